@@ -1,0 +1,54 @@
+//! A ray's hit, described by the surface around it: the one record shading and footprints read.
+//!
+//! `crate::render` builds a [`SurfaceHit`] from Embree's hit (geometry id, primitive id,
+//! barycentrics, distance) and the scene's vertex data. Footprints (`crate::footprint`) read
+//! the [`Patch`] to differentiate positions, normals and texture coordinates; shading reads
+//! the normals, texture coordinates and material.
+
+use glam::{Vec2, Vec3};
+
+/// The local surface a hit lies on, with what footprints need to differentiate it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Patch {
+    /// A triangle with vertices `p`, optional per-vertex shading normals `n` (as stored,
+    /// not necessarily unit length) and optional texture coordinates `st`.
+    /// Barycentrics follow Embree: `P = (1-u-v) p[0] + u p[1] + v p[2]`.
+    Triangle {
+        p: [Vec3; 3],
+        n: Option<[Vec3; 3]>,
+        st: Option<[Vec2; 3]>,
+    },
+    /// An analytic sphere; st is its lat-long parameterisation (see `crate::scene::Sphere`).
+    Sphere { center: Vec3, radius: f32 },
+}
+
+/// A hit on a surface, in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    /// Distance along the (unit-length) ray direction.
+    pub t: f32,
+    pub position: Vec3,
+    /// Unit geometric normal, facing outward (as the geometry is wound / the sphere's outside).
+    pub geometric_normal: Vec3,
+    /// Unit shading normal (interpolated vertex normals, or the geometric normal),
+    /// facing the same side as `geometric_normal`.
+    pub shading_normal: Vec3,
+    /// Barycentric (u, v) on a triangle; (s, t) on a sphere.
+    pub barycentric: Vec2,
+    /// Texture coordinates in OpenImageIO convention (zero when the surface has none).
+    pub st: Vec2,
+    /// World-space partial derivatives of position with respect to s and t
+    /// (zero vectors when the surface has no texture parameterisation).
+    pub dpds: Vec3,
+    pub dpdt: Vec3,
+    /// Index into `SceneDescription::materials`.
+    pub material: u32,
+    pub patch: Patch,
+}
+
+impl SurfaceHit {
+    /// True when the ray arrived from the side the geometric normal points to.
+    pub fn is_front_face(&self, ray_direction: Vec3) -> bool {
+        ray_direction.dot(self.geometric_normal) < 0.0
+    }
+}

@@ -1,0 +1,3 @@
+pub mod hit;
+pub mod scene;
+pub mod texture;

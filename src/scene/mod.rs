@@ -1,0 +1,271 @@
+//! Scene description: the plain data every loader produces and the renderer consumes.
+//!
+//! A [`SceneDescription`] is what a TOML scene, an OBJ file or a glTF file becomes after
+//! loading and validation: world-space triangle meshes and spheres, materials, lights,
+//! textures (by source, not yet decoded), an optional camera and render settings.
+//! Nothing here touches Embree or decodes images; `crate::render` turns a description into
+//! an Embree scene and decoded textures.
+//!
+//! Texture coordinates are stored in OpenImageIO's convention (`s` to the right, `t`
+//! downwards, (0,0) at the outer corner of the first texel): loaders map OBJ's v-up and
+//! glTF's v-down coordinates onto it.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3};
+
+pub use crate::texture::{ColorSpace, WrapMode};
+
+/// Everything needed to render one image, after loading and validation.
+#[derive(Clone, Debug, Default)]
+pub struct SceneDescription {
+    /// Where the scene came from (a path, or `<built-in default scene>`); used in messages.
+    pub source: String,
+    pub camera: Option<CameraDesc>,
+    pub lights: Vec<Light>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<TextureDesc>,
+    pub meshes: Vec<TriangleMesh>,
+    pub spheres: Vec<Sphere>,
+    pub environment: Environment,
+    pub settings: RenderSettings,
+    /// Things the loader decided on the user's behalf ("camera placed to frame the bounds",
+    /// "no lights: default light and environment added"); printed in the summary line.
+    pub notes: Vec<String>,
+}
+
+/// A camera placed by eye/target/up with one of three projections.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraDesc {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    pub projection: Projection,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Projection {
+    /// Vertical field of view in degrees.
+    Pinhole { vfov_degrees: f32 },
+    /// Vertical field of view in degrees; lens radius and focus distance in world units.
+    ThinLens { vfov_degrees: f32, aperture_radius: f32, focus_distance: f32 },
+    /// Height of the view rectangle in world units.
+    Orthographic { height: f32 },
+}
+
+/// Punctual lights (seed 001: point and directional sources with shadow rays).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    /// Radiant intensity `color * intensity` (W/sr, or candela for glTF), falling off as 1/r^2.
+    Point { position: Vec3, color: Vec3, intensity: f32 },
+    /// `direction` is the direction the light travels; irradiance `color * intensity`.
+    Directional { direction: Vec3, color: Vec3, intensity: f32 },
+    /// A point light restricted to a cone around `direction` (the direction light travels),
+    /// full inside `inner_angle`, smoothly falling to zero at `outer_angle` (radians).
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        color: Vec3,
+        intensity: f32,
+        inner_angle: f32,
+        outer_angle: f32,
+    },
+}
+
+/// What is seen where rays escape, and what lights diffuse surfaces as an ambient term.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Environment {
+    Color(Vec3),
+    /// An equirectangular (lat-long) map; `textures[texture]`, scaled by `intensity`.
+    LatLong { texture: usize, intensity: f32 },
+}
+
+impl Default for Environment {
+    fn default() -> Self {
+        Environment::Color(Vec3::ZERO)
+    }
+}
+
+/// Where a texture's encoded bytes come from.
+#[derive(Clone, Debug)]
+pub enum TextureSource {
+    File(PathBuf),
+    /// Encoded image bytes (PNG, JPEG, EXR) held in memory: glTF buffer views and data URIs,
+    /// and the built-in default scene's assets. `label` names it in messages.
+    Encoded { label: String, bytes: Arc<Vec<u8>> },
+}
+
+impl TextureSource {
+    /// A name for messages: the file path or the label.
+    pub fn label(&self) -> String {
+        match self {
+            TextureSource::File(path) => path.display().to_string(),
+            TextureSource::Encoded { label, .. } => label.clone(),
+        }
+    }
+}
+
+/// A texture as the scene refers to it; decoded and mip-mapped by `crate::texture`.
+#[derive(Clone, Debug)]
+pub struct TextureDesc {
+    pub name: String,
+    pub source: TextureSource,
+    /// `Srgb` for colour (decoded to linear on load), `Linear` for data such as alpha.
+    pub color_space: ColorSpace,
+    pub wrap_s: WrapMode,
+    pub wrap_t: WrapMode,
+}
+
+/// A texture bound to a material slot, with an affine transform of its coordinates
+/// (glTF `KHR_texture_transform`, TOML `scale`/`offset`/`rotation`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureBinding {
+    /// Index into [`SceneDescription::textures`].
+    pub texture: usize,
+    /// `st' = transform * st` (applied to the mesh's st in OpenImageIO convention).
+    pub transform: glam::Affine2,
+}
+
+/// A Whitted-style material (seeds 001 and 004). Weights are in [0, 1].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Linear RGB diffuse albedo (multiplied by the base-colour texture when present).
+    pub base_color: Vec3,
+    pub base_color_texture: Option<TextureBinding>,
+    /// Blinn-Phong highlight weight and exponent.
+    pub specular: f32,
+    pub shininess: f32,
+    /// Perfect-mirror reflectivity (0 = none).
+    pub mirror: f32,
+    /// Weight of the dielectric (Fresnel-split reflection + refraction) lobe (0 = opaque).
+    pub transmission: f32,
+    /// Index of refraction of the material's inside (the outside is 1).
+    pub ior: f32,
+    /// Beer's law: colour remaining after travelling `attenuation_distance` inside
+    /// (`sigma = -ln(color) / distance`); `f32::INFINITY` means no absorption.
+    pub attenuation_color: Vec3,
+    pub attenuation_distance: f32,
+    /// Emitted radiance (linear RGB).
+    pub emission: Vec3,
+    /// Alpha cut-out: a hit is ignored where alpha < cutoff. `None` = opaque.
+    pub alpha_cutoff: Option<f32>,
+    /// Constant alpha (glTF base colour factor's alpha), multiplied with the alpha texture.
+    pub alpha: f32,
+    /// Texture whose alpha channel gives coverage (glTF: the base-colour texture).
+    pub alpha_texture: Option<TextureBinding>,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: String::new(),
+            base_color: Vec3::splat(0.8),
+            base_color_texture: None,
+            specular: 0.0,
+            shininess: 32.0,
+            mirror: 0.0,
+            transmission: 0.0,
+            ior: 1.5,
+            attenuation_color: Vec3::ONE,
+            attenuation_distance: f32::INFINITY,
+            emission: Vec3::ZERO,
+            alpha_cutoff: None,
+            alpha: 1.0,
+            alpha_texture: None,
+        }
+    }
+}
+
+/// An indexed triangle mesh in world space (node transforms already applied).
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals, same length as `positions`, or empty for flat shading.
+    pub normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates in OpenImageIO convention, or empty.
+    pub st: Vec<Vec2>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Index into [`SceneDescription::materials`].
+    pub material: usize,
+}
+
+/// An analytic sphere. Its st coordinates are the lat-long parameterisation
+/// (s = azimuth / 2pi, t = polar angle / pi, t = 0 at +Y).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sphere {
+    pub center: Vec3,
+    pub radius: f32,
+    pub material: usize,
+}
+
+/// Tone mapping applied when writing PNG (EXR is always linear and untouched).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ToneMap {
+    /// Clamp to [0, 1], then the sRGB transfer function.
+    #[default]
+    Clamp,
+    /// Reinhard `x / (1 + x)` per channel, then sRGB.
+    Reinhard,
+}
+
+/// Fresnel equations used at dielectric boundaries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum FresnelMode {
+    /// Exact unpolarised Fresnel equations.
+    #[default]
+    Exact,
+    /// Schlick's approximation (with total internal reflection).
+    Schlick,
+}
+
+/// Render settings a scene may carry; the command line overrides them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    /// A path whose throughput (max RGB component) falls below this stops (seed 001).
+    pub min_throughput: f32,
+    pub tonemap: ToneMap,
+    /// Exposure in stops applied to PNG output only.
+    pub exposure: f32,
+    pub fresnel: FresnelMode,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 640,
+            height: 360,
+            spp: 1,
+            max_depth: 8,
+            min_throughput: 1e-3,
+            tonemap: ToneMap::Clamp,
+            exposure: 0.0,
+            fresnel: FresnelMode::Exact,
+        }
+    }
+}
+
+impl SceneDescription {
+    /// World-space bounds of all geometry, or `None` for an empty scene.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for mesh in &self.meshes {
+            for p in &mesh.positions {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+        for sphere in &self.spheres {
+            lo = lo.min(sphere.center - Vec3::splat(sphere.radius));
+            hi = hi.max(sphere.center + Vec3::splat(sphere.radius));
+        }
+        (lo.x <= hi.x).then_some((lo, hi))
+    }
+}
