@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs the Debian packages conetrace needs to build, render and test, if any is missing.
+# Debian bookworm, as root (or with sudo available). Safe to run repeatedly.
+set -euo pipefail
+
+packages=(
+  libembree-dev          # Embree 3.13.5 headers and libembree3 (ray traversal)
+  libclang-dev clang     # libclang for bindgen, which generates the Embree bindings at build time
+  pkg-config
+  python3-openimageio    # OpenImageIO's TextureSystem: the filtering reference in the tests
+  openimageio-tools      # maketx, for mip-mapped reference textures
+  python3-numpy
+  assimp-testmodels      # real OBJ/glTF files, valid and malformed, used by the tests
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if [ "${#missing[@]}" -gt 0 ]; then
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  echo "setup: installing ${missing[*]}" >&2
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+fi
+
+if ! command -v cargo >/dev/null 2>&1; then
+  echo "setup: cargo not found; install Rust (rustup or Debian's cargo) and re-run" >&2
+  exit 1
+fi

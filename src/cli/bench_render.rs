@@ -1,0 +1,141 @@
+//! `conetrace bench render`: raw packet traversal vs full shading, side by side in one run.
+//!
+//! Both passes use the same scene, camera rays (4x4 blocks as 16-wide packets), tiles and
+//! threads. The raw pass only traces camera rays; the full pass renders them with shading,
+//! shadow rays and secondary rays. Each pass runs several times and the median is kept.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use clap::Args;
+use glam::Vec2;
+use rayon::prelude::*;
+
+use crate::cli::render_cmd::{self, RenderArgs};
+use crate::cli::CommandError;
+use crate::integrator::Whitted;
+use crate::render::stats::WorkCounters;
+use crate::render::tracer::{TraceHit, TraceRay};
+use crate::render::{self, RenderContext, RenderControl};
+
+#[derive(Args, Debug)]
+pub struct BenchRenderArgs {
+    #[command(flatten)]
+    pub render: RenderArgs,
+    /// Repetitions of each pass (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeat: usize,
+}
+
+/// Camera rays of every pixel traced through Embree with no shading; returns rays traced.
+pub fn trace_camera_rays_only(context: &RenderContext) -> u64 {
+    let options = &context.options;
+    let tiles = render::work_tiles(options.width, options.height);
+    tiles
+        .par_iter()
+        .map_init(
+            || {
+                crate::embree::enable_flush_denormals();
+                (Vec::<TraceRay>::new(), Vec::<TraceHit>::new(), WorkCounters::default())
+            },
+            |(rays, hits, counters), tile| {
+                rays.clear();
+                for by in (0..tile.height).step_by(4) {
+                    for bx in (0..tile.width).step_by(4) {
+                        for ly in 0..4 {
+                            for lx in 0..4 {
+                                let (x, y) = (bx + lx, by + ly);
+                                if x >= tile.width || y >= tile.height {
+                                    continue;
+                                }
+                                let px = (tile.x0 + x) as f32 + 0.5;
+                                let py = (tile.y0 + y) as f32 + 0.5;
+                                let (origin, direction) =
+                                    context.camera.generate_ray(px, py, Vec2::splat(0.5));
+                                rays.push(TraceRay {
+                                    origin,
+                                    direction,
+                                    tfar: f32::INFINITY,
+                                    cone_width: 0.0,
+                                    cone_spread: 0.0,
+                                });
+                            }
+                        }
+                    }
+                }
+                context.tracer.intersect(rays, hits, true, counters);
+                rays.len() as u64
+            },
+        )
+        .sum()
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(|a, b| a.total_cmp(b));
+    values[values.len() / 2]
+}
+
+pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
+    let scene = render_cmd::load(&args.render)?;
+    let mut options = render_cmd::options(&args.render, &scene)?;
+    options.count_tiles = false;
+    let repeat = args.repeat.max(1);
+    let mut pool = rayon::ThreadPoolBuilder::new()
+        .start_handler(|_| crate::embree::enable_flush_denormals());
+    if let Some(threads) = args.render.threads {
+        pool = pool.num_threads(threads.max(1));
+    }
+    let pool = pool
+        .build()
+        .map_err(|e| CommandError::internal(format!("cannot start worker threads: {e}")))?;
+    let scene = Arc::new(scene);
+    pool.install(|| {
+        let context = render::prepare(scene.clone(), options.clone())
+            .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        // Warm up both paths once (page faults, lazy BVH parts).
+        trace_camera_rays_only(&context);
+        let _ = render::render(&context, &Whitted, &RenderControl::default());
+
+        let mut raw_times = Vec::new();
+        let mut full_times = Vec::new();
+        let mut raw_rays = 0;
+        let mut full_counters = WorkCounters::default();
+        for _ in 0..repeat {
+            let start = Instant::now();
+            raw_rays = trace_camera_rays_only(&context);
+            raw_times.push(start.elapsed().as_secs_f64());
+            let result = render::render(&context, &Whitted, &RenderControl::default());
+            full_times.push(result.stats.seconds);
+            full_counters = result.stats.counters;
+        }
+        let raw = median(raw_times);
+        let full = median(full_times);
+        let raw_rate = raw_rays as f64 / raw / 1e6;
+        let full_camera_rate = full_counters.camera_rays as f64 / full / 1e6;
+        let full_ray_rate = full_counters.total_rays() as f64 / full / 1e6;
+        println!(
+            "scene {} at {}x{}, {} spp, {} threads, median of {repeat}",
+            scene.source,
+            options.width,
+            options.height,
+            options.spp,
+            rayon::current_num_threads()
+        );
+        println!("| pass | seconds | camera Mrays/s | all Mrays/s |");
+        println!("|---|---|---|---|");
+        println!("| raw packet traversal (camera rays, no shading) | {raw:.4} | {raw_rate:.2} | {raw_rate:.2} |");
+        println!(
+            "| full shading ({} camera, {} shadow, {} reflection, {} refraction rays) | {full:.4} | {full_camera_rate:.2} | {full_ray_rate:.2} |",
+            full_counters.camera_rays,
+            full_counters.shadow_rays,
+            full_counters.reflection_rays,
+            full_counters.refraction_rays
+        );
+        println!(
+            "ratio full/raw: {:.3} in all rays per second, {:.3} in camera rays per second (pixels)",
+            full_ray_rate / raw_rate,
+            full_camera_rate / raw_rate
+        );
+        Ok(())
+    })
+}

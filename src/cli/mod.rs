@@ -1,0 +1,93 @@
+//! The `conetrace` command line: subcommands, exit statuses and one-line errors.
+//!
+//! Exit statuses: 0 success, 1 internal failure (a bug: please report), 2 bad input (a file
+//! or an option; the message names it), 3 interrupted (the finished part was saved).
+
+pub mod bench_render;
+pub mod bench_textures;
+pub mod render_cmd;
+pub mod sample_texture;
+
+use clap::{Parser, Subcommand};
+
+/// Success.
+pub const EXIT_OK: i32 = 0;
+/// An internal failure that is not the input's fault.
+pub const EXIT_INTERNAL: i32 = 1;
+/// Bad input: a scene, mesh, texture or option the program cannot use.
+pub const EXIT_BAD_INPUT: i32 = 2;
+/// The render was interrupted (Ctrl-C, SIGTERM, cancellation); the finished part was saved.
+pub const EXIT_INTERRUPTED: i32 = 3;
+
+/// A failed command: what to print (one line) and the exit status.
+#[derive(Debug)]
+pub struct CommandError {
+    pub message: String,
+    pub status: i32,
+}
+
+impl CommandError {
+    pub fn bad_input(message: impl Into<String>) -> CommandError {
+        CommandError {
+            message: message.into(),
+            status: EXIT_BAD_INPUT,
+        }
+    }
+    pub fn internal(message: impl Into<String>) -> CommandError {
+        CommandError {
+            message: message.into(),
+            status: EXIT_INTERNAL,
+        }
+    }
+}
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "conetrace",
+    version,
+    about = "CPU ray tracer on Embree packets; texture lookups filtered by ray cones and ray differentials"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene (TOML, OBJ, glTF); with no scene, the built-in default scene into out/.
+    Render(render_cmd::RenderArgs),
+    /// Filter a texture at the (s, t, derivatives) queries of a CSV file; print r,g,b,a rows.
+    SampleTexture(sample_texture::SampleTextureArgs),
+    /// Benchmarks: raw packet traversal vs full shading, texture filtering vs OpenImageIO.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// Camera rays through Embree with no shading, then the same rays fully shaded.
+    Render(bench_render::BenchRenderArgs),
+    /// Lookups per second per filter, ours and OpenImageIO's, on the same queries.
+    Textures(bench_textures::BenchTexturesArgs),
+}
+
+/// Run the parsed command line; returns the exit status.
+pub fn run(cli: Cli) -> i32 {
+    let result = match cli.command {
+        Command::Render(args) => render_cmd::run(&args),
+        Command::SampleTexture(args) => {
+            sample_texture::run(&args).map_err(CommandError::bad_input)
+        }
+        Command::Bench(BenchCommand::Render(args)) => bench_render::run(&args),
+        Command::Bench(BenchCommand::Textures(args)) => {
+            bench_textures::run(&args).map_err(CommandError::bad_input)
+        }
+    };
+    match result {
+        Ok(()) => EXIT_OK,
+        Err(error) => {
+            eprintln!("conetrace: error: {}", error.message);
+            error.status
+        }
+    }
+}

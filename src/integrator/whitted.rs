@@ -1,0 +1,603 @@
+//! Whitted ray tracing (seed 001's recursion, seed 004's Fresnel and Beer's law), traced in
+//! waves of packets.
+//!
+//! Instead of recursing ray by ray, a tile is rendered breadth first: the camera rays of
+//! each 4x4 pixel block form one 16-wide packet; every hit is shaded, its shadow rays are
+//! batched and traced as occlusion packets, and the reflection and refraction rays it spawns
+//! form the next wave, traced in packets again. A ray carries its throughput (the product of
+//! the coefficients on its way from the camera), so the sum over all waves equals the
+//! recursive formulation `local + k_r * trace(reflected) + k_t * trace(refracted)`.
+//!
+//! Recursion stops at the maximum depth or when a ray's throughput falls below the
+//! threshold (seed 001's termination rules). Rays leave surfaces from an origin offset by a
+//! few ULPs along the geometric normal, which scales with the scene
+//! (`shading::ray_offset`).
+
+use glam::{Vec2, Vec3};
+
+use crate::footprint::Footprint;
+use crate::hit::SurfaceHit;
+use crate::integrator::{Integrator, TileImage, TileRect};
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::prepared::{binding_query, environment_radiance};
+use crate::render::sampling;
+use crate::render::stats::RayKind;
+use crate::render::tracer::{TraceHit, TraceRay};
+use crate::scene::{FresnelMode, Material};
+use crate::shading::{self, beer, fresnel, ray_offset};
+
+/// Shadow rays stop passing through transmissive occluders below this strength (seed 001).
+const SHADOW_CUTOFF: f32 = 0.002;
+/// At most this many transmissive occluders are crossed by one shadow ray.
+const MAX_SHADOW_CROSSINGS: u32 = 16;
+
+/// The Whitted integrator.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Whitted;
+
+/// A ray in flight, with what it carries from the camera.
+#[derive(Clone, Copy, Debug)]
+struct PathRay {
+    origin: Vec3,
+    direction: Vec3,
+    throughput: Vec3,
+    footprint: Footprint,
+    /// Index of the pixel inside the tile.
+    pixel: u32,
+    depth: u32,
+    kind: RayKind,
+    /// Absorption coefficient of the medium the ray travels in (zero outside media).
+    sigma: Vec3,
+    /// Whether this ray belongs to the pixel's first sample (which writes the AOVs).
+    first_sample: bool,
+}
+
+/// A shadow ray and the radiance it delivers if unoccluded.
+#[derive(Clone, Copy, Debug)]
+struct ShadowRay {
+    origin: Vec3,
+    direction: Vec3,
+    distance: f32,
+    contribution: Vec3,
+    pixel: u32,
+}
+
+/// Reused buffers of one tile's waves.
+#[derive(Default)]
+struct Waves {
+    current: Vec<PathRay>,
+    next: Vec<PathRay>,
+    trace_rays: Vec<TraceRay>,
+    trace_hits: Vec<TraceHit>,
+    shadows: Vec<ShadowRay>,
+    shadow_rays: Vec<TraceRay>,
+    shadow_blocked: Vec<bool>,
+}
+
+impl Integrator for Whitted {
+    fn render_tile(
+        &self,
+        context: &RenderContext,
+        tile: TileRect,
+        image: &mut TileImage,
+        worker: &mut WorkerState,
+    ) {
+        let options = &context.options;
+        let spp = options.spp.max(1);
+        let mut waves = Waves::default();
+        let image_width = options.width;
+        for sample in 0..spp {
+            generate_camera_rays(context, tile, sample, image_width, &mut waves.current);
+            worker
+                .counters
+                .count_rays(RayKind::Camera, waves.current.len() as u64);
+            while !waves.current.is_empty() {
+                trace_wave(context, &mut waves, worker);
+                shade_wave(context, &mut waves, image, worker);
+                trace_shadows(context, &mut waves, image, worker);
+                std::mem::swap(&mut waves.current, &mut waves.next);
+                waves.next.clear();
+            }
+        }
+        let scale = 1.0 / spp as f32;
+        for (c, a) in image.color.iter_mut().zip(image.alpha.iter_mut()) {
+            for v in c.iter_mut() {
+                *v *= scale;
+            }
+            *a *= scale;
+        }
+    }
+}
+
+/// Camera rays of one sample for a tile, ordered so that each run of 16 is a 4x4 block.
+fn generate_camera_rays(
+    context: &RenderContext,
+    tile: TileRect,
+    sample: u32,
+    image_width: u32,
+    out: &mut Vec<PathRay>,
+) {
+    out.clear();
+    let camera = &context.camera;
+    let lod = context.options.lod;
+    let spp = context.options.spp.max(1);
+    let dof = context.effects.depth_of_field;
+    for by in (0..tile.height).step_by(4) {
+        for bx in (0..tile.width).step_by(4) {
+            for ly in 0..4 {
+                for lx in 0..4 {
+                    let (x, y) = (bx + lx, by + ly);
+                    if x >= tile.width || y >= tile.height {
+                        continue;
+                    }
+                    let (px, py) = (tile.x0 + x, tile.y0 + y);
+                    let pixel_id = py * image_width + px;
+                    let offset = sampling::pixel_offset(pixel_id, sample, spp);
+                    let lens = if dof {
+                        sampling::lens_sample(pixel_id, sample)
+                    } else {
+                        Vec2::splat(0.5)
+                    };
+                    let (fx, fy) = (px as f32 + offset.x, py as f32 + offset.y);
+                    let (origin, direction) = camera.generate_ray(fx, fy, lens);
+                    let footprint = if context.effects.footprints {
+                        camera.initial_footprint(lod, fx, fy, origin, direction)
+                    } else {
+                        Footprint::none()
+                    };
+                    out.push(PathRay {
+                        origin,
+                        direction,
+                        throughput: Vec3::ONE,
+                        footprint,
+                        pixel: y * tile.width + x,
+                        depth: 0,
+                        kind: RayKind::Camera,
+                        sigma: Vec3::ZERO,
+                        first_sample: sample == 0,
+                    });
+                }
+            }
+        }
+    }
+}
+
+/// Trace the current wave: camera waves as coherent 4x4 packets, later waves as incoherent
+/// packets.
+fn trace_wave(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerState) {
+    waves.trace_rays.clear();
+    waves.trace_rays.extend(waves.current.iter().map(|ray| {
+        let (cone_width, cone_spread) = ray.footprint.cone_at_origin();
+        TraceRay {
+            origin: ray.origin,
+            direction: ray.direction,
+            tfar: f32::INFINITY,
+            cone_width,
+            cone_spread,
+        }
+    }));
+    let coherent = waves.current.first().is_some_and(|r| r.kind == RayKind::Camera);
+    context.tracer.intersect(
+        &waves.trace_rays,
+        &mut waves.trace_hits,
+        coherent,
+        &mut worker.counters,
+    );
+}
+
+fn shade_wave(
+    context: &RenderContext,
+    waves: &mut Waves,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    waves.shadows.clear();
+    for index in 0..waves.current.len() {
+        let ray = waves.current[index];
+        let hit = waves.trace_hits[index];
+        if !hit.is_hit() {
+            shade_miss(context, &ray, image, worker);
+            continue;
+        }
+        let surface = context.surfaces.surface_hit(ray.origin, ray.direction, &hit);
+        shade_hit(context, ray, &surface, image, waves, worker);
+    }
+}
+
+fn shade_miss(context: &RenderContext, ray: &PathRay, image: &mut TileImage, worker: &mut WorkerState) {
+    let effects = &context.effects;
+    let gradients = if effects.footprints {
+        let g = ray.footprint.environment_gradients(ray.direction);
+        [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
+    } else {
+        [0.0; 4]
+    };
+    if matches!(
+        context.scene.environment,
+        crate::scene::Environment::LatLong { .. }
+    ) {
+        worker.counters.texture_lookups += 1;
+    }
+    let radiance = environment_radiance(
+        &context.scene.environment,
+        &context.textures,
+        ray.direction,
+        gradients,
+        &context.options.filter,
+    );
+    add_radiance(image, ray.pixel, ray.throughput * radiance);
+}
+
+#[inline]
+fn add_radiance(image: &mut TileImage, pixel: u32, radiance: Vec3) {
+    let c = &mut image.color[pixel as usize];
+    c[0] += radiance.x;
+    c[1] += radiance.y;
+    c[2] += radiance.z;
+}
+
+fn shade_hit(
+    context: &RenderContext,
+    mut ray: PathRay,
+    surface: &SurfaceHit,
+    image: &mut TileImage,
+    waves: &mut Waves,
+    worker: &mut WorkerState,
+) {
+    let effects = &context.effects;
+    let options = &context.options;
+    let material: &Material = &context.scene.materials[surface.material as usize];
+    let pixel = ray.pixel as usize;
+
+    if ray.kind == RayKind::Camera {
+        image.alpha[pixel] += 1.0;
+        if ray.first_sample && !image.depth.is_empty() {
+            image.depth[pixel] = surface.t * ray.direction.dot(context.camera_forward);
+            image.normal[pixel] = surface.shading_normal.to_array();
+            image.uv[pixel] = surface.st.to_array();
+        }
+    }
+
+    // Beer's law over the distance travelled inside the medium (seed 004).
+    if effects.absorption && ray.sigma != Vec3::ZERO {
+        ray.throughput *= beer::transmittance(ray.sigma, surface.t);
+        worker.counters.absorption_evaluations += 1;
+    }
+    if effects.footprints {
+        ray.footprint.transfer(ray.direction, surface);
+        worker.counters.footprint_updates += 1;
+    }
+
+    let albedo = surface_albedo(context, &ray, material, surface, image, worker);
+    if ray.kind == RayKind::Camera && ray.first_sample && !image.albedo.is_empty() {
+        image.albedo[pixel] = albedo.to_array();
+    }
+
+    let front = ray.direction.dot(surface.geometric_normal) < 0.0;
+    let (ng, ns) = if front {
+        (surface.geometric_normal, surface.shading_normal)
+    } else {
+        (-surface.geometric_normal, -surface.shading_normal)
+    };
+    let mut radiance = material.emission;
+
+    // Local illumination of the opaque part: direct light with shadow rays, plus ambient
+    // environment light.
+    let opaque = (1.0 - material.mirror) * (1.0 - material.transmission);
+    if opaque > 0.0 {
+        let wo = -ray.direction;
+        if effects.shadows {
+            let origin = ray_offset::offset_ray_origin(surface.position, ng);
+            for light in &context.scene.lights {
+                let sample = shading::lights::light_sample(light, surface.position);
+                let wi = sample.direction_to_light;
+                if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 {
+                    continue;
+                }
+                let f = shading::brdf::eval_surface(
+                    albedo,
+                    material.specular,
+                    material.shininess,
+                    ns,
+                    wo,
+                    wi,
+                );
+                let contribution = ray.throughput * opaque * f * sample.radiance_scale;
+                if contribution.max_element() <= 0.0 {
+                    continue;
+                }
+                waves.shadows.push(ShadowRay {
+                    origin,
+                    direction: wi,
+                    distance: sample.distance,
+                    contribution,
+                    pixel: ray.pixel,
+                });
+            }
+        }
+        if effects.environment {
+            radiance += opaque * albedo * context.environment_mean;
+        }
+    }
+    add_radiance(image, ray.pixel, ray.throughput * radiance);
+
+    let can_spawn = ray.depth < options.max_depth;
+    if !can_spawn {
+        return;
+    }
+    let mut spawn = |direction: Vec3,
+                     leave_normal: Vec3,
+                     weight: Vec3,
+                     kind: RayKind,
+                     footprint: Footprint,
+                     sigma: Vec3| {
+        let throughput = ray.throughput * weight;
+        if throughput.max_element() < options.min_throughput {
+            return;
+        }
+        worker.counters.count_rays(kind, 1);
+        waves.next.push(PathRay {
+            origin: ray_offset::offset_ray_origin(surface.position, leave_normal),
+            direction,
+            throughput,
+            footprint,
+            pixel: ray.pixel,
+            depth: ray.depth + 1,
+            kind,
+            sigma,
+            first_sample: ray.first_sample,
+        });
+    };
+
+    if effects.mirror_reflection && material.mirror > 0.0 {
+        let reflected = reflect_above(ray.direction, ns, ng);
+        let footprint = footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
+        spawn(
+            reflected,
+            ng,
+            Vec3::splat(material.mirror),
+            RayKind::Reflection,
+            footprint,
+            ray.sigma,
+        );
+    }
+
+    if effects.refraction && material.transmission > 0.0 {
+        // eta = n_incident / n_transmitted; the outside is vacuum/air.
+        let eta = if front { 1.0 / material.ior } else { material.ior };
+        let cos_i = (-ray.direction).dot(ns);
+        let reflectance = match options.fresnel {
+            FresnelMode::Exact => fresnel::fresnel_dielectric(cos_i, eta),
+            FresnelMode::Schlick => fresnel::fresnel_schlick(cos_i, eta),
+        };
+        let refracted = shading::refraction::refract(ray.direction, ns, eta)
+            .filter(|d| d.dot(ng) < 0.0);
+        let reflectance = if refracted.is_some() { reflectance } else { 1.0 };
+        if let Some(refracted) = refracted {
+            let footprint = if effects.footprints {
+                worker.counters.footprint_updates += 1;
+                ray.footprint.refract(ray.direction, surface, eta, refracted)
+            } else {
+                ray.footprint
+            };
+            // Entering the material: its medium; leaving: back outside.
+            let sigma = if front {
+                context.materials.sigma[surface.material as usize]
+            } else {
+                Vec3::ZERO
+            };
+            spawn(
+                refracted,
+                -ng,
+                Vec3::splat(material.transmission * (1.0 - reflectance)),
+                RayKind::Refraction,
+                footprint,
+                sigma,
+            );
+        }
+        let reflected = reflect_above(ray.direction, ns, ng);
+        let footprint = footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
+        spawn(
+            reflected,
+            ng,
+            Vec3::splat(material.transmission * reflectance),
+            RayKind::Reflection,
+            footprint,
+            ray.sigma,
+        );
+    }
+}
+
+/// Mirror direction about the shading normal, kept above the geometric surface.
+#[inline]
+fn reflect_above(direction: Vec3, ns: Vec3, ng: Vec3) -> Vec3 {
+    let r = shading::refraction::reflect(direction, ns);
+    if r.dot(ng) > 0.0 {
+        r
+    } else {
+        shading::refraction::reflect(direction, ng)
+    }
+}
+
+#[inline]
+fn footprint_reflect(
+    enabled: bool,
+    ray: &PathRay,
+    surface: &SurfaceHit,
+    reflected: Vec3,
+    worker: &mut WorkerState,
+) -> Footprint {
+    if enabled {
+        worker.counters.footprint_updates += 1;
+        ray.footprint.reflect(ray.direction, surface, reflected)
+    } else {
+        ray.footprint
+    }
+}
+
+/// The material's albedo at the hit: base colour times its texture, filtered by the ray's
+/// footprint. Fills the first-lookup AOVs of the pixel.
+fn surface_albedo(
+    context: &RenderContext,
+    ray: &PathRay,
+    material: &Material,
+    surface: &SurfaceHit,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) -> Vec3 {
+    let Some(binding) = &material.base_color_texture else {
+        return material.base_color;
+    };
+    let options = &context.options;
+    let gradients = if context.effects.footprints {
+        let g = ray
+            .footprint
+            .texture_gradients(ray.direction, surface, options.filter.max_aniso);
+        [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
+    } else {
+        [0.0; 4]
+    };
+    let query = binding_query(&binding.transform, surface.st, gradients);
+    let texture = &context.textures[binding.texture];
+    worker.counters.texture_lookups += 1;
+    let texel = match worker.tiles.get_mut(binding.texture) {
+        Some(tiles) => texture.sample_recording(&query, &options.filter, tiles),
+        None => texture.sample(&query, &options.filter),
+    };
+    let pixel = ray.pixel as usize;
+    if ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel] {
+        image.lookup_done[pixel] = true;
+        if !image.tex.is_empty() {
+            image.tex[pixel] = [
+                query.s, query.t, query.dsdx, query.dtdx, query.dsdy, query.dtdy,
+            ];
+            image.texcolor[pixel] = [texel.x, texel.y, texel.z, 1.0];
+        }
+        if !image.lod.is_empty() {
+            image.lod[pixel] = texture.lod(&query, &options.filter);
+            image.footprint[pixel] = ray.footprint.width();
+        }
+    }
+    material.base_color * texel.truncate()
+}
+
+/// Trace the wave's shadow rays as occlusion packets and add what reaches the lights.
+/// With transmissive occluders, a shadow ray is attenuated by each one it crosses (seed 001).
+fn trace_shadows(
+    context: &RenderContext,
+    waves: &mut Waves,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    if waves.shadows.is_empty() {
+        return;
+    }
+    worker
+        .counters
+        .count_rays(RayKind::Shadow, waves.shadows.len() as u64);
+    waves.shadow_rays.clear();
+    waves
+        .shadow_rays
+        .extend(waves.shadows.iter().map(|s| TraceRay {
+            origin: s.origin,
+            direction: s.direction,
+            tfar: shadow_tfar(s.distance),
+            cone_width: 0.0,
+            cone_spread: 0.0,
+        }));
+    if !context.effects.transmissive_shadows {
+        context.tracer.occluded(
+            &waves.shadow_rays,
+            &mut waves.shadow_blocked,
+            &mut worker.counters,
+        );
+        for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
+            if !blocked {
+                add_radiance(image, shadow.pixel, shadow.contribution);
+            }
+        }
+        return;
+    }
+    // Transmissive occluders: walk each shadow ray through the surfaces it meets.
+    let mut strength = vec![Vec3::ONE; waves.shadows.len()];
+    let mut active: Vec<usize> = (0..waves.shadows.len()).collect();
+    let mut entered_at: Vec<f32> = vec![0.0; waves.shadows.len()];
+    let mut travelled: Vec<f32> = vec![0.0; waves.shadows.len()];
+    for _ in 0..MAX_SHADOW_CROSSINGS {
+        if active.is_empty() {
+            break;
+        }
+        let rays: Vec<TraceRay> = active.iter().map(|&i| waves.shadow_rays[i]).collect();
+        context
+            .tracer
+            .intersect(&rays, &mut waves.trace_hits, false, &mut worker.counters);
+        let mut still_active = Vec::with_capacity(active.len());
+        for (slot, &i) in active.iter().enumerate() {
+            let hit = waves.trace_hits[slot];
+            if !hit.is_hit() {
+                continue;
+            }
+            let ray = rays[slot];
+            let surface = context.surfaces.surface_hit(ray.origin, ray.direction, &hit);
+            let material = &context.scene.materials[surface.material as usize];
+            if material.transmission <= 0.0 {
+                strength[i] = Vec3::ZERO;
+                continue;
+            }
+            let front = ray.direction.dot(surface.geometric_normal) < 0.0;
+            let mut s = strength[i] * material.transmission;
+            if front {
+                entered_at[i] = travelled[i] + hit.t;
+            } else if context.effects.absorption {
+                // Leaving the medium: absorb over the distance travelled inside.
+                let inside = (travelled[i] + hit.t - entered_at[i]).max(0.0);
+                s *= beer::transmittance(context.materials.sigma[surface.material as usize], inside);
+                worker.counters.absorption_evaluations += 1;
+            }
+            strength[i] = s;
+            if s.max_element() < SHADOW_CUTOFF {
+                strength[i] = Vec3::ZERO;
+                continue;
+            }
+            let leave = if front {
+                -surface.geometric_normal
+            } else {
+                surface.geometric_normal
+            };
+            let origin = ray_offset::offset_ray_origin(surface.position, leave);
+            let moved = (origin - ray.origin).dot(ray.direction);
+            travelled[i] += moved;
+            let remaining = ray.tfar - moved;
+            if remaining <= 0.0 {
+                continue;
+            }
+            waves.shadow_rays[i] = TraceRay {
+                origin,
+                tfar: remaining,
+                ..ray
+            };
+            worker.counters.count_rays(RayKind::Shadow, 1);
+            still_active.push(i);
+        }
+        active = still_active;
+    }
+    for &i in &active {
+        // Ran out of crossings: treat as blocked.
+        strength[i] = Vec3::ZERO;
+    }
+    for (shadow, s) in waves.shadows.iter().zip(&strength) {
+        if s.max_element() > 0.0 {
+            add_radiance(image, shadow.pixel, shadow.contribution * *s);
+        }
+    }
+}
+
+/// Shadow rays stop just short of the light so the light's own position is not an occluder.
+#[inline]
+fn shadow_tfar(distance: f32) -> f32 {
+    if distance.is_finite() {
+        distance * (1.0 - 1e-4)
+    } else {
+        f32::INFINITY
+    }
+}

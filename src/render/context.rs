@@ -1,0 +1,58 @@
+//! Everything a worker needs to render a tile, shared read-only across threads, and the
+//! per-worker state it fills.
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use crate::camera::Camera;
+use crate::footprint::LodStrategy;
+use crate::integrator::AovSelection;
+use crate::render::effects::EffectSet;
+use crate::render::prepared::{MaterialTable, SurfaceLookup};
+use crate::render::stats::WorkCounters;
+use crate::render::tracer::Tracer;
+use crate::scene::SceneDescription;
+use crate::texture::{FilterOptions, Texture, TileSet};
+
+/// How to render: size, sampling, recursion and filtering choices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub min_throughput: f32,
+    pub lod: LodStrategy,
+    pub filter: FilterOptions,
+    pub fresnel: crate::scene::FresnelMode,
+    pub aovs: AovSelection,
+    /// Record the 64x64 texture tiles every lookup touches (for `--stats`).
+    pub count_tiles: bool,
+    /// Force every effect on (the general path), for benchmarks.
+    pub all_effects: bool,
+}
+
+/// The shared, read-only state of one render.
+pub struct RenderContext {
+    pub scene: Arc<SceneDescription>,
+    pub tracer: Tracer,
+    pub surfaces: SurfaceLookup,
+    pub textures: Vec<Arc<Texture>>,
+    pub materials: MaterialTable,
+    pub camera: Camera,
+    /// Unit viewing direction, for camera-space depth.
+    pub camera_forward: Vec3,
+    pub effects: EffectSet,
+    pub options: RenderOptions,
+    /// Mean environment radiance: the ambient light of diffuse surfaces.
+    pub environment_mean: Vec3,
+}
+
+/// What one worker accumulates while rendering tiles.
+#[derive(Default)]
+pub struct WorkerState {
+    pub counters: WorkCounters,
+    /// One tile record per texture, when tiles are counted.
+    pub tiles: Vec<TileSet>,
+}

@@ -1,0 +1,262 @@
+//! The render stage: from a scene description to a filled film.
+//!
+//! Data flow: [`SceneDescription`] -> [`prepare`] (decode textures, build and commit the
+//! Embree scene, analyse effects) -> tiles rendered in parallel by an
+//! [`Integrator`](crate::integrator::Integrator) on rayon workers (each with the
+//! flush-to-zero/denormals-are-zero bits Embree asks for) -> a [`RenderResult`] holding
+//! the film and the statistics. Writing files is the caller's business (`crate::film`).
+
+pub mod context;
+pub mod effects;
+pub mod prepared;
+pub mod sampling;
+pub mod stats;
+pub mod tracer;
+
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::film::{Film, Layer};
+use crate::integrator::{AovSelection, Integrator, TileImage, TileRect};
+use crate::scene::SceneDescription;
+
+pub use context::{RenderContext, RenderOptions, WorkerState};
+pub use effects::EffectSet;
+pub use prepared::PrepareError;
+pub use stats::{RenderStats, TileUsage, WorkCounters};
+
+/// Side of the square work tiles handed to workers (a multiple of the 4x4 packet block).
+pub const TILE_SIZE: u32 = 16;
+
+/// A finished (or interrupted) render.
+pub struct RenderResult {
+    pub film: Film,
+    pub stats: RenderStats,
+    /// Which work tiles finished (all of them unless cancelled).
+    pub finished_tiles: Vec<bool>,
+}
+
+/// Build everything a render needs from a scene description.
+pub fn prepare(
+    scene: Arc<SceneDescription>,
+    options: RenderOptions,
+) -> Result<RenderContext, PrepareError> {
+    let Some(camera_desc) = scene.camera.clone() else {
+        return Err(PrepareError::Invalid {
+            source_label: scene.source.clone(),
+            message: "the scene has no camera".to_string(),
+        });
+    };
+    let textures = prepared::decode_textures(&scene)?;
+    let (tracer, geometries) = tracer::Tracer::build(&scene, &textures, &options)?;
+    let camera = crate::camera::Camera::new(&camera_desc, options.width, options.height);
+    let camera_forward = (camera_desc.target - camera_desc.eye).normalize_or(glam::Vec3::NEG_Z);
+    let effects = if options.all_effects {
+        EffectSet::all()
+    } else {
+        EffectSet::analyse(&scene, options.lod).0
+    };
+    let environment_mean = prepared::environment_mean(&scene.environment, &textures);
+    Ok(RenderContext {
+        materials: prepared::MaterialTable::new(&scene.materials),
+        surfaces: prepared::SurfaceLookup {
+            scene: scene.clone(),
+            geometries,
+        },
+        scene,
+        tracer,
+        textures,
+        camera,
+        camera_forward,
+        effects,
+        options,
+        environment_mean,
+    })
+}
+
+/// The film layers an AOV selection asks for (colour is always there).
+pub fn film_layers(aovs: AovSelection) -> Vec<Layer> {
+    let mut layers = vec![Layer::Color];
+    if aovs.surface {
+        layers.extend([Layer::Depth, Layer::Normal, Layer::Albedo, Layer::Uv]);
+    }
+    if aovs.texture_footprint {
+        layers.extend([Layer::TexFootprint, Layer::TexColor]);
+    }
+    if aovs.lod {
+        layers.extend([Layer::Lod, Layer::Footprint]);
+    }
+    layers
+}
+
+/// The work tiles of an image, in row-major order.
+pub fn work_tiles(width: u32, height: u32) -> Vec<TileRect> {
+    let mut tiles = Vec::new();
+    for y0 in (0..height).step_by(TILE_SIZE as usize) {
+        for x0 in (0..width).step_by(TILE_SIZE as usize) {
+            tiles.push(TileRect {
+                x0,
+                y0,
+                width: TILE_SIZE.min(width - x0),
+                height: TILE_SIZE.min(height - y0),
+            });
+        }
+    }
+    tiles
+}
+
+/// Hooks a render reports to: progress after each tile and a cancellation flag.
+pub struct RenderControl<'a> {
+    /// Called with (finished tiles, total tiles) from worker threads.
+    pub progress: Option<&'a (dyn Fn(usize, usize) + Sync)>,
+    /// Set to stop the render after the tiles in flight.
+    pub cancel: Option<&'a AtomicBool>,
+    /// Tiles already finished by an earlier run (`--resume`): skipped.
+    pub skip: Option<&'a [bool]>,
+}
+
+impl Default for RenderControl<'_> {
+    fn default() -> Self {
+        RenderControl {
+            progress: None,
+            cancel: None,
+            skip: None,
+        }
+    }
+}
+
+/// Render `context` with `integrator` into a new film.
+pub fn render(
+    context: &RenderContext,
+    integrator: &dyn Integrator,
+    control: &RenderControl,
+) -> RenderResult {
+    let options = &context.options;
+    let tiles = work_tiles(options.width, options.height);
+    let mut film = Film::new(options.width, options.height, &film_layers(options.aovs));
+    let finished_count = AtomicUsize::new(0);
+    let totals = Mutex::new(WorkerState::default());
+    let count_tiles = options.count_tiles;
+    let start = Instant::now();
+    let texture_count = context.textures.len();
+    let new_worker = || WorkerState {
+        counters: WorkCounters::default(),
+        tiles: if count_tiles {
+            context
+                .textures
+                .iter()
+                .map(|t| crate::texture::TileSet::new(t))
+                .collect()
+        } else {
+            Vec::new()
+        },
+    };
+    let results: Vec<Option<TileImage>> = tiles
+        .par_iter()
+        .enumerate()
+        .map_init(
+            || {
+                crate::embree::enable_flush_denormals();
+                new_worker()
+            },
+            |worker, (index, tile)| {
+                if control.skip.is_some_and(|skip| skip.get(index) == Some(&true)) {
+                    return None;
+                }
+                if control.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                    return None;
+                }
+                let mut image = TileImage::new(*tile, options.aovs);
+                integrator.render_tile(context, *tile, &mut image, worker);
+                // Hand this tile's work to the total so nothing is lost when a worker's
+                // state is dropped.
+                {
+                    let mut total = totals.lock().unwrap_or_else(|e| e.into_inner());
+                    total.counters.add(&worker.counters);
+                    worker.counters = WorkCounters::default();
+                    if count_tiles {
+                        if total.tiles.is_empty() {
+                            total.tiles = std::mem::take(&mut worker.tiles);
+                            worker.tiles = new_worker().tiles;
+                        } else {
+                            for (sum, part) in total.tiles.iter_mut().zip(&worker.tiles) {
+                                sum.merge(part);
+                            }
+                            worker.tiles = new_worker().tiles;
+                        }
+                    }
+                }
+                let done = finished_count.fetch_add(1, Ordering::Relaxed) + 1;
+                if let Some(progress) = control.progress {
+                    progress(done, tiles.len());
+                }
+                Some(image)
+            },
+        )
+        .collect();
+    let seconds = start.elapsed().as_secs_f64();
+
+    let mut finished_tiles = vec![false; tiles.len()];
+    for (index, (tile, image)) in tiles.iter().zip(&results).enumerate() {
+        if let Some(image) = image {
+            film.write_tile(tile, image);
+            finished_tiles[index] = true;
+        }
+    }
+    let total = totals.into_inner().unwrap_or_else(|e| e.into_inner());
+    let counters = total.counters;
+    let texture_tiles = count_tiles.then(|| TileUsage {
+        total: total.tiles.iter().map(|t| t.count()).sum(),
+        per_texture: (0..texture_count)
+            .map(|i| {
+                (
+                    context.scene.textures[i].name.clone(),
+                    total
+                        .tiles
+                        .get(i)
+                        .map(|t| t.count_per_level())
+                        .unwrap_or_default(),
+                )
+            })
+            .collect(),
+    });
+    let (_, reasons) = effects::EffectSet::analyse(&context.scene, options.lod);
+    let effects = if options.all_effects {
+        context
+            .effects
+            .names()
+            .into_iter()
+            .map(|name| stats::EffectReason {
+                effect: name.to_string(),
+                because: "--all-effects".to_string(),
+            })
+            .collect()
+    } else {
+        reasons
+    };
+    let stats = RenderStats {
+        scene: context.scene.source.clone(),
+        width: options.width,
+        height: options.height,
+        spp: options.spp,
+        threads: rayon::current_num_threads(),
+        lod: options.lod.to_string(),
+        filter: options.filter.filter.to_string(),
+        seconds,
+        mrays_per_second: counters.total_rays() as f64 / seconds.max(1e-9) / 1e6,
+        counters,
+        texture_memory_bytes: context.textures.iter().map(|t| t.memory_bytes() as u64).sum(),
+        texture_tiles,
+        effects,
+        notes: context.scene.notes.clone(),
+        complete: finished_tiles.iter().all(|&f| f),
+    };
+    RenderResult {
+        film,
+        stats,
+        finished_tiles,
+    }
+}

@@ -1,0 +1,276 @@
+//! A scene made ready to render: decoded textures, the committed Embree scene, the camera,
+//! and the lookups that turn an Embree hit back into a [`SurfaceHit`].
+
+use std::sync::Arc;
+
+use glam::{Affine2, Vec2, Vec3, Vec4};
+
+use crate::camera::Camera;
+use crate::hit::{Patch, SurfaceHit};
+use crate::render::tracer::TraceHit;
+use crate::scene::{Environment, Material, SceneDescription, TextureBinding, TextureSource};
+use crate::shading::beer;
+use crate::texture::{FilterOptions, Texture, TextureQuery};
+
+/// What an Embree geometry id stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GeometryRef {
+    Mesh(usize),
+    /// All spheres live in one geometry; the primitive id indexes `SceneDescription::spheres`.
+    Spheres,
+}
+
+/// Per-material values the integrator needs on every hit, computed once.
+#[derive(Clone, Debug)]
+pub struct MaterialTable {
+    /// Beer's-law absorption coefficient per material (zero when it has no medium).
+    pub sigma: Vec<Vec3>,
+}
+
+/// Failure to prepare a scene for rendering (textures that do not decode, Embree errors).
+#[derive(Debug, thiserror::Error)]
+pub enum PrepareError {
+    #[error("{0}")]
+    Texture(#[from] crate::texture::TextureError),
+    #[error("{source_label}: Embree: {message}")]
+    Embree { source_label: String, message: String },
+    #[error("{source_label}: {message}")]
+    Invalid { source_label: String, message: String },
+}
+
+/// Decode every texture of `scene` (sRGB colour textures are decoded to linear on load).
+pub fn decode_textures(scene: &SceneDescription) -> Result<Vec<Arc<Texture>>, PrepareError> {
+    scene
+        .textures
+        .iter()
+        .map(|desc| {
+            let texture = match &desc.source {
+                TextureSource::File(path) => Texture::from_file(path, desc.color_space)?,
+                TextureSource::Encoded { label, bytes } => {
+                    Texture::from_encoded(bytes, label, desc.color_space)?
+                }
+            };
+            Ok(Arc::new(texture))
+        })
+        .collect()
+}
+
+impl MaterialTable {
+    pub fn new(materials: &[Material]) -> MaterialTable {
+        MaterialTable {
+            sigma: materials
+                .iter()
+                .map(|m| beer::sigma_from_attenuation(m.attenuation_color, m.attenuation_distance))
+                .collect(),
+        }
+    }
+}
+
+/// Surface data of a prepared scene, independent of Embree: turns Embree's
+/// (geometry, primitive, u, v, t) back into a [`SurfaceHit`].
+pub struct SurfaceLookup {
+    pub scene: Arc<SceneDescription>,
+    pub geometries: Vec<GeometryRef>,
+}
+
+impl SurfaceLookup {
+    /// The surface at `hit` of the ray (`origin`, unit `direction`).
+    pub fn surface_hit(&self, origin: Vec3, direction: Vec3, hit: &TraceHit) -> SurfaceHit {
+        let position = origin + direction * hit.t;
+        match self.geometries[hit.geometry as usize] {
+            GeometryRef::Mesh(index) => {
+                let mesh = &self.scene.meshes[index];
+                let [i0, i1, i2] = mesh.triangles[hit.primitive as usize];
+                let (i0, i1, i2) = (i0 as usize, i1 as usize, i2 as usize);
+                let p = [mesh.positions[i0], mesh.positions[i1], mesh.positions[i2]];
+                let (u, v) = (hit.u, hit.v);
+                let w = 1.0 - u - v;
+                let e1 = p[1] - p[0];
+                let e2 = p[2] - p[0];
+                let geometric_normal = e1.cross(e2).normalize_or(Vec3::Y);
+                let n = (!mesh.normals.is_empty())
+                    .then(|| [mesh.normals[i0], mesh.normals[i1], mesh.normals[i2]]);
+                let mut shading_normal = match n {
+                    Some(n) => {
+                        let interpolated = n[0] * w + n[1] * u + n[2] * v;
+                        if interpolated.is_finite() {
+                            interpolated.normalize_or(geometric_normal)
+                        } else {
+                            geometric_normal
+                        }
+                    }
+                    None => geometric_normal,
+                };
+                // Interpolated normals may face away from the geometry: keep them on its side.
+                if shading_normal.dot(geometric_normal) < 0.0 {
+                    shading_normal = -shading_normal;
+                }
+                let st_vertices =
+                    (!mesh.st.is_empty()).then(|| [mesh.st[i0], mesh.st[i1], mesh.st[i2]]);
+                let (st, dpds, dpdt) = match st_vertices {
+                    Some(t) => {
+                        let st = t[0] * w + t[1] * u + t[2] * v;
+                        let (dpds, dpdt) = triangle_position_derivatives(p, t);
+                        (st, dpds, dpdt)
+                    }
+                    None => (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO),
+                };
+                SurfaceHit {
+                    t: hit.t,
+                    position,
+                    geometric_normal,
+                    shading_normal,
+                    barycentric: Vec2::new(u, v),
+                    st,
+                    dpds,
+                    dpdt,
+                    material: mesh.material as u32,
+                    patch: Patch::Triangle { p, n, st: st_vertices },
+                }
+            }
+            GeometryRef::Spheres => {
+                let sphere = &self.scene.spheres[hit.primitive as usize];
+                // Recompute the point from the centre so it lies on the sphere exactly.
+                let normal = (position - sphere.center).normalize_or(Vec3::Y);
+                let position = sphere.center + normal * sphere.radius;
+                let (st, dpds, dpdt) = sphere_parameterisation(normal, sphere.radius);
+                SurfaceHit {
+                    t: hit.t,
+                    position,
+                    geometric_normal: normal,
+                    shading_normal: normal,
+                    barycentric: st,
+                    st,
+                    dpds,
+                    dpdt,
+                    material: sphere.material as u32,
+                    patch: Patch::Sphere {
+                        center: sphere.center,
+                        radius: sphere.radius,
+                    },
+                }
+            }
+        }
+    }
+}
+
+/// dP/ds and dP/dt of a triangle with texture coordinates `t` (zero if the st mapping is
+/// degenerate).
+fn triangle_position_derivatives(p: [Vec3; 3], t: [Vec2; 3]) -> (Vec3, Vec3) {
+    let dp1 = p[1] - p[0];
+    let dp2 = p[2] - p[0];
+    let dt1 = t[1] - t[0];
+    let dt2 = t[2] - t[0];
+    let det = dt1.x * dt2.y - dt1.y * dt2.x;
+    if !det.is_finite() || det.abs() < 1e-20 {
+        return (Vec3::ZERO, Vec3::ZERO);
+    }
+    let inv = 1.0 / det;
+    let dpds = (dp1 * dt2.y - dp2 * dt1.y) * inv;
+    let dpdt = (dp2 * dt1.x - dp1 * dt2.x) * inv;
+    if dpds.is_finite() && dpdt.is_finite() {
+        (dpds, dpdt)
+    } else {
+        (Vec3::ZERO, Vec3::ZERO)
+    }
+}
+
+/// The lat-long parameterisation of a sphere (s = azimuth / 2pi, t = polar angle / pi,
+/// t = 0 at +Y) at unit normal `n`, with dP/ds and dP/dt.
+fn sphere_parameterisation(n: Vec3, radius: f32) -> (Vec2, Vec3, Vec3) {
+    use std::f32::consts::PI;
+    let st = crate::footprint::direction_to_lat_long(n);
+    let phi = st.x * 2.0 * PI;
+    let theta = st.y * PI;
+    let (sin_phi, cos_phi) = phi.sin_cos();
+    let (sin_theta, cos_theta) = theta.sin_cos();
+    // P = c + r (sin(theta) cos(phi), cos(theta), sin(theta) sin(phi)) up to the convention of
+    // direction_to_lat_long; derivatives follow from the chain rule with ds = dphi / 2pi,
+    // dt = dtheta / pi.
+    let dpdphi = Vec3::new(-sin_theta * sin_phi, 0.0, sin_theta * cos_phi) * radius;
+    let dpdtheta = Vec3::new(cos_theta * cos_phi, -sin_theta, cos_theta * sin_phi) * radius;
+    (st, dpdphi * (2.0 * PI), dpdtheta * PI)
+}
+
+/// A texture bound to a material slot, ready to sample.
+#[inline]
+pub fn sample_binding(
+    textures: &[Arc<Texture>],
+    binding: &TextureBinding,
+    st: Vec2,
+    gradients: [f32; 4],
+    options: &FilterOptions,
+) -> Vec4 {
+    let query = binding_query(&binding.transform, st, gradients);
+    textures[binding.texture].sample(&query, options)
+}
+
+/// The query for a binding: st and gradients through the binding's affine transform.
+#[inline]
+pub fn binding_query(transform: &Affine2, st: Vec2, g: [f32; 4]) -> TextureQuery {
+    let st = transform.transform_point2(st);
+    let dx = transform.matrix2 * Vec2::new(g[0], g[1]);
+    let dy = transform.matrix2 * Vec2::new(g[2], g[3]);
+    TextureQuery {
+        s: st.x,
+        t: st.y,
+        dsdx: dx.x,
+        dtdx: dx.y,
+        dsdy: dy.x,
+        dtdy: dy.y,
+    }
+}
+
+/// The environment seen in direction `dir` (unfiltered background colour or filtered lat-long
+/// lookup with the given gradients).
+pub fn environment_radiance(
+    environment: &Environment,
+    textures: &[Arc<Texture>],
+    dir: Vec3,
+    gradients: [f32; 4],
+    options: &FilterOptions,
+) -> Vec3 {
+    match environment {
+        Environment::Color(c) => *c,
+        Environment::LatLong { texture, intensity } => {
+            let st = crate::footprint::direction_to_lat_long(dir);
+            let q = TextureQuery {
+                s: st.x,
+                t: st.y,
+                dsdx: gradients[0],
+                dtdx: gradients[1],
+                dsdy: gradients[2],
+                dtdy: gradients[3],
+            };
+            textures[*texture].sample(&q, options).truncate() * *intensity
+        }
+    }
+}
+
+/// Average radiance of the environment, the ambient term that lights diffuse surfaces.
+pub fn environment_mean(environment: &Environment, textures: &[Arc<Texture>]) -> Vec3 {
+    match environment {
+        Environment::Color(c) => *c,
+        Environment::LatLong { texture, intensity } => {
+            // The coarsest mip level is the mean of the map.
+            let q = TextureQuery {
+                s: 0.5,
+                t: 0.5,
+                dsdx: 1.0,
+                dtdx: 0.0,
+                dsdy: 0.0,
+                dtdy: 1.0,
+            };
+            let options = FilterOptions {
+                filter: crate::texture::FilterMode::Trilinear,
+                ..FilterOptions::default()
+            };
+            textures[*texture].sample(&q, &options).truncate() * *intensity
+        }
+    }
+}
+
+/// Needed to keep the camera next to the lookups in the render context.
+pub fn camera_for(scene: &SceneDescription, width: u32, height: u32) -> Option<Camera> {
+    scene.camera.as_ref().map(|desc| Camera::new(desc, width, height))
+}

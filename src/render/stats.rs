@@ -1,0 +1,151 @@
+//! Counters of the work a render did, merged from every worker, printed and written as JSON.
+//!
+//! Each worker fills its own [`WorkCounters`] for a tile and adds it into the shared total
+//! once per tile, so counting costs nothing on the hot path beyond an integer increment.
+
+use serde::Serialize;
+
+/// Kinds of rays the renderer traces, counted separately (seed 001's ray tree).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayKind {
+    Camera,
+    Shadow,
+    Reflection,
+    Refraction,
+}
+
+/// Work done by one worker (or, after merging, by the whole render).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct WorkCounters {
+    pub camera_rays: u64,
+    pub shadow_rays: u64,
+    pub reflection_rays: u64,
+    pub refraction_rays: u64,
+    /// Footprint transfers, reflections and refractions (ray cones or differentials).
+    pub footprint_updates: u64,
+    /// Filtered texture lookups (surface, environment and alpha textures).
+    pub texture_lookups: u64,
+    /// Alpha-cutout filter callbacks run by Embree.
+    pub filter_callbacks: u64,
+    /// Absorption (Beer's law) evaluations.
+    pub absorption_evaluations: u64,
+}
+
+impl WorkCounters {
+    pub fn count_rays(&mut self, kind: RayKind, n: u64) {
+        match kind {
+            RayKind::Camera => self.camera_rays += n,
+            RayKind::Shadow => self.shadow_rays += n,
+            RayKind::Reflection => self.reflection_rays += n,
+            RayKind::Refraction => self.refraction_rays += n,
+        }
+    }
+
+    pub fn total_rays(&self) -> u64 {
+        self.camera_rays + self.shadow_rays + self.reflection_rays + self.refraction_rays
+    }
+
+    pub fn add(&mut self, other: &WorkCounters) {
+        self.camera_rays += other.camera_rays;
+        self.shadow_rays += other.shadow_rays;
+        self.reflection_rays += other.reflection_rays;
+        self.refraction_rays += other.refraction_rays;
+        self.footprint_updates += other.footprint_updates;
+        self.texture_lookups += other.texture_lookups;
+        self.filter_callbacks += other.filter_callbacks;
+        self.absorption_evaluations += other.absorption_evaluations;
+    }
+}
+
+/// Texture tiles (64x64 texels) touched per texture and mip level over a whole render:
+/// the metric of seed 000's figures 4-7.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct TileUsage {
+    pub total: u64,
+    /// One entry per texture, in scene order: `(name, tiles per mip level)`.
+    pub per_texture: Vec<(String, Vec<u64>)>,
+}
+
+/// Everything `--stats` writes and the summary line prints.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RenderStats {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub threads: usize,
+    pub lod: String,
+    pub filter: String,
+    pub seconds: f64,
+    pub counters: WorkCounters,
+    pub mrays_per_second: f64,
+    /// Decoded texture memory (all mip levels), bytes.
+    pub texture_memory_bytes: u64,
+    pub texture_tiles: Option<TileUsage>,
+    /// Effects the scene needs, each with the reason.
+    pub effects: Vec<EffectReason>,
+    pub notes: Vec<String>,
+    pub complete: bool,
+}
+
+#[derive(Clone, Debug, Serialize, PartialEq, Eq)]
+pub struct EffectReason {
+    pub effect: String,
+    pub because: String,
+}
+
+impl RenderStats {
+    /// The one-line summary printed at the end of a render.
+    pub fn summary_line(&self) -> String {
+        let c = &self.counters;
+        let mut line = format!(
+            "rendered {} ({}x{}, {} spp, lod {}, filter {}) in {:.3} s: {} camera, {} shadow, {} reflection, {} refraction rays, {:.2} Mrays/s",
+            self.scene,
+            self.width,
+            self.height,
+            self.spp,
+            self.lod,
+            self.filter,
+            self.seconds,
+            c.camera_rays,
+            c.shadow_rays,
+            c.reflection_rays,
+            c.refraction_rays,
+            self.mrays_per_second
+        );
+        if !self.effects.is_empty() {
+            let names: Vec<&str> = self.effects.iter().map(|e| e.effect.as_str()).collect();
+            line.push_str(&format!("; effects: {}", names.join(", ")));
+        }
+        if let Some(tiles) = &self.texture_tiles {
+            line.push_str(&format!("; {} texture tiles", tiles.total));
+        }
+        for note in &self.notes {
+            line.push_str("; ");
+            line.push_str(note);
+        }
+        if !self.complete {
+            line.push_str("; INCOMPLETE");
+        }
+        line
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counters_add_and_total() {
+        let mut a = WorkCounters::default();
+        a.count_rays(RayKind::Camera, 16);
+        a.count_rays(RayKind::Shadow, 4);
+        let mut b = WorkCounters::default();
+        b.count_rays(RayKind::Refraction, 2);
+        b.texture_lookups = 7;
+        a.add(&b);
+        assert_eq!(a.total_rays(), 22);
+        assert_eq!(a.refraction_rays, 2);
+        assert_eq!(a.texture_lookups, 7);
+    }
+}

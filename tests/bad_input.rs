@@ -1,0 +1,151 @@
+//! Every kind of bad input gets exit status 2, one line naming the file, and no output.
+
+mod common;
+
+use common::*;
+
+const GOOD_SCENE: &str = r#"
+[render]
+width = 8
+height = 8
+
+[camera]
+type = "pinhole"
+eye = [0.0, 1.0, 4.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov = 40.0
+
+[[light]]
+type = "point"
+position = [0.0, 4.0, 0.0]
+color = [1.0, 1.0, 1.0]
+intensity = 10.0
+
+[[material]]
+name = "matte"
+base_color = [0.5, 0.5, 0.5]
+
+[[sphere]]
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+material = "matte"
+"#;
+
+/// Run `render scene_file` in `dir` and check the failure contract: status 2, one line on
+/// stderr mentioning `names`, no output file.
+fn assert_rejected(dir: &std::path::Path, scene_file: &str, extra: &[&str], names: &str) {
+    let mut args = vec!["render", scene_file, "-o", "out.exr", "--quiet"];
+    args.extend_from_slice(extra);
+    let out = run_in(dir, &args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{scene_file}: stderr {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{scene_file}: expected one line, got {stderr:?}");
+    assert!(lines[0].contains(names), "{scene_file}: '{}' does not name '{names}'", lines[0]);
+    assert!(!dir.join("out.exr").exists(), "{scene_file}: an output was written");
+    assert!(!dir.join("out.png").exists(), "{scene_file}: a PNG was written");
+}
+
+#[test]
+fn the_good_scene_renders() {
+    let dir = temp_dir();
+    write(dir.path(), "good.toml", GOOD_SCENE);
+    let out = run_in(dir.path(), &["render", "good.toml", "-o", "out.exr", "--quiet"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(dir.path().join("out.exr").exists());
+    assert!(dir.path().join("out.png").exists());
+}
+
+#[test]
+fn missing_scene_file() {
+    let dir = temp_dir();
+    assert_rejected(dir.path(), "nowhere.toml", &[], "nowhere.toml");
+}
+
+#[test]
+fn missing_mesh_file() {
+    let dir = temp_dir();
+    let text = format!("{GOOD_SCENE}\n[[mesh]]\nfile = \"absent.obj\"\nmaterial = \"matte\"\n");
+    write(dir.path(), "s.toml", &text);
+    assert_rejected(dir.path(), "s.toml", &[], "absent.obj");
+}
+
+#[test]
+fn malformed_toml_reports_line_and_column() {
+    let dir = temp_dir();
+    let text = GOOD_SCENE.replace("radius = 1.0", "radius = = 1.0");
+    write(dir.path(), "broken.toml", &text);
+    let out = run_in(dir.path(), &["render", "broken.toml", "-o", "out.exr", "--quiet"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    let line = GOOD_SCENE.lines().position(|l| l.contains("radius")).unwrap() + 1;
+    assert!(stderr.contains(&format!("broken.toml:{line}:")), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(!dir.path().join("out.exr").exists());
+}
+
+#[test]
+fn unknown_material_name() {
+    let dir = temp_dir();
+    write(dir.path(), "s.toml", &GOOD_SCENE.replace("material = \"matte\"", "material = \"matt\""));
+    assert_rejected(dir.path(), "s.toml", &[], "matt");
+}
+
+#[test]
+fn unknown_texture_name() {
+    let dir = temp_dir();
+    let text = GOOD_SCENE.replace(
+        "base_color = [0.5, 0.5, 0.5]",
+        "base_color = [0.5, 0.5, 0.5]\nbase_color_texture = \"nosuch\"",
+    );
+    write(dir.path(), "s.toml", &text);
+    assert_rejected(dir.path(), "s.toml", &[], "nosuch");
+}
+
+#[test]
+fn nan_and_infinite_numbers() {
+    let dir = temp_dir();
+    write(dir.path(), "nan.toml", &GOOD_SCENE.replace("radius = 1.0", "radius = nan"));
+    assert_rejected(dir.path(), "nan.toml", &[], "nan.toml");
+    write(dir.path(), "inf.toml", &GOOD_SCENE.replace("intensity = 10.0", "intensity = inf"));
+    assert_rejected(dir.path(), "inf.toml", &[], "inf.toml");
+}
+
+#[test]
+fn zero_area_image_size() {
+    let dir = temp_dir();
+    write(dir.path(), "zero.toml", &GOOD_SCENE.replace("width = 8", "width = 0"));
+    assert_rejected(dir.path(), "zero.toml", &[], "zero.toml");
+    write(dir.path(), "good.toml", GOOD_SCENE);
+    assert_rejected(dir.path(), "good.toml", &["--height", "0"], "good.toml");
+}
+
+#[test]
+fn unreadable_texture() {
+    let dir = temp_dir();
+    write(dir.path(), "fake.png", "this is not a PNG file");
+    let text = GOOD_SCENE.replace(
+        "[[material]]",
+        "[[texture]]\nname = \"fake\"\nfile = \"fake.png\"\n\n[[material]]",
+    )
+    .replace(
+        "base_color = [0.5, 0.5, 0.5]",
+        "base_color = [0.5, 0.5, 0.5]\nbase_color_texture = \"fake\"",
+    );
+    write(dir.path(), "s.toml", &text);
+    assert_rejected(dir.path(), "s.toml", &[], "fake.png");
+}
+
+#[test]
+fn a_failed_render_never_replaces_the_previous_output() {
+    let dir = temp_dir();
+    write(dir.path(), "good.toml", GOOD_SCENE);
+    let out = run_in(dir.path(), &["render", "good.toml", "-o", "keep.exr", "--quiet"]);
+    assert!(out.status.success());
+    let before = std::fs::read(dir.path().join("keep.exr")).unwrap();
+    write(dir.path(), "bad.toml", &GOOD_SCENE.replace("radius = 1.0", "radius = nan"));
+    let out = run_in(dir.path(), &["render", "bad.toml", "-o", "keep.exr", "--quiet"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(std::fs::read(dir.path().join("keep.exr")).unwrap(), before);
+}
