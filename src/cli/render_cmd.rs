@@ -238,8 +238,12 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     if let Some(stats_path) = &args.stats {
         let json = serde_json::to_string_pretty(&result.stats)
             .map_err(|e| CommandError::internal(format!("statistics: {e}")))?;
-        film::write_file_atomically(stats_path, json.as_bytes())
-            .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        film::atomic_file::write_atomically(stats_path, |w| {
+            use std::io::Write;
+            w.write_all(json.as_bytes())
+                .map_err(|e| film::OutputError::io(stats_path, "write", e))
+        })
+        .map_err(|e| CommandError::bad_input(e.to_string()))?;
     }
     let mut line = result.stats.summary_line();
     line.push_str(&format!("; wrote {}", exr_path.display()));

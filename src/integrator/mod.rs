@@ -9,6 +9,7 @@ pub mod tile_image;
 pub mod whitted;
 
 pub use tile_image::{AovSelection, TileImage, TileRect};
+pub use whitted::Whitted;
 
 use crate::render::context::RenderContext;
 use crate::render::context::WorkerState;

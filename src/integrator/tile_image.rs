@@ -1,19 +1,6 @@
 //! The pixels of one tile as an integrator produces them: colour, alpha and the AOVs.
 
-/// A rectangle of pixels, in image coordinates (y down).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct TileRect {
-    pub x0: u32,
-    pub y0: u32,
-    pub width: u32,
-    pub height: u32,
-}
-
-impl TileRect {
-    pub fn pixel_count(&self) -> usize {
-        (self.width * self.height) as usize
-    }
-}
+pub use crate::film::TileRect;
 
 /// Which AOVs to fill (colour and alpha are always filled).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -54,7 +41,7 @@ pub struct TileImage {
 impl TileImage {
     /// A zeroed image for `tile` with the selected AOVs.
     pub fn new(tile: TileRect, aovs: AovSelection) -> TileImage {
-        let n = tile.pixel_count();
+        let n = tile.area();
         let take = |on: bool| if on { n } else { 0 };
         TileImage {
             color: vec![[0.0; 3]; n],

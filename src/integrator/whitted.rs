@@ -23,8 +23,8 @@ use crate::render::prepared::{binding_query, environment_radiance};
 use crate::render::sampling;
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
-use crate::scene::{FresnelMode, Material};
-use crate::shading::{self, beer, fresnel, ray_offset};
+use crate::scene::Material;
+use crate::shading::{self, DielectricBoundary};
 
 /// Shadow rays stop passing through transmissive occluders below this strength (seed 001).
 const SHADOW_CUTOFF: f32 = 0.002;
@@ -260,7 +260,7 @@ fn shade_hit(
 
     // Beer's law over the distance travelled inside the medium (seed 004).
     if effects.absorption && ray.sigma != Vec3::ZERO {
-        ray.throughput *= beer::transmittance(ray.sigma, surface.t);
+        ray.throughput *= shading::transmittance(ray.sigma, surface.t);
         worker.counters.absorption_evaluations += 1;
     }
     if effects.footprints {
@@ -287,14 +287,14 @@ fn shade_hit(
     if opaque > 0.0 {
         let wo = -ray.direction;
         if effects.shadows {
-            let origin = ray_offset::offset_ray_origin(surface.position, ng);
+            let origin = shading::offset_ray_origin(surface.position, ng);
             for light in &context.scene.lights {
-                let sample = shading::lights::light_sample(light, surface.position);
+                let sample = shading::light_sample(light, surface.position);
                 let wi = sample.direction_to_light;
                 if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 {
                     continue;
                 }
-                let f = shading::brdf::eval_surface(
+                let f = shading::eval_surface(
                     albedo,
                     material.specular,
                     material.shininess,
@@ -325,34 +325,17 @@ fn shade_hit(
     if !can_spawn {
         return;
     }
-    let mut spawn = |direction: Vec3,
-                     leave_normal: Vec3,
-                     weight: Vec3,
-                     kind: RayKind,
-                     footprint: Footprint,
-                     sigma: Vec3| {
-        let throughput = ray.throughput * weight;
-        if throughput.max_element() < options.min_throughput {
-            return;
-        }
-        worker.counters.count_rays(kind, 1);
-        waves.next.push(PathRay {
-            origin: ray_offset::offset_ray_origin(surface.position, leave_normal),
-            direction,
-            throughput,
-            footprint,
-            pixel: ray.pixel,
-            depth: ray.depth + 1,
-            kind,
-            sigma,
-            first_sample: ray.first_sample,
-        });
+    let spawner = Spawner {
+        parent: &ray,
+        position: surface.position,
+        min_throughput: options.min_throughput,
     };
-
     if effects.mirror_reflection && material.mirror > 0.0 {
         let reflected = reflect_above(ray.direction, ns, ng);
         let footprint = footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
-        spawn(
+        spawner.spawn(
+            waves,
+            worker,
             reflected,
             ng,
             Vec3::splat(material.mirror),
@@ -363,20 +346,18 @@ fn shade_hit(
     }
 
     if effects.refraction && material.transmission > 0.0 {
-        // eta = n_incident / n_transmitted; the outside is vacuum/air.
-        let eta = if front { 1.0 / material.ior } else { material.ior };
-        let cos_i = (-ray.direction).dot(ns);
-        let reflectance = match options.fresnel {
-            FresnelMode::Exact => fresnel::fresnel_dielectric(cos_i, eta),
-            FresnelMode::Schlick => fresnel::fresnel_schlick(cos_i, eta),
-        };
-        let refracted = shading::refraction::refract(ray.direction, ns, eta)
+        // Which side the ray comes from, eta = n_incident / n_transmitted (outside = 1).
+        let boundary = DielectricBoundary::new(ray.direction, surface.shading_normal, material.ior);
+        let reflectance = shading::fresnel(options.fresnel, boundary.cos_i, boundary.eta);
+        let refracted = shading::refract(ray.direction, boundary.normal, boundary.eta)
             .filter(|d| d.dot(ng) < 0.0);
+        // Total internal reflection (or a refracted ray that would stay on the incident side).
         let reflectance = if refracted.is_some() { reflectance } else { 1.0 };
         if let Some(refracted) = refracted {
             let footprint = if effects.footprints {
                 worker.counters.footprint_updates += 1;
-                ray.footprint.refract(ray.direction, surface, eta, refracted)
+                ray.footprint
+                    .refract(ray.direction, surface, boundary.eta, refracted)
             } else {
                 ray.footprint
             };
@@ -386,7 +367,9 @@ fn shade_hit(
             } else {
                 Vec3::ZERO
             };
-            spawn(
+            spawner.spawn(
+            waves,
+            worker,
                 refracted,
                 -ng,
                 Vec3::splat(material.transmission * (1.0 - reflectance)),
@@ -397,7 +380,9 @@ fn shade_hit(
         }
         let reflected = reflect_above(ray.direction, ns, ng);
         let footprint = footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
-        spawn(
+        spawner.spawn(
+            waves,
+            worker,
             reflected,
             ng,
             Vec3::splat(material.transmission * reflectance),
@@ -408,14 +393,55 @@ fn shade_hit(
     }
 }
 
+/// Spawns the secondary rays of one hit.
+struct Spawner<'a> {
+    parent: &'a PathRay,
+    position: Vec3,
+    min_throughput: f32,
+}
+
+impl Spawner<'_> {
+    /// Queue a ray leaving the surface on the side of `leave_normal`, unless its throughput
+    /// has fallen below the threshold (seed 001's "contribution too small" rule).
+    #[allow(clippy::too_many_arguments)]
+    fn spawn(
+        &self,
+        waves: &mut Waves,
+        worker: &mut WorkerState,
+        direction: Vec3,
+        leave_normal: Vec3,
+        weight: Vec3,
+        kind: RayKind,
+        footprint: Footprint,
+        sigma: Vec3,
+    ) {
+        let throughput = self.parent.throughput * weight;
+        if throughput.max_element() < self.min_throughput {
+            return;
+        }
+        worker.counters.count_rays(kind, 1);
+        waves.next.push(PathRay {
+            origin: shading::offset_ray_origin(self.position, leave_normal),
+            direction,
+            throughput,
+            footprint,
+            pixel: self.parent.pixel,
+            depth: self.parent.depth + 1,
+            kind,
+            sigma,
+            first_sample: self.parent.first_sample,
+        });
+    }
+}
+
 /// Mirror direction about the shading normal, kept above the geometric surface.
 #[inline]
 fn reflect_above(direction: Vec3, ns: Vec3, ng: Vec3) -> Vec3 {
-    let r = shading::refraction::reflect(direction, ns);
+    let r = shading::reflect(direction, ns);
     if r.dot(ng) > 0.0 {
         r
     } else {
-        shading::refraction::reflect(direction, ng)
+        shading::reflect(direction, ng)
     }
 }
 
@@ -551,7 +577,7 @@ fn trace_shadows(
             } else if context.effects.absorption {
                 // Leaving the medium: absorb over the distance travelled inside.
                 let inside = (travelled[i] + hit.t - entered_at[i]).max(0.0);
-                s *= beer::transmittance(context.materials.sigma[surface.material as usize], inside);
+                s *= shading::transmittance(context.materials.sigma[surface.material as usize], inside);
                 worker.counters.absorption_evaluations += 1;
             }
             strength[i] = s;
@@ -564,7 +590,7 @@ fn trace_shadows(
             } else {
                 surface.geometric_normal
             };
-            let origin = ray_offset::offset_ray_origin(surface.position, leave);
+            let origin = shading::offset_ray_origin(surface.position, leave);
             let moved = (origin - ray.origin).dot(ray.direction);
             travelled[i] += moved;
             let remaining = ray.tfar - moved;

@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::film::{Film, Layer};
+use crate::film::{Film, FilmTile, Layer};
 use crate::integrator::{AovSelection, Integrator, TileImage, TileRect};
 use crate::scene::SceneDescription;
 
@@ -148,7 +148,7 @@ pub fn render(
             context
                 .textures
                 .iter()
-                .map(|t| crate::texture::TileSet::new(t))
+                .map(|_| crate::texture::TileSet::new())
                 .collect()
         } else {
             Vec::new()
@@ -178,14 +178,13 @@ pub fn render(
                     total.counters.add(&worker.counters);
                     worker.counters = WorkCounters::default();
                     if count_tiles {
+                        let parts = std::mem::replace(&mut worker.tiles, new_worker().tiles);
                         if total.tiles.is_empty() {
-                            total.tiles = std::mem::take(&mut worker.tiles);
-                            worker.tiles = new_worker().tiles;
+                            total.tiles = parts;
                         } else {
-                            for (sum, part) in total.tiles.iter_mut().zip(&worker.tiles) {
+                            for (sum, part) in total.tiles.iter_mut().zip(parts) {
                                 sum.merge(part);
                             }
-                            worker.tiles = new_worker().tiles;
                         }
                     }
                 }
@@ -202,7 +201,7 @@ pub fn render(
     let mut finished_tiles = vec![false; tiles.len()];
     for (index, (tile, image)) in tiles.iter().zip(&results).enumerate() {
         if let Some(image) = image {
-            film.write_tile(tile, image);
+            copy_tile_to_film(image, *tile, &mut film);
             finished_tiles[index] = true;
         }
     }
@@ -259,4 +258,33 @@ pub fn render(
         stats,
         finished_tiles,
     }
+}
+
+/// Copy an integrator's tile into the film, layer by layer.
+fn copy_tile_to_film(image: &TileImage, rect: TileRect, film: &mut Film) {
+    let mut tile: FilmTile = film.new_tile(rect);
+    for y in 0..rect.height {
+        for x in 0..rect.width {
+            let i = (y * rect.width + x) as usize;
+            let (fx, fy) = (rect.x0 + x, rect.y0 + y);
+            let c = image.color[i];
+            let a = image.alpha[i];
+            tile.set(Layer::Color, fx, fy, &[c[0], c[1], c[2], a]);
+            if !image.depth.is_empty() {
+                tile.set(Layer::Depth, fx, fy, &[image.depth[i]]);
+                tile.set(Layer::Normal, fx, fy, &image.normal[i]);
+                tile.set(Layer::Albedo, fx, fy, &image.albedo[i]);
+                tile.set(Layer::Uv, fx, fy, &image.uv[i]);
+            }
+            if !image.tex.is_empty() {
+                tile.set(Layer::TexFootprint, fx, fy, &image.tex[i]);
+                tile.set(Layer::TexColor, fx, fy, &image.texcolor[i]);
+            }
+            if !image.lod.is_empty() {
+                tile.set(Layer::Lod, fx, fy, &[image.lod[i]]);
+                tile.set(Layer::Footprint, fx, fy, &[image.footprint[i]]);
+            }
+        }
+    }
+    film.merge_tile(&tile);
 }

@@ -9,7 +9,6 @@ use crate::camera::Camera;
 use crate::hit::{Patch, SurfaceHit};
 use crate::render::tracer::TraceHit;
 use crate::scene::{Environment, Material, SceneDescription, TextureBinding, TextureSource};
-use crate::shading::beer;
 use crate::texture::{FilterOptions, Texture, TextureQuery};
 
 /// What an Embree geometry id stands for.
@@ -60,7 +59,7 @@ impl MaterialTable {
         MaterialTable {
             sigma: materials
                 .iter()
-                .map(|m| beer::sigma_from_attenuation(m.attenuation_color, m.attenuation_distance))
+                .map(|m| crate::shading::sigma_from_attenuation(m.attenuation_color, m.attenuation_distance))
                 .collect(),
         }
     }
@@ -133,7 +132,7 @@ impl SurfaceLookup {
                 // Recompute the point from the centre so it lies on the sphere exactly.
                 let normal = (position - sphere.center).normalize_or(Vec3::Y);
                 let position = sphere.center + normal * sphere.radius;
-                let (st, dpds, dpdt) = sphere_parameterisation(normal, sphere.radius);
+                let (st, dpds, dpdt) = crate::footprint::lat_long_frame(normal, sphere.radius);
                 SurfaceHit {
                     t: hit.t,
                     position,
@@ -173,23 +172,6 @@ fn triangle_position_derivatives(p: [Vec3; 3], t: [Vec2; 3]) -> (Vec3, Vec3) {
     } else {
         (Vec3::ZERO, Vec3::ZERO)
     }
-}
-
-/// The lat-long parameterisation of a sphere (s = azimuth / 2pi, t = polar angle / pi,
-/// t = 0 at +Y) at unit normal `n`, with dP/ds and dP/dt.
-fn sphere_parameterisation(n: Vec3, radius: f32) -> (Vec2, Vec3, Vec3) {
-    use std::f32::consts::PI;
-    let st = crate::footprint::direction_to_lat_long(n);
-    let phi = st.x * 2.0 * PI;
-    let theta = st.y * PI;
-    let (sin_phi, cos_phi) = phi.sin_cos();
-    let (sin_theta, cos_theta) = theta.sin_cos();
-    // P = c + r (sin(theta) cos(phi), cos(theta), sin(theta) sin(phi)) up to the convention of
-    // direction_to_lat_long; derivatives follow from the chain rule with ds = dphi / 2pi,
-    // dt = dtheta / pi.
-    let dpdphi = Vec3::new(-sin_theta * sin_phi, 0.0, sin_theta * cos_phi) * radius;
-    let dpdtheta = Vec3::new(cos_theta * cos_phi, -sin_theta, cos_theta * sin_phi) * radius;
-    (st, dpdphi * (2.0 * PI), dpdtheta * PI)
 }
 
 /// A texture bound to a material slot, ready to sample.

@@ -42,3 +42,250 @@ impl TraceHit {
         self.geometry != u32::MAX
     }
 }
+
+use std::cell::Cell;
+use std::sync::Arc;
+
+use crate::embree::{
+    CommittedScene, Device, FilterCandidate, Ray, RayPacket, RayPayload, SceneBuilder,
+    TraceOptions,
+};
+use crate::render::context::RenderOptions;
+use crate::render::prepared::{GeometryRef, PrepareError};
+use crate::render::stats::WorkCounters;
+use crate::scene::SceneDescription;
+use crate::texture::{FilterMode, FilterOptions, Texture, TextureQuery};
+
+thread_local! {
+    /// Alpha-filter callbacks run on this thread since the last trace call drained it.
+    static FILTER_CALLS: Cell<u64> = const { Cell::new(0) };
+}
+
+/// The committed Embree scene and how to trace slices of rays through it.
+pub struct Tracer {
+    scene: CommittedScene,
+    /// Kept alive for as long as the scene.
+    _device: Device,
+}
+
+impl Tracer {
+    /// Build and commit the Embree scene of `scene`: one triangle geometry per mesh, one
+    /// sphere geometry for all spheres, alpha-cutout filters for cut-out materials.
+    pub fn build(
+        scene: &Arc<SceneDescription>,
+        textures: &[Arc<Texture>],
+        options: &RenderOptions,
+    ) -> Result<(Tracer, Vec<GeometryRef>), PrepareError> {
+        let embree_error = |e: crate::embree::EmbreeError| PrepareError::Embree {
+            source_label: scene.source.clone(),
+            message: e.to_string(),
+        };
+        let device = Device::new().map_err(embree_error)?;
+        let mut builder = SceneBuilder::new(&device).map_err(embree_error)?;
+        let mut geometries = Vec::new();
+        for (index, mesh) in scene.meshes.iter().enumerate() {
+            if mesh.triangles.is_empty() {
+                continue;
+            }
+            let id = builder
+                .add_triangle_mesh(&mesh.positions, &mesh.triangles)
+                .map_err(embree_error)?;
+            debug_assert_eq!(id as usize, geometries.len());
+            geometries.push(GeometryRef::Mesh(index));
+            let material = &scene.materials[mesh.material];
+            if let (Some(cutoff), Some(binding)) = (material.alpha_cutoff, &material.alpha_texture) {
+                let filter = alpha_filter(
+                    scene.clone(),
+                    index,
+                    textures[binding.texture].clone(),
+                    binding.transform,
+                    material.alpha,
+                    cutoff,
+                    options.filter.max_aniso,
+                );
+                builder.set_alpha_filter(id, filter).map_err(embree_error)?;
+            }
+        }
+        if !scene.spheres.is_empty() {
+            let spheres: Vec<(glam::Vec3, f32)> =
+                scene.spheres.iter().map(|s| (s.center, s.radius)).collect();
+            builder.add_spheres(&spheres).map_err(embree_error)?;
+            geometries.push(GeometryRef::Spheres);
+        }
+        let committed = builder.commit().map_err(embree_error)?;
+        Ok((
+            Tracer {
+                scene: committed,
+                _device: device,
+            },
+            geometries,
+        ))
+    }
+
+    /// Native packet width of the device (16, 8 or 4).
+    pub fn packet_width(&self) -> usize {
+        self.scene.packet_width()
+    }
+
+    /// Closest hits of `rays` into `hits` (resized to match), 16 rays per packet call
+    /// (split into 8- or 4-wide calls on devices without 16-wide support).
+    pub fn intersect(
+        &self,
+        rays: &[TraceRay],
+        hits: &mut Vec<TraceHit>,
+        coherent: bool,
+        counters: &mut WorkCounters,
+    ) {
+        hits.clear();
+        hits.resize(rays.len(), TraceHit::MISS);
+        let mut packet = RayPacket::<16>::new();
+        let mut payload = [RayPayload::default(); 16];
+        for (chunk_index, chunk) in rays.chunks(16).enumerate() {
+            for lane in 0..16 {
+                match chunk.get(lane) {
+                    Some(ray) => {
+                        packet.set_ray(lane, &Ray::segment(ray.origin, ray.direction, 0.0, ray.tfar));
+                        packet.set_valid(lane, true);
+                        payload[lane] = RayPayload {
+                            cone_width: ray.cone_width,
+                            cone_spread: ray.cone_spread,
+                        };
+                    }
+                    None => packet.set_valid(lane, false),
+                }
+            }
+            let options = if coherent {
+                TraceOptions::coherent()
+            } else {
+                TraceOptions::incoherent()
+            }
+            .with_payload(&payload);
+            // A failing alpha callback is reported by Embree's layer; the lanes keep the
+            // hits Embree produced, which is the deterministic fallback.
+            let _ = self.scene.intersect_tile(&mut packet, options);
+            let out = &mut hits[chunk_index * 16..];
+            for lane in 0..chunk.len() {
+                if let Some(hit) = packet.hit(lane) {
+                    out[lane] = TraceHit {
+                        t: hit.t,
+                        geometry: hit.geom_id,
+                        primitive: hit.prim_id,
+                        u: hit.u,
+                        v: hit.v,
+                    };
+                }
+            }
+        }
+        counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
+    }
+
+    /// Whether each of `rays` is blocked before its `tfar` (occlusion packets).
+    pub fn occluded(&self, rays: &[TraceRay], blocked: &mut Vec<bool>, counters: &mut WorkCounters) {
+        blocked.clear();
+        blocked.resize(rays.len(), false);
+        let mut packet = RayPacket::<16>::new();
+        for (chunk_index, chunk) in rays.chunks(16).enumerate() {
+            for lane in 0..16 {
+                match chunk.get(lane) {
+                    Some(ray) => {
+                        packet.set_ray(lane, &Ray::segment(ray.origin, ray.direction, 0.0, ray.tfar));
+                        packet.set_valid(lane, true);
+                    }
+                    None => packet.set_valid(lane, false),
+                }
+            }
+            let _ = self.scene.occluded_tile(&mut packet, TraceOptions::incoherent());
+            for lane in 0..chunk.len() {
+                blocked[chunk_index * 16 + lane] = packet.is_occluded(lane);
+            }
+        }
+        counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
+    }
+}
+
+/// The alpha test of a cut-out material on mesh `mesh_index`, run by Embree for every
+/// candidate hit. The alpha texture is filtered over the ray cone's footprint at the hit
+/// (an isotropic footprint of the cone's width mapped to st through the triangle's texel
+/// density), so distant cut-outs are tested against averaged coverage and do not shimmer.
+///
+/// Where the footprint covers many texels, the filtered alpha is a coverage fraction; the
+/// test then compares it with a per-ray threshold spread over (0, 1) instead of the fixed
+/// cutoff, so the fraction of rays that hit equals the coverage. At magnification the fixed
+/// cutoff is used (a crisp edge), with a smooth blend between the two regimes.
+fn alpha_filter(
+    scene: Arc<SceneDescription>,
+    mesh_index: usize,
+    texture: Arc<Texture>,
+    transform: glam::Affine2,
+    constant_alpha: f32,
+    cutoff: f32,
+    max_aniso: f32,
+) -> crate::embree::AlphaFilter {
+    let options = FilterOptions {
+        filter: FilterMode::Trilinear,
+        max_aniso,
+        ..FilterOptions::default()
+    };
+    let texels = (texture.width() as f32) * (texture.height() as f32);
+    Arc::new(move |candidate: &FilterCandidate| {
+        FILTER_CALLS.with(|c| c.set(c.get() + 1));
+        let mesh = &scene.meshes[mesh_index];
+        let Some(&[i0, i1, i2]) = mesh.triangles.get(candidate.prim_id as usize) else {
+            return true;
+        };
+        if mesh.st.is_empty() {
+            return constant_alpha >= cutoff;
+        }
+        let (i0, i1, i2) = (i0 as usize, i1 as usize, i2 as usize);
+        let (u, v) = (candidate.u, candidate.v);
+        let st = mesh.st[i0] * (1.0 - u - v) + mesh.st[i1] * u + mesh.st[i2] * v;
+        // Texel density: st area per world area of this triangle.
+        let p = [mesh.positions[i0], mesh.positions[i1], mesh.positions[i2]];
+        let world_area = (p[1] - p[0]).cross(p[2] - p[0]).length();
+        let t = [
+            transform.transform_point2(mesh.st[i0]),
+            transform.transform_point2(mesh.st[i1]),
+            transform.transform_point2(mesh.st[i2]),
+        ];
+        let st_area = ((t[1] - t[0]).perp_dot(t[2] - t[0])).abs();
+        let width = (candidate.payload.cone_width + candidate.payload.cone_spread * candidate.t).abs();
+        let st_width = if world_area > 0.0 && world_area.is_finite() {
+            width * (st_area / world_area).sqrt()
+        } else {
+            0.0
+        };
+        let st_width = if st_width.is_finite() { st_width } else { 0.0 };
+        let st = transform.transform_point2(st);
+        let query = TextureQuery {
+            s: st.x,
+            t: st.y,
+            dsdx: st_width,
+            dtdx: 0.0,
+            dsdy: 0.0,
+            dtdy: st_width,
+        };
+        let alpha = texture.sample(&query, &options).w * constant_alpha;
+        // Footprint size in texels decides between a crisp cutoff and coverage.
+        let texels_covered = st_width * st_width * texels;
+        let blend = ((texels_covered - 1.0) / 3.0).clamp(0.0, 1.0);
+        let threshold = cutoff + (ray_threshold(candidate) - cutoff) * blend;
+        alpha >= threshold
+    })
+}
+
+/// A threshold in (0, 1) that is a fixed function of the ray (so packets and single rays
+/// agree), spread uniformly over rays.
+fn ray_threshold(candidate: &FilterCandidate) -> f32 {
+    let mut h = candidate.origin.x.to_bits()
+        ^ candidate.origin.y.to_bits().rotate_left(11)
+        ^ candidate.origin.z.to_bits().rotate_left(22)
+        ^ candidate.direction.x.to_bits().rotate_left(5)
+        ^ candidate.direction.y.to_bits().rotate_left(16)
+        ^ candidate.direction.z.to_bits().rotate_left(27);
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x7feb_352d);
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x846c_a68b);
+    h ^= h >> 16;
+    ((h >> 8) as f32 + 0.5) / (1u32 << 24) as f32
+}

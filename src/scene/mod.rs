@@ -10,6 +10,8 @@
 //! downwards, (0,0) at the outer corner of the first texel): loaders map OBJ's v-up and
 //! glTF's v-down coordinates onto it.
 
+pub mod load;
+
 use std::path::PathBuf;
 use std::sync::Arc;
 

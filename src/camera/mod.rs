@@ -1,0 +1,364 @@
+//! Cameras: turn a pixel position (and a lens sample) into a ray, and give that ray the
+//! footprint it starts with.
+//!
+//! Three projections (`crate::scene::Projection`): pinhole, thin lens and orthographic.
+//! Each is described by seed 000's camera frame: `W` from the eye to the centre of the view
+//! rectangle, `U` and `V` half its width and height. The pinhole's and the orthographic
+//! camera's rectangle lies at the target's distance, the thin lens's on its focal plane.
+//! Pixel coordinates run x right, y down, with pixel centres at +0.5.
+//!
+//! Initial footprints: seed 000's cone initialisation per projection (and the second cone
+//! of the two-cone envelope), seed 002's eq. 8 for ray differentials (for a thin lens,
+//! differentiated with respect to the pixel at a fixed lens sample; for an orthographic
+//! camera, the origin moves and the direction does not).
+
+mod lens;
+
+use glam::{Vec2, Vec3};
+
+use crate::footprint::robust::unit_or;
+use crate::footprint::{
+    ConeEnvelope, DistanceFootprint, Footprint, LodStrategy, RayCone, RayDifferential,
+};
+use crate::scene::{CameraDesc, Projection};
+
+pub use lens::concentric_disk;
+
+/// The projection a [`Camera`] uses, with its validated parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CameraModel {
+    /// All rays from the eye point.
+    Pinhole,
+    /// A thin lens of `lens_radius` focused on the view rectangle.
+    ThinLens {
+        /// Radius of the lens disk in world units (positive).
+        lens_radius: f32,
+    },
+    /// Parallel rays from the view rectangle.
+    Orthographic,
+}
+
+/// A camera ready to generate rays for an image of `width` x `height` pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    model: CameraModel,
+    eye: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    /// Eye to the centre of the view rectangle.
+    w: Vec3,
+    /// Half the view rectangle's width (to the right) and height (upwards).
+    u: Vec3,
+    v: Vec3,
+    width: u32,
+    height: u32,
+}
+
+impl Camera {
+    /// A camera for `desc` rendering `width` x `height` pixels. Degenerate descriptions are
+    /// repaired rather than rejected (the scene loader validates and reports them): eye ==
+    /// target looks down -Z, an up vector parallel to the view picks another, field of view
+    /// is clamped to [0.001, 179] degrees (45 if not finite), a non-positive focus distance
+    /// uses the target's distance, a non-positive orthographic height becomes 1, and a zero
+    /// image size counts as 1.
+    pub fn new(desc: &CameraDesc, width: u32, height: u32) -> Camera {
+        let width = width.max(1);
+        let height = height.max(1);
+        let aspect = width as f32 / height as f32;
+        let eye = if desc.eye.is_finite() {
+            desc.eye
+        } else {
+            Vec3::ZERO
+        };
+        let to_target = desc.target - eye;
+        let target_distance = {
+            let d = to_target.length();
+            if d.is_finite() && d > 1.0e-12 {
+                d
+            } else {
+                1.0
+            }
+        };
+        let forward = unit_or(to_target, Vec3::NEG_Z);
+        let right = unit_or(forward.cross(desc.up), forward.any_orthonormal_vector());
+        let up = right.cross(forward);
+        let tan_half = |vfov: f32| {
+            let deg = if vfov.is_finite() {
+                vfov.clamp(1.0e-3, 179.0)
+            } else {
+                45.0
+            };
+            (deg.to_radians() * 0.5).tan()
+        };
+        let (model, plane_distance, half_height) = match desc.projection {
+            Projection::Pinhole { vfov_degrees } => (
+                CameraModel::Pinhole,
+                target_distance,
+                tan_half(vfov_degrees) * target_distance,
+            ),
+            Projection::ThinLens {
+                vfov_degrees,
+                aperture_radius,
+                focus_distance,
+            } => {
+                let focus = if focus_distance.is_finite() && focus_distance > 0.0 {
+                    focus_distance
+                } else {
+                    target_distance
+                };
+                let radius = if aperture_radius.is_finite() {
+                    aperture_radius.abs()
+                } else {
+                    0.0
+                };
+                let model = if radius > 0.0 {
+                    CameraModel::ThinLens {
+                        lens_radius: radius,
+                    }
+                } else {
+                    CameraModel::Pinhole
+                };
+                (model, focus, tan_half(vfov_degrees) * focus)
+            }
+            Projection::Orthographic { height } => {
+                let h = if height.is_finite() && height > 0.0 {
+                    height
+                } else {
+                    1.0
+                };
+                (CameraModel::Orthographic, target_distance, 0.5 * h)
+            }
+        };
+        Camera {
+            model,
+            eye,
+            forward,
+            right,
+            up,
+            w: forward * plane_distance,
+            u: right * (half_height * aspect),
+            v: up * half_height,
+            width,
+            height,
+        }
+    }
+
+    /// The projection in use (a thin lens of zero radius is a pinhole).
+    #[inline]
+    pub fn model(&self) -> CameraModel {
+        self.model
+    }
+
+    /// Unit viewing direction.
+    #[inline]
+    pub fn forward(&self) -> Vec3 {
+        self.forward
+    }
+
+    /// The eye point (centre of the lens).
+    #[inline]
+    pub fn eye(&self) -> Vec3 {
+        self.eye
+    }
+
+    /// Image size in pixels.
+    #[inline]
+    pub fn resolution(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Width of one pixel on the view rectangle: 2 min(|U| / w_img, |V| / h_img).
+    #[inline]
+    pub fn pixel_size(&self) -> f32 {
+        2.0 * (self.u.length() / self.width as f32).min(self.v.length() / self.height as f32)
+    }
+
+    /// The point on the view rectangle under pixel coordinates (px, py), relative to the eye.
+    #[inline]
+    fn rectangle_point(&self, px: f32, py: f32) -> Vec3 {
+        let x = 2.0 * px / self.width as f32 - 1.0;
+        let y = 1.0 - 2.0 * py / self.height as f32;
+        self.w + self.u * x + self.v * y
+    }
+
+    /// How the view-rectangle point moves per pixel in x and in y.
+    #[inline]
+    fn rectangle_per_pixel(&self) -> (Vec3, Vec3) {
+        (
+            self.u * (2.0 / self.width as f32),
+            self.v * (-2.0 / self.height as f32),
+        )
+    }
+
+    /// Pixel coordinates px in [0,width), py in [0,height) (y down, pixel centre at +0.5),
+    /// lens sample in [0,1)^2 (ignored unless thin lens). Returns the ray origin and unit
+    /// direction. Non-finite pixel coordinates are treated as the image centre.
+    #[inline]
+    pub fn generate_ray(&self, px: f32, py: f32, lens: Vec2) -> (Vec3, Vec3) {
+        let (px, py) = self.sanitize_pixel(px, py);
+        let on_rectangle = self.rectangle_point(px, py);
+        match self.model {
+            CameraModel::Pinhole => (self.eye, unit_or(on_rectangle, self.forward)),
+            CameraModel::ThinLens { lens_radius } => {
+                let disk = concentric_disk(lens) * lens_radius;
+                let origin = self.eye + self.right * disk.x + self.up * disk.y;
+                let focus = self.eye + on_rectangle;
+                (origin, unit_or(focus - origin, self.forward))
+            }
+            CameraModel::Orthographic => (self.eye + (on_rectangle - self.w), self.forward),
+        }
+    }
+
+    #[inline]
+    fn sanitize_pixel(&self, px: f32, py: f32) -> (f32, f32) {
+        let fix = |p: f32, size: u32| if p.is_finite() { p } else { 0.5 * size as f32 };
+        (fix(px, self.width), fix(py, self.height))
+    }
+
+    /// The footprint the ray (`origin`, unit `dir`) through pixel (px, py) starts with.
+    ///
+    /// - `Distance`: zero width spreading at the pinhole angle (perspective cameras) or one
+    ///   pixel wide without spread (orthographic).
+    /// - `Cone1`: seed 000's cone for the projection (thin lens: the lens cone).
+    /// - `Cone`: seed 000's two-cone envelope: pinhole + thin lens of one-pixel width
+    ///   focused on the view rectangle; thin lens + pinhole; orthographic + thin lens of
+    ///   one-pixel width. The extra cone is ignored on the first hit of pinhole and
+    ///   orthographic cameras.
+    /// - `Differential`: seed 002, eq. 8 (pinhole), the same at a fixed lens point for a
+    ///   thin lens (`origin` is that point), moving origins for orthographic.
+    pub fn initial_footprint(
+        &self,
+        strategy: LodStrategy,
+        px: f32,
+        py: f32,
+        origin: Vec3,
+        dir: Vec3,
+    ) -> Footprint {
+        let d = unit_or(dir, self.forward);
+        let (hu, hv) = (self.u.length(), self.v.length());
+        let pinhole = || RayCone::pinhole(d, self.w, hu, hv, self.width, self.height);
+        let ortho = || RayCone::orthographic(hu, hv, self.width, self.height);
+        let pixel_lens = || RayCone::thin_lens(self.pixel_size(), d, self.w);
+        match strategy {
+            LodStrategy::Mip0 => Footprint::Mip0,
+            LodStrategy::Distance => Footprint::Distance(match self.model {
+                CameraModel::Orthographic => DistanceFootprint::new(ortho().width, 0.0),
+                _ => DistanceFootprint::new(0.0, pinhole().angle),
+            }),
+            LodStrategy::Cone1 => Footprint::Cone1(match self.model {
+                CameraModel::Pinhole => pinhole(),
+                CameraModel::ThinLens { lens_radius } => {
+                    RayCone::thin_lens(2.0 * lens_radius, d, self.w)
+                }
+                CameraModel::Orthographic => ortho(),
+            }),
+            LodStrategy::Cone => Footprint::Cone(match self.model {
+                CameraModel::Pinhole => ConeEnvelope::new(pinhole(), pixel_lens(), true),
+                CameraModel::ThinLens { lens_radius } => ConeEnvelope::new(
+                    RayCone::thin_lens(2.0 * lens_radius, d, self.w),
+                    pinhole(),
+                    false,
+                ),
+                CameraModel::Orthographic => ConeEnvelope::new(ortho(), pixel_lens(), true),
+            }),
+            LodStrategy::Differential => {
+                let (px, py) = self.sanitize_pixel(px, py);
+                let (dx, dy) = self.rectangle_per_pixel();
+                Footprint::Differential(match self.model {
+                    CameraModel::Pinhole => {
+                        RayDifferential::from_point(self.rectangle_point(px, py), dx, dy)
+                    }
+                    CameraModel::ThinLens { .. } => {
+                        let lens_point = if origin.is_finite() { origin } else { self.eye };
+                        let focus = self.eye + self.rectangle_point(px, py);
+                        RayDifferential::from_point(focus - lens_point, dx, dy)
+                    }
+                    CameraModel::Orthographic => RayDifferential::parallel(dx, dy),
+                })
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn desc(projection: Projection) -> CameraDesc {
+        CameraDesc {
+            eye: Vec3::new(0.0, 1.0, 5.0),
+            target: Vec3::new(0.0, 1.0, 0.0),
+            up: Vec3::Y,
+            projection,
+        }
+    }
+
+    #[test]
+    fn pinhole_rays_cover_the_field_of_view() {
+        let cam = Camera::new(&desc(Projection::Pinhole { vfov_degrees: 90.0 }), 200, 100);
+        let (o, d) = cam.generate_ray(100.0, 50.0, Vec2::splat(0.5));
+        assert_eq!(o, Vec3::new(0.0, 1.0, 5.0));
+        assert!((d - Vec3::NEG_Z).length() < 1e-6);
+        // Top edge of the image: 45 degrees up.
+        let (_, top) = cam.generate_ray(100.0, 0.0, Vec2::ZERO);
+        assert!((top.y - top.z.abs()).abs() < 1e-5 && top.y > 0.0);
+        // Right edge: aspect 2, so tan = 2.
+        let (_, right) = cam.generate_ray(200.0, 50.0, Vec2::ZERO);
+        assert!((right.x / -right.z - 2.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn thin_lens_rays_meet_on_the_focal_plane() {
+        let projection = Projection::ThinLens {
+            vfov_degrees: 40.0,
+            aperture_radius: 0.2,
+            focus_distance: 3.0,
+        };
+        let cam = Camera::new(&desc(projection), 64, 64);
+        let mut points = Vec::new();
+        for lens in [
+            Vec2::new(0.1, 0.2),
+            Vec2::new(0.9, 0.5),
+            Vec2::new(0.4, 0.8),
+        ] {
+            let (o, d) = cam.generate_ray(20.5, 40.5, lens);
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            let t = (o.z - 2.0) / -d.z;
+            points.push(o + d * t);
+        }
+        assert!((points[0] - points[1]).length() < 1e-4 && (points[0] - points[2]).length() < 1e-4);
+    }
+
+    #[test]
+    fn orthographic_rays_are_parallel_and_one_pixel_apart() {
+        let cam = Camera::new(&desc(Projection::Orthographic { height: 4.0 }), 80, 40);
+        let (o0, d0) = cam.generate_ray(10.5, 10.5, Vec2::ZERO);
+        let (o1, d1) = cam.generate_ray(11.5, 10.5, Vec2::ZERO);
+        assert_eq!(d0, d1);
+        assert!(((o1 - o0).length() - cam.pixel_size()).abs() < 1e-6);
+        assert!((cam.pixel_size() - 0.1).abs() < 1e-6);
+    }
+
+    #[test]
+    fn degenerate_descriptions_give_finite_rays() {
+        let bad = CameraDesc {
+            eye: Vec3::ONE,
+            target: Vec3::ONE,
+            up: Vec3::ZERO,
+            projection: Projection::ThinLens {
+                vfov_degrees: f32::NAN,
+                aperture_radius: -0.1,
+                focus_distance: 0.0,
+            },
+        };
+        let cam = Camera::new(&bad, 0, 0);
+        let (o, d) = cam.generate_ray(f32::NAN, 0.3, Vec2::splat(0.7));
+        assert!(o.is_finite() && d.is_finite());
+        assert!((d.length() - 1.0).abs() < 1e-5);
+        for strategy in LodStrategy::ALL {
+            let f = cam.initial_footprint(strategy, 0.5, 0.5, o, d);
+            assert!(f.width().is_finite());
+        }
+    }
+}

@@ -1,0 +1,174 @@
+//! Where a scene's referenced files come from: the file system, or the bytes built into
+//! the binary for the default scene.
+//!
+//! Loaders never touch `std::fs` directly; they ask a [`Files`] for a path relative to the
+//! file being loaded. That lets the built-in default scene resolve `../models/box.obj` and
+//! `../textures/checker.png` from `include_bytes!` data exactly as the asset files would.
+
+use std::path::{Component, Path, PathBuf};
+use std::sync::Arc;
+
+use super::error::SceneError;
+use crate::scene::TextureSource;
+
+/// Resolves and reads files relative to a base directory.
+#[derive(Clone, Debug)]
+pub(crate) struct Files {
+    base_dir: PathBuf,
+    /// `None` reads the file system; `Some` looks paths up in embedded (path, bytes) pairs.
+    embedded: Option<&'static [(&'static str, &'static [u8])]>,
+}
+
+impl Files {
+    /// Files on disk, relative paths resolved against `base_dir`.
+    pub(crate) fn disk(base_dir: &Path) -> Self {
+        Files {
+            base_dir: base_dir.to_path_buf(),
+            embedded: None,
+        }
+    }
+
+    /// Embedded files keyed by normalised relative paths such as `assets/models/box.obj`.
+    pub(crate) fn embedded(
+        base_dir: &str,
+        table: &'static [(&'static str, &'static [u8])],
+    ) -> Self {
+        Files {
+            base_dir: PathBuf::from(base_dir),
+            embedded: Some(table),
+        }
+    }
+
+    /// The same source with relative paths resolved against `dir` instead.
+    pub(crate) fn with_base(&self, dir: &Path) -> Self {
+        Files {
+            base_dir: dir.to_path_buf(),
+            embedded: self.embedded,
+        }
+    }
+
+    /// `relative` joined to the base directory and lexically normalised (absolute paths kept).
+    pub(crate) fn resolve(&self, relative: &str) -> PathBuf {
+        normalize(&self.base_dir.join(relative))
+    }
+
+    /// The bytes of the file at `path` (an already resolved path).
+    pub(crate) fn read(&self, path: &Path) -> Result<Vec<u8>, SceneError> {
+        match self.embedded {
+            Some(table) => lookup(table, path).map(<[u8]>::to_vec).ok_or_else(|| {
+                SceneError::unreadable(path.display(), "not among the built-in files")
+            }),
+            None => {
+                if path.is_dir() {
+                    return Err(SceneError::unreadable(path.display(), "is a directory"));
+                }
+                std::fs::read(path).map_err(|e| SceneError::unreadable(path.display(), e))
+            }
+        }
+    }
+
+    /// A texture source for the image at `path`, after checking it exists and can be opened.
+    /// The image itself is decoded later by `crate::texture`.
+    pub(crate) fn texture_source(&self, path: &Path) -> Result<TextureSource, SceneError> {
+        match self.embedded {
+            Some(table) => match lookup(table, path) {
+                Some(bytes) => Ok(TextureSource::Encoded {
+                    label: path.display().to_string(),
+                    bytes: Arc::new(bytes.to_vec()),
+                }),
+                None => Err(SceneError::unreadable(
+                    path.display(),
+                    "not among the built-in files",
+                )),
+            },
+            None => {
+                if !path.is_file() {
+                    let reason = if path.exists() {
+                        "not a regular file"
+                    } else {
+                        "no such file"
+                    };
+                    return Err(SceneError::unreadable(path.display(), reason));
+                }
+                std::fs::File::open(path).map_err(|e| SceneError::unreadable(path.display(), e))?;
+                Ok(TextureSource::File(path.to_path_buf()))
+            }
+        }
+    }
+}
+
+fn lookup(table: &'static [(&'static str, &'static [u8])], path: &Path) -> Option<&'static [u8]> {
+    let wanted = normalize(path);
+    table
+        .iter()
+        .find(|(name, _)| Path::new(name) == wanted)
+        .map(|(_, bytes)| *bytes)
+}
+
+/// Removes `.` components and folds `dir/..` pairs without touching the file system.
+pub(crate) fn normalize(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for component in path.components() {
+        match component {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                let last_is_normal =
+                    matches!(out.components().next_back(), Some(Component::Normal(_)));
+                if last_is_normal {
+                    out.pop();
+                } else {
+                    out.push("..");
+                }
+            }
+            other => out.push(other.as_os_str()),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    static TABLE: &[(&str, &[u8])] = &[("assets/models/box.obj", b"v 0 0 0\n")];
+
+    #[test]
+    fn normalize_folds_parent_components() {
+        assert_eq!(
+            normalize(Path::new("assets/scenes/../models/./box.obj")),
+            PathBuf::from("assets/models/box.obj")
+        );
+        assert_eq!(normalize(Path::new("../a/b")), PathBuf::from("../a/b"));
+        assert_eq!(normalize(Path::new("/x/../y")), PathBuf::from("/y"));
+    }
+
+    #[test]
+    fn embedded_files_resolve_relative_to_the_base() {
+        let files = Files::embedded("assets/scenes", TABLE);
+        let path = files.resolve("../models/box.obj");
+        assert_eq!(files.read(&path).unwrap(), b"v 0 0 0\n");
+        assert!(files.read(&files.resolve("missing.obj")).is_err());
+        assert!(matches!(
+            files.texture_source(&path),
+            Ok(TextureSource::Encoded { .. })
+        ));
+    }
+
+    #[test]
+    fn missing_disk_files_are_errors_naming_the_file() {
+        let files = Files::disk(Path::new("/nonexistent-dir"));
+        let err = files.read(&files.resolve("x.obj")).unwrap_err().to_string();
+        assert!(
+            err.starts_with("/nonexistent-dir/x.obj: cannot read"),
+            "{err}"
+        );
+        let err = files
+            .texture_source(&files.resolve("t.png"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("t.png") && err.contains("no such file"),
+            "{err}"
+        );
+    }
+}

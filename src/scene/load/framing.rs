@@ -1,0 +1,147 @@
+//! Defaults for scenes that lack a camera or lights: a pinhole camera that frames the
+//! geometry's bounding sphere, and a key light with a grey-blue environment.
+
+use glam::Vec3;
+
+use crate::scene::{CameraDesc, Environment, Light, Projection, SceneDescription};
+
+/// Vertical field of view of a framing camera, in degrees.
+pub const FRAMING_FOV_DEGREES: f32 = 40.0;
+/// Direction from the bounds' centre towards a framing camera (before normalisation).
+const VIEW_DIRECTION: Vec3 = Vec3::new(0.5, 0.4, 1.0);
+/// Environment colour added along with the default key light.
+pub const DEFAULT_ENVIRONMENT: Vec3 = Vec3::new(0.3, 0.32, 0.38);
+
+/// Centre and radius of the sphere around the scene's bounds (a unit sphere at the origin
+/// for an empty scene).
+fn bounding_sphere(scene: &SceneDescription) -> (Vec3, f32) {
+    match scene.bounds() {
+        Some((lo, hi)) if lo.is_finite() && hi.is_finite() => {
+            ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-3))
+        }
+        _ => (Vec3::ZERO, 1.0),
+    }
+}
+
+/// A pinhole camera (fov 40 degrees) looking at the centre of the scene's bounds from the
+/// direction (0.5, 0.4, 1), just far enough that the bounding sphere fits both the vertical
+/// and (for `aspect` = width / height below 1) the horizontal field of view.
+pub fn frame_camera(scene: &SceneDescription, aspect: f32) -> CameraDesc {
+    let (center, radius) = bounding_sphere(scene);
+    let aspect = if aspect.is_finite() && aspect > 0.0 {
+        aspect
+    } else {
+        1.0
+    };
+    let half_v = (FRAMING_FOV_DEGREES * 0.5).to_radians();
+    let half_h = (aspect * half_v.tan()).atan();
+    let distance = radius / half_v.min(half_h).sin();
+    CameraDesc {
+        eye: center + VIEW_DIRECTION.normalize() * distance,
+        target: center,
+        up: Vec3::Y,
+        projection: Projection::Pinhole {
+            vfov_degrees: FRAMING_FOV_DEGREES,
+        },
+    }
+}
+
+/// Adds a framing camera when there is none and a key light (plus, when the environment is
+/// black, the grey-blue environment) when there are no lights, noting each in `scene.notes`.
+pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription) {
+    if scene.camera.is_none() {
+        let aspect = scene.settings.width as f32 / scene.settings.height.max(1) as f32;
+        scene.camera = Some(frame_camera(scene, aspect));
+        scene
+            .notes
+            .push("no camera: placed one to frame the bounds".into());
+    }
+    if scene.lights.is_empty() {
+        let (center, radius) = bounding_sphere(scene);
+        let (eye, up) = scene
+            .camera
+            .as_ref()
+            .map_or((center + Vec3::Z * 3.0 * radius, Vec3::Y), |c| {
+                (c.eye, c.up.normalize_or_zero())
+            });
+        let back = (eye - center).normalize_or_zero();
+        // Above and a little behind the camera, so shadows fall away from the viewer.
+        let position = eye + back * (0.5 * radius) + up * (1.5 * radius);
+        let distance_squared = (position - center).length_squared().max(1e-6);
+        // Irradiance pi at the centre: a white diffuse surface facing the light has radiance 1.
+        scene.lights.push(Light::Point {
+            position,
+            color: Vec3::ONE,
+            intensity: std::f32::consts::PI * distance_squared,
+        });
+        if scene.environment == Environment::Color(Vec3::ZERO) {
+            scene.environment = Environment::Color(DEFAULT_ENVIRONMENT);
+        }
+        scene
+            .notes
+            .push("no lights: added a default key light and environment".into());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Material, Sphere};
+
+    fn one_sphere(center: Vec3, radius: f32) -> SceneDescription {
+        SceneDescription {
+            materials: vec![Material::default()],
+            spheres: vec![Sphere {
+                center,
+                radius,
+                material: 0,
+            }],
+            ..Default::default()
+        }
+    }
+
+    /// Angle between the view axis and the ray from the eye tangent to the bounding sphere.
+    fn tangent_angle(camera: &CameraDesc, center: Vec3, radius: f32) -> f32 {
+        (radius / (camera.eye - center).length()).asin()
+    }
+
+    #[test]
+    fn framing_fits_the_bounding_sphere_vertically() {
+        let center = Vec3::new(3.0, -1.0, 2.0);
+        let scene = one_sphere(center, 2.0);
+        let camera = frame_camera(&scene, 16.0 / 9.0);
+        assert_eq!(camera.target, center);
+        let bound_radius = 2.0 * 3f32.sqrt();
+        let angle = tangent_angle(&camera, center, bound_radius);
+        assert!((angle - 20f32.to_radians()).abs() < 1e-4, "{angle}");
+        let dir = (camera.eye - center).normalize();
+        assert!((dir - VIEW_DIRECTION.normalize()).length() < 1e-5);
+    }
+
+    #[test]
+    fn narrow_images_frame_by_the_horizontal_fov() {
+        let scene = one_sphere(Vec3::ZERO, 1.0);
+        let wide = frame_camera(&scene, 2.0);
+        let tall = frame_camera(&scene, 0.5);
+        assert!(tall.eye.length() > wide.eye.length() * 1.5);
+        let half_h = (0.5 * 20f32.to_radians().tan()).atan();
+        assert!((tangent_angle(&tall, Vec3::ZERO, 3f32.sqrt()) - half_h).abs() < 1e-4);
+    }
+
+    #[test]
+    fn missing_camera_and_lights_are_added_with_notes() {
+        let mut scene = one_sphere(Vec3::ZERO, 1.0);
+        add_missing_camera_and_lights(&mut scene);
+        assert!(scene.camera.is_some());
+        assert_eq!(scene.lights.len(), 1);
+        assert_eq!(scene.environment, Environment::Color(DEFAULT_ENVIRONMENT));
+        assert_eq!(scene.notes.len(), 2);
+        let Light::Point { position, .. } = scene.lights[0] else {
+            panic!("not a point light")
+        };
+        assert!(position.y > scene.camera.as_ref().unwrap().eye.y);
+        // Nothing more is added the second time.
+        add_missing_camera_and_lights(&mut scene);
+        assert_eq!(scene.notes.len(), 2);
+    }
+}

@@ -1,0 +1,1054 @@
+//! glTF 2.0 (`.gltf` with external or embedded buffers, `.glb`) as a scene part.
+//!
+//! The `gltf` crate parses and validates the JSON; this file resolves buffers itself and
+//! reads accessors with bounds checks, so malformed files (indices out of range, short
+//! buffers, cyclic node graphs) become a [`SceneError`] instead of a panic. Images are not
+//! decoded: buffer-view and `data:` images become `TextureSource::Encoded`, file URIs
+//! `TextureSource::File`.
+//!
+//! Material mapping onto the Whitted model: base colour factor/texture (sRGB), emissive
+//! factor, `KHR_materials_transmission` factor,
+//! `KHR_materials_ior`, `KHR_materials_volume` attenuation colour/distance (Beer's law,
+//! seed 004), `KHR_texture_transform`, alpha mode MASK (BLEND is treated as MASK at 0.5)
+//! with the base-colour texture's alpha as a linear alpha texture. Metallic-roughness:
+//! a metallic factor >= 0.9 with roughness <= 0.1 becomes a mirror whose reflectivity is
+//! the largest base-colour component (the metal's normal-incidence reflectance) times the
+//! metallic factor, with the diffuse colour scaled by `1 - metallic`; otherwise the
+//! Blinn-Phong lobe gets weight `mix(0.04, max(base colour), metallic)` and exponent
+//! `2 / roughness^4 - 2` (clamped to [1, 10000]).
+//! Texture coordinates: glTF's v points down, so `t = v` directly.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{Affine2, Affine3A, Mat4, Vec2, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+
+use super::error::SceneError;
+use super::files::Files;
+use super::merge::Transform;
+use super::uri::{decode_data_uri, percent_decode};
+use crate::scene::{
+    CameraDesc, ColorSpace, Light, Material, Projection, SceneDescription, TextureBinding,
+    TextureDesc, TextureSource, TriangleMesh, WrapMode,
+};
+
+/// Loads the glTF file at `path` as a scene part: world-space meshes, materials, textures,
+/// punctual lights and the first camera met in the node graph.
+pub(crate) fn load_gltf(files: &Files, path: &Path) -> Result<SceneDescription, SceneError> {
+    let label = path.display().to_string();
+    let bytes = files.read(path)?;
+    let err = |m: String| SceneError::invalid(&label, m);
+    let gltf =
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
+            match version_1_hint(&bytes) {
+                Some(hint) => err(hint.to_owned()),
+                None => err(format!("glTF parse error: {e}")),
+            }
+        })?;
+    check_schema(gltf.document.as_json()).map_err(err)?;
+    let local = files.with_base(path.parent().unwrap_or(Path::new("")));
+    let buffers = load_buffers(&gltf, &local).map_err(err)?;
+    let mut loader = Loader {
+        document: &gltf.document,
+        buffers: &buffers,
+        files: &local,
+        label: &label,
+        part: SceneDescription {
+            source: label.clone(),
+            ..Default::default()
+        },
+        materials: HashMap::new(),
+        textures: HashMap::new(),
+    };
+    loader.walk_nodes().map_err(err)?;
+    if loader.part.meshes.is_empty() {
+        return Err(err("no triangle meshes in the glTF file".into()));
+    }
+    Ok(loader.part)
+}
+
+/// The `gltf` crate's validation (index ranges, required fields, supported required
+/// extensions), except that missing POSITION `min`/`max` is tolerated: the specification
+/// requires them, but this loader computes bounds itself and exporters often omit them.
+fn check_schema(root: &gltf::json::Root) -> Result<(), String> {
+    use gltf::json::validation::{Error, Validate};
+    let mut problems = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let path = path().to_string();
+        let bounds = path.ends_with(".min") || path.ends_with(".max");
+        if !(bounds && matches!(error, Error::Missing)) {
+            problems.push(format!("{path}: {error}"));
+        }
+    });
+    match problems.len() {
+        0 => Ok(()),
+        1 => Err(format!("invalid glTF: {}", problems[0])),
+        n => Err(format!(
+            "invalid glTF: {} (and {} more problems)",
+            problems[0],
+            n - 1
+        )),
+    }
+}
+
+/// Buffer contents by buffer index.
+fn load_buffers(gltf: &gltf::Gltf, files: &Files) -> Result<Vec<Vec<u8>>, String> {
+    let mut out = Vec::new();
+    for buffer in gltf.document.buffers() {
+        let i = buffer.index();
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
+                format!("buffer {i} refers to a GLB binary chunk that is missing")
+            })?,
+            gltf::buffer::Source::Uri(uri) => match decode_data_uri(uri) {
+                Some(decoded) => decoded.map_err(|e| format!("buffer {i}: {e}"))?,
+                None => {
+                    let path = files.resolve(&percent_decode(uri));
+                    files.read(&path).map_err(|e| format!("buffer {i}: {e}"))?
+                }
+            },
+        };
+        if data.len() < buffer.length() {
+            return Err(format!(
+                "buffer {i} holds {} bytes but declares byteLength {}",
+                data.len(),
+                buffer.length()
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// The bytes of a buffer view, bounds-checked.
+fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Result<&'b [u8], String> {
+    let buffer = buffers
+        .get(view.buffer().index())
+        .ok_or_else(|| format!("buffer view {} names a missing buffer", view.index()))?;
+    let end = view.offset().checked_add(view.length());
+    end.and_then(|end| buffer.get(view.offset()..end))
+        .ok_or_else(|| format!("buffer view {} lies outside its buffer", view.index()))
+}
+
+fn component(data_type: DataType, bytes: &[u8], normalized: bool) -> f32 {
+    // Normalised integers follow the glTF 2.0 specification, section 3.11.
+    match data_type {
+        DataType::F32 => f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
+        DataType::U8 => {
+            let v = f32::from(bytes[0]);
+            if normalized {
+                v / 255.0
+            } else {
+                v
+            }
+        }
+        DataType::I8 => {
+            let v = f32::from(bytes[0] as i8);
+            if normalized {
+                (v / 127.0).max(-1.0)
+            } else {
+                v
+            }
+        }
+        DataType::U16 => {
+            let v = f32::from(u16::from_le_bytes([bytes[0], bytes[1]]));
+            if normalized {
+                v / 65535.0
+            } else {
+                v
+            }
+        }
+        DataType::I16 => {
+            let v = f32::from(i16::from_le_bytes([bytes[0], bytes[1]]));
+            if normalized {
+                (v / 32767.0).max(-1.0)
+            } else {
+                v
+            }
+        }
+        DataType::U32 => u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) as f32,
+    }
+}
+
+fn index_value(data_type: DataType, bytes: &[u8]) -> Option<u32> {
+    match data_type {
+        DataType::U8 => Some(u32::from(bytes[0])),
+        DataType::U16 => Some(u32::from(u16::from_le_bytes([bytes[0], bytes[1]]))),
+        DataType::U32 => Some(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
+        _ => None,
+    }
+}
+
+/// Strided elements of an accessor (or of a sparse values block), bounds-checked once.
+struct Elements<'b> {
+    data: &'b [u8],
+    stride: usize,
+    element_size: usize,
+}
+
+impl<'b> Elements<'b> {
+    fn new(
+        data: &'b [u8],
+        offset: usize,
+        stride: usize,
+        element_size: usize,
+        count: usize,
+        what: &str,
+    ) -> Result<Self, String> {
+        let needed = match count {
+            0 => Some(offset),
+            n => (n - 1)
+                .checked_mul(stride)
+                .and_then(|v| v.checked_add(offset))
+                .and_then(|v| v.checked_add(element_size)),
+        };
+        match needed {
+            Some(end) if end <= data.len() => Ok(Elements {
+                data: &data[offset..],
+                stride,
+                element_size,
+            }),
+            _ => Err(format!("{what} reads past the end of its buffer view")),
+        }
+    }
+
+    fn get(&self, i: usize) -> &'b [u8] {
+        &self.data[i * self.stride..i * self.stride + self.element_size]
+    }
+}
+
+/// Reads an accessor as `count * components` floats (sparse substitution applied).
+fn read_floats(
+    accessor: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+    components: usize,
+) -> Result<Vec<f32>, String> {
+    let what = format!("accessor {}", accessor.index());
+    if accessor.dimensions().multiplicity() != components {
+        return Err(format!(
+            "{what} has {:?} elements, expected {components} components",
+            accessor.dimensions()
+        ));
+    }
+    let data_type = accessor.data_type();
+    let size = data_type.size();
+    let element_size = size * components;
+    let count = accessor.count();
+    let normalized = accessor.normalized();
+    let read_element = |out: &mut [f32], bytes: &[u8]| {
+        for (c, value) in out.iter_mut().enumerate() {
+            *value = component(data_type, &bytes[c * size..], normalized);
+        }
+    };
+    let total = count
+        .checked_mul(components)
+        .filter(|&n| n <= 1 << 28)
+        .ok_or_else(|| format!("{what} has an implausible count {count}"))?;
+    let mut out = vec![0.0f32; total];
+    if let Some(view) = accessor.view() {
+        let bytes = view_bytes(&view, buffers)?;
+        let stride = view.stride().unwrap_or(element_size).max(element_size);
+        let elements = Elements::new(bytes, accessor.offset(), stride, element_size, count, &what)?;
+        for (i, chunk) in out.chunks_exact_mut(components).enumerate() {
+            read_element(chunk, elements.get(i));
+        }
+    }
+    if let Some(sparse) = accessor.sparse() {
+        let n = sparse.count();
+        let indices = sparse.indices();
+        let index_type = match indices.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+        };
+        let index_size = index_type.size();
+        let index_bytes = view_bytes(&indices.view(), buffers)?;
+        let index_elements = Elements::new(
+            index_bytes,
+            indices.offset(),
+            index_size,
+            index_size,
+            n,
+            &what,
+        )?;
+        let values = sparse.values();
+        let value_bytes = view_bytes(&values.view(), buffers)?;
+        let value_elements = Elements::new(
+            value_bytes,
+            values.offset(),
+            element_size,
+            element_size,
+            n,
+            &what,
+        )?;
+        for j in 0..n {
+            let target =
+                index_value(index_type, index_elements.get(j)).unwrap_or(u32::MAX) as usize;
+            let slot = out
+                .get_mut(target * components..(target + 1) * components)
+                .ok_or_else(|| format!("{what}: sparse index {target} out of range"))?;
+            read_element(slot, value_elements.get(j));
+        }
+    }
+    Ok(out)
+}
+
+/// Reads an index accessor (unsigned scalar integers).
+fn read_indices(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
+    let what = format!("index accessor {}", accessor.index());
+    let data_type = accessor.data_type();
+    if accessor.dimensions() != Dimensions::Scalar || index_value(data_type, &[0; 4]).is_none() {
+        return Err(format!("{what} is not unsigned scalar integers"));
+    }
+    if accessor.sparse().is_some() {
+        return Err(format!("{what}: sparse index accessors are not supported"));
+    }
+    let view = accessor
+        .view()
+        .ok_or_else(|| format!("{what} has no buffer view"))?;
+    let bytes = view_bytes(&view, buffers)?;
+    let size = data_type.size();
+    let stride = view.stride().unwrap_or(size).max(size);
+    let elements = Elements::new(
+        bytes,
+        accessor.offset(),
+        stride,
+        size,
+        accessor.count(),
+        &what,
+    )?;
+    Ok((0..accessor.count())
+        .map(|i| index_value(data_type, elements.get(i)).unwrap_or(0))
+        .collect())
+}
+
+struct Loader<'a> {
+    document: &'a gltf::Document,
+    buffers: &'a [Vec<u8>],
+    files: &'a Files,
+    label: &'a str,
+    part: SceneDescription,
+    /// glTF material index (`None` = the default material) -> index in `part.materials`.
+    materials: HashMap<Option<usize>, usize>,
+    /// (glTF texture index, colour space) -> index in `part.textures`.
+    textures: HashMap<(usize, bool), usize>,
+}
+
+impl Loader<'_> {
+    /// Visits the scene's node forest iteratively, after checking it really is a forest.
+    fn walk_nodes(&mut self) -> Result<(), String> {
+        let node_count = self.document.nodes().len();
+        let mut parent = vec![None; node_count];
+        for node in self.document.nodes() {
+            for child in node.children() {
+                let c = child.index();
+                if let Some(p) = parent[c] {
+                    return Err(format!(
+                        "node {c} is a child of both node {p} and node {}",
+                        node.index()
+                    ));
+                }
+                parent[c] = Some(node.index());
+            }
+        }
+        // With at most one parent each, a cycle shows as a parent chain longer than the node count.
+        for start in 0..node_count {
+            let mut current = start;
+            let mut steps = 0;
+            while let Some(p) = parent[current] {
+                current = p;
+                steps += 1;
+                if steps > node_count {
+                    return Err(format!(
+                        "node graph is recursive (node {start} is its own ancestor)"
+                    ));
+                }
+            }
+        }
+        let roots: Vec<usize> = match self
+            .document
+            .default_scene()
+            .or_else(|| self.document.scenes().next())
+        {
+            Some(scene) => scene.nodes().map(|n| n.index()).collect(),
+            None => (0..node_count).filter(|&n| parent[n].is_none()).collect(),
+        };
+        if let Some(&r) = roots.iter().find(|&&r| parent[r].is_some()) {
+            return Err(format!(
+                "scene root node {r} is also a child of another node"
+            ));
+        }
+        let nodes: Vec<gltf::Node> = self.document.nodes().collect();
+        let mut stack: Vec<(usize, Mat4)> =
+            roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
+        let mut cameras_seen = 0;
+        while let Some((index, parent_matrix)) = stack.pop() {
+            let node = &nodes[index];
+            let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+            let world = parent_matrix * local;
+            if !world.is_finite() {
+                return Err(format!("node {index} has a non-finite transform"));
+            }
+            let affine = Affine3A::from_mat4(world);
+            if let Some(mesh) = node.mesh() {
+                match Transform::new(affine) {
+                    Some(transform) => self.add_mesh(&mesh, &transform)?,
+                    None => self.part.notes.push(format!(
+                        "{}: node {index} has a singular transform: its mesh is skipped",
+                        self.label
+                    )),
+                }
+            }
+            if let Some(camera) = node.camera() {
+                cameras_seen += 1;
+                if self.part.camera.is_none() {
+                    self.part.camera = Some(convert_camera(&camera, &affine)?);
+                }
+            }
+            if let Some(light) = node.light() {
+                self.part.lights.push(convert_light(&light, &affine)?);
+            }
+            for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+                stack.push((child.index(), world));
+            }
+        }
+        if cameras_seen > 1 {
+            self.part.notes.push(format!(
+                "{}: {cameras_seen} cameras, using the first",
+                self.label
+            ));
+        }
+        Ok(())
+    }
+
+    fn add_mesh(&mut self, mesh: &gltf::Mesh, transform: &Transform) -> Result<(), String> {
+        let mesh_name = mesh
+            .name()
+            .map_or_else(|| format!("mesh{}", mesh.index()), str::to_owned);
+        for primitive in mesh.primitives() {
+            let what = format!("mesh '{mesh_name}' primitive {}", primitive.index());
+            let mode = primitive.mode();
+            if !matches!(
+                mode,
+                gltf::mesh::Mode::Triangles
+                    | gltf::mesh::Mode::TriangleStrip
+                    | gltf::mesh::Mode::TriangleFan
+            ) {
+                self.part.notes.push(format!(
+                    "{}: {what} uses mode {mode:?}, skipped",
+                    self.label
+                ));
+                continue;
+            }
+            let positions_accessor = primitive
+                .get(&gltf::Semantic::Positions)
+                .ok_or_else(|| format!("{what} has no POSITION attribute"))?;
+            let positions = read_floats(&positions_accessor, self.buffers, 3)?;
+            let vertex_count = positions.len() / 3;
+            let positions: Vec<Vec3> = positions
+                .chunks_exact(3)
+                .map(|p| transform.point(Vec3::from_slice(p)))
+                .collect();
+            let normals = match primitive.get(&gltf::Semantic::Normals) {
+                Some(accessor) => {
+                    let n = read_floats(&accessor, self.buffers, 3)?;
+                    if n.len() / 3 != vertex_count {
+                        return Err(format!(
+                            "{what}: {} normals for {vertex_count} positions",
+                            n.len() / 3
+                        ));
+                    }
+                    n.chunks_exact(3)
+                        .map(|n| transform.normal(Vec3::from_slice(n)))
+                        .collect()
+                }
+                None => Vec::new(),
+            };
+            let st = match primitive.get(&gltf::Semantic::TexCoords(0)) {
+                Some(accessor) => {
+                    let uv = read_floats(&accessor, self.buffers, 2)?;
+                    if uv.len() / 2 != vertex_count {
+                        return Err(format!(
+                            "{what}: {} texture coordinates for {vertex_count} positions",
+                            uv.len() / 2
+                        ));
+                    }
+                    // glTF's v already points down: t = v.
+                    uv.chunks_exact(2).map(Vec2::from_slice).collect()
+                }
+                None => Vec::new(),
+            };
+            let indices = match primitive.indices() {
+                Some(accessor) => read_indices(&accessor, self.buffers)?,
+                None => (0..vertex_count as u32).collect(),
+            };
+            if let Some(bad) = indices.iter().find(|&&i| i as usize >= vertex_count) {
+                return Err(format!(
+                    "{what}: index {bad} out of range ({vertex_count} vertices)"
+                ));
+            }
+            let triangles = match mode {
+                gltf::mesh::Mode::TriangleStrip => strip_triangles(&indices),
+                gltf::mesh::Mode::TriangleFan => fan_triangles(&indices),
+                _ => {
+                    if indices.len() % 3 != 0 {
+                        return Err(format!(
+                            "{what}: {} indices is not a whole number of triangles",
+                            indices.len()
+                        ));
+                    }
+                    indices
+                        .chunks_exact(3)
+                        .map(|t| [t[0], t[1], t[2]])
+                        .collect()
+                }
+            };
+            let material = self.material(&primitive.material())?;
+            self.part.meshes.push(TriangleMesh {
+                name: format!("{mesh_name}#{}", primitive.index()),
+                positions,
+                normals,
+                st,
+                triangles,
+                material,
+            });
+        }
+        Ok(())
+    }
+
+    fn material(&mut self, m: &gltf::Material) -> Result<usize, String> {
+        if let Some(&i) = self.materials.get(&m.index()) {
+            return Ok(i);
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let factor = pbr.base_color_factor();
+        let mut material = Material {
+            name: m.name().map_or_else(
+                || format!("material{}", m.index().map_or(-1, |i| i as i64)),
+                str::to_owned,
+            ),
+            base_color: Vec3::new(factor[0], factor[1], factor[2]),
+            alpha: factor[3],
+            ..Material::default()
+        };
+        let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
+        let reflectance = material.base_color.max_element();
+        if metallic >= 0.9 && roughness <= 0.1 {
+            material.mirror = (reflectance * metallic).clamp(0.0, 1.0);
+            material.base_color *= 1.0 - metallic;
+        } else {
+            material.specular = (0.04 + (reflectance - 0.04) * metallic).clamp(0.0, 1.0);
+            let r4 = roughness.max(1e-3).powi(4);
+            material.shininess = (2.0 / r4 - 2.0).clamp(1.0, 10000.0);
+        }
+        material.emission = Vec3::from(m.emissive_factor());
+        if let Some(t) = m.transmission() {
+            material.transmission = t.transmission_factor();
+        }
+        if let Some(ior) = m.ior() {
+            material.ior = ior;
+        }
+        if let Some(volume) = m.volume() {
+            material.attenuation_color = Vec3::from(volume.attenuation_color());
+            material.attenuation_distance = volume.attenuation_distance();
+        }
+        if let Some(info) = pbr.base_color_texture() {
+            material.base_color_texture = Some(self.binding(&info, ColorSpace::Srgb)?);
+            if matches!(
+                m.alpha_mode(),
+                gltf::material::AlphaMode::Mask | gltf::material::AlphaMode::Blend
+            ) {
+                material.alpha_texture = Some(self.binding(&info, ColorSpace::Linear)?);
+            }
+        }
+        match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => {}
+            gltf::material::AlphaMode::Mask => {
+                material.alpha_cutoff = Some(m.alpha_cutoff().unwrap_or(0.5))
+            }
+            gltf::material::AlphaMode::Blend => {
+                material.alpha_cutoff = Some(0.5);
+                self.part.notes.push(format!(
+                    "{}: material '{}' uses alphaMode BLEND, rendered as MASK at 0.5",
+                    self.label, material.name
+                ));
+            }
+        }
+        self.part.materials.push(material);
+        let index = self.part.materials.len() - 1;
+        self.materials.insert(m.index(), index);
+        Ok(index)
+    }
+
+    fn binding(
+        &mut self,
+        info: &gltf::texture::Info,
+        color_space: ColorSpace,
+    ) -> Result<TextureBinding, String> {
+        let mut transform = Affine2::IDENTITY;
+        let mut tex_coord = info.tex_coord();
+        if let Some(t) = info.texture_transform() {
+            transform = texture_transform(t.offset(), t.rotation(), t.scale());
+            tex_coord = t.tex_coord().unwrap_or(tex_coord);
+        }
+        if tex_coord != 0 {
+            self.part.notes.push(format!(
+                "{}: a texture uses TEXCOORD_{tex_coord}; only TEXCOORD_0 is read",
+                self.label
+            ));
+        }
+        let texture = self.texture(&info.texture(), color_space)?;
+        Ok(TextureBinding { texture, transform })
+    }
+
+    fn texture(
+        &mut self,
+        texture: &gltf::Texture,
+        color_space: ColorSpace,
+    ) -> Result<usize, String> {
+        let key = (texture.index(), color_space == ColorSpace::Srgb);
+        if let Some(&i) = self.textures.get(&key) {
+            return Ok(i);
+        }
+        let image = texture.source();
+        let image_label = format!("{}#image{}", self.label, image.index());
+        let source = match image.source() {
+            gltf::image::Source::View { view, .. } => TextureSource::Encoded {
+                label: image_label,
+                bytes: Arc::new(view_bytes(&view, self.buffers)?.to_vec()),
+            },
+            gltf::image::Source::Uri { uri, .. } => match decode_data_uri(uri) {
+                Some(decoded) => TextureSource::Encoded {
+                    label: image_label,
+                    bytes: Arc::new(decoded.map_err(|e| format!("image {}: {e}", image.index()))?),
+                },
+                None => {
+                    let path = self.files.resolve(&percent_decode(uri));
+                    self.files
+                        .texture_source(&path)
+                        .map_err(|e| format!("image {}: {e}", image.index()))?
+                }
+            },
+        };
+        let sampler = texture.sampler();
+        self.part.textures.push(TextureDesc {
+            name: texture
+                .name()
+                .or(image.name())
+                .map_or_else(|| format!("texture{}", texture.index()), str::to_owned),
+            source,
+            color_space,
+            wrap_s: wrap_mode(sampler.wrap_s()),
+            wrap_t: wrap_mode(sampler.wrap_t()),
+        });
+        let index = self.part.textures.len() - 1;
+        self.textures.insert(key, index);
+        Ok(index)
+    }
+}
+
+/// A triangle strip as triangles; every second one is flipped to keep the winding.
+fn strip_triangles(indices: &[u32]) -> Vec<[u32; 3]> {
+    (0..indices.len().saturating_sub(2))
+        .map(|i| {
+            let (a, b, c) = (indices[i], indices[i + 1], indices[i + 2]);
+            if i % 2 == 0 {
+                [a, b, c]
+            } else {
+                [b, a, c]
+            }
+        })
+        .collect()
+}
+
+/// A triangle fan around its first index as triangles.
+fn fan_triangles(indices: &[u32]) -> Vec<[u32; 3]> {
+    (1..indices.len().saturating_sub(1))
+        .map(|i| [indices[0], indices[i], indices[i + 1]])
+        .collect()
+}
+
+/// When the `gltf` crate rejects a file, a clearer reason if it is a glTF 1.0 file.
+fn version_1_hint(bytes: &[u8]) -> Option<&'static str> {
+    const HINT: &str = "glTF 1.0 files are not supported (only glTF 2.0)";
+    if bytes.starts_with(b"glTF") {
+        let version = bytes
+            .get(4..8)
+            .map(|v| u32::from_le_bytes([v[0], v[1], v[2], v[3]]));
+        return (version == Some(1)).then_some(HINT);
+    }
+    let json: serde_json::Value = serde_json::from_slice(bytes).ok()?;
+    let version = json.get("asset")?.get("version")?.as_str()?;
+    version.starts_with('1').then_some(HINT)
+}
+
+fn wrap_mode(mode: gltf::texture::WrappingMode) -> WrapMode {
+    match mode {
+        gltf::texture::WrappingMode::Repeat => WrapMode::Periodic,
+        gltf::texture::WrappingMode::ClampToEdge => WrapMode::Clamp,
+        gltf::texture::WrappingMode::MirroredRepeat => WrapMode::Mirror,
+    }
+}
+
+/// `KHR_texture_transform`: `uv' = T(offset) * R(rotation) * S(scale) * uv`, with the
+/// extension's rotation matrix columns (cos, sin) and (-sin, cos). Because glTF's uv is
+/// already OpenImageIO's st, the same matrix applies to st.
+pub(crate) fn texture_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Affine2 {
+    Affine2::from_scale_angle_translation(Vec2::from(scale), rotation, Vec2::from(offset))
+}
+
+/// A glTF camera looks down its node's -Z with +Y up.
+fn convert_camera(camera: &gltf::Camera, world: &Affine3A) -> Result<CameraDesc, String> {
+    let eye = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+    if forward == Vec3::ZERO || up == Vec3::ZERO {
+        return Err(format!(
+            "camera {} has a degenerate node transform",
+            camera.index()
+        ));
+    }
+    let projection = match camera.projection() {
+        gltf::camera::Projection::Perspective(p) => Projection::Pinhole {
+            vfov_degrees: p.yfov().to_degrees(),
+        },
+        gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
+            height: 2.0 * o.ymag(),
+        },
+    };
+    Ok(CameraDesc {
+        eye,
+        target: eye + forward,
+        up,
+        projection,
+    })
+}
+
+/// `KHR_lights_punctual`: lights shine down their node's -Z; spot cone angles are radians.
+fn convert_light(
+    light: &gltf::khr_lights_punctual::Light,
+    world: &Affine3A,
+) -> Result<Light, String> {
+    let position = world.transform_point3(Vec3::ZERO);
+    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let color = Vec3::from(light.color());
+    let intensity = light.intensity();
+    if direction == Vec3::ZERO {
+        return Err(format!(
+            "light {} has a degenerate node transform",
+            light.index()
+        ));
+    }
+    Ok(match light.kind() {
+        gltf::khr_lights_punctual::Kind::Point => Light::Point {
+            position,
+            color,
+            intensity,
+        },
+        gltf::khr_lights_punctual::Kind::Directional => Light::Directional {
+            direction,
+            color,
+            intensity,
+        },
+        gltf::khr_lights_punctual::Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => Light::Spot {
+            position,
+            direction,
+            color,
+            intensity,
+            inner_angle: inner_cone_angle,
+            outer_angle: outer_cone_angle,
+        },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f32::consts::FRAC_PI_2;
+
+    #[test]
+    fn texture_transform_matches_the_extension_formula() {
+        let (offset, rotation, scale) = ([0.25, -0.5], 0.3f32, [2.0, 3.0]);
+        let m = texture_transform(offset, rotation, scale);
+        let uv = Vec2::new(0.7, 0.2);
+        // T * R * S written out with the extension's column-major matrices.
+        let (s, c) = rotation.sin_cos();
+        let scaled = Vec2::new(uv.x * scale[0], uv.y * scale[1]);
+        let rotated = Vec2::new(c * scaled.x - s * scaled.y, s * scaled.x + c * scaled.y);
+        let expected = rotated + Vec2::from(offset);
+        assert!((m.transform_point2(uv) - expected).length() < 1e-6);
+        let quarter = texture_transform([0.0, 0.0], FRAC_PI_2, [1.0, 1.0]);
+        assert!((quarter.transform_point2(Vec2::X) - Vec2::Y).length() < 1e-6);
+    }
+
+    fn base64(bytes: &[u8]) -> String {
+        const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut out = String::new();
+        for chunk in bytes.chunks(3) {
+            let b = [
+                chunk[0],
+                *chunk.get(1).unwrap_or(&0),
+                *chunk.get(2).unwrap_or(&0),
+            ];
+            let v = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+            for k in 0..4 {
+                if k <= chunk.len() {
+                    out.push(char::from(ALPHABET[((v >> (18 - 6 * k)) & 63) as usize]));
+                } else {
+                    out.push('=');
+                }
+            }
+        }
+        out
+    }
+
+    /// A one-triangle glTF with every feature the loader maps; `edit` changes the JSON.
+    fn synthetic(
+        edit: impl FnOnce(&mut serde_json::Value),
+        vertices: [[f32; 3]; 3],
+    ) -> Result<SceneDescription, SceneError> {
+        let mut buffer = Vec::new();
+        for p in vertices {
+            p.iter().for_each(|x| buffer.extend(x.to_le_bytes()));
+        }
+        for _ in 0..3 {
+            [0.0f32, 0.0, 1.0]
+                .iter()
+                .for_each(|x| buffer.extend(x.to_le_bytes()));
+        }
+        for uv in [[0.0f32, 0.0], [1.0, 0.0], [0.0, 1.0]] {
+            uv.iter().for_each(|x| buffer.extend(x.to_le_bytes()));
+        }
+        for i in [0u16, 1, 2, 0] {
+            buffer.extend(i.to_le_bytes());
+        }
+        let png = b"\x89PNG fake image bytes";
+        let mut json = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
+                               "KHR_materials_volume", "KHR_texture_transform"],
+            "extensions": {"KHR_lights_punctual": {"lights": [
+                {"type": "point", "color": [1, 0.5, 0.25], "intensity": 10},
+                {"type": "spot", "intensity": 5, "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.5}},
+                {"type": "directional", "intensity": 2}
+            ]}},
+            "scene": 0,
+            "scenes": [{"nodes": [0, 3]}],
+            "nodes": [
+                {"translation": [10, 0, 0], "scale": [2, 1, 1], "children": [1, 2], "mesh": 0},
+                {"camera": 0, "translation": [0, 0, 5]},
+                {"extensions": {"KHR_lights_punctual": {"light": 1}}, "rotation": [-std::f32::consts::FRAC_1_SQRT_2, 0, 0, std::f32::consts::FRAC_1_SQRT_2]},
+                {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 3, 0]}
+            ],
+            "cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}],
+            "meshes": [{"name": "tri", "primitives": [{
+                "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3, "material": 0}]}],
+            "materials": [{
+                "name": "jelly",
+                "pbrMetallicRoughness": {
+                    "baseColorFactor": [0.5, 0.6, 0.7, 0.8],
+                    "baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform":
+                        {"offset": [0.5, 0.25], "rotation": 0.0, "scale": [2, 4]}}},
+                    "metallicFactor": 0.0
+                },
+                "alphaMode": "MASK", "alphaCutoff": 0.3,
+                "emissiveFactor": [0.1, 0.2, 0.3],
+                "extensions": {
+                    "KHR_materials_transmission": {"transmissionFactor": 0.9},
+                    "KHR_materials_ior": {"ior": 1.33},
+                    "KHR_materials_volume": {"attenuationColor": [0.5, 1.0, 1.0], "attenuationDistance": 2.0}
+                }
+            }],
+            "textures": [{"source": 0, "sampler": 0}],
+            "samplers": [{"wrapS": 33071, "wrapT": 33648}],
+            "images": [{"uri": format!("data:image/png;base64,{}", base64(png))}],
+            "buffers": [{"byteLength": buffer.len(), "uri": format!("data:application/octet-stream;base64,{}", base64(&buffer))}],
+            "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 96}, {"buffer": 0, "byteOffset": 96, "byteLength": 8}],
+            "accessors": [
+                {"bufferView": 0, "byteOffset": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 0, "byteOffset": 36, "componentType": 5126, "count": 3, "type": "VEC3"},
+                {"bufferView": 0, "byteOffset": 72, "componentType": 5126, "count": 3, "type": "VEC2"},
+                {"bufferView": 1, "byteOffset": 0, "componentType": 5123, "count": 3, "type": "SCALAR"}
+            ]
+        });
+        edit(&mut json);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("synthetic.gltf");
+        std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+        load_gltf(&Files::disk(dir.path()), &path)
+    }
+
+    const TRIANGLE: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+    #[test]
+    fn synthetic_file_maps_every_feature() {
+        let part = synthetic(|_| {}, TRIANGLE).unwrap_or_else(|e| panic!("{e}"));
+        let mesh = &part.meshes[0];
+        // Node 0: scale x by 2, then translate by 10.
+        assert_eq!(mesh.positions[1], Vec3::new(12.0, 0.0, 0.0));
+        assert_eq!(mesh.normals[0], Vec3::Z);
+        assert_eq!(mesh.st[2], Vec2::new(0.0, 1.0), "glTF v is t directly");
+        let m = &part.materials[mesh.material];
+        assert_eq!(m.base_color, Vec3::new(0.5, 0.6, 0.7));
+        assert_eq!(m.alpha, 0.8);
+        assert_eq!(m.alpha_cutoff, Some(0.3));
+        assert_eq!(m.transmission, 0.9);
+        assert_eq!(m.ior, 1.33);
+        assert_eq!(m.attenuation_color, Vec3::new(0.5, 1.0, 1.0));
+        assert_eq!(m.attenuation_distance, 2.0);
+        assert_eq!(m.emission, Vec3::new(0.1, 0.2, 0.3));
+        assert_eq!(m.mirror, 0.0);
+        let color = m.base_color_texture.as_ref().unwrap();
+        let alpha = m.alpha_texture.as_ref().unwrap();
+        assert_eq!(
+            color.transform.transform_point2(Vec2::ONE),
+            Vec2::new(2.5, 4.25)
+        );
+        assert_eq!(color.transform, alpha.transform);
+        let (ct, at) = (&part.textures[color.texture], &part.textures[alpha.texture]);
+        assert_eq!(
+            (ct.color_space, at.color_space),
+            (ColorSpace::Srgb, ColorSpace::Linear)
+        );
+        assert_eq!((ct.wrap_s, ct.wrap_t), (WrapMode::Clamp, WrapMode::Mirror));
+        let TextureSource::Encoded { bytes, .. } = &ct.source else {
+            panic!("data URI image should stay encoded")
+        };
+        assert_eq!(&bytes[..4], b"\x89PNG");
+        // Camera at node 1 (child of node 0): eye = (10, 0, 5), looking down -z.
+        let camera = part.camera.as_ref().unwrap();
+        assert_eq!(camera.eye, Vec3::new(10.0, 0.0, 5.0));
+        assert!((camera.target - camera.eye - Vec3::NEG_Z).length() < 1e-6);
+        assert!(
+            matches!(camera.projection, Projection::Pinhole { vfov_degrees } if (vfov_degrees - 0.5f32.to_degrees()).abs() < 1e-4)
+        );
+        // Lights: the spot at node 2 is rotated -90 deg about x, so it shines down -y.
+        assert_eq!(part.lights.len(), 2);
+        let Light::Spot {
+            direction,
+            position,
+            inner_angle,
+            outer_angle,
+            ..
+        } = part.lights[0]
+        else {
+            panic!("spot first")
+        };
+        assert!((direction - Vec3::NEG_Y).length() < 1e-5, "{direction}");
+        assert_eq!(position, Vec3::new(10.0, 0.0, 0.0));
+        assert_eq!((inner_angle, outer_angle), (0.1, 0.5));
+        assert!(
+            matches!(part.lights[1], Light::Point { position, intensity, .. } if position == Vec3::new(0.0, 3.0, 0.0) && intensity == 10.0)
+        );
+    }
+
+    #[test]
+    fn shiny_metals_become_mirrors() {
+        let part = synthetic(
+            |j| {
+                j["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = 1.0.into();
+                j["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = 0.05.into();
+            },
+            TRIANGLE,
+        )
+        .unwrap();
+        let m = &part.materials[0];
+        assert_eq!(m.mirror, 0.7);
+        assert_eq!(m.base_color, Vec3::ZERO);
+    }
+
+    #[test]
+    fn orthographic_cameras_use_twice_ymag() {
+        let part = synthetic(
+            |j| j["cameras"][0] = serde_json::json!({"type": "orthographic", "orthographic": {"xmag": 3, "ymag": 2, "znear": 0, "zfar": 10}}),
+            TRIANGLE,
+        )
+        .unwrap();
+        assert_eq!(
+            part.camera.unwrap().projection,
+            Projection::Orthographic { height: 4.0 }
+        );
+    }
+
+    #[test]
+    fn malformed_synthetic_files_are_errors() {
+        type Edit = Box<dyn FnOnce(&mut serde_json::Value)>;
+        let cases: Vec<(Edit, &str)> = vec![
+            (
+                Box::new(|j| j["nodes"][3]["children"] = serde_json::json!([1])),
+                "child of both",
+            ),
+            (
+                Box::new(|j| j["nodes"][1]["children"] = serde_json::json!([0])),
+                "recursive",
+            ),
+            (
+                Box::new(|j| j["accessors"][0]["count"] = 9.into()),
+                "past the end",
+            ),
+            (
+                Box::new(|j| j["bufferViews"][1]["byteLength"] = 200.into()),
+                "outside its buffer",
+            ),
+            (
+                Box::new(|j| j["buffers"][0]["uri"] = "missing.bin".into()),
+                "missing.bin",
+            ),
+            (
+                Box::new(|j| j["meshes"][0]["primitives"][0]["material"] = 7.into()),
+                "Index out of bounds",
+            ),
+        ];
+        for (edit, expected) in cases {
+            let e = synthetic(edit, TRIANGLE).unwrap_err().to_string();
+            assert!(e.contains("synthetic.gltf") && e.contains(expected), "{e}");
+        }
+        let nan = [[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let part = synthetic(|_| {}, nan).unwrap();
+        let scene = SceneDescription {
+            source: "synthetic.gltf".into(),
+            ..part
+        };
+        assert!(super::super::validate(&scene)
+            .unwrap_err()
+            .to_string()
+            .contains("not finite"));
+    }
+
+    #[test]
+    fn strips_and_fans_become_triangles() {
+        assert_eq!(strip_triangles(&[0, 1, 2, 3]), vec![[0, 1, 2], [2, 1, 3]]);
+        assert_eq!(fan_triangles(&[0, 1, 2, 3]), vec![[0, 1, 2], [0, 2, 3]]);
+        assert!(strip_triangles(&[0, 1]).is_empty());
+        assert!(fan_triangles(&[]).is_empty());
+    }
+
+    #[test]
+    fn gltf_1_files_are_named_as_such() {
+        assert!(version_1_hint(br#"{"asset": {"version": "1.0"}}"#).is_some());
+        assert!(version_1_hint(br#"{"asset": {"version": "2.0"}}"#).is_none());
+        assert!(version_1_hint(b"glTF\x01\0\0\0").is_some());
+    }
+
+    #[test]
+    fn accessor_elements_are_bounds_checked() {
+        let data = [0u8; 24];
+        assert!(Elements::new(&data, 0, 12, 12, 2, "a").is_ok());
+        assert!(Elements::new(&data, 4, 12, 12, 2, "a").is_err());
+        assert!(Elements::new(&data, 0, usize::MAX, 12, 3, "a").is_err());
+    }
+
+    #[test]
+    fn normalized_components_decode_per_spec() {
+        assert_eq!(component(DataType::U8, &[255], true), 1.0);
+        assert_eq!(component(DataType::I8, &[0x80], true), -1.0);
+        assert_eq!(component(DataType::U16, &[0xff, 0xff], true), 1.0);
+        assert_eq!(component(DataType::U16, &[2, 0], false), 2.0);
+    }
+}

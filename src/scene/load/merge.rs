@@ -1,0 +1,223 @@
+//! Placing one loaded part (an OBJ or glTF file) into a scene: an optional affine
+//! placement and an optional material override, with every index re-based.
+
+use glam::{Affine3A, EulerRot, Mat3A, Quat, Vec3};
+
+use crate::scene::{Light, SceneDescription, TextureBinding};
+
+/// Translate / rotate (degrees about x, then y, then z) / scale, applied as `T * R * S`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Placement {
+    pub translate: Vec3,
+    pub rotate_degrees: Vec3,
+    pub scale: Vec3,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Placement {
+            translate: Vec3::ZERO,
+            rotate_degrees: Vec3::ZERO,
+            scale: Vec3::ONE,
+        }
+    }
+}
+
+impl Placement {
+    /// The affine map `T * Rz * Ry * Rx * S` (x rotation applied first).
+    pub(crate) fn matrix(&self) -> Affine3A {
+        let r = self.rotate_degrees;
+        let rotation = Quat::from_euler(
+            EulerRot::ZYX,
+            r.z.to_radians(),
+            r.y.to_radians(),
+            r.x.to_radians(),
+        );
+        Affine3A::from_scale_rotation_translation(self.scale, rotation, self.translate)
+    }
+}
+
+/// Maps points, normals (by the inverse transpose) and directions through an affine map.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Transform {
+    pub matrix: Affine3A,
+    normal_matrix: Mat3A,
+}
+
+impl Transform {
+    /// `None` when the map is singular (a zero scale): it would flatten the geometry.
+    pub(crate) fn new(matrix: Affine3A) -> Option<Self> {
+        let det = matrix.matrix3.determinant();
+        if !det.is_finite() || det.abs() < 1e-20 {
+            return None;
+        }
+        Some(Transform {
+            matrix,
+            normal_matrix: matrix.matrix3.inverse().transpose(),
+        })
+    }
+
+    #[inline]
+    pub(crate) fn point(&self, p: Vec3) -> Vec3 {
+        self.matrix.transform_point3(p)
+    }
+
+    /// A shading normal, renormalised (zero stays zero).
+    #[inline]
+    pub(crate) fn normal(&self, n: Vec3) -> Vec3 {
+        (self.normal_matrix * n).normalize_or_zero()
+    }
+
+    /// A unit direction (light directions).
+    #[inline]
+    pub(crate) fn direction(&self, d: Vec3) -> Vec3 {
+        self.matrix.transform_vector3(d).normalize_or_zero()
+    }
+
+    /// Applies the map to a light in place.
+    pub(crate) fn light(&self, light: &mut Light) {
+        match light {
+            Light::Point { position, .. } => *position = self.point(*position),
+            Light::Directional { direction, .. } => *direction = self.direction(*direction),
+            Light::Spot {
+                position,
+                direction,
+                ..
+            } => {
+                *position = self.point(*position);
+                *direction = self.direction(*direction);
+            }
+        }
+    }
+}
+
+/// Appends `part` to `scene`: geometry through `transform`, materials and textures re-based,
+/// or every mesh bound to `material_override` (then the part's own materials are dropped).
+/// The part's camera is taken (transformed) only when `scene` has none.
+pub(crate) fn append(
+    scene: &mut SceneDescription,
+    part: SceneDescription,
+    transform: Option<&Transform>,
+    material_override: Option<usize>,
+) {
+    let texture_base = scene.textures.len();
+    let material_base = scene.materials.len();
+    if material_override.is_none() {
+        scene.textures.extend(part.textures);
+        let rebase = |b: &mut Option<TextureBinding>| {
+            if let Some(binding) = b {
+                binding.texture += texture_base;
+            }
+        };
+        for mut material in part.materials {
+            rebase(&mut material.base_color_texture);
+            rebase(&mut material.alpha_texture);
+            scene.materials.push(material);
+        }
+    }
+    for mut mesh in part.meshes {
+        mesh.material = material_override.unwrap_or(mesh.material + material_base);
+        if let Some(t) = transform {
+            for p in &mut mesh.positions {
+                *p = t.point(*p);
+            }
+            for n in &mut mesh.normals {
+                *n = t.normal(*n);
+            }
+        }
+        scene.meshes.push(mesh);
+    }
+    for mut light in part.lights {
+        if let Some(t) = transform {
+            t.light(&mut light);
+        }
+        scene.lights.push(light);
+    }
+    if scene.camera.is_none() {
+        if let Some(mut camera) = part.camera {
+            if let Some(t) = transform {
+                camera.eye = t.point(camera.eye);
+                camera.target = t.point(camera.target);
+                camera.up = t.direction(camera.up);
+            }
+            scene.camera = Some(camera);
+        }
+    }
+    scene.notes.extend(part.notes);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Material, TriangleMesh};
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn placement_scales_then_rotates_then_translates() {
+        let placement = Placement {
+            translate: Vec3::new(10.0, 0.0, 0.0),
+            rotate_degrees: Vec3::new(0.0, 90.0, 0.0),
+            scale: Vec3::splat(2.0),
+        };
+        let t = Transform::new(placement.matrix()).unwrap();
+        // (1,0,0) -> scale (2,0,0) -> rotate 90 deg about y -> (0,0,-2) -> translate.
+        assert!(close(t.point(Vec3::X), Vec3::new(10.0, 0.0, -2.0)));
+    }
+
+    #[test]
+    fn rotations_apply_x_first() {
+        let placement = Placement {
+            rotate_degrees: Vec3::new(90.0, 90.0, 0.0),
+            ..Placement::default()
+        };
+        let t = Transform::new(placement.matrix()).unwrap();
+        // y -> (x rot 90) z -> (y rot 90) x
+        assert!(close(t.point(Vec3::Y), Vec3::X));
+    }
+
+    #[test]
+    fn normals_use_the_inverse_transpose() {
+        let placement = Placement {
+            scale: Vec3::new(4.0, 1.0, 1.0),
+            ..Placement::default()
+        };
+        let t = Transform::new(placement.matrix()).unwrap();
+        // The plane x + y = 0 with normal (1,1,0)/sqrt2 becomes x/4 + y = 0: normal ~ (1/4, 1, 0).
+        let n = t.normal(Vec3::new(1.0, 1.0, 0.0).normalize());
+        assert!(close(n, Vec3::new(0.25, 1.0, 0.0).normalize()), "{n}");
+    }
+
+    #[test]
+    fn singular_placements_are_rejected() {
+        let placement = Placement {
+            scale: Vec3::new(1.0, 0.0, 1.0),
+            ..Placement::default()
+        };
+        assert!(Transform::new(placement.matrix()).is_none());
+    }
+
+    #[test]
+    fn append_rebases_materials_and_textures() {
+        let mut scene = SceneDescription {
+            materials: vec![Material::default()],
+            ..Default::default()
+        };
+        let part = SceneDescription {
+            materials: vec![Material::default(), Material::default()],
+            meshes: vec![TriangleMesh {
+                material: 1,
+                ..Default::default()
+            }],
+            ..Default::default()
+        };
+        append(&mut scene, part.clone(), None, None);
+        assert_eq!(scene.materials.len(), 3);
+        assert_eq!(scene.meshes[0].material, 2);
+        append(&mut scene, part, None, Some(0));
+        assert_eq!(scene.materials.len(), 3);
+        assert_eq!(scene.meshes[1].material, 0);
+    }
+}

@@ -1,0 +1,164 @@
+//! Scene loading: TOML scenes, OBJ + MTL and glTF 2.0 files become a validated
+//! [`SceneDescription`].
+//!
+//! [`load_scene`] picks the format from the file extension. OBJ and glTF files may be
+//! rendered directly or pulled into a TOML scene with `[[mesh]]`; either way a scene
+//! without a camera gets one from [`frame_camera`] and a scene without lights gets a key
+//! light and an environment colour, each recorded in `SceneDescription::notes`. Every
+//! problem (missing file, syntax error, unknown name, `nan`, zero image size, ...) is a
+//! [`SceneError`] whose message is one line naming the file. Textures are only located
+//! and checked for readability here; `crate::texture` decodes them.
+//!
+//! ```toml
+//! [camera]
+//! eye = [0, 1, 5]
+//! target = [0, 1, 0]
+//!
+//! [[material]]
+//! name = "glass"
+//! transmission = 1.0
+//! ior = 1.5
+//!
+//! [[sphere]]
+//! center = [0, 1, 0]
+//! radius = 1
+//! material = "glass"
+//! ```
+
+mod default_scene;
+mod error;
+mod files;
+mod framing;
+mod gltf;
+mod merge;
+mod obj;
+mod toml_format;
+mod uri;
+mod validate;
+
+use std::path::Path;
+
+pub use default_scene::{default_scene, DEFAULT_SCENE_LABEL};
+pub use error::SceneError;
+pub use framing::{frame_camera, FRAMING_FOV_DEGREES};
+pub use validate::validate;
+
+use crate::scene::SceneDescription;
+use files::Files;
+
+/// The file formats a scene can be loaded from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Toml,
+    Obj,
+    Gltf,
+}
+
+/// The format named by `path`'s extension (case-insensitive).
+fn format_of(path: &Path) -> Result<Format, SceneError> {
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match extension.as_str() {
+        "toml" => Ok(Format::Toml),
+        "obj" => Ok(Format::Obj),
+        "gltf" | "glb" => Ok(Format::Gltf),
+        _ => Err(SceneError::UnknownFormat {
+            file: path.display().to_string(),
+            extension,
+        }),
+    }
+}
+
+/// Loads a scene from a `.toml`, `.obj`, `.gltf` or `.glb` file (extension case-insensitive),
+/// adds a camera and lights when missing, and validates the result.
+pub fn load_scene(path: &Path) -> Result<SceneDescription, SceneError> {
+    let label = path.display().to_string();
+    let base_dir = path.parent().unwrap_or(Path::new(""));
+    let files = Files::disk(base_dir);
+    let scene = match format_of(path)? {
+        Format::Toml => {
+            let bytes = files.read(path)?;
+            let text = String::from_utf8(bytes)
+                .map_err(|_| SceneError::invalid(&label, "not UTF-8 text"))?;
+            toml_format::parse(&text, &files, &label)?
+        }
+        Format::Obj | Format::Gltf => {
+            let mut scene = SceneDescription {
+                source: label.clone(),
+                ..Default::default()
+            };
+            merge::append(&mut scene, load_part(&files, path)?, None, None);
+            scene
+        }
+    };
+    finish(scene)
+}
+
+/// Parses TOML scene text; relative file names resolve against `base_dir`, and messages name
+/// `source_label`. Missing camera and lights are added and the result is validated.
+pub fn load_toml_str(
+    text: &str,
+    base_dir: &Path,
+    source_label: &str,
+) -> Result<SceneDescription, SceneError> {
+    finish(toml_format::parse(
+        text,
+        &Files::disk(base_dir),
+        source_label,
+    )?)
+}
+
+/// An OBJ or glTF file as a scene part (world-space meshes, materials, textures, lights,
+/// camera), not yet completed or validated.
+fn load_part(files: &Files, path: &Path) -> Result<SceneDescription, SceneError> {
+    match format_of(path)? {
+        Format::Obj => obj::load_obj(files, path),
+        Format::Gltf => gltf::load_gltf(files, path),
+        Format::Toml => Err(SceneError::UnknownFormat {
+            file: path.display().to_string(),
+            extension: "toml (a scene cannot be included as a mesh)".into(),
+        }),
+    }
+}
+
+/// Adds a missing camera and lights, then validates.
+fn finish(mut scene: SceneDescription) -> Result<SceneDescription, SceneError> {
+    framing::add_missing_camera_and_lights(&mut scene);
+    validate(&scene)?;
+    Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn extensions_dispatch_case_insensitively() {
+        assert_eq!(format_of(Path::new("a/B.TOML")).unwrap(), Format::Toml);
+        assert_eq!(format_of(Path::new("x.Obj")).unwrap(), Format::Obj);
+        assert_eq!(format_of(Path::new("x.GLB")).unwrap(), Format::Gltf);
+        let e = format_of(Path::new("x.fbx")).unwrap_err().to_string();
+        assert!(e.starts_with("x.fbx: unknown scene format 'fbx'"), "{e}");
+        assert!(load_scene(Path::new("noext")).is_err());
+    }
+
+    #[test]
+    fn missing_scene_file_is_an_error_naming_it() {
+        let e = load_scene(Path::new("/nonexistent/scene.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("/nonexistent/scene.toml: cannot read"), "{e}");
+    }
+
+    #[test]
+    fn toml_without_camera_or_lights_gets_defaults_and_notes() {
+        let text = "[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\n";
+        let s = load_toml_str(text, Path::new("."), "t.toml").unwrap();
+        assert!(s.camera.is_some());
+        assert_eq!(s.lights.len(), 1);
+        assert_eq!(s.notes.len(), 2);
+        assert_eq!(s.materials.len(), 1);
+    }
+}

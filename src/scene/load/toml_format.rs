@@ -1,0 +1,946 @@
+//! The TOML scene format (documented key by key in `docs/scene-format.md`).
+//!
+//! Parsing happens in two steps: serde reads the text into `Raw*` structs that mirror the
+//! file (unknown keys, wrong types, `nan`/`inf` and negative sizes are rejected there, with
+//! line and column), then [`build`] resolves names (materials, textures), loads referenced
+//! mesh files and produces a [`SceneDescription`]. Values that reference something keep
+//! their [`Spanned`] position so resolution errors point at the right place too.
+
+use glam::{Affine2, Vec2, Vec3};
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::Deserialize;
+use std::collections::HashMap;
+use std::fmt;
+use toml::Spanned;
+
+use super::error::SceneError;
+use super::files::Files;
+use super::merge::{append, Placement, Transform};
+use crate::scene::{
+    CameraDesc, ColorSpace, Environment, FresnelMode, Light, Material, Projection, RenderSettings,
+    SceneDescription, Sphere, TextureBinding, TextureDesc, ToneMap, WrapMode,
+};
+
+/// A finite number: TOML's `nan` and `inf` literals (and overflow past f32) are rejected.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Num(f32);
+
+impl<'de> Deserialize<'de> for Num {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = f64::deserialize(d)?;
+        let f = v as f32;
+        if !v.is_finite() {
+            return Err(de::Error::custom(format!(
+                "number {v} is not finite (nan and inf are not allowed)"
+            )));
+        }
+        if !f.is_finite() {
+            return Err(de::Error::custom(format!(
+                "number {v:e} is too large for f32"
+            )));
+        }
+        Ok(Num(f))
+    }
+}
+
+type V3 = [Num; 3];
+
+fn v3(v: V3) -> Vec3 {
+    Vec3::new(v[0].0, v[1].0, v[2].0)
+}
+
+/// `scale = 2` or `scale = [1, 2, 1]`.
+#[derive(Clone, Copy, Debug)]
+struct Scale(Vec3);
+
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct ScaleVisitor;
+        impl<'de> Visitor<'de> for ScaleVisitor {
+            type Value = Scale;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number or an array of 3 numbers")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale, E> {
+                let f = v as f32;
+                if f.is_finite() {
+                    Ok(Scale(Vec3::splat(f)))
+                } else {
+                    Err(E::custom(format!("scale {v} is not finite")))
+                }
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Scale, A::Error> {
+                let mut out = [0.0f32; 3];
+                for (i, slot) in out.iter_mut().enumerate() {
+                    let Num(v) = seq
+                        .next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+                    *slot = v;
+                }
+                if seq.next_element::<Num>()?.is_some() {
+                    return Err(de::Error::invalid_length(4, &self));
+                }
+                Ok(Scale(Vec3::from(out)))
+            }
+        }
+        d.deserialize_any(ScaleVisitor)
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    render: Option<RawRender>,
+    camera: Option<Spanned<RawCamera>>,
+    #[serde(default)]
+    light: Vec<Spanned<RawLight>>,
+    environment: Option<Spanned<RawEnvironment>>,
+    #[serde(default)]
+    texture: Vec<RawTexture>,
+    #[serde(default)]
+    material: Vec<RawMaterial>,
+    #[serde(default)]
+    sphere: Vec<RawSphere>,
+    #[serde(default)]
+    mesh: Vec<RawMesh>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRender {
+    width: Option<Spanned<u32>>,
+    height: Option<Spanned<u32>>,
+    spp: Option<Spanned<u32>>,
+    max_depth: Option<u32>,
+    min_throughput: Option<Spanned<Num>>,
+    tonemap: Option<RawToneMap>,
+    exposure: Option<Num>,
+    fresnel: Option<RawFresnel>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum RawToneMap {
+    Clamp,
+    Reinhard,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum RawFresnel {
+    Exact,
+    Schlick,
+}
+
+#[derive(Deserialize, Clone, Copy, Default, PartialEq)]
+#[serde(rename_all = "snake_case")]
+enum CameraType {
+    #[default]
+    Pinhole,
+    ThinLens,
+    Orthographic,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCamera {
+    #[serde(rename = "type", default)]
+    kind: CameraType,
+    eye: V3,
+    target: V3,
+    up: Option<V3>,
+    fov: Option<Num>,
+    aperture_radius: Option<Num>,
+    focus_distance: Option<Num>,
+    height: Option<Num>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq)]
+#[serde(rename_all = "snake_case")]
+enum LightType {
+    Point,
+    Directional,
+    Spot,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLight {
+    #[serde(rename = "type")]
+    kind: LightType,
+    position: Option<V3>,
+    direction: Option<V3>,
+    color: Option<V3>,
+    intensity: Option<Num>,
+    inner_angle: Option<Num>,
+    outer_angle: Option<Num>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEnvironment {
+    color: Option<V3>,
+    texture: Option<Spanned<String>>,
+    intensity: Option<Num>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum RawColorSpace {
+    Srgb,
+    Linear,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum RawWrap {
+    Periodic,
+    Clamp,
+    Black,
+    Mirror,
+}
+
+impl RawWrap {
+    fn mode(self) -> WrapMode {
+        match self {
+            RawWrap::Periodic => WrapMode::Periodic,
+            RawWrap::Clamp => WrapMode::Clamp,
+            RawWrap::Black => WrapMode::Black,
+            RawWrap::Mirror => WrapMode::Mirror,
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTexture {
+    name: Spanned<String>,
+    file: Spanned<String>,
+    color_space: Option<RawColorSpace>,
+    wrap: Option<RawWrap>,
+    wrap_s: Option<RawWrap>,
+    wrap_t: Option<RawWrap>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMaterial {
+    name: Spanned<String>,
+    base_color: Option<V3>,
+    base_color_texture: Option<Spanned<String>>,
+    texture_scale: Option<[Num; 2]>,
+    texture_offset: Option<[Num; 2]>,
+    texture_rotation: Option<Num>,
+    specular: Option<Spanned<Num>>,
+    shininess: Option<Spanned<Num>>,
+    mirror: Option<Spanned<Num>>,
+    transmission: Option<Spanned<Num>>,
+    ior: Option<Spanned<Num>>,
+    attenuation_color: Option<V3>,
+    attenuation_distance: Option<Spanned<Num>>,
+    emission: Option<V3>,
+    alpha: Option<Spanned<Num>>,
+    alpha_texture: Option<Spanned<String>>,
+    alpha_cutoff: Option<Spanned<Num>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSphere {
+    center: V3,
+    radius: Spanned<Num>,
+    material: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMesh {
+    file: Spanned<String>,
+    material: Option<Spanned<String>>,
+    translate: Option<V3>,
+    rotate: Option<V3>,
+    scale: Option<Spanned<Scale>>,
+}
+
+/// Errors located in the TOML text.
+struct Located<'a> {
+    text: &'a str,
+    label: &'a str,
+}
+
+impl Located<'_> {
+    fn at<T>(&self, spanned: &Spanned<T>, message: impl fmt::Display) -> SceneError {
+        SceneError::at_offset(self.label, self.text, spanned.span().start, message)
+    }
+}
+
+/// Parses a TOML scene and loads what it references (relative to `files`); the result has
+/// no defaults added and is not yet validated.
+pub(crate) fn parse(
+    text: &str,
+    files: &Files,
+    label: &str,
+) -> Result<SceneDescription, SceneError> {
+    let raw: RawScene = toml::from_str(text).map_err(|e| match e.span() {
+        Some(span) => SceneError::at_offset(label, text, span.start, e.message()),
+        None => SceneError::invalid(label, e.message()),
+    })?;
+    build(raw, files, &Located { text, label })
+}
+
+/// Sets `slot` from an optional weight that must lie in [0, 1].
+fn unit_weight(
+    loc: &Located,
+    slot: &mut f32,
+    value: &Option<Spanned<Num>>,
+    key: &str,
+) -> Result<(), SceneError> {
+    if let Some(v) = value {
+        let x = v.get_ref().0;
+        if !(0.0..=1.0).contains(&x) {
+            return Err(loc.at(v, format!("{key} = {x} must lie in [0, 1]")));
+        }
+        *slot = x;
+    }
+    Ok(())
+}
+
+fn unknown_name(
+    loc: &Located,
+    name: &Spanned<String>,
+    kind: &str,
+    known: &HashMap<String, usize>,
+) -> SceneError {
+    let mut names: Vec<&str> = known.keys().map(String::as_str).collect();
+    names.sort_unstable();
+    let list = if names.is_empty() {
+        "none defined".to_owned()
+    } else {
+        names.join(", ")
+    };
+    loc.at(
+        name,
+        format!("unknown {kind} '{}' (known: {list})", name.get_ref()),
+    )
+}
+
+fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription, SceneError> {
+    let mut scene = SceneDescription {
+        source: loc.label.to_owned(),
+        ..Default::default()
+    };
+    if let Some(render) = &raw.render {
+        scene.settings = settings(render, loc)?;
+    }
+
+    // Textures, by name.
+    let mut texture_names: HashMap<String, usize> = HashMap::new();
+    for t in &raw.texture {
+        let name = t.name.get_ref().clone();
+        if texture_names.contains_key(&name) {
+            return Err(loc.at(&t.name, format!("texture '{name}' is defined twice")));
+        }
+        let path = files.resolve(t.file.get_ref());
+        let source = files
+            .texture_source(&path)
+            .map_err(|e| loc.at(&t.file, format!("texture '{name}': {e}")))?;
+        let wrap = t.wrap.map_or(WrapMode::Periodic, RawWrap::mode);
+        scene.textures.push(TextureDesc {
+            name: name.clone(),
+            source,
+            color_space: match t.color_space {
+                Some(RawColorSpace::Linear) => ColorSpace::Linear,
+                Some(RawColorSpace::Srgb) | None => ColorSpace::Srgb,
+            },
+            wrap_s: t.wrap_s.map_or(wrap, RawWrap::mode),
+            wrap_t: t.wrap_t.map_or(wrap, RawWrap::mode),
+        });
+        texture_names.insert(name, scene.textures.len() - 1);
+    }
+    let texture = |name: &Spanned<String>| {
+        texture_names
+            .get(name.get_ref())
+            .copied()
+            .ok_or_else(|| unknown_name(loc, name, "texture", &texture_names))
+    };
+
+    // Materials, by name.
+    let mut material_names: HashMap<String, usize> = HashMap::new();
+    for m in &raw.material {
+        let name = m.name.get_ref().clone();
+        if material_names.contains_key(&name) {
+            return Err(loc.at(&m.name, format!("material '{name}' is defined twice")));
+        }
+        let mut material = Material {
+            name: name.clone(),
+            ..Material::default()
+        };
+        if let Some(c) = m.base_color {
+            material.base_color = v3(c);
+        }
+        let transform = texture_transform(m);
+        if let Some(t) = &m.base_color_texture {
+            material.base_color_texture = Some(TextureBinding {
+                texture: texture(t)?,
+                transform,
+            });
+        }
+        unit_weight(loc, &mut material.specular, &m.specular, "specular")?;
+        unit_weight(loc, &mut material.mirror, &m.mirror, "mirror")?;
+        unit_weight(
+            loc,
+            &mut material.transmission,
+            &m.transmission,
+            "transmission",
+        )?;
+        unit_weight(loc, &mut material.alpha, &m.alpha, "alpha")?;
+        if let Some(s) = &m.shininess {
+            if s.get_ref().0 < 0.0 {
+                return Err(loc.at(s, "shininess must be >= 0"));
+            }
+            material.shininess = s.get_ref().0;
+        }
+        if let Some(ior) = &m.ior {
+            if ior.get_ref().0 <= 0.0 {
+                return Err(loc.at(ior, format!("ior = {} must be > 0", ior.get_ref().0)));
+            }
+            material.ior = ior.get_ref().0;
+        }
+        if let Some(c) = m.attenuation_color {
+            material.attenuation_color = v3(c);
+        }
+        if let Some(d) = &m.attenuation_distance {
+            if d.get_ref().0 <= 0.0 {
+                return Err(loc.at(d, "attenuation_distance must be > 0"));
+            }
+            material.attenuation_distance = d.get_ref().0;
+        }
+        if let Some(e) = m.emission {
+            material.emission = v3(e);
+        }
+        if let Some(t) = &m.alpha_texture {
+            let index = texture(t)?;
+            if scene.textures[index].color_space != ColorSpace::Linear {
+                return Err(loc.at(
+                    t,
+                    format!(
+                        "alpha texture '{}' must be declared with color_space = \"linear\"",
+                        t.get_ref()
+                    ),
+                ));
+            }
+            material.alpha_texture = Some(TextureBinding {
+                texture: index,
+                transform,
+            });
+        }
+        if m.alpha_cutoff.is_some() || material.alpha_texture.is_some() {
+            let mut cutoff = 0.5;
+            unit_weight(loc, &mut cutoff, &m.alpha_cutoff, "alpha_cutoff")?;
+            material.alpha_cutoff = Some(cutoff);
+        }
+        scene.materials.push(material);
+        material_names.insert(name, scene.materials.len() - 1);
+    }
+    let mut default_material = None;
+    let mut material = |scene: &mut SceneDescription, name: &Option<Spanned<String>>| match name {
+        Some(name) => material_names
+            .get(name.get_ref())
+            .copied()
+            .ok_or_else(|| unknown_name(loc, name, "material", &material_names)),
+        None => Ok(*default_material.get_or_insert_with(|| {
+            scene.materials.push(Material {
+                name: "default".into(),
+                ..Material::default()
+            });
+            scene.materials.len() - 1
+        })),
+    };
+
+    for s in &raw.sphere {
+        let radius = s.radius.get_ref().0;
+        if radius <= 0.0 {
+            return Err(loc.at(
+                &s.radius,
+                format!("sphere radius {radius} must be positive"),
+            ));
+        }
+        let index = material(&mut scene, &s.material)?;
+        scene.spheres.push(Sphere {
+            center: v3(s.center),
+            radius,
+            material: index,
+        });
+    }
+
+    for m in &raw.mesh {
+        let placement = Placement {
+            translate: m.translate.map_or(Vec3::ZERO, v3),
+            rotate_degrees: m.rotate.map_or(Vec3::ZERO, v3),
+            scale: m.scale.as_ref().map_or(Vec3::ONE, |s| s.get_ref().0),
+        };
+        let transform = Transform::new(placement.matrix()).ok_or_else(|| match &m.scale {
+            Some(s) => loc.at(s, "mesh scale must not be zero"),
+            None => loc.at(&m.file, "mesh transform is singular"),
+        })?;
+        let material_override = match &m.material {
+            Some(_) => Some(material(&mut scene, &m.material)?),
+            None => None,
+        };
+        let path = files.resolve(m.file.get_ref());
+        let part = super::load_part(files, &path).map_err(|e| match e {
+            SceneError::Unreadable { reason, .. } => loc.at(
+                &m.file,
+                format!("cannot read mesh file '{}': {reason}", path.display()),
+            ),
+            SceneError::UnknownFormat { extension, .. } => loc.at(
+                &m.file,
+                format!(
+                    "mesh file '{}' has unknown format '{extension}' (known: obj, gltf, glb)",
+                    path.display()
+                ),
+            ),
+            other => other,
+        })?;
+        append(&mut scene, part, Some(&transform), material_override);
+    }
+
+    if let Some(env) = &raw.environment {
+        scene.environment = environment(env, &texture_names, loc)?;
+    }
+    if let Some(camera) = &raw.camera {
+        scene.camera = Some(camera_desc(camera, loc)?);
+    }
+    for light in &raw.light {
+        scene.lights.push(light_desc(light, loc)?);
+    }
+    Ok(scene)
+}
+
+/// `texture_scale`, `texture_offset`, `texture_rotation` (degrees) as `T * R * S`, the same
+/// composition as glTF's `KHR_texture_transform`, applied to st.
+fn texture_transform(m: &RawMaterial) -> Affine2 {
+    let scale = m
+        .texture_scale
+        .map_or(Vec2::ONE, |s| Vec2::new(s[0].0, s[1].0));
+    let offset = m
+        .texture_offset
+        .map_or(Vec2::ZERO, |o| Vec2::new(o[0].0, o[1].0));
+    let rotation = m.texture_rotation.map_or(0.0, |r| r.0.to_radians());
+    Affine2::from_scale_angle_translation(scale, rotation, offset)
+}
+
+fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> {
+    let mut s = RenderSettings::default();
+    for (slot, value, key) in [
+        (&mut s.width, &r.width, "width"),
+        (&mut s.height, &r.height, "height"),
+        (&mut s.spp, &r.spp, "spp"),
+    ] {
+        if let Some(v) = value {
+            if *v.get_ref() == 0 {
+                return Err(loc.at(v, format!("render.{key} must be at least 1")));
+            }
+            *slot = *v.get_ref();
+        }
+    }
+    if let Some(d) = r.max_depth {
+        s.max_depth = d;
+    }
+    if let Some(t) = &r.min_throughput {
+        if t.get_ref().0 < 0.0 {
+            return Err(loc.at(t, "render.min_throughput must be >= 0"));
+        }
+        s.min_throughput = t.get_ref().0;
+    }
+    if let Some(t) = r.tonemap {
+        s.tonemap = match t {
+            RawToneMap::Clamp => ToneMap::Clamp,
+            RawToneMap::Reinhard => ToneMap::Reinhard,
+        };
+    }
+    if let Some(e) = r.exposure {
+        s.exposure = e.0;
+    }
+    if let Some(f) = r.fresnel {
+        s.fresnel = match f {
+            RawFresnel::Exact => FresnelMode::Exact,
+            RawFresnel::Schlick => FresnelMode::Schlick,
+        };
+    }
+    Ok(s)
+}
+
+fn camera_desc(c: &Spanned<RawCamera>, loc: &Located) -> Result<CameraDesc, SceneError> {
+    let raw = c.get_ref();
+    let eye = v3(raw.eye);
+    let target = v3(raw.target);
+    let up = raw.up.map_or(Vec3::Y, v3);
+    let fov = raw.fov.map_or(45.0, |f| f.0);
+    let distance = (target - eye).length();
+    if distance == 0.0 {
+        return Err(loc.at(c, "camera eye and target coincide"));
+    }
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(loc.at(
+            c,
+            format!("camera fov = {fov} must lie in (0, 180) degrees"),
+        ));
+    }
+    let projection = match raw.kind {
+        CameraType::Pinhole => Projection::Pinhole { vfov_degrees: fov },
+        CameraType::ThinLens => {
+            let aperture_radius = raw
+                .aperture_radius
+                .ok_or_else(|| loc.at(c, "a thin_lens camera needs aperture_radius"))?
+                .0;
+            let focus_distance = raw.focus_distance.map_or(distance, |f| f.0);
+            if aperture_radius < 0.0 || focus_distance <= 0.0 {
+                return Err(loc.at(
+                    c,
+                    "camera aperture_radius must be >= 0 and focus_distance > 0",
+                ));
+            }
+            Projection::ThinLens {
+                vfov_degrees: fov,
+                aperture_radius,
+                focus_distance,
+            }
+        }
+        CameraType::Orthographic => {
+            let height = raw
+                .height
+                .map_or(2.0 * distance * (0.5 * fov.to_radians()).tan(), |h| h.0);
+            if height <= 0.0 {
+                return Err(loc.at(c, "orthographic camera height must be > 0"));
+            }
+            Projection::Orthographic { height }
+        }
+    };
+    Ok(CameraDesc {
+        eye,
+        target,
+        up,
+        projection,
+    })
+}
+
+fn light_desc(l: &Spanned<RawLight>, loc: &Located) -> Result<Light, SceneError> {
+    let raw = l.get_ref();
+    let color = raw.color.map_or(Vec3::ONE, v3);
+    let intensity = raw.intensity.map_or(1.0, |i| i.0);
+    let name = match raw.kind {
+        LightType::Point => "point",
+        LightType::Directional => "directional",
+        LightType::Spot => "spot",
+    };
+    let position = || {
+        raw.position
+            .map(v3)
+            .ok_or_else(|| loc.at(l, format!("a {name} light needs a position")))
+    };
+    let direction = || {
+        let d = raw
+            .direction
+            .map(v3)
+            .ok_or_else(|| loc.at(l, format!("a {name} light needs a direction")))?;
+        if d.length_squared() == 0.0 {
+            return Err(loc.at(l, "light direction must not be zero"));
+        }
+        Ok(d.normalize())
+    };
+    Ok(match raw.kind {
+        LightType::Point => Light::Point {
+            position: position()?,
+            color,
+            intensity,
+        },
+        LightType::Directional => Light::Directional {
+            direction: direction()?,
+            color,
+            intensity,
+        },
+        LightType::Spot => {
+            let inner = raw.inner_angle.map_or(30.0, |a| a.0);
+            let outer = raw.outer_angle.map_or(45.0, |a| a.0);
+            if !(0.0 <= inner && inner <= outer && outer <= 180.0) {
+                return Err(loc.at(
+                    l,
+                    "spot angles must satisfy 0 <= inner_angle <= outer_angle <= 180",
+                ));
+            }
+            Light::Spot {
+                position: position()?,
+                direction: direction()?,
+                color,
+                intensity,
+                inner_angle: inner.to_radians(),
+                outer_angle: outer.to_radians(),
+            }
+        }
+    })
+}
+
+fn environment(
+    e: &Spanned<RawEnvironment>,
+    textures: &HashMap<String, usize>,
+    loc: &Located,
+) -> Result<Environment, SceneError> {
+    let raw = e.get_ref();
+    match (&raw.color, &raw.texture) {
+        (Some(_), Some(_)) => Err(loc.at(e, "environment takes either color or texture, not both")),
+        (Some(c), None) => Ok(Environment::Color(v3(*c))),
+        (None, Some(name)) => {
+            let texture = textures
+                .get(name.get_ref())
+                .copied()
+                .ok_or_else(|| unknown_name(loc, name, "texture", textures))?;
+            Ok(Environment::LatLong {
+                texture,
+                intensity: raw.intensity.map_or(1.0, |i| i.0),
+            })
+        }
+        (None, None) => Ok(Environment::Color(Vec3::ZERO)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn parse_here(text: &str) -> Result<SceneDescription, SceneError> {
+        parse(text, &Files::disk(Path::new("/nonexistent")), "s.toml")
+    }
+
+    fn err(text: &str) -> String {
+        let message = parse_here(text).unwrap_err().to_string();
+        assert!(!message.contains('\n'), "{message}");
+        message
+    }
+
+    #[test]
+    fn full_scene_parses() {
+        let text = r#"
+[render]
+width = 320
+height = 200
+spp = 4
+tonemap = "reinhard"
+fresnel = "schlick"
+exposure = 1.5
+
+[camera]
+type = "thin_lens"
+eye = [0, 1, 5]
+target = [0, 1, 0]
+fov = 30
+aperture_radius = 0.1
+
+[[light]]
+type = "spot"
+position = [0, 5, 0]
+direction = [0, -2, 0]
+inner_angle = 10
+outer_angle = 20
+
+[environment]
+color = [0.1, 0.2, 0.3]
+
+[[material]]
+name = "glass"
+transmission = 1.0
+ior = 1.5
+attenuation_color = [0.5, 0.9, 0.5]
+attenuation_distance = 2
+
+[[sphere]]
+center = [0, 1, 0]
+radius = 1
+material = "glass"
+"#;
+        let s = parse_here(text).unwrap();
+        assert_eq!(
+            (s.settings.width, s.settings.height, s.settings.spp),
+            (320, 200, 4)
+        );
+        assert_eq!(s.settings.tonemap, ToneMap::Reinhard);
+        assert_eq!(s.settings.fresnel, FresnelMode::Schlick);
+        let cam = s.camera.unwrap();
+        assert_eq!(
+            cam.projection,
+            Projection::ThinLens {
+                vfov_degrees: 30.0,
+                aperture_radius: 0.1,
+                focus_distance: 5.0
+            }
+        );
+        let Light::Spot {
+            direction,
+            inner_angle,
+            ..
+        } = s.lights[0]
+        else {
+            panic!("not a spot light")
+        };
+        assert_eq!(direction, Vec3::NEG_Y);
+        assert!((inner_angle - 10f32.to_radians()).abs() < 1e-6);
+        assert_eq!(s.environment, Environment::Color(Vec3::new(0.1, 0.2, 0.3)));
+        assert_eq!(s.materials[s.spheres[0].material].attenuation_distance, 2.0);
+    }
+
+    #[test]
+    fn syntax_errors_report_line_and_column() {
+        let e = err("[render]\nwidth = = 3\n");
+        assert!(e.starts_with("s.toml:2:"), "{e}");
+    }
+
+    #[test]
+    fn unknown_keys_are_errors() {
+        let e = err("[render]\nwidht = 3\n");
+        assert!(e.starts_with("s.toml:2:1:") && e.contains("widht"), "{e}");
+        let e = err("[[sphere]]\ncenter = [0,0,0]\nradius = 1\nmaterial_name = 'x'\n");
+        assert!(e.contains("material_name"), "{e}");
+    }
+
+    #[test]
+    fn unknown_material_lists_the_known_ones() {
+        let text = "[[material]]\nname = 'mirror'\n[[material]]\nname = 'glass'\n[[sphere]]\ncenter = [0,0,0]\nradius = 1\nmaterial = 'glas'\n";
+        let e = err(text);
+        assert_eq!(
+            e,
+            "s.toml:8:12: unknown material 'glas' (known: glass, mirror)"
+        );
+    }
+
+    #[test]
+    fn unknown_texture_is_an_error() {
+        let e = err("[[material]]\nname = 'm'\nbase_color_texture = 'wood'\n");
+        assert!(
+            e.starts_with("s.toml:3:") && e.contains("unknown texture 'wood'"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn nan_and_inf_are_rejected_with_location() {
+        let e = err("[[sphere]]\ncenter = [0, nan, 0]\nradius = 1\n");
+        assert!(
+            e.starts_with("s.toml:2:") && e.contains("not finite"),
+            "{e}"
+        );
+        let e = err("[[light]]\ntype = 'point'\nposition = [0,0,0]\nintensity = inf\n");
+        assert!(
+            e.starts_with("s.toml:4:") && e.contains("not finite"),
+            "{e}"
+        );
+        let e = err("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1e40\n");
+        assert!(
+            e.starts_with("s.toml:3:10:") && e.contains("too large"),
+            "{e}"
+        );
+        let e = err("[render]\nexposure = -inf\n");
+        assert!(e.contains("not finite"), "{e}");
+    }
+
+    #[test]
+    fn zero_image_size_negative_radius_and_bad_ior_are_errors() {
+        let e = err("[render]\nwidth = 0\n");
+        assert!(e.starts_with("s.toml:2:9:") && e.contains("width"), "{e}");
+        let e = err("[[sphere]]\ncenter = [0,0,0]\nradius = -2\n");
+        assert!(e.starts_with("s.toml:3:10:") && e.contains("radius"), "{e}");
+        let e = err("[[material]]\nname = 'g'\nior = 0\n");
+        assert!(e.starts_with("s.toml:3:7:") && e.contains("ior"), "{e}");
+        let e = err("[[material]]\nname = 'g'\nior = -1.5\n");
+        assert!(e.contains("ior"), "{e}");
+    }
+
+    #[test]
+    fn missing_files_are_errors_at_the_reference() {
+        let e = err("[[mesh]]\nfile = 'missing.obj'\n");
+        assert!(
+            e.starts_with("s.toml:2:8:") && e.contains("missing.obj"),
+            "{e}"
+        );
+        let e = err("[[texture]]\nname = 't'\nfile = 'missing.png'\n");
+        assert!(
+            e.starts_with("s.toml:3:8:") && e.contains("missing.png"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn wrong_enum_values_are_errors() {
+        let e = err("[camera]\ntype = 'fisheye'\neye = [0,0,1]\ntarget = [0,0,0]\n");
+        assert!(e.contains("fisheye"), "{e}");
+        let e = err("[render]\ntonemap = 'aces'\n");
+        assert!(e.starts_with("s.toml:2:") && e.contains("aces"), "{e}");
+    }
+
+    #[test]
+    fn texture_transform_and_wrap_modes() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("c.png"), b"x").unwrap();
+        let text = "[[texture]]\nname = 'c'\nfile = 'c.png'\nwrap = 'clamp'\nwrap_t = 'mirror'\n\
+                    [[material]]\nname = 'm'\nbase_color_texture = 'c'\ntexture_scale = [4, 2]\ntexture_offset = [0.5, 0]\ntexture_rotation = 90\n";
+        let s = parse(text, &Files::disk(dir.path()), "s.toml").unwrap();
+        let t = &s.textures[0];
+        assert_eq!(
+            (t.wrap_s, t.wrap_t, t.color_space),
+            (WrapMode::Clamp, WrapMode::Mirror, ColorSpace::Srgb)
+        );
+        assert!(
+            matches!(&t.source, crate::scene::TextureSource::File(p) if *p == dir.path().join("c.png"))
+        );
+        let binding = s.materials[0].base_color_texture.as_ref().unwrap();
+        // (1, 0) -> scale (4, 0) -> rotate 90 deg (0, 4) -> offset (0.5, 4).
+        let st = binding.transform.transform_point2(Vec2::X);
+        assert!((st - Vec2::new(0.5, 4.0)).length() < 1e-5, "{st}");
+    }
+
+    #[test]
+    fn alpha_textures_must_be_linear() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a.png"), b"x").unwrap();
+        let base = "[[texture]]\nname = 'a'\nfile = 'a.png'\n";
+        let material = "[[material]]\nname = 'leaf'\nalpha_texture = 'a'\n";
+        let srgb = format!("{base}{material}");
+        let e = parse(&srgb, &Files::disk(dir.path()), "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("linear"), "{e}");
+        let linear = format!("{base}color_space = 'linear'\n{material}");
+        let s = parse(&linear, &Files::disk(dir.path()), "s.toml").unwrap();
+        assert_eq!(s.materials[0].alpha_cutoff, Some(0.5));
+    }
+
+    #[test]
+    fn meshes_are_placed_and_materials_overridden() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("t.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        )
+        .unwrap();
+        let text = "[[material]]\nname = 'red'\nbase_color = [1, 0, 0]\n\
+                    [[mesh]]\nfile = 't.obj'\nmaterial = 'red'\ntranslate = [0, 0, 5]\nscale = 2\n\
+                    [[mesh]]\nfile = 't.obj'\nrotate = [0, 0, 90]\n";
+        let s = parse(text, &Files::disk(dir.path()), "s.toml").unwrap();
+        assert_eq!(s.meshes.len(), 2);
+        assert_eq!(s.meshes[0].material, 0);
+        assert_eq!(s.meshes[0].positions[1], Vec3::new(2.0, 0.0, 5.0));
+        assert!((s.meshes[1].positions[1] - Vec3::Y).length() < 1e-6);
+        assert_ne!(s.meshes[1].material, 0);
+        let e = parse(
+            "[[mesh]]\nfile = 't.obj'\nscale = 0\n",
+            &Files::disk(dir.path()),
+            "s.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("s.toml:3:9:"), "{e}");
+    }
+}

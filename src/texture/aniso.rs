@@ -1,0 +1,142 @@
+//! Anisotropic filtering: bilinear probes spaced along the ellipse's major axis on
+//! the level(s) chosen from the minor axis, Gaussian-weighted (reference note,
+//! step 7; seed 002, section 4 "anisotropic texture filtering").
+//!
+//! The probe count n = max(1, int(2 * aspect - 1)) is computed in f32 like
+//! OpenImageIO's, because near whole numbers f32 and f64 disagree on it.
+
+use glam::Vec4;
+
+use super::ellipse;
+pub(crate) use super::ellipse::footprint;
+use super::filter_closest_bilinear::bilinear;
+use super::mip_pyramid::MipPyramid;
+use super::tiles::TexelObserver;
+use super::{TextureQuery, WrapMode};
+
+/// Number of probes for an (already clamped) aspect ratio.
+#[inline(always)]
+pub(crate) fn probe_count(aspect: f32) -> usize {
+    ((2.0 * aspect - 1.0) as i32).max(1) as usize
+}
+
+/// The anisotropic lookup.
+#[inline]
+pub(crate) fn sample<O: TexelObserver>(
+    pyramid: &MipPyramid,
+    q: &TextureQuery,
+    max_aniso: f32,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    let f = ellipse::footprint(pyramid, q, max_aniso);
+    let n = probe_count(f.aspect);
+    let (sin, cos) = f.axes.theta.sin_cos();
+    // Probe offsets p in [-1, 1] map to half the distance between the ellipse's
+    // end-circle centres, (major - minor) / 2, on either side of (s, t).
+    let ll = 2.0 * (f.axes.major - f.axes.minor);
+    let ds = cos * ll * 0.5;
+    let dt = sin * ll * 0.5;
+    let inv_n = 1.0 / n as f32;
+    let gauss_scale = f.axes.major / ll;
+
+    let mut sum = Vec4::ZERO;
+    for k in 0..2 {
+        let level_weight = f.levels.weights[k];
+        if level_weight == 0.0 {
+            continue;
+        }
+        let m = f.levels.levels[k];
+        let level = &pyramid.levels[m];
+        let level_sum = match n {
+            1 => bilinear(level, m, q.s, q.t, wrap, obs),
+            2 => {
+                let a = bilinear(level, m, q.s - 0.5 * ds, q.t - 0.5 * dt, wrap, obs);
+                let b = bilinear(level, m, q.s + 0.5 * ds, q.t + 0.5 * dt, wrap, obs);
+                0.5 * a + 0.5 * b
+            }
+            _ => {
+                // Weights exp(-2 x^2) with x = p * major / (2 (major - minor)),
+                // normalised once at the end.
+                let mut acc = Vec4::ZERO;
+                let mut wsum = 0.0f32;
+                for i in 0..n {
+                    let p = 2.0 * (i as f32 + 0.5) * inv_n - 1.0;
+                    let x = p * gauss_scale;
+                    let w = (-2.0 * x * x).exp();
+                    wsum += w;
+                    acc += w * bilinear(level, m, q.s + p * ds, q.t + p * dt, wrap, obs);
+                }
+                acc / wsum
+            }
+        };
+        sum += level_weight * level_sum;
+    }
+    sum
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::mip_pyramid::MipLevel;
+    use super::super::tiles::NoTiles;
+    use super::*;
+
+    #[test]
+    fn probe_counts() {
+        assert_eq!(probe_count(1.0), 1);
+        assert_eq!(probe_count(1.4), 1);
+        assert_eq!(probe_count(1.5), 2);
+        assert_eq!(probe_count(16.0), 31);
+        assert_eq!(probe_count(15.999), 30);
+    }
+
+    #[test]
+    fn weights_sum_to_one_on_constant_texture() {
+        let p = MipPyramid::build(MipLevel::new(128, 96, vec![[0.7; 4]; 128 * 96]).unwrap());
+        for k in 0..64 {
+            let angle = k as f32 * 0.37;
+            let major = 0.002 * (1.0 + k as f32);
+            let q = TextureQuery {
+                s: 0.1 * k as f32,
+                t: -0.05 * k as f32,
+                dsdx: major * angle.cos(),
+                dtdx: major * angle.sin(),
+                dsdy: -0.001 * angle.sin(),
+                dtdy: 0.001 * angle.cos(),
+            };
+            let v = sample(&p, &q, 16.0, (WrapMode::Periodic, WrapMode::Mirror), &mut NoTiles);
+            assert!((v - Vec4::splat(0.7)).abs().max_element() < 1e-5, "{k}: {v}");
+        }
+    }
+
+    #[test]
+    fn stretched_footprint_averages_stripes_along_the_major_axis() {
+        // Vertical stripes 0/1 one texel wide: a footprint long along s averages them,
+        // one long along t does not.
+        let texels = (0..64 * 64)
+            .map(|i| [(i % 2) as f32, 0.0, 0.0, 1.0])
+            .collect();
+        let p = MipPyramid::build(MipLevel::new(64, 64, texels).unwrap());
+        let centre = 1.5 / 64.0; // centre of column 1 (value 1)
+        let along_s = TextureQuery {
+            s: centre,
+            t: 0.5,
+            dsdx: 16.0 / 64.0,
+            dtdx: 0.0,
+            dsdy: 0.0,
+            dtdy: 1.0 / 64.0,
+        };
+        let along_t = TextureQuery {
+            dsdx: 0.0,
+            dtdx: 16.0 / 64.0,
+            dsdy: 0.25 / 64.0,
+            dtdy: 0.0,
+            ..along_s
+        };
+        let wrap = (WrapMode::Periodic, WrapMode::Periodic);
+        let a = sample(&p, &along_s, 16.0, wrap, &mut NoTiles).x;
+        let b = sample(&p, &along_t, 16.0, wrap, &mut NoTiles).x;
+        assert!((a - 0.5).abs() < 0.1, "{a}");
+        assert!(b > 0.9, "{b}");
+    }
+}

@@ -1,0 +1,218 @@
+//! Decoding texture files into linear RGBA f32 levels.
+//!
+//! PNG and JPEG (8 or 16 bit; grey, grey-alpha, RGB, RGBA) go through the `image`
+//! crate; OpenEXR (half, float or uint channels) through the `exr` crate. The format
+//! is sniffed from the bytes, not the file name. Missing alpha is 1; grey is copied
+//! to R, G and B. With [`ColorSpace::Srgb`] the colour channels of PNG/JPEG are
+//! decoded from sRGB to linear; alpha and OpenEXR data are always used as stored.
+//! A mip-mapped OpenEXR (as `maketx` writes) returns all its levels, finest first.
+
+use std::io::Cursor;
+
+use exr::prelude::{FlatSamples, Levels, ReadChannels, ReadLayers};
+use image::DynamicImage;
+
+use super::mip_pyramid::MipLevel;
+use super::{ColorSpace, TextureError};
+
+/// Decodes `bytes` (PNG, JPEG or OpenEXR) into one or more levels, finest first.
+pub(crate) fn decode(
+    bytes: &[u8],
+    label: &str,
+    color_space: ColorSpace,
+) -> Result<Vec<MipLevel>, TextureError> {
+    if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+        decode_exr(bytes, label)
+    } else if bytes.starts_with(b"\x89PNG\r\n\x1a\n") || bytes.starts_with(&[0xff, 0xd8, 0xff]) {
+        decode_png_jpeg(bytes, label, color_space).map(|l| vec![l])
+    } else {
+        Err(TextureError::UnknownFormat {
+            label: label.to_string(),
+        })
+    }
+}
+
+/// sRGB transfer function inverse (IEC 61966-2-1).
+#[inline]
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn dimensions_error(label: &str, message: String) -> TextureError {
+    TextureError::Dimensions {
+        label: label.to_string(),
+        message,
+    }
+}
+
+fn decode_png_jpeg(
+    bytes: &[u8],
+    label: &str,
+    color_space: ColorSpace,
+) -> Result<MipLevel, TextureError> {
+    let img = image::load_from_memory(bytes).map_err(|e| TextureError::Decode {
+        label: label.to_string(),
+        message: e.to_string(),
+    })?;
+    let (w, h) = (img.width(), img.height());
+    let srgb = color_space == ColorSpace::Srgb;
+    let texels: Vec<[f32; 4]> = match img {
+        DynamicImage::ImageLuma8(_)
+        | DynamicImage::ImageLumaA8(_)
+        | DynamicImage::ImageRgb8(_)
+        | DynamicImage::ImageRgba8(_) => {
+            let lut: [f32; 256] = std::array::from_fn(|i| {
+                let v = i as f32 / 255.0;
+                if srgb {
+                    srgb_to_linear(v)
+                } else {
+                    v
+                }
+            });
+            img.to_rgba8()
+                .pixels()
+                .map(|p| [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize], p[3] as f32 / 255.0])
+                .collect()
+        }
+        _ => {
+            let decode = |v: u16| {
+                let v = v as f32 / 65535.0;
+                if srgb {
+                    srgb_to_linear(v)
+                } else {
+                    v
+                }
+            };
+            img.to_rgba16()
+                .pixels()
+                .map(|p| [decode(p[0]), decode(p[1]), decode(p[2]), p[3] as f32 / 65535.0])
+                .collect()
+        }
+    };
+    MipLevel::new(w, h, texels).map_err(|m| dimensions_error(label, m))
+}
+
+fn decode_exr(bytes: &[u8], label: &str) -> Result<Vec<MipLevel>, TextureError> {
+    let exr_error = |e: exr::error::Error| TextureError::Exr {
+        label: label.to_string(),
+        message: e.to_string(),
+    };
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .all_resolution_levels()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(exr_error)?;
+    let layer = &image.layer_data;
+    let channels = &layer.channel_data.list;
+    let find = |names: &[&str]| {
+        channels.iter().position(|c| {
+            let n = c.name.to_string();
+            let short = n.rsplit('.').next().unwrap_or(&n).to_string();
+            names.iter().any(|want| short.eq_ignore_ascii_case(want))
+        })
+    };
+    let grey = find(&["Y", "L"]).or(if channels.len() == 1 { Some(0) } else { None });
+    let sources: [Option<usize>; 4] = [
+        find(&["R"]).or(grey),
+        find(&["G"]).or(grey),
+        find(&["B"]).or(grey),
+        find(&["A"]),
+    ];
+    if sources[..3].iter().all(Option::is_none) {
+        return Err(TextureError::Exr {
+            label: label.to_string(),
+            message: "no R, G, B or Y channel".to_string(),
+        });
+    }
+
+    // Per channel, the list of levels (finest first).
+    let level_lists: Vec<Vec<&FlatSamples>> = channels
+        .iter()
+        .map(|c| match &c.sample_data {
+            Levels::Singular(s) => vec![s],
+            Levels::Mip { level_data, .. } => level_data.iter().collect(),
+            Levels::Rip { level_data, .. } => level_data.map_data.iter().take(1).collect(),
+        })
+        .collect();
+    let n_levels = level_lists.iter().map(Vec::len).min().unwrap_or(0);
+    let (mut w, mut h) = (layer.size.0, layer.size.1);
+    let mut levels = Vec::with_capacity(n_levels);
+    for li in 0..n_levels {
+        let count = w * h;
+        let mut texels = vec![[0.0f32, 0.0, 0.0, 1.0]; count];
+        for (k, src) in sources.iter().enumerate() {
+            let Some(ci) = *src else { continue };
+            let samples = level_lists[ci][li];
+            if samples.len() != count {
+                if li == 0 {
+                    return Err(dimensions_error(
+                        label,
+                        format!("channel has {} samples, expected {w}x{h}", samples.len()),
+                    ));
+                }
+                // Level sizes not in the halving chain (e.g. rounded up): use level 0 only.
+                return Ok(levels.into_iter().take(1).collect());
+            }
+            for (t, v) in texels.iter_mut().zip(samples.values_as_f32()) {
+                t[k] = v;
+            }
+        }
+        let level = MipLevel::new(w as u32, h as u32, texels).map_err(|m| dimensions_error(label, m))?;
+        levels.push(level);
+        w = (w / 2).max(1);
+        h = (h / 2).max(1);
+    }
+    if levels.is_empty() {
+        return Err(dimensions_error(label, "no image data".to_string()));
+    }
+    Ok(levels)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn png_bytes(img: DynamicImage) -> Vec<u8> {
+        let mut out = Cursor::new(Vec::new());
+        img.write_to(&mut out, image::ImageFormat::Png).unwrap();
+        out.into_inner()
+    }
+
+    #[test]
+    fn grey_png_expands_to_rgba_and_decodes_srgb() {
+        let grey = image::GrayImage::from_raw(2, 1, vec![0, 188]).unwrap();
+        let bytes = png_bytes(DynamicImage::ImageLuma8(grey));
+        let lin = decode(&bytes, "g.png", ColorSpace::Linear).unwrap();
+        assert_eq!(lin[0].texel(1, 0), [188.0 / 255.0, 188.0 / 255.0, 188.0 / 255.0, 1.0]);
+        let srgb = decode(&bytes, "g.png", ColorSpace::Srgb).unwrap();
+        let v = srgb[0].texel(1, 0);
+        assert!((v[0] - 0.5029).abs() < 1e-3 && v[3] == 1.0);
+    }
+
+    #[test]
+    fn alpha_stays_linear_and_sixteen_bit_is_read() {
+        let rgba = image::RgbaImage::from_raw(1, 1, vec![255, 0, 128, 128]).unwrap();
+        let l = decode(&png_bytes(DynamicImage::ImageRgba8(rgba)), "a.png", ColorSpace::Srgb).unwrap();
+        assert_eq!(l[0].texel(0, 0)[3], 128.0 / 255.0);
+        assert_eq!(l[0].texel(0, 0)[0], 1.0);
+        let rgb16 = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(1, 1, vec![65535u16, 0, 32768]).unwrap();
+        let l = decode(&png_bytes(DynamicImage::ImageRgb16(rgb16)), "b.png", ColorSpace::Linear).unwrap();
+        let t = l[0].texel(0, 0);
+        assert!((t[2] - 32768.0 / 65535.0).abs() < 1e-7 && t[3] == 1.0);
+    }
+
+    #[test]
+    fn garbage_is_rejected_with_label() {
+        let e = decode(b"hello", "junk.bin", ColorSpace::Linear).unwrap_err();
+        assert!(e.to_string().contains("junk.bin"));
+        let e = decode(b"\x89PNG\r\n\x1a\nbroken", "bad.png", ColorSpace::Linear).unwrap_err();
+        assert!(e.to_string().starts_with("bad.png"));
+    }
+}

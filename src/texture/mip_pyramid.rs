@@ -1,0 +1,236 @@
+//! The mip pyramid: level 0 and successively halved levels down to 1x1.
+//!
+//! Built once on load by the rule of OpenImageIO's `maketx` with its default box
+//! filter (reference note, step 9), so that for float input our levels equal the
+//! ones `maketx` writes within 1e-6: each level is (w/2, h/2) with integer division
+//! and a minimum of 1; when both source sides are even the texel is the exact 2x2
+//! average, otherwise it is a bilinear sample of the previous level at the new
+//! texel's centre with edge clamping. Everything is computed in f32 from the
+//! previous f32 level. Non-power-of-two sizes are handled by the bilinear rule.
+
+/// Largest accepted side, so every texel coordinate is exact in f32.
+const MAX_SIDE: u32 = 1 << 24;
+
+/// One level of the pyramid: linear RGBA texels, row-major, t = 0 first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MipLevel {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// `width * height` texels.
+    pub texels: Vec<[f32; 4]>,
+}
+
+impl MipLevel {
+    /// Checks the dimensions against the texel count.
+    pub fn new(width: u32, height: u32, texels: Vec<[f32; 4]>) -> Result<MipLevel, String> {
+        if width == 0 || height == 0 {
+            return Err(format!("{width}x{height} has no texels"));
+        }
+        if width > MAX_SIDE || height > MAX_SIDE {
+            return Err(format!("{width}x{height} exceeds {MAX_SIDE} texels per side"));
+        }
+        let expected = width as usize * height as usize;
+        if texels.len() != expected {
+            return Err(format!(
+                "{width}x{height} needs {expected} texels but {} were given",
+                texels.len()
+            ));
+        }
+        Ok(MipLevel {
+            width,
+            height,
+            texels,
+        })
+    }
+
+    /// The texel at column x, row y (both in range).
+    #[inline(always)]
+    pub fn texel(&self, x: usize, y: usize) -> [f32; 4] {
+        self.texels[y * self.width as usize + x]
+    }
+
+    /// min(width, height) as f32: OIIO's per-level filter-width scale.
+    #[inline(always)]
+    pub(crate) fn min_side(&self) -> f32 {
+        self.width.min(self.height) as f32
+    }
+
+    /// The next coarser level by the `maketx` box rule.
+    fn halve(&self) -> MipLevel {
+        let (sw, sh) = (self.width as usize, self.height as usize);
+        let dw = (sw / 2).max(1);
+        let dh = (sh / 2).max(1);
+        let mut texels = Vec::with_capacity(dw * dh);
+        if sw % 2 == 0 && sh % 2 == 0 {
+            // Exact 2x2 box average.
+            for y in 0..dh {
+                for x in 0..dw {
+                    let a = self.texel(2 * x, 2 * y);
+                    let b = self.texel(2 * x + 1, 2 * y);
+                    let c = self.texel(2 * x, 2 * y + 1);
+                    let d = self.texel(2 * x + 1, 2 * y + 1);
+                    texels.push(std::array::from_fn(|k| {
+                        0.5 * (0.5 * (a[k] + b[k]) + 0.5 * (c[k] + d[k]))
+                    }));
+                }
+            }
+        } else {
+            // Bilinear sample of this level at each new texel's centre, edges clamped.
+            let axis = |i: usize, src: usize, dst: usize| -> (usize, usize, f32) {
+                let x = (i as f32 + 0.5) / dst as f32 * src as f32 - 0.5;
+                let x0 = x.floor();
+                let f = x - x0;
+                let lo = (x0.max(0.0) as usize).min(src - 1);
+                let hi = ((x0 + 1.0).max(0.0) as usize).min(src - 1);
+                (lo, hi, f)
+            };
+            for y in 0..dh {
+                let (y0, y1, fy) = axis(y, sh, dh);
+                for x in 0..dw {
+                    let (x0, x1, fx) = axis(x, sw, dw);
+                    let a = self.texel(x0, y0);
+                    let b = self.texel(x1, y0);
+                    let c = self.texel(x0, y1);
+                    let d = self.texel(x1, y1);
+                    texels.push(std::array::from_fn(|k| {
+                        (1.0 - fy) * ((1.0 - fx) * a[k] + fx * b[k])
+                            + fy * ((1.0 - fx) * c[k] + fx * d[k])
+                    }));
+                }
+            }
+        }
+        MipLevel {
+            width: dw as u32,
+            height: dh as u32,
+            texels,
+        }
+    }
+}
+
+/// All levels, finest first; the last is 1x1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MipPyramid {
+    /// Level 0 is the full-resolution image.
+    pub levels: Vec<MipLevel>,
+}
+
+impl MipPyramid {
+    /// Builds every level from level 0 by the `maketx` box rule.
+    pub fn build(base: MipLevel) -> MipPyramid {
+        let mut levels = vec![base];
+        loop {
+            let last = &levels[levels.len() - 1];
+            if last.width == 1 && last.height == 1 {
+                break;
+            }
+            let next = last.halve();
+            levels.push(next);
+        }
+        MipPyramid { levels }
+    }
+
+    /// Uses levels read from a file (e.g. a mip-mapped OpenEXR written by `maketx`).
+    /// The caller checks [`MipPyramid::chain_is_valid`] first.
+    pub fn from_levels(levels: Vec<MipLevel>) -> MipPyramid {
+        MipPyramid { levels }
+    }
+
+    /// True when each level halves the previous one (integer division, min 1) down to 1x1.
+    pub fn chain_is_valid(levels: &[MipLevel]) -> bool {
+        let Some(last) = levels.last() else {
+            return false;
+        };
+        levels.windows(2).all(|w| {
+            w[1].width == (w[0].width / 2).max(1) && w[1].height == (w[0].height / 2).max(1)
+        }) && last.width == 1
+            && last.height == 1
+    }
+
+    /// Bytes of texel storage over all levels.
+    pub fn memory_bytes(&self) -> usize {
+        self.levels
+            .iter()
+            .map(|l| l.texels.len() * std::mem::size_of::<[f32; 4]>())
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn level(w: u32, h: u32, f: impl Fn(u32, u32) -> f32) -> MipLevel {
+        let texels = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let v = f(x, y);
+                [v, 2.0 * v, 1.0 - v, 1.0]
+            })
+            .collect();
+        MipLevel::new(w, h, texels).unwrap()
+    }
+
+    #[test]
+    fn sizes_halve_down_to_one_by_one() {
+        let sizes = |w, h| -> Vec<(u32, u32)> {
+            MipPyramid::build(level(w, h, |_, _| 0.0))
+                .levels
+                .iter()
+                .map(|l| (l.width, l.height))
+                .collect()
+        };
+        assert_eq!(sizes(8, 2), vec![(8, 2), (4, 1), (2, 1), (1, 1)]);
+        assert_eq!(sizes(13, 7), vec![(13, 7), (6, 3), (3, 1), (1, 1)]);
+        assert_eq!(sizes(1, 5), vec![(1, 5), (1, 2), (1, 1)]);
+        assert_eq!(sizes(1, 1), vec![(1, 1)]);
+        let p = MipPyramid::build(level(13, 7, |_, _| 0.0));
+        assert!(MipPyramid::chain_is_valid(&p.levels));
+        assert!(!MipPyramid::chain_is_valid(&p.levels[..2]));
+    }
+
+    #[test]
+    fn even_sizes_average_two_by_two_blocks() {
+        let p = MipPyramid::build(level(4, 2, |x, y| (x + 4 * y) as f32));
+        let l1 = &p.levels[1];
+        assert_eq!((l1.width, l1.height), (2, 1));
+        // (0+1+4+5)/4 and (2+3+6+7)/4
+        assert_eq!(l1.texel(0, 0)[0], 2.5);
+        assert_eq!(l1.texel(1, 0)[0], 4.5);
+        assert_eq!(p.levels[2].texel(0, 0)[0], 3.5);
+    }
+
+    #[test]
+    fn odd_sizes_resample_bilinearly_at_texel_centres() {
+        // 3 -> 1: centre of the new texel is source x = 1.0 exactly.
+        let p = MipPyramid::build(level(3, 1, |x, _| [1.0, 5.0, 9.0][x as usize]));
+        assert_eq!(p.levels[1].texel(0, 0)[0], 5.0);
+        // 5 -> 2: centres at source x = 0.75 and 3.25.
+        let p = MipPyramid::build(level(5, 1, |x, _| x as f32 * x as f32));
+        let l1 = &p.levels[1];
+        assert!((l1.texel(0, 0)[0] - 0.75).abs() < 1e-6);
+        assert!((l1.texel(1, 0)[0] - (9.0 + 0.25 * 7.0)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn constant_image_stays_constant_and_mean_is_preserved_for_pow2() {
+        let p = MipPyramid::build(level(6, 10, |_, _| 0.375));
+        for l in &p.levels {
+            assert!(l.texels.iter().all(|t| (t[0] - 0.375).abs() < 1e-7));
+        }
+        let p = MipPyramid::build(level(16, 8, |x, y| ((x * 7 + y * 3) % 5) as f32));
+        let mean = |l: &MipLevel| l.texels.iter().map(|t| t[0] as f64).sum::<f64>() / l.texels.len() as f64;
+        let m0 = mean(&p.levels[0]);
+        for l in &p.levels {
+            assert!((mean(l) - m0).abs() < 1e-5);
+        }
+        assert_eq!(p.memory_bytes(), (128 + 32 + 8 + 2 + 1) * 16);
+    }
+
+    #[test]
+    fn rejects_bad_dimensions() {
+        assert!(MipLevel::new(0, 3, vec![]).is_err());
+        assert!(MipLevel::new(2, 2, vec![[0.0; 4]; 3]).is_err());
+    }
+}

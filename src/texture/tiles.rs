@@ -1,0 +1,128 @@
+//! Recording which 64x64-texel tiles the filters touch (seed 000, figures 4-7: the
+//! tile-count metric of a demand-loaded texture cache).
+//!
+//! Filters read texels through a [`TexelObserver`] type parameter. The plain lookup
+//! passes [`NoTiles`], whose `touch` is empty and vanishes after monomorphisation, so
+//! `Texture::sample` pays nothing for this; `sample_recording` passes a
+//! [`TileRecorder`]. A [`TileSet`] is kept per thread and keyed by
+//! (texture id, level, tile x, tile y), so one set can hold tiles of many textures;
+//! merge the per-thread sets at the end of a render.
+
+use std::collections::HashSet;
+
+/// Edge length of a cache tile in texels (OpenImageIO's `maketx` default).
+pub const TILE_SIZE: u32 = 64;
+
+/// Something told about every texel a filter reads.
+pub(crate) trait TexelObserver {
+    /// Texel (x, y) of mip level `level` is read.
+    fn touch(&mut self, level: usize, x: usize, y: usize);
+}
+
+/// The observer of plain lookups: does nothing.
+pub(crate) struct NoTiles;
+
+impl TexelObserver for NoTiles {
+    #[inline(always)]
+    fn touch(&mut self, _level: usize, _x: usize, _y: usize) {}
+}
+
+/// The observer of recording lookups: adds the texel's tile to a [`TileSet`].
+pub(crate) struct TileRecorder<'a> {
+    texture_id: u64,
+    tiles: &'a mut TileSet,
+    last: Option<(usize, usize, usize)>,
+}
+
+impl<'a> TileRecorder<'a> {
+    pub(crate) fn new(texture_id: u64, tiles: &'a mut TileSet) -> Self {
+        TileRecorder {
+            texture_id,
+            tiles,
+            last: None,
+        }
+    }
+}
+
+impl TexelObserver for TileRecorder<'_> {
+    #[inline]
+    fn touch(&mut self, level: usize, x: usize, y: usize) {
+        let key = (level, x / TILE_SIZE as usize, y / TILE_SIZE as usize);
+        // Neighbouring texels mostly share a tile: skip the hash for repeats.
+        if self.last != Some(key) {
+            self.last = Some(key);
+            self.tiles.record(self.texture_id, key.0, key.1, key.2);
+        }
+    }
+}
+
+/// A set of touched tiles over any number of textures (one per thread, then merged).
+#[derive(Clone, Debug, Default)]
+pub struct TileSet {
+    tiles: HashSet<(u64, u32, u32, u32)>,
+}
+
+impl TileSet {
+    /// An empty set.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Marks tile (tile_x, tile_y) of `level` of texture `texture_id` as touched.
+    pub fn record(&mut self, texture_id: u64, level: usize, tile_x: usize, tile_y: usize) {
+        self.tiles
+            .insert((texture_id, level as u32, tile_x as u32, tile_y as u32));
+    }
+
+    /// Adds every tile of `other`.
+    pub fn merge(&mut self, other: TileSet) {
+        if self.tiles.len() < other.tiles.len() {
+            let mine = std::mem::replace(&mut self.tiles, other.tiles);
+            self.tiles.extend(mine);
+        } else {
+            self.tiles.extend(other.tiles);
+        }
+    }
+
+    /// Number of distinct tiles over all textures and levels.
+    pub fn count(&self) -> u64 {
+        self.tiles.len() as u64
+    }
+
+    /// Distinct tiles per mip level (summed over textures); index = level.
+    pub fn count_per_level(&self) -> Vec<u64> {
+        let mut counts = Vec::new();
+        for &(_, level, _, _) in &self.tiles {
+            let level = level as usize;
+            if counts.len() <= level {
+                counts.resize(level + 1, 0);
+            }
+            counts[level] += 1;
+        }
+        counts
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn records_distinct_tiles_per_texture_and_level() {
+        let mut a = TileSet::new();
+        {
+            let mut r = TileRecorder::new(7, &mut a);
+            r.touch(0, 0, 0);
+            r.touch(0, 63, 63); // same tile
+            r.touch(0, 64, 0); // next tile
+            r.touch(2, 1, 1);
+        }
+        assert_eq!(a.count(), 3);
+        let mut b = TileSet::new();
+        b.record(8, 0, 0, 0); // other texture, same tile coordinates
+        b.record(7, 0, 0, 0); // duplicate of a's
+        a.merge(b);
+        assert_eq!(a.count(), 4);
+        assert_eq!(a.count_per_level(), vec![3, 0, 1]);
+    }
+}
