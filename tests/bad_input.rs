@@ -41,18 +41,39 @@ fn assert_rejected(dir: &std::path::Path, scene_file: &str, extra: &[&str], name
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{scene_file}: stderr {stderr}");
     let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "{scene_file}: expected one line, got {stderr:?}");
-    assert!(lines[0].contains(names), "{scene_file}: '{}' does not name '{names}'", lines[0]);
-    assert!(!dir.join("out.exr").exists(), "{scene_file}: an output was written");
-    assert!(!dir.join("out.png").exists(), "{scene_file}: a PNG was written");
+    assert_eq!(
+        lines.len(),
+        1,
+        "{scene_file}: expected one line, got {stderr:?}"
+    );
+    assert!(
+        lines[0].contains(names),
+        "{scene_file}: '{}' does not name '{names}'",
+        lines[0]
+    );
+    assert!(
+        !dir.join("out.exr").exists(),
+        "{scene_file}: an output was written"
+    );
+    assert!(
+        !dir.join("out.png").exists(),
+        "{scene_file}: a PNG was written"
+    );
 }
 
 #[test]
 fn the_good_scene_renders() {
     let dir = temp_dir();
     write(dir.path(), "good.toml", GOOD_SCENE);
-    let out = run_in(dir.path(), &["render", "good.toml", "-o", "out.exr", "--quiet"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = run_in(
+        dir.path(),
+        &["render", "good.toml", "-o", "out.exr", "--quiet"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(dir.path().join("out.exr").exists());
     assert!(dir.path().join("out.png").exists());
 }
@@ -76,10 +97,17 @@ fn malformed_toml_reports_line_and_column() {
     let dir = temp_dir();
     let text = GOOD_SCENE.replace("radius = 1.0", "radius = = 1.0");
     write(dir.path(), "broken.toml", &text);
-    let out = run_in(dir.path(), &["render", "broken.toml", "-o", "out.exr", "--quiet"]);
+    let out = run_in(
+        dir.path(),
+        &["render", "broken.toml", "-o", "out.exr", "--quiet"],
+    );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    let line = GOOD_SCENE.lines().position(|l| l.contains("radius")).unwrap() + 1;
+    let line = GOOD_SCENE
+        .lines()
+        .position(|l| l.contains("radius"))
+        .unwrap()
+        + 1;
     assert!(stderr.contains(&format!("broken.toml:{line}:")), "{stderr}");
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(!dir.path().join("out.exr").exists());
@@ -88,7 +116,11 @@ fn malformed_toml_reports_line_and_column() {
 #[test]
 fn unknown_material_name() {
     let dir = temp_dir();
-    write(dir.path(), "s.toml", &GOOD_SCENE.replace("material = \"matte\"", "material = \"matt\""));
+    write(
+        dir.path(),
+        "s.toml",
+        &GOOD_SCENE.replace("material = \"matte\"", "material = \"matt\""),
+    );
     assert_rejected(dir.path(), "s.toml", &[], "matt");
 }
 
@@ -106,16 +138,28 @@ fn unknown_texture_name() {
 #[test]
 fn nan_and_infinite_numbers() {
     let dir = temp_dir();
-    write(dir.path(), "nan.toml", &GOOD_SCENE.replace("radius = 1.0", "radius = nan"));
+    write(
+        dir.path(),
+        "nan.toml",
+        &GOOD_SCENE.replace("radius = 1.0", "radius = nan"),
+    );
     assert_rejected(dir.path(), "nan.toml", &[], "nan.toml");
-    write(dir.path(), "inf.toml", &GOOD_SCENE.replace("intensity = 10.0", "intensity = inf"));
+    write(
+        dir.path(),
+        "inf.toml",
+        &GOOD_SCENE.replace("intensity = 10.0", "intensity = inf"),
+    );
     assert_rejected(dir.path(), "inf.toml", &[], "inf.toml");
 }
 
 #[test]
 fn zero_area_image_size() {
     let dir = temp_dir();
-    write(dir.path(), "zero.toml", &GOOD_SCENE.replace("width = 8", "width = 0"));
+    write(
+        dir.path(),
+        "zero.toml",
+        &GOOD_SCENE.replace("width = 8", "width = 0"),
+    );
     assert_rejected(dir.path(), "zero.toml", &[], "zero.toml");
     write(dir.path(), "good.toml", GOOD_SCENE);
     assert_rejected(dir.path(), "good.toml", &["--height", "0"], "good.toml");
@@ -125,14 +169,15 @@ fn zero_area_image_size() {
 fn unreadable_texture() {
     let dir = temp_dir();
     write(dir.path(), "fake.png", "this is not a PNG file");
-    let text = GOOD_SCENE.replace(
-        "[[material]]",
-        "[[texture]]\nname = \"fake\"\nfile = \"fake.png\"\n\n[[material]]",
-    )
-    .replace(
-        "base_color = [0.5, 0.5, 0.5]",
-        "base_color = [0.5, 0.5, 0.5]\nbase_color_texture = \"fake\"",
-    );
+    let text = GOOD_SCENE
+        .replace(
+            "[[material]]",
+            "[[texture]]\nname = \"fake\"\nfile = \"fake.png\"\n\n[[material]]",
+        )
+        .replace(
+            "base_color = [0.5, 0.5, 0.5]",
+            "base_color = [0.5, 0.5, 0.5]\nbase_color_texture = \"fake\"",
+        );
     write(dir.path(), "s.toml", &text);
     assert_rejected(dir.path(), "s.toml", &[], "fake.png");
 }
@@ -141,11 +186,21 @@ fn unreadable_texture() {
 fn a_failed_render_never_replaces_the_previous_output() {
     let dir = temp_dir();
     write(dir.path(), "good.toml", GOOD_SCENE);
-    let out = run_in(dir.path(), &["render", "good.toml", "-o", "keep.exr", "--quiet"]);
+    let out = run_in(
+        dir.path(),
+        &["render", "good.toml", "-o", "keep.exr", "--quiet"],
+    );
     assert!(out.status.success());
     let before = std::fs::read(dir.path().join("keep.exr")).unwrap();
-    write(dir.path(), "bad.toml", &GOOD_SCENE.replace("radius = 1.0", "radius = nan"));
-    let out = run_in(dir.path(), &["render", "bad.toml", "-o", "keep.exr", "--quiet"]);
+    write(
+        dir.path(),
+        "bad.toml",
+        &GOOD_SCENE.replace("radius = 1.0", "radius = nan"),
+    );
+    let out = run_in(
+        dir.path(),
+        &["render", "bad.toml", "-o", "keep.exr", "--quiet"],
+    );
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(std::fs::read(dir.path().join("keep.exr")).unwrap(), before);
 }

@@ -44,8 +44,22 @@ file = "plane.obj"
 material = "matte"
 "#,
     );
-    let out = run_in(dir.path(), &["render", "scene.toml", "-o", "plane.exr", "--no-png", "--quiet"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = run_in(
+        dir.path(),
+        &[
+            "render",
+            "scene.toml",
+            "-o",
+            "plane.exr",
+            "--no-png",
+            "--quiet",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let image = read_exr(&dir.path().join("plane.exr"));
     let (u, v) = (image.channel("uv.U"), image.channel("uv.V"));
     let albedo = [0.5f32, 0.25, 0.125];
@@ -105,12 +119,23 @@ radius = 1.0
 material = "mirror"
 "#,
     );
-    let out = run_in(dir.path(), &["render", "scene.toml", "-o", "m.exr", "--no-png", "--quiet"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = run_in(
+        dir.path(),
+        &["render", "scene.toml", "-o", "m.exr", "--no-png", "--quiet"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let image = read_exr(&dir.path().join("m.exr"));
     for (name, env) in [("R", 0.2f32), ("G", 0.4), ("B", 0.6)] {
         let centre = image.at(name, 16, 16);
-        assert!((centre - 0.8 * env).abs() < 1e-4, "{name}: {centre} vs {}", 0.8 * env);
+        assert!(
+            (centre - 0.8 * env).abs() < 1e-4,
+            "{name}: {centre} vs {}",
+            0.8 * env
+        );
         // The corner misses the sphere and shows the environment itself.
         let corner = image.at(name, 0, 0);
         assert!((corner - env).abs() < 1e-5, "{name} corner: {corner}");
@@ -137,8 +162,14 @@ fn edge_column(image: &ExrImage) -> f32 {
 }
 
 fn slab_scene(with_slab: bool) -> String {
+    // Aim at the bright/dark edge (x = 0 on the backdrop z = -10) from 30 degrees.
     let theta = 30f32.to_radians();
-    let eye = [-20.0 * theta.sin(), 0.0, 20.0 * theta.cos()];
+    let target = [0.0, 0.0, -10.0];
+    let eye = [
+        target[0] - 30.0 * theta.sin(),
+        0.0,
+        target[2] + 30.0 * theta.cos(),
+    ];
     let slab = if with_slab {
         r#"
 [[material]]
@@ -165,7 +196,7 @@ max_depth = 8
 [camera]
 type = "orthographic"
 eye = [{}, {}, {}]
-target = [0.0, 0.0, 0.0]
+target = [{}, {}, {}]
 up = [0.0, 1.0, 0.0]
 height = 0.2
 
@@ -196,7 +227,7 @@ file = "dark.obj"
 material = "dark"
 {slab}
 "#,
-        eye[0], eye[1], eye[2]
+        eye[0], eye[1], eye[2], target[0], target[1], target[2]
     )
 }
 
@@ -229,9 +260,20 @@ fn glass_slab_shifts_rays_by_the_predicted_amount() {
     for name in ["without", "with"] {
         let out = run_in(
             dir.path(),
-            &["render", &format!("{name}.toml"), "-o", &format!("{name}.exr"), "--no-png", "--quiet"],
+            &[
+                "render",
+                &format!("{name}.toml"),
+                "-o",
+                &format!("{name}.exr"),
+                "--no-png",
+                "--quiet",
+            ],
         );
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     let without = edge_column(&read_exr(&dir.path().join("without.exr")));
     let with = edge_column(&read_exr(&dir.path().join("with.exr")));

@@ -36,7 +36,11 @@ pub fn trace_camera_rays_only(context: &RenderContext) -> u64 {
         .map_init(
             || {
                 crate::embree::enable_flush_denormals();
-                (Vec::<TraceRay>::new(), Vec::<TraceHit>::new(), WorkCounters::default())
+                (
+                    Vec::<TraceRay>::new(),
+                    Vec::<TraceHit>::new(),
+                    WorkCounters::default(),
+                )
             },
             |(rays, hits, counters), tile| {
                 rays.clear();
@@ -80,8 +84,8 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
     let mut options = render_cmd::options(&args.render, &scene)?;
     options.count_tiles = false;
     let repeat = args.repeat.max(1);
-    let mut pool = rayon::ThreadPoolBuilder::new()
-        .start_handler(|_| crate::embree::enable_flush_denormals());
+    let mut pool =
+        rayon::ThreadPoolBuilder::new().start_handler(|_| crate::embree::enable_flush_denormals());
     if let Some(threads) = args.render.threads {
         pool = pool.num_threads(threads.max(1));
     }

@@ -75,9 +75,7 @@ pub enum BenchCommand {
 pub fn run(cli: Cli) -> i32 {
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
-        Command::SampleTexture(args) => {
-            sample_texture::run(&args).map_err(CommandError::bad_input)
-        }
+        Command::SampleTexture(args) => sample_texture::run(&args).map_err(CommandError::bad_input),
         Command::Bench(BenchCommand::Render(args)) => bench_render::run(&args),
         Command::Bench(BenchCommand::Textures(args)) => {
             bench_textures::run(&args).map_err(CommandError::bad_input)

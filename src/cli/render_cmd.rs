@@ -118,7 +118,9 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
     }
     let spp = args.spp.unwrap_or(scene.settings.spp);
     if spp == 0 {
-        return Err(CommandError::bad_input(format!("{label}: --spp must be at least 1")));
+        return Err(CommandError::bad_input(format!(
+            "{label}: --spp must be at least 1"
+        )));
     }
     if !(args.max_aniso.is_finite() && args.max_aniso >= 1.0) {
         return Err(CommandError::bad_input(format!(
@@ -186,7 +188,11 @@ pub fn output_paths(args: &RenderArgs) -> (PathBuf, Option<PathBuf>) {
     let png = if args.no_png {
         None
     } else {
-        Some(args.png.clone().unwrap_or_else(|| exr.with_extension("png")))
+        Some(
+            args.png
+                .clone()
+                .unwrap_or_else(|| exr.with_extension("png")),
+        )
     };
     (exr, png)
 }
@@ -198,8 +204,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let (exr_path, png_path) = output_paths(args);
     let exposure = scene.settings.exposure;
 
-    let mut pool = rayon::ThreadPoolBuilder::new()
-        .start_handler(|_| crate::embree::enable_flush_denormals());
+    let mut pool =
+        rayon::ThreadPoolBuilder::new().start_handler(|_| crate::embree::enable_flush_denormals());
     if let Some(threads) = args.threads {
         if threads == 0 {
             return Err(CommandError::bad_input("--threads must be at least 1"));
@@ -214,7 +220,10 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let result = pool.install(|| -> Result<render::RenderResult, CommandError> {
         let context = render::prepare(scene.clone(), options.clone())
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
-        let bar = progress_bar(args.quiet, render::work_tiles(options.width, options.height).len());
+        let bar = progress_bar(
+            args.quiet,
+            render::work_tiles(options.width, options.height).len(),
+        );
         let progress = |done: usize, _total: usize| bar.set_position(done as u64);
         let control = RenderControl {
             progress: Some(&progress),

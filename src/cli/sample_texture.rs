@@ -37,9 +37,15 @@ pub fn read_queries(path: &Path) -> Result<Vec<TextureQuery>, String> {
     let name = path.display();
     let text =
         std::fs::read_to_string(path).map_err(|e| format!("{name}: cannot read queries: {e}"))?;
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
     let header: Vec<String> = match lines.next() {
-        Some((_, h)) => h.split(',').map(|c| c.trim().to_ascii_lowercase()).collect(),
+        Some((_, h)) => h
+            .split(',')
+            .map(|c| c.trim().to_ascii_lowercase())
+            .collect(),
         None => return Err(format!("{name}: empty query file")),
     };
     if header != ["s", "t", "dsdx", "dtdx", "dsdy", "dtdy"] {
@@ -57,7 +63,12 @@ pub fn read_queries(path: &Path) -> Result<Vec<TextureQuery>, String> {
                 .next()
                 .ok_or_else(|| format!("{name}: line {}: expected 6 values", i + 1))?;
             *slot = field.trim().parse().map_err(|_| {
-                format!("{name}: line {}: value {} '{}' is not a number", i + 1, k + 1, field.trim())
+                format!(
+                    "{name}: line {}: value {} '{}' is not a number",
+                    i + 1,
+                    k + 1,
+                    field.trim()
+                )
             })?;
         }
         if fields.next().is_some() {

@@ -92,6 +92,6 @@ mod tests {
         names.sort_unstable();
         names.dedup();
         assert_eq!(names.len(), count);
-        assert_eq!(count, 4 + 1 + 3 + 3 + 2 + 6 + 3 + 1 + 1);
+        assert_eq!(count, 4 + 1 + 3 + 3 + 2 + 6 + 4 + 1 + 1);
     }
 }

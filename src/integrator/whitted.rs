@@ -176,7 +176,10 @@ fn trace_wave(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerSta
             cone_spread,
         }
     }));
-    let coherent = waves.current.first().is_some_and(|r| r.kind == RayKind::Camera);
+    let coherent = waves
+        .current
+        .first()
+        .is_some_and(|r| r.kind == RayKind::Camera);
     context.tracer.intersect(
         &waves.trace_rays,
         &mut waves.trace_hits,
@@ -199,12 +202,19 @@ fn shade_wave(
             shade_miss(context, &ray, image, worker);
             continue;
         }
-        let surface = context.surfaces.surface_hit(ray.origin, ray.direction, &hit);
+        let surface = context
+            .surfaces
+            .surface_hit(ray.origin, ray.direction, &hit);
         shade_hit(context, ray, &surface, image, waves, worker);
     }
 }
 
-fn shade_miss(context: &RenderContext, ray: &PathRay, image: &mut TileImage, worker: &mut WorkerState) {
+fn shade_miss(
+    context: &RenderContext,
+    ray: &PathRay,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
     let effects = &context.effects;
     let gradients = if effects.footprints {
         let g = ray.footprint.environment_gradients(ray.direction);
@@ -352,7 +362,11 @@ fn shade_hit(
         let refracted = shading::refract(ray.direction, boundary.normal, boundary.eta)
             .filter(|d| d.dot(ng) < 0.0);
         // Total internal reflection (or a refracted ray that would stay on the incident side).
-        let reflectance = if refracted.is_some() { reflectance } else { 1.0 };
+        let reflectance = if refracted.is_some() {
+            reflectance
+        } else {
+            1.0
+        };
         if let Some(refracted) = refracted {
             let footprint = if effects.footprints {
                 worker.counters.footprint_updates += 1;
@@ -368,8 +382,8 @@ fn shade_hit(
                 Vec3::ZERO
             };
             spawner.spawn(
-            waves,
-            worker,
+                waves,
+                worker,
                 refracted,
                 -ng,
                 Vec3::splat(material.transmission * (1.0 - reflectance)),
@@ -564,7 +578,9 @@ fn trace_shadows(
                 continue;
             }
             let ray = rays[slot];
-            let surface = context.surfaces.surface_hit(ray.origin, ray.direction, &hit);
+            let surface = context
+                .surfaces
+                .surface_hit(ray.origin, ray.direction, &hit);
             let material = &context.scene.materials[surface.material as usize];
             if material.transmission <= 0.0 {
                 strength[i] = Vec3::ZERO;
@@ -577,7 +593,10 @@ fn trace_shadows(
             } else if context.effects.absorption {
                 // Leaving the medium: absorb over the distance travelled inside.
                 let inside = (travelled[i] + hit.t - entered_at[i]).max(0.0);
-                s *= shading::transmittance(context.materials.sigma[surface.material as usize], inside);
+                s *= shading::transmittance(
+                    context.materials.sigma[surface.material as usize],
+                    inside,
+                );
                 worker.counters.absorption_evaluations += 1;
             }
             strength[i] = s;

@@ -86,12 +86,19 @@ impl EffectSet {
             set.shadows = true;
             because(
                 "shadows",
-                format!("{} light(s), e.g. {}", scene.lights.len(), light_kind(light)),
+                format!(
+                    "{} light(s), e.g. {}",
+                    scene.lights.len(),
+                    light_kind(light)
+                ),
             );
         }
         if let Some(m) = materials().find(|m| m.mirror > 0.0) {
             set.mirror_reflection = true;
-            because("mirror reflection", format!("material '{}' has mirror {}", m.name, m.mirror));
+            because(
+                "mirror reflection",
+                format!("material '{}' has mirror {}", m.name, m.mirror),
+            );
         }
         if let Some(m) = materials().find(|m| m.transmission > 0.0) {
             set.refraction = true;
@@ -107,13 +114,18 @@ impl EffectSet {
                 );
             }
         }
-        if let Some(m) = materials()
-            .find(|m| m.transmission > 0.0 && m.attenuation_distance.is_finite() && m.attenuation_color != glam::Vec3::ONE)
-        {
+        if let Some(m) = materials().find(|m| {
+            m.transmission > 0.0
+                && m.attenuation_distance.is_finite()
+                && m.attenuation_color != glam::Vec3::ONE
+        }) {
             set.absorption = true;
             because(
                 "Beer's-law absorption",
-                format!("material '{}' has attenuation over {}", m.name, m.attenuation_distance),
+                format!(
+                    "material '{}' has attenuation over {}",
+                    m.name, m.attenuation_distance
+                ),
             );
         }
         let textured = materials().find(|m| m.base_color_texture.is_some());
@@ -121,15 +133,24 @@ impl EffectSet {
         if lod != LodStrategy::Mip0 {
             if let Some(m) = textured {
                 set.footprints = true;
-                because("ray footprints", format!("material '{}' has a base-colour texture", m.name));
+                because(
+                    "ray footprints",
+                    format!("material '{}' has a base-colour texture", m.name),
+                );
             } else if env_texture {
                 set.footprints = true;
-                because("ray footprints", "the environment is a lat-long texture".to_string());
+                because(
+                    "ray footprints",
+                    "the environment is a lat-long texture".to_string(),
+                );
             }
         }
         if let Some(m) = materials().find(|m| m.alpha_cutoff.is_some()) {
             set.alpha_cutout = true;
-            because("alpha cut-out", format!("material '{}' has an alpha cutoff", m.name));
+            because(
+                "alpha cut-out",
+                format!("material '{}' has an alpha cutoff", m.name),
+            );
         }
         let env_lit = match &scene.environment {
             Environment::Color(c) => c.max_element() > 0.0,
@@ -137,13 +158,22 @@ impl EffectSet {
         };
         if env_lit {
             set.environment = true;
-            because("environment light", "the environment is not black".to_string());
+            because(
+                "environment light",
+                "the environment is not black".to_string(),
+            );
         }
         if let Some(camera) = &scene.camera {
-            if let Projection::ThinLens { aperture_radius, .. } = camera.projection {
+            if let Projection::ThinLens {
+                aperture_radius, ..
+            } = camera.projection
+            {
                 if aperture_radius > 0.0 {
                     set.depth_of_field = true;
-                    because("depth of field", format!("thin-lens aperture radius {aperture_radius}"));
+                    because(
+                        "depth of field",
+                        format!("thin-lens aperture radius {aperture_radius}"),
+                    );
                 }
             }
         }

@@ -163,7 +163,10 @@ pub fn render(
                 new_worker()
             },
             |worker, (index, tile)| {
-                if control.skip.is_some_and(|skip| skip.get(index) == Some(&true)) {
+                if control
+                    .skip
+                    .is_some_and(|skip| skip.get(index) == Some(&true))
+                {
                     return None;
                 }
                 if control.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
@@ -247,7 +250,11 @@ pub fn render(
         seconds,
         mrays_per_second: counters.total_rays() as f64 / seconds.max(1e-9) / 1e6,
         counters,
-        texture_memory_bytes: context.textures.iter().map(|t| t.memory_bytes() as u64).sum(),
+        texture_memory_bytes: context
+            .textures
+            .iter()
+            .map(|t| t.memory_bytes() as u64)
+            .sum(),
         texture_tiles,
         effects,
         notes: context.scene.notes.clone(),

@@ -32,9 +32,15 @@ pub enum PrepareError {
     #[error("{0}")]
     Texture(#[from] crate::texture::TextureError),
     #[error("{source_label}: Embree: {message}")]
-    Embree { source_label: String, message: String },
+    Embree {
+        source_label: String,
+        message: String,
+    },
     #[error("{source_label}: {message}")]
-    Invalid { source_label: String, message: String },
+    Invalid {
+        source_label: String,
+        message: String,
+    },
 }
 
 /// Decode every texture of `scene` (sRGB colour textures are decoded to linear on load).
@@ -59,7 +65,12 @@ impl MaterialTable {
         MaterialTable {
             sigma: materials
                 .iter()
-                .map(|m| crate::shading::sigma_from_attenuation(m.attenuation_color, m.attenuation_distance))
+                .map(|m| {
+                    crate::shading::sigma_from_attenuation(
+                        m.attenuation_color,
+                        m.attenuation_distance,
+                    )
+                })
                 .collect(),
         }
     }
@@ -124,7 +135,11 @@ impl SurfaceLookup {
                     dpds,
                     dpdt,
                     material: mesh.material as u32,
-                    patch: Patch::Triangle { p, n, st: st_vertices },
+                    patch: Patch::Triangle {
+                        p,
+                        n,
+                        st: st_vertices,
+                    },
                 }
             }
             GeometryRef::Spheres => {
@@ -254,5 +269,8 @@ pub fn environment_mean(environment: &Environment, textures: &[Arc<Texture>]) ->
 
 /// Needed to keep the camera next to the lookups in the render context.
 pub fn camera_for(scene: &SceneDescription, width: u32, height: u32) -> Option<Camera> {
-    scene.camera.as_ref().map(|desc| Camera::new(desc, width, height))
+    scene
+        .camera
+        .as_ref()
+        .map(|desc| Camera::new(desc, width, height))
 }

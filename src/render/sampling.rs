@@ -17,7 +17,12 @@ fn hash_u32(mut x: u32) -> u32 {
 /// A uniform number in [0, 1) for (pixel, sample, dimension).
 #[inline]
 pub fn uniform(pixel: u32, sample: u32, dimension: u32) -> f32 {
-    let h = hash_u32(pixel ^ hash_u32(sample.wrapping_mul(0x9E37_79B9) ^ hash_u32(dimension.wrapping_add(0x68E3_1DA4))));
+    let h = hash_u32(
+        pixel
+            ^ hash_u32(
+                sample.wrapping_mul(0x9E37_79B9) ^ hash_u32(dimension.wrapping_add(0x68E3_1DA4)),
+            ),
+    );
     (h >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 

@@ -47,8 +47,7 @@ use std::cell::Cell;
 use std::sync::Arc;
 
 use crate::embree::{
-    CommittedScene, Device, FilterCandidate, Ray, RayPacket, RayPayload, SceneBuilder,
-    TraceOptions,
+    CommittedScene, Device, FilterCandidate, Ray, RayPacket, RayPayload, SceneBuilder, TraceOptions,
 };
 use crate::render::context::RenderOptions;
 use crate::render::prepared::{GeometryRef, PrepareError};
@@ -93,7 +92,8 @@ impl Tracer {
             debug_assert_eq!(id as usize, geometries.len());
             geometries.push(GeometryRef::Mesh(index));
             let material = &scene.materials[mesh.material];
-            if let (Some(cutoff), Some(binding)) = (material.alpha_cutoff, &material.alpha_texture) {
+            if let (Some(cutoff), Some(binding)) = (material.alpha_cutoff, &material.alpha_texture)
+            {
                 let filter = alpha_filter(
                     scene.clone(),
                     index,
@@ -144,7 +144,10 @@ impl Tracer {
             for lane in 0..16 {
                 match chunk.get(lane) {
                     Some(ray) => {
-                        packet.set_ray(lane, &Ray::segment(ray.origin, ray.direction, 0.0, ray.tfar));
+                        packet.set_ray(
+                            lane,
+                            &Ray::segment(ray.origin, ray.direction, 0.0, ray.tfar),
+                        );
                         packet.set_valid(lane, true);
                         payload[lane] = RayPayload {
                             cone_width: ray.cone_width,
@@ -180,7 +183,12 @@ impl Tracer {
     }
 
     /// Whether each of `rays` is blocked before its `tfar` (occlusion packets).
-    pub fn occluded(&self, rays: &[TraceRay], blocked: &mut Vec<bool>, counters: &mut WorkCounters) {
+    pub fn occluded(
+        &self,
+        rays: &[TraceRay],
+        blocked: &mut Vec<bool>,
+        counters: &mut WorkCounters,
+    ) {
         blocked.clear();
         blocked.resize(rays.len(), false);
         let mut packet = RayPacket::<16>::new();
@@ -188,13 +196,18 @@ impl Tracer {
             for lane in 0..16 {
                 match chunk.get(lane) {
                     Some(ray) => {
-                        packet.set_ray(lane, &Ray::segment(ray.origin, ray.direction, 0.0, ray.tfar));
+                        packet.set_ray(
+                            lane,
+                            &Ray::segment(ray.origin, ray.direction, 0.0, ray.tfar),
+                        );
                         packet.set_valid(lane, true);
                     }
                     None => packet.set_valid(lane, false),
                 }
             }
-            let _ = self.scene.occluded_tile(&mut packet, TraceOptions::incoherent());
+            let _ = self
+                .scene
+                .occluded_tile(&mut packet, TraceOptions::incoherent());
             for lane in 0..chunk.len() {
                 blocked[chunk_index * 16 + lane] = packet.is_occluded(lane);
             }
@@ -248,7 +261,8 @@ fn alpha_filter(
             transform.transform_point2(mesh.st[i2]),
         ];
         let st_area = ((t[1] - t[0]).perp_dot(t[2] - t[0])).abs();
-        let width = (candidate.payload.cone_width + candidate.payload.cone_spread * candidate.t).abs();
+        let width =
+            (candidate.payload.cone_width + candidate.payload.cone_spread * candidate.t).abs();
         let st_width = if world_area > 0.0 && world_area.is_finite() {
             width * (st_area / world_area).sqrt()
         } else {

@@ -51,7 +51,11 @@ pub enum Projection {
     /// Vertical field of view in degrees.
     Pinhole { vfov_degrees: f32 },
     /// Vertical field of view in degrees; lens radius and focus distance in world units.
-    ThinLens { vfov_degrees: f32, aperture_radius: f32, focus_distance: f32 },
+    ThinLens {
+        vfov_degrees: f32,
+        aperture_radius: f32,
+        focus_distance: f32,
+    },
     /// Height of the view rectangle in world units.
     Orthographic { height: f32 },
 }
@@ -60,9 +64,17 @@ pub enum Projection {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
     /// Radiant intensity `color * intensity` (W/sr, or candela for glTF), falling off as 1/r^2.
-    Point { position: Vec3, color: Vec3, intensity: f32 },
+    Point {
+        position: Vec3,
+        color: Vec3,
+        intensity: f32,
+    },
     /// `direction` is the direction the light travels; irradiance `color * intensity`.
-    Directional { direction: Vec3, color: Vec3, intensity: f32 },
+    Directional {
+        direction: Vec3,
+        color: Vec3,
+        intensity: f32,
+    },
     /// A point light restricted to a cone around `direction` (the direction light travels),
     /// full inside `inner_angle`, smoothly falling to zero at `outer_angle` (radians).
     Spot {
@@ -80,7 +92,10 @@ pub enum Light {
 pub enum Environment {
     Color(Vec3),
     /// An equirectangular (lat-long) map; `textures[texture]`, scaled by `intensity`.
-    LatLong { texture: usize, intensity: f32 },
+    LatLong {
+        texture: usize,
+        intensity: f32,
+    },
 }
 
 impl Default for Environment {
@@ -95,7 +110,10 @@ pub enum TextureSource {
     File(PathBuf),
     /// Encoded image bytes (PNG, JPEG, EXR) held in memory: glTF buffer views and data URIs,
     /// and the built-in default scene's assets. `label` names it in messages.
-    Encoded { label: String, bytes: Arc<Vec<u8>> },
+    Encoded {
+        label: String,
+        bytes: Arc<Vec<u8>>,
+    },
 }
 
 impl TextureSource {

@@ -14,14 +14,17 @@ use super::mip_pyramid::MipPyramid;
 use super::tiles::TexelObserver;
 use super::{TextureQuery, WrapMode};
 
+/// Probe weights for up to this many probes live on the stack (limit 64).
+const MAX_STACK_PROBES: usize = 127;
+
 /// Number of probes for an (already clamped) aspect ratio.
 #[inline(always)]
 pub(crate) fn probe_count(aspect: f32) -> usize {
     ((2.0 * aspect - 1.0) as i32).max(1) as usize
 }
 
-/// The anisotropic lookup.
-#[inline]
+/// The anisotropic lookup (out of line for the same reason as `ewa::sample`).
+#[inline(never)]
 pub(crate) fn sample<O: TexelObserver>(
     pyramid: &MipPyramid,
     q: &TextureQuery,
@@ -40,6 +43,18 @@ pub(crate) fn sample<O: TexelObserver>(
     let inv_n = 1.0 / n as f32;
     let gauss_scale = f.axes.major / ll;
 
+    // Gaussian weights exp(-2 x^2), x = p * major / (2 (major - minor)), shared by
+    // both levels; kept on the stack up to MAX_STACK_PROBES probes.
+    let mut weights = [0.0f32; MAX_STACK_PROBES];
+    let mut wsum = 0.0f32;
+    if (3..=MAX_STACK_PROBES).contains(&n) {
+        for (i, w) in weights[..n].iter_mut().enumerate() {
+            let x = (2.0 * (i as f32 + 0.5) * inv_n - 1.0) * gauss_scale;
+            *w = (-2.0 * x * x).exp();
+            wsum += *w;
+        }
+    }
+
     let mut sum = Vec4::ZERO;
     for k in 0..2 {
         let level_weight = f.levels.weights[k];
@@ -55,9 +70,16 @@ pub(crate) fn sample<O: TexelObserver>(
                 let b = bilinear(level, m, q.s + 0.5 * ds, q.t + 0.5 * dt, wrap, obs);
                 0.5 * a + 0.5 * b
             }
+            _ if n <= MAX_STACK_PROBES => {
+                let mut acc = Vec4::ZERO;
+                for (i, w) in weights[..n].iter().enumerate() {
+                    let p = 2.0 * (i as f32 + 0.5) * inv_n - 1.0;
+                    acc += *w * bilinear(level, m, q.s + p * ds, q.t + p * dt, wrap, obs);
+                }
+                acc / wsum
+            }
             _ => {
-                // Weights exp(-2 x^2) with x = p * major / (2 (major - minor)),
-                // normalised once at the end.
+                // Very high anisotropy limits: weights computed on the fly.
                 let mut acc = Vec4::ZERO;
                 let mut wsum = 0.0f32;
                 for i in 0..n {
@@ -104,8 +126,17 @@ mod tests {
                 dsdy: -0.001 * angle.sin(),
                 dtdy: 0.001 * angle.cos(),
             };
-            let v = sample(&p, &q, 16.0, (WrapMode::Periodic, WrapMode::Mirror), &mut NoTiles);
-            assert!((v - Vec4::splat(0.7)).abs().max_element() < 1e-5, "{k}: {v}");
+            let v = sample(
+                &p,
+                &q,
+                16.0,
+                (WrapMode::Periodic, WrapMode::Mirror),
+                &mut NoTiles,
+            );
+            assert!(
+                (v - Vec4::splat(0.7)).abs().max_element() < 1e-5,
+                "{k}: {v}"
+            );
         }
     }
 

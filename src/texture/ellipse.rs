@@ -84,7 +84,9 @@ pub(crate) fn ellipse_axes(d: &Derivs) -> Axes {
     let a = (d.dtdx * d.dtdx + d.dtdy * d.dtdy) as f64;
     let b = -2.0 * (d.dsdx * d.dtdx + d.dsdy * d.dtdy) as f64;
     let c = (d.dsdx * d.dsdx + d.dsdy * d.dsdy) as f64;
-    let root = (a - c).hypot(b);
+    // sqrt of the sum of squares rather than hypot(): no overflow is possible here
+    // (|a|, |b|, |c| < 1e37) and it avoids a slow libm call.
+    let root = ((a - c) * (a - c) + b * b).sqrt();
     let minor2 = ((a + c - root) * 0.5) as f32;
     let major2 = ((a + c + root) * 0.5) as f32;
     Axes {
@@ -138,8 +140,7 @@ impl LevelChoice {
 
     /// The blended level as a real number (for the `lod` AOV).
     pub fn fractional(&self) -> f32 {
-        self.levels[0] as f32
-            + self.weights[1] * (self.levels[1] as f32 - self.levels[0] as f32)
+        self.levels[0] as f32 + self.weights[1] * (self.levels[1] as f32 - self.levels[0] as f32)
     }
 }
 

@@ -23,8 +23,9 @@ use super::{TextureQuery, WrapMode};
 /// Gaussian falloff exp(-ALPHA r^2), r = 1 on the ellipse boundary.
 const ALPHA: f32 = 2.0;
 
-/// The EWA lookup.
-#[inline]
+/// The EWA lookup (kept out of line: it is large and would crowd the other filters'
+/// registers in `Texture::sample`).
+#[inline(never)]
 pub(crate) fn sample<O: TexelObserver>(
     pyramid: &MipPyramid,
     q: &TextureQuery,
@@ -99,14 +100,18 @@ fn ewa_on_level<O: TexelObserver>(
     let (y0, y1) = ((y - half_h).ceil(), (y + half_h).floor());
 
     let edge = (-ALPHA).exp();
+    // Loop counts from the box size (bounded by the axis cap), not by stepping an
+    // f32 coordinate, which stalls where whole numbers are more than 1 apart.
+    let span = |lo: f32, hi: f32| ((hi - lo + 1.0).clamp(0.0, 2.0 * cap + 3.0)) as usize;
+    let (nx, ny) = (span(x0, x1), span(y0, y1));
     let mut acc = Vec4::ZERO;
     let mut wsum = 0.0f32;
-    let mut ty = y0;
-    while ty <= y1 {
+    for row_k in 0..ny {
+        let ty = y0 + row_k as f32;
         let dy = ty - y;
         let row = wrap_texel(ty, level.height, wrap.1);
-        let mut tx = x0;
-        while tx <= x1 {
+        for col_k in 0..nx {
+            let tx = x0 + col_k as f32;
             let dx = tx - x;
             let r2 = a * dx * dx + b * dx * dy + c * dy * dy;
             if r2 < 1.0 {
@@ -117,9 +122,7 @@ fn ewa_on_level<O: TexelObserver>(
                     acc += weight * Vec4::from_array(level.texel(ix, iy));
                 }
             }
-            tx += 1.0;
         }
-        ty += 1.0;
     }
     if wsum > 0.0 {
         acc / wsum
@@ -153,7 +156,13 @@ mod tests {
                 dsdy: -0.004 * a.sin(),
                 dtdy: 0.004 * a.cos(),
             };
-            let v = sample(&p, &q, 16.0, (WrapMode::Clamp, WrapMode::Periodic), &mut NoTiles);
+            let v = sample(
+                &p,
+                &q,
+                16.0,
+                (WrapMode::Clamp, WrapMode::Periodic),
+                &mut NoTiles,
+            );
             assert!((v - Vec4::splat(0.3)).abs().max_element() < 1e-5);
         }
     }

@@ -9,7 +9,7 @@ use glam::Vec4;
 
 use super::mip_pyramid::MipLevel;
 use super::tiles::TexelObserver;
-use super::wrap::wrap_texel;
+use super::wrap::{floor_f32, wrap_texel};
 use super::WrapMode;
 
 /// Texel-space position split into whole part (kept in f32 so huge values stay exact)
@@ -17,7 +17,7 @@ use super::WrapMode;
 #[inline(always)]
 fn to_texel(s: f32, n: u32) -> (f32, f32) {
     let x = s * n as f32 - 0.5;
-    let i = x.floor();
+    let i = floor_f32(x);
     (i, x - i)
 }
 
@@ -65,7 +65,7 @@ pub(crate) fn closest<O: TexelObserver>(
 }
 
 /// Bilinear interpolation of the four texels around (s, t).
-#[inline]
+#[inline(always)]
 pub(crate) fn bilinear<O: TexelObserver>(
     level: &MipLevel,
     level_index: usize,
@@ -76,6 +76,26 @@ pub(crate) fn bilinear<O: TexelObserver>(
 ) -> Vec4 {
     let (i, fs) = to_texel(s, level.width);
     let (j, ft) = to_texel(t, level.height);
+    let (w, h) = (level.width as f32, level.height as f32);
+    if i >= 0.0 && i + 1.0 < w && j >= 0.0 && j + 1.0 < h {
+        // All four texels inside: no wrapping needed (the common case).
+        let (x, y) = (i as usize, j as usize);
+        let row = level.width as usize;
+        let k = y * row + x;
+        obs.touch(level_index, x, y);
+        obs.touch(level_index, x + 1, y);
+        obs.touch(level_index, x, y + 1);
+        obs.touch(level_index, x + 1, y + 1);
+        let t = &level.texels;
+        let (a, b) = (Vec4::from_array(t[k]), Vec4::from_array(t[k + 1]));
+        let (c, d) = (
+            Vec4::from_array(t[k + row]),
+            Vec4::from_array(t[k + row + 1]),
+        );
+        let top = a * (1.0 - fs) + b * fs;
+        let bottom = c * (1.0 - fs) + d * fs;
+        return top * (1.0 - ft) + bottom * ft;
+    }
     let xs = [
         wrap_texel(i, level.width, wrap.0),
         wrap_texel(i + 1.0, level.width, wrap.0),

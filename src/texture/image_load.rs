@@ -75,7 +75,14 @@ fn decode_png_jpeg(
             });
             img.to_rgba8()
                 .pixels()
-                .map(|p| [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize], p[3] as f32 / 255.0])
+                .map(|p| {
+                    [
+                        lut[p[0] as usize],
+                        lut[p[1] as usize],
+                        lut[p[2] as usize],
+                        p[3] as f32 / 255.0,
+                    ]
+                })
                 .collect()
         }
         _ => {
@@ -89,13 +96,22 @@ fn decode_png_jpeg(
             };
             img.to_rgba16()
                 .pixels()
-                .map(|p| [decode(p[0]), decode(p[1]), decode(p[2]), p[3] as f32 / 65535.0])
+                .map(|p| {
+                    [
+                        decode(p[0]),
+                        decode(p[1]),
+                        decode(p[2]),
+                        p[3] as f32 / 65535.0,
+                    ]
+                })
                 .collect()
         }
     };
     MipLevel::new(w, h, texels).map_err(|m| dimensions_error(label, m))
 }
 
+// Levels are indexed across the per-channel level lists, hence the index loop.
+#[allow(clippy::needless_range_loop)]
 fn decode_exr(bytes: &[u8], label: &str) -> Result<Vec<MipLevel>, TextureError> {
     let exr_error = |e: exr::error::Error| TextureError::Exr {
         label: label.to_string(),
@@ -164,7 +180,8 @@ fn decode_exr(bytes: &[u8], label: &str) -> Result<Vec<MipLevel>, TextureError> 
                 t[k] = v;
             }
         }
-        let level = MipLevel::new(w as u32, h as u32, texels).map_err(|m| dimensions_error(label, m))?;
+        let level =
+            MipLevel::new(w as u32, h as u32, texels).map_err(|m| dimensions_error(label, m))?;
         levels.push(level);
         w = (w / 2).max(1);
         h = (h / 2).max(1);
@@ -190,7 +207,10 @@ mod tests {
         let grey = image::GrayImage::from_raw(2, 1, vec![0, 188]).unwrap();
         let bytes = png_bytes(DynamicImage::ImageLuma8(grey));
         let lin = decode(&bytes, "g.png", ColorSpace::Linear).unwrap();
-        assert_eq!(lin[0].texel(1, 0), [188.0 / 255.0, 188.0 / 255.0, 188.0 / 255.0, 1.0]);
+        assert_eq!(
+            lin[0].texel(1, 0),
+            [188.0 / 255.0, 188.0 / 255.0, 188.0 / 255.0, 1.0]
+        );
         let srgb = decode(&bytes, "g.png", ColorSpace::Srgb).unwrap();
         let v = srgb[0].texel(1, 0);
         assert!((v[0] - 0.5029).abs() < 1e-3 && v[3] == 1.0);
@@ -199,13 +219,41 @@ mod tests {
     #[test]
     fn alpha_stays_linear_and_sixteen_bit_is_read() {
         let rgba = image::RgbaImage::from_raw(1, 1, vec![255, 0, 128, 128]).unwrap();
-        let l = decode(&png_bytes(DynamicImage::ImageRgba8(rgba)), "a.png", ColorSpace::Srgb).unwrap();
+        let l = decode(
+            &png_bytes(DynamicImage::ImageRgba8(rgba)),
+            "a.png",
+            ColorSpace::Srgb,
+        )
+        .unwrap();
         assert_eq!(l[0].texel(0, 0)[3], 128.0 / 255.0);
         assert_eq!(l[0].texel(0, 0)[0], 1.0);
-        let rgb16 = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(1, 1, vec![65535u16, 0, 32768]).unwrap();
-        let l = decode(&png_bytes(DynamicImage::ImageRgb16(rgb16)), "b.png", ColorSpace::Linear).unwrap();
+        let rgb16 =
+            image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(1, 1, vec![65535u16, 0, 32768])
+                .unwrap();
+        let l = decode(
+            &png_bytes(DynamicImage::ImageRgb16(rgb16)),
+            "b.png",
+            ColorSpace::Linear,
+        )
+        .unwrap();
         let t = l[0].texel(0, 0);
         assert!((t[2] - 32768.0 / 65535.0).abs() < 1e-7 && t[3] == 1.0);
+    }
+
+    #[test]
+    fn jpeg_is_decoded() {
+        let grey = image::GrayImage::from_raw(8, 8, vec![200; 64]).unwrap();
+        let mut out = Cursor::new(Vec::new());
+        DynamicImage::ImageLuma8(grey)
+            .write_to(&mut out, image::ImageFormat::Jpeg)
+            .unwrap();
+        let l = decode(out.get_ref(), "g.jpg", ColorSpace::Linear).unwrap();
+        assert_eq!((l[0].width, l[0].height), (8, 8));
+        let t = l[0].texel(3, 4);
+        assert!(
+            (t[0] - 200.0 / 255.0).abs() < 3.0 / 255.0 && t[3] == 1.0,
+            "{t:?}"
+        );
     }
 
     #[test]

@@ -219,12 +219,11 @@ impl Texture {
         height: u32,
         texels: Vec<[f32; 4]>,
     ) -> Result<Texture, TextureError> {
-        let base = MipLevel::new(width, height, texels).map_err(|message| {
-            TextureError::Dimensions {
+        let base =
+            MipLevel::new(width, height, texels).map_err(|message| TextureError::Dimensions {
                 label: "in-memory texture".to_string(),
                 message,
-            }
-        })?;
+            })?;
         Ok(Self::with_pyramid(
             "in-memory texture",
             MipPyramid::build(base),
@@ -326,7 +325,9 @@ impl Texture {
         };
         let p = &self.pyramid;
         match opts.filter {
-            FilterMode::Closest => filter_closest_bilinear::closest(&p.levels[0], 0, q.s, q.t, wrap, obs),
+            FilterMode::Closest => {
+                filter_closest_bilinear::closest(&p.levels[0], 0, q.s, q.t, wrap, obs)
+            }
             FilterMode::Bilinear => {
                 filter_closest_bilinear::bilinear(&p.levels[0], 0, q.s, q.t, wrap, obs)
             }
@@ -380,6 +381,13 @@ mod tests {
     }
 
     #[test]
+    fn texture_is_shareable_across_threads() {
+        fn assert_send_sync<T: Send + Sync>() {}
+        assert_send_sync::<Texture>();
+        assert_send_sync::<TileSet>();
+    }
+
+    #[test]
     fn names_round_trip() {
         for f in [
             FilterMode::Closest,
@@ -424,7 +432,10 @@ mod tests {
                 ..Default::default()
             };
             let v = tex.sample(&q, &opts);
-            assert!((v - bil).abs().max_element() < 1e-5, "{filter}: {v} vs {bil}");
+            assert!(
+                (v - bil).abs().max_element() < 1e-5,
+                "{filter}: {v} vs {bil}"
+            );
             assert_eq!(tex.lod(&q, &opts), 0.0);
         }
     }

@@ -65,7 +65,12 @@ mod tests {
             };
             let c = level_choice(&p, &q);
             assert!((c.weights[0] + c.weights[1] - 1.0).abs() < 1e-6);
-            let v = sample(&p, &q, (WrapMode::Periodic, WrapMode::Periodic), &mut NoTiles);
+            let v = sample(
+                &p,
+                &q,
+                (WrapMode::Periodic, WrapMode::Periodic),
+                &mut NoTiles,
+            );
             assert!((v - Vec4::ONE).abs().max_element() < 1e-5);
         }
     }

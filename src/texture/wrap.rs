@@ -11,7 +11,12 @@ use super::WrapMode;
 #[inline(always)]
 pub(crate) fn wrap_texel(i: f32, n: u32, mode: WrapMode) -> Option<usize> {
     let nf = n as f32;
+    // Callers reduce periodic and mirror coordinates to one or two periods first, so
+    // the common cases avoid the division inside `rem_euclid`.
     let wrapped = match mode {
+        WrapMode::Periodic if i >= 0.0 && i < nf => i,
+        WrapMode::Periodic if i < 0.0 && i >= -nf => i + nf,
+        WrapMode::Periodic if i >= nf && i < 2.0 * nf => i - nf,
         WrapMode::Periodic => i.rem_euclid(nf),
         WrapMode::Clamp => i.clamp(0.0, nf - 1.0),
         WrapMode::Black => {
@@ -35,6 +40,22 @@ pub(crate) fn wrap_texel(i: f32, n: u32, mode: WrapMode) -> Option<usize> {
     Some(idx.min(n as usize - 1))
 }
 
+/// floor() without a libm call on CPUs lacking SSE4.1 (the default x86-64 target):
+/// values of magnitude >= 2^23 are already whole, NaN stays NaN.
+#[inline(always)]
+pub(crate) fn floor_f32(x: f32) -> f32 {
+    if x.abs() < 8_388_608.0 {
+        let t = (x as i32) as f32;
+        if t > x {
+            t - 1.0
+        } else {
+            t
+        }
+    } else {
+        x
+    }
+}
+
 /// Moves a coordinate by whole periods into [0, 1) (periodic) or [0, 2) (mirror);
 /// other modes keep it. The subtraction is exact in f32, so a lookup at s = 1e7 and
 /// one at s = 0 read the same texels, and probe offsets added afterwards keep
@@ -42,8 +63,8 @@ pub(crate) fn wrap_texel(i: f32, n: u32, mode: WrapMode) -> Option<usize> {
 #[inline(always)]
 pub(crate) fn reduce_coordinate(s: f32, mode: WrapMode) -> f32 {
     match mode {
-        WrapMode::Periodic => s - s.floor(),
-        WrapMode::Mirror => s - 2.0 * (s * 0.5).floor(),
+        WrapMode::Periodic => s - floor_f32(s),
+        WrapMode::Mirror => s - 2.0 * floor_f32(s * 0.5),
         WrapMode::Clamp | WrapMode::Black => s,
     }
 }
@@ -71,6 +92,17 @@ mod tests {
             mirrored,
             vec![3, 2, 1, 0, 0, 1, 2, 3, 3, 2, 1, 0, 0, 1, 2, 3]
         );
+    }
+
+    #[test]
+    fn fast_floor_matches_floor() {
+        for x in [
+            0.0f32, -0.0, 0.5, -0.5, 1.0, -1.0, -1.5, 2.99, -2.99, 8388607.5, -8388607.5, 1e7,
+            -1e7, 3e9,
+        ] {
+            assert_eq!(floor_f32(x), x.floor(), "{x}");
+        }
+        assert!(floor_f32(f32::NAN).is_nan());
     }
 
     #[test]
