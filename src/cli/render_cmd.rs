@@ -1,12 +1,21 @@
 //! `conetrace render`: load a scene, render it, write EXR (+ AOVs) and PNG atomically, print
 //! a summary line and optionally the statistics as JSON.
+//!
+//! Interruption: Ctrl-C or SIGTERM sets a flag the workers check before each tile; the tiles
+//! in flight finish, the finished part is written as an EXR whose unfinished pixels have
+//! alpha 0 and whose header says `conetrace.incomplete = 1`, lists the finished tiles
+//! (`conetrace.tiles_done`) and the settings (`conetrace.settings`), and the command exits
+//! with status 3 (no PNG is written for an incomplete render). `--resume` reads that EXR,
+//! refuses it when the settings differ, and renders only the missing tiles; rendering is
+//! deterministic per pixel, so the result equals an uninterrupted render.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use clap::Args;
 
-use crate::cli::CommandError;
+use crate::cli::{CommandError, EXIT_INTERRUPTED};
 use crate::film::{self, ExrAttributes};
 use crate::footprint::LodStrategy;
 use crate::integrator::{AovSelection, Whitted};
@@ -79,6 +88,107 @@ pub struct RenderArgs {
     /// Do not show a progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Continue an interrupted render: read the incomplete output EXR and render only the
+    /// tiles it lacks (the settings must be the same).
+    #[arg(long)]
+    pub resume: bool,
+}
+
+/// Header attribute listing the finished work tiles (see [`encode_tiles`]).
+pub const TILES_DONE_ATTRIBUTE: &str = "conetrace.tiles_done";
+/// Header attribute holding the settings a `--resume` must match.
+pub const SETTINGS_ATTRIBUTE: &str = "conetrace.settings";
+
+/// Set by the Ctrl-C / SIGTERM handler; render workers stop taking new tiles.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Finished tiles as hexadecimal digits, four tiles per digit (tile `4k + b` is bit `b` of
+/// digit `k`), so a 4K image's 32,400 tiles take 8,100 characters.
+pub fn encode_tiles(finished: &[bool]) -> String {
+    finished
+        .chunks(4)
+        .map(|bits| {
+            let value = bits
+                .iter()
+                .enumerate()
+                .fold(0u32, |acc, (b, &done)| acc | ((done as u32) << b));
+            char::from_digit(value, 16).unwrap_or('0')
+        })
+        .collect()
+}
+
+/// The inverse of [`encode_tiles`] for `count` tiles; `None` when the text does not fit.
+pub fn decode_tiles(text: &str, count: usize) -> Option<Vec<bool>> {
+    if text.len() != count.div_ceil(4) {
+        return None;
+    }
+    let mut finished = Vec::with_capacity(count);
+    for c in text.chars() {
+        let value = c.to_digit(16)?;
+        for b in 0..4 {
+            if finished.len() < count {
+                finished.push(value & (1 << b) != 0);
+            } else if value & (1 << b) != 0 {
+                return None;
+            }
+        }
+    }
+    Some(finished)
+}
+
+/// Everything that changes the pixels, as one line: a resume must match it exactly.
+pub fn settings_signature(scene: &SceneDescription, options: &RenderOptions) -> String {
+    let text = format!(
+        "scene={}; size={}x{}; spp={}; max_depth={}; min_throughput={}; lod={}; filter={:?}; \
+         fresnel={:?}; aovs={:?}; all_effects={}",
+        scene.source,
+        options.width,
+        options.height,
+        options.spp,
+        options.max_depth,
+        options.min_throughput,
+        options.lod,
+        options.filter,
+        options.fresnel,
+        options.aovs,
+        options.all_effects
+    );
+    // EXR text attributes are Latin-1.
+    text.chars()
+        .map(|c| if (c as u32) < 256 { c } else { '?' })
+        .collect()
+}
+
+/// The earlier, incomplete render `--resume` continues: its film and finished tiles.
+fn read_resume_state(
+    exr_path: &Path,
+    signature: &str,
+    tile_count: usize,
+) -> Result<(film::Film, Vec<bool>), CommandError> {
+    let label = exr_path.display();
+    let (earlier, attributes) = film::read_exr(exr_path)
+        .map_err(|e| CommandError::bad_input(format!("--resume: {e}")))?;
+    let stored = attributes.strings.get(SETTINGS_ATTRIBUTE).ok_or_else(|| {
+        CommandError::bad_input(format!(
+            "{label}: --resume: not a conetrace render (no {SETTINGS_ATTRIBUTE} attribute)"
+        ))
+    })?;
+    if stored != signature {
+        return Err(CommandError::bad_input(format!(
+            "{label}: --resume: the file was rendered with different settings ({stored}) than \
+             now ({signature})"
+        )));
+    }
+    let finished = attributes
+        .strings
+        .get(TILES_DONE_ATTRIBUTE)
+        .and_then(|text| decode_tiles(text, tile_count))
+        .ok_or_else(|| {
+            CommandError::bad_input(format!(
+                "{label}: --resume: missing or malformed {TILES_DONE_ATTRIBUTE} attribute"
+            ))
+        })?;
+    Ok((earlier, finished))
 }
 
 /// Load the scene named by `args` (or the default one), with a camera.
@@ -89,10 +199,13 @@ pub fn load(args: &RenderArgs) -> Result<SceneDescription, CommandError> {
     };
     let width = args.width.unwrap_or(scene.settings.width);
     let height = args.height.unwrap_or(scene.settings.height);
-    if scene.camera.is_none() {
+    // A camera the loader placed to frame the bounds is re-placed for the aspect ratio the
+    // command line asks for.
+    let framed = scene.notes.iter().any(|n| n.contains("no camera"));
+    if scene.camera.is_none() || (framed && (args.width.is_some() || args.height.is_some())) {
         let aspect = width.max(1) as f32 / height.max(1) as f32;
         scene.camera = Some(frame_camera(&scene, aspect));
-        if !scene.notes.iter().any(|n| n.contains("camera")) {
+        if !framed {
             scene
                 .notes
                 .push("no camera: placed one to frame the bounds".to_string());
@@ -216,8 +329,20 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         .build()
         .map_err(|e| CommandError::internal(format!("cannot start worker threads: {e}")))?;
 
+    let tiles = render::work_tiles(options.width, options.height);
+    let signature = settings_signature(&scene, &options);
+    let earlier = if args.resume {
+        Some(read_resume_state(&exr_path, &signature, tiles.len())?)
+    } else {
+        None
+    };
+    // A second handler cannot be installed (e.g. when `run` is called twice in one
+    // process); the first one sets the same flag.
+    INTERRUPTED.store(false, Ordering::SeqCst);
+    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+
     let scene = Arc::new(scene);
-    let result = pool.install(|| -> Result<render::RenderResult, CommandError> {
+    let mut result = pool.install(|| -> Result<render::RenderResult, CommandError> {
         let context = render::prepare(scene.clone(), options.clone())
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
         let bar = progress_bar(
@@ -227,19 +352,65 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         let progress = |done: usize, _total: usize| bar.set_position(done as u64);
         let control = RenderControl {
             progress: Some(&progress),
-            ..RenderControl::default()
+            cancel: Some(&INTERRUPTED),
+            skip: earlier.as_ref().map(|(_, finished)| finished.as_slice()),
         };
         let result = render::render(&context, &Whitted, &control);
         bar.finish_and_clear();
         Ok(result)
     })?;
 
-    let attributes = ExrAttributes {
-        incomplete: !result.stats.complete,
+    // Tiles an earlier run finished come from its file.
+    if let Some((earlier_film, earlier_finished)) = &earlier {
+        for ((tile, done), &done_before) in tiles
+            .iter()
+            .zip(result.finished_tiles.iter_mut())
+            .zip(earlier_finished)
+        {
+            if done_before && !*done {
+                result.film.copy_region_from(earlier_film, *tile);
+                *done = true;
+            }
+        }
+    }
+    let finished_count = result.finished_tiles.iter().filter(|&&d| d).count();
+    let complete = finished_count == tiles.len();
+    result.stats.complete = complete;
+    if !complete && finished_count == 0 {
+        return Err(CommandError {
+            message: format!(
+                "interrupted before any tile finished; nothing written to {}",
+                exr_path.display()
+            ),
+            status: EXIT_INTERRUPTED,
+        });
+    }
+    let mut attributes = ExrAttributes {
+        software: Some(format!("conetrace {}", env!("CARGO_PKG_VERSION"))),
+        incomplete: !complete,
+        finished_tiles: Some(finished_count as u32),
         ..ExrAttributes::default()
     };
+    attributes.strings.insert(
+        TILES_DONE_ATTRIBUTE.to_string(),
+        encode_tiles(&result.finished_tiles),
+    );
+    attributes
+        .strings
+        .insert(SETTINGS_ATTRIBUTE.to_string(), signature);
     film::write_exr(&result.film, &exr_path, &attributes)
         .map_err(|e| CommandError::bad_input(e.to_string()))?;
+    if !complete {
+        return Err(CommandError {
+            message: format!(
+                "interrupted: wrote the {finished_count} finished of {} tiles to {} \
+                 (unfinished pixels have alpha 0; no PNG); continue with --resume",
+                tiles.len(),
+                exr_path.display()
+            ),
+            status: EXIT_INTERRUPTED,
+        });
+    }
     if let Some(png_path) = &png_path {
         film::write_png(&result.film, png_path, tonemap, exposure)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;

@@ -19,7 +19,7 @@ use crate::footprint::Footprint;
 use crate::hit::SurfaceHit;
 use crate::integrator::{Integrator, TileImage, TileRect};
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::prepared::{binding_query, environment_radiance};
+use crate::render::prepared::{binding_query, environment_radiance, SurfaceDetail};
 use crate::render::sampling;
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
@@ -72,6 +72,19 @@ struct Waves {
     shadows: Vec<ShadowRay>,
     shadow_rays: Vec<TraceRay>,
     shadow_blocked: Vec<bool>,
+    /// Walks of shadow rays through transmissive occluders.
+    walk: ShadowWalk,
+}
+
+/// Reused state of shadow rays walking through transmissive occluders.
+#[derive(Default)]
+struct ShadowWalk {
+    strength: Vec<Vec3>,
+    active: Vec<usize>,
+    still_active: Vec<usize>,
+    entered_at: Vec<f32>,
+    travelled: Vec<f32>,
+    batch: Vec<TraceRay>,
 }
 
 impl Integrator for Whitted {
@@ -202,10 +215,22 @@ fn shade_wave(
             shade_miss(context, &ray, image, worker);
             continue;
         }
+        let detail = surface_detail(context, &ray, &hit);
         let surface = context
             .surfaces
-            .surface_hit(ray.origin, ray.direction, &hit);
+            .surface_hit(ray.origin, ray.direction, &hit, detail);
         shade_hit(context, ray, &surface, image, waves, worker);
+    }
+}
+
+/// Texture coordinates are needed for textured materials and for the camera hit's AOVs.
+#[inline]
+fn surface_detail(context: &RenderContext, ray: &PathRay, hit: &TraceHit) -> SurfaceDetail {
+    let aov = ray.kind == RayKind::Camera && ray.first_sample && context.options.aovs.surface;
+    if aov || context.surfaces.is_textured(hit) {
+        SurfaceDetail::Texturing
+    } else {
+        SurfaceDetail::Geometry
     }
 }
 
@@ -234,6 +259,7 @@ fn shade_miss(
         ray.direction,
         gradients,
         &context.options.filter,
+        context.external_textures.as_deref(),
     );
     add_radiance(image, ray.pixel, ray.throughput * radiance);
 }
@@ -500,9 +526,18 @@ fn surface_albedo(
     let query = binding_query(&binding.transform, surface.st, gradients);
     let texture = &context.textures[binding.texture];
     worker.counters.texture_lookups += 1;
-    let texel = match worker.tiles.get_mut(binding.texture) {
-        Some(tiles) => texture.sample_recording(&query, &options.filter, tiles),
-        None => texture.sample(&query, &options.filter),
+    let texel = match (
+        &context.external_textures,
+        worker.tiles.get_mut(binding.texture),
+    ) {
+        (Some(external), _) => crate::render::external_textures::sample_external(
+            external.as_ref(),
+            binding.texture,
+            &query,
+            &options.filter,
+        ),
+        (None, Some(tiles)) => texture.sample_recording(&query, &options.filter, tiles),
+        (None, None) => texture.sample(&query, &options.filter),
     };
     let pixel = ray.pixel as usize;
     if ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel] {
@@ -559,49 +594,63 @@ fn trace_shadows(
         return;
     }
     // Transmissive occluders: walk each shadow ray through the surfaces it meets.
-    let mut strength = vec![Vec3::ONE; waves.shadows.len()];
-    let mut active: Vec<usize> = (0..waves.shadows.len()).collect();
-    let mut entered_at: Vec<f32> = vec![0.0; waves.shadows.len()];
-    let mut travelled: Vec<f32> = vec![0.0; waves.shadows.len()];
+    let n = waves.shadows.len();
+    let walk = &mut waves.walk;
+    walk.strength.clear();
+    walk.strength.resize(n, Vec3::ONE);
+    walk.entered_at.clear();
+    walk.entered_at.resize(n, 0.0);
+    walk.travelled.clear();
+    walk.travelled.resize(n, 0.0);
+    walk.active.clear();
+    walk.active.extend(0..n);
     for _ in 0..MAX_SHADOW_CROSSINGS {
-        if active.is_empty() {
+        if walk.active.is_empty() {
             break;
         }
-        let rays: Vec<TraceRay> = active.iter().map(|&i| waves.shadow_rays[i]).collect();
-        context
-            .tracer
-            .intersect(&rays, &mut waves.trace_hits, false, &mut worker.counters);
-        let mut still_active = Vec::with_capacity(active.len());
-        for (slot, &i) in active.iter().enumerate() {
+        walk.batch.clear();
+        walk.batch
+            .extend(walk.active.iter().map(|&i| waves.shadow_rays[i]));
+        context.tracer.intersect(
+            &walk.batch,
+            &mut waves.trace_hits,
+            false,
+            &mut worker.counters,
+        );
+        walk.still_active.clear();
+        for (slot, &i) in walk.active.iter().enumerate() {
             let hit = waves.trace_hits[slot];
             if !hit.is_hit() {
                 continue;
             }
-            let ray = rays[slot];
-            let surface = context
-                .surfaces
-                .surface_hit(ray.origin, ray.direction, &hit);
+            let ray = walk.batch[slot];
+            let surface = context.surfaces.surface_hit(
+                ray.origin,
+                ray.direction,
+                &hit,
+                SurfaceDetail::Geometry,
+            );
             let material = &context.scene.materials[surface.material as usize];
             if material.transmission <= 0.0 {
-                strength[i] = Vec3::ZERO;
+                walk.strength[i] = Vec3::ZERO;
                 continue;
             }
             let front = ray.direction.dot(surface.geometric_normal) < 0.0;
-            let mut s = strength[i] * material.transmission;
+            let mut s = walk.strength[i] * material.transmission;
             if front {
-                entered_at[i] = travelled[i] + hit.t;
+                walk.entered_at[i] = walk.travelled[i] + hit.t;
             } else if context.effects.absorption {
                 // Leaving the medium: absorb over the distance travelled inside.
-                let inside = (travelled[i] + hit.t - entered_at[i]).max(0.0);
+                let inside = (walk.travelled[i] + hit.t - walk.entered_at[i]).max(0.0);
                 s *= shading::transmittance(
                     context.materials.sigma[surface.material as usize],
                     inside,
                 );
                 worker.counters.absorption_evaluations += 1;
             }
-            strength[i] = s;
+            walk.strength[i] = s;
             if s.max_element() < SHADOW_CUTOFF {
-                strength[i] = Vec3::ZERO;
+                walk.strength[i] = Vec3::ZERO;
                 continue;
             }
             let leave = if front {
@@ -611,7 +660,7 @@ fn trace_shadows(
             };
             let origin = shading::offset_ray_origin(surface.position, leave);
             let moved = (origin - ray.origin).dot(ray.direction);
-            travelled[i] += moved;
+            walk.travelled[i] += moved;
             let remaining = ray.tfar - moved;
             if remaining <= 0.0 {
                 continue;
@@ -622,15 +671,15 @@ fn trace_shadows(
                 ..ray
             };
             worker.counters.count_rays(RayKind::Shadow, 1);
-            still_active.push(i);
+            walk.still_active.push(i);
         }
-        active = still_active;
+        std::mem::swap(&mut walk.active, &mut walk.still_active);
     }
-    for &i in &active {
+    for &i in &walk.active {
         // Ran out of crossings: treat as blocked.
-        strength[i] = Vec3::ZERO;
+        walk.strength[i] = Vec3::ZERO;
     }
-    for (shadow, s) in waves.shadows.iter().zip(&strength) {
+    for (shadow, s) in waves.shadows.iter().zip(&walk.strength) {
         if s.max_element() > 0.0 {
             add_radiance(image, shadow.pixel, shadow.contribution * *s);
         }

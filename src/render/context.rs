@@ -47,6 +47,9 @@ pub struct RenderContext {
     pub options: RenderOptions,
     /// Mean environment radiance: the ambient light of diffuse surfaces.
     pub environment_mean: Vec3,
+    /// When set, base-colour and environment lookups go to this texture system instead of
+    /// [`Self::textures`] (see [`crate::render::external_textures`]).
+    pub external_textures: Option<Arc<dyn crate::render::ExternalTextures>>,
 }
 
 /// What one worker accumulates while rendering tiles.

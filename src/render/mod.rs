@@ -8,6 +8,7 @@
 
 pub mod context;
 pub mod effects;
+pub mod external_textures;
 pub mod prepared;
 pub mod sampling;
 pub mod stats;
@@ -25,6 +26,7 @@ use crate::scene::SceneDescription;
 
 pub use context::{RenderContext, RenderOptions, WorkerState};
 pub use effects::EffectSet;
+pub use external_textures::ExternalTextures;
 pub use prepared::PrepareError;
 pub use stats::{RenderStats, TileUsage, WorkCounters};
 
@@ -62,10 +64,7 @@ pub fn prepare(
     let environment_mean = prepared::environment_mean(&scene.environment, &textures);
     Ok(RenderContext {
         materials: prepared::MaterialTable::new(&scene.materials),
-        surfaces: prepared::SurfaceLookup {
-            scene: scene.clone(),
-            geometries,
-        },
+        surfaces: prepared::SurfaceLookup::new(scene.clone(), geometries),
         scene,
         tracer,
         textures,
@@ -74,6 +73,7 @@ pub fn prepare(
         effects,
         options,
         environment_mean,
+        external_textures: None,
     })
 }
 

@@ -81,11 +81,52 @@ impl MaterialTable {
 pub struct SurfaceLookup {
     pub scene: Arc<SceneDescription>,
     pub geometries: Vec<GeometryRef>,
+    /// Per material: whether shading it reads a texture (so hits need texture coordinates).
+    pub textured_materials: Vec<bool>,
+}
+
+/// How much of the surface a caller needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SurfaceDetail {
+    /// Position and normals only (shadow-ray walks, untextured materials).
+    Geometry,
+    /// Also texture coordinates and dP/ds, dP/dt (texture lookups, footprints, AOVs).
+    Texturing,
 }
 
 impl SurfaceLookup {
+    pub fn new(scene: Arc<SceneDescription>, geometries: Vec<GeometryRef>) -> SurfaceLookup {
+        let textured_materials = scene
+            .materials
+            .iter()
+            .map(|m| m.base_color_texture.is_some())
+            .collect();
+        SurfaceLookup {
+            scene,
+            geometries,
+            textured_materials,
+        }
+    }
+
+    /// Whether the material at `hit` reads a texture.
+    #[inline]
+    pub fn is_textured(&self, hit: &TraceHit) -> bool {
+        let material = match self.geometries[hit.geometry as usize] {
+            GeometryRef::Mesh(index) => self.scene.meshes[index].material,
+            GeometryRef::Spheres => self.scene.spheres[hit.primitive as usize].material,
+        };
+        self.textured_materials[material]
+    }
+
     /// The surface at `hit` of the ray (`origin`, unit `direction`).
-    pub fn surface_hit(&self, origin: Vec3, direction: Vec3, hit: &TraceHit) -> SurfaceHit {
+    pub fn surface_hit(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        hit: &TraceHit,
+        detail: SurfaceDetail,
+    ) -> SurfaceHit {
+        let texturing = detail == SurfaceDetail::Texturing;
         let position = origin + direction * hit.t;
         match self.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(index) => {
@@ -118,12 +159,12 @@ impl SurfaceLookup {
                 let st_vertices =
                     (!mesh.st.is_empty()).then(|| [mesh.st[i0], mesh.st[i1], mesh.st[i2]]);
                 let (st, dpds, dpdt) = match st_vertices {
-                    Some(t) => {
+                    Some(t) if texturing => {
                         let st = t[0] * w + t[1] * u + t[2] * v;
                         let (dpds, dpdt) = triangle_position_derivatives(p, t);
                         (st, dpds, dpdt)
                     }
-                    None => (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO),
+                    _ => (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO),
                 };
                 SurfaceHit {
                     t: hit.t,
@@ -147,7 +188,12 @@ impl SurfaceLookup {
                 // Recompute the point from the centre so it lies on the sphere exactly.
                 let normal = (position - sphere.center).normalize_or(Vec3::Y);
                 let position = sphere.center + normal * sphere.radius;
-                let (st, dpds, dpdt) = crate::footprint::lat_long_frame(normal, sphere.radius);
+                // The lat-long frame costs two inverse trigonometric functions: only when needed.
+                let (st, dpds, dpdt) = if texturing {
+                    crate::footprint::lat_long_frame(normal, sphere.radius)
+                } else {
+                    (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
+                };
                 SurfaceHit {
                     t: hit.t,
                     position,
@@ -219,13 +265,14 @@ pub fn binding_query(transform: &Affine2, st: Vec2, g: [f32; 4]) -> TextureQuery
 }
 
 /// The environment seen in direction `dir` (unfiltered background colour or filtered lat-long
-/// lookup with the given gradients).
+/// lookup with the given gradients), from `external` when given.
 pub fn environment_radiance(
     environment: &Environment,
     textures: &[Arc<Texture>],
     dir: Vec3,
     gradients: [f32; 4],
     options: &FilterOptions,
+    external: Option<&dyn crate::render::ExternalTextures>,
 ) -> Vec3 {
     match environment {
         Environment::Color(c) => *c,
@@ -239,7 +286,13 @@ pub fn environment_radiance(
                 dsdy: gradients[2],
                 dtdy: gradients[3],
             };
-            textures[*texture].sample(&q, options).truncate() * *intensity
+            let texel = match external {
+                Some(external) => crate::render::external_textures::sample_external(
+                    external, *texture, &q, options,
+                ),
+                None => textures[*texture].sample(&q, options),
+            };
+            texel.truncate() * *intensity
         }
     }
 }

@@ -5,8 +5,9 @@ usage: fullframe.py FRAME.exr TEXTURE [--filter aniso] [--wrap periodic] [--max-
                     [--maketx] [--channels 3]
 
 FRAME.exr holds per pixel the lookup the renderer made (channels tex.s, tex.t,
-tex.dsdx, tex.dtdx, tex.dsdy, tex.dtdy; NaN where there was no textured hit) and its
-result (texcolor.R, texcolor.G, texcolor.B). Every pixel whose tex.* are all finite
+tex.dsdx, tex.dtdx, tex.dsdy, tex.dtdy) and its result (texcolor.R, texcolor.G,
+texcolor.B); texcolor.A is 1 where a lookup happened and 0 elsewhere (frames without
+texcolor.A mark missing lookups with NaN). Every pixel with a lookup
 is looked up with TextureSystem.texture() using the options of oiio_lookup.py, and
 the PSNR (peak 1) between OIIO's RGB and texcolor is printed, with the pixel count
 and the max abs difference. TEXTURE should be a maketx output; with --maketx the
@@ -78,6 +79,8 @@ def main():
     lookup = read_channels(a.frame, LOOKUP)
     ours = read_channels(a.frame, COLOR)
     valid = np.all(np.isfinite(lookup), axis=-1)
+    if "texcolor.A" in oiio.ImageBuf(a.frame).spec().channelnames:
+        valid &= read_channels(a.frame, ["texcolor.A"])[:, :, 0] > 0
     ts = oiio.TextureSystem(shared=False)
     theirs = np.zeros_like(ours)
     ys, xs = np.nonzero(valid)
