@@ -16,7 +16,7 @@ use crate::cli::CommandError;
 use crate::integrator::Whitted;
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
-use crate::render::{self, RenderContext, RenderControl};
+use crate::render::{self, RenderContext, RenderControl, RenderOptions};
 
 #[derive(Args, Debug)]
 pub struct BenchRenderArgs {
@@ -96,12 +96,23 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
     pool.install(|| {
         let context = render::prepare(scene.clone(), options.clone())
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
-        // Warm up both paths once (page faults, lazy BVH parts).
+        // The same rays shaded with direct light and shadow rays only (no reflection or
+        // refraction rays): the camera-plus-shadow rendering the target speaks of.
+        let direct_options = RenderOptions {
+            max_depth: 0,
+            ..options.clone()
+        };
+        let direct_context = render::prepare(scene.clone(), direct_options)
+            .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        // Warm up every path once (page faults, lazy BVH parts).
         trace_camera_rays_only(&context);
         let _ = render::render(&context, &Whitted, &RenderControl::default());
+        let _ = render::render(&direct_context, &Whitted, &RenderControl::default());
 
         let mut raw_times = Vec::new();
         let mut full_times = Vec::new();
+        let mut direct_times = Vec::new();
+        let mut direct_counters = WorkCounters::default();
         let mut raw_rays = 0;
         let mut full_counters = WorkCounters::default();
         for _ in 0..repeat {
@@ -111,12 +122,18 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             let result = render::render(&context, &Whitted, &RenderControl::default());
             full_times.push(result.stats.seconds);
             full_counters = result.stats.counters;
+            let result = render::render(&direct_context, &Whitted, &RenderControl::default());
+            direct_times.push(result.stats.seconds);
+            direct_counters = result.stats.counters;
         }
         let raw = median(raw_times);
         let full = median(full_times);
         let raw_rate = raw_rays as f64 / raw / 1e6;
         let full_camera_rate = full_counters.camera_rays as f64 / full / 1e6;
         let full_ray_rate = full_counters.total_rays() as f64 / full / 1e6;
+        let direct = median(direct_times);
+        let direct_camera_rate = direct_counters.camera_rays as f64 / direct / 1e6;
+        let direct_ray_rate = direct_counters.total_rays() as f64 / direct / 1e6;
         println!(
             "scene {} at {}x{}, {} spp, {} threads, median of {repeat}",
             scene.source,
@@ -134,6 +151,15 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             full_counters.shadow_rays,
             full_counters.reflection_rays,
             full_counters.refraction_rays
+        );
+        println!(
+            "| camera + shadow rays, shaded, no bounces ({} camera, {} shadow rays) | {direct:.4} | {direct_camera_rate:.2} | {direct_ray_rate:.2} |",
+            direct_counters.camera_rays, direct_counters.shadow_rays
+        );
+        println!(
+            "ratio camera+shadow/raw: {:.3} in all rays per second, {:.3} in camera rays per second (pixels)",
+            direct_ray_rate / raw_rate,
+            direct_camera_rate / raw_rate
         );
         println!(
             "ratio full/raw: {:.3} in all rays per second, {:.3} in camera rays per second (pixels)",

@@ -46,7 +46,9 @@ static EMBEDDED: &[(&str, &[u8])] = &[
 /// a single grey sphere is returned with the error in `notes` rather than panicking.
 pub fn default_scene() -> SceneDescription {
     let files = Files::embedded("assets/scenes", EMBEDDED);
-    match toml_format::parse(SCENE_TEXT, &files, DEFAULT_SCENE_LABEL).and_then(super::finish) {
+    match toml_format::parse(SCENE_TEXT, &files, DEFAULT_SCENE_LABEL)
+        .and_then(|scene| super::finish(scene, super::DefaultLights::WhenOtherwiseBlack))
+    {
         Ok(scene) => scene,
         Err(e) => {
             let mut scene = SceneDescription {
@@ -63,7 +65,10 @@ pub fn default_scene() -> SceneDescription {
                 )],
                 ..Default::default()
             };
-            super::framing::add_missing_camera_and_lights(&mut scene);
+            super::framing::add_missing_camera_and_lights(
+                &mut scene,
+                super::framing::DefaultLights::WhenNoLights,
+            );
             scene
         }
     }

@@ -46,9 +46,33 @@ pub fn frame_camera(scene: &SceneDescription, aspect: f32) -> CameraDesc {
     }
 }
 
+/// When a scene without lights gets the default key light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DefaultLights {
+    /// Models rendered directly (OBJ, glTF): whenever they have no lights.
+    WhenNoLights,
+    /// TOML scenes describe their lighting: only when, without lights, nothing would be
+    /// visible (no emissive material and a black environment).
+    WhenOtherwiseBlack,
+}
+
+/// Whether anything lights the scene besides punctual lights.
+fn lit_without_lights(scene: &SceneDescription) -> bool {
+    let environment = match &scene.environment {
+        Environment::Color(c) => c.max_element() > 0.0,
+        Environment::LatLong { intensity, .. } => *intensity > 0.0,
+    };
+    environment
+        || scene
+            .materials
+            .iter()
+            .any(|m| m.emission.max_element() > 0.0)
+}
+
 /// Adds a framing camera when there is none and a key light (plus, when the environment is
-/// black, the grey-blue environment) when there are no lights, noting each in `scene.notes`.
-pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription) {
+/// black, the grey-blue environment) when there are no lights and `lights` asks for one,
+/// noting each in `scene.notes`.
+pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription, lights: DefaultLights) {
     if scene.camera.is_none() {
         let aspect = scene.settings.width as f32 / scene.settings.height.max(1) as f32;
         scene.camera = Some(frame_camera(scene, aspect));
@@ -56,7 +80,11 @@ pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription) {
             .notes
             .push("no camera: placed one to frame the bounds".into());
     }
-    if scene.lights.is_empty() {
+    let wanted = match lights {
+        DefaultLights::WhenNoLights => true,
+        DefaultLights::WhenOtherwiseBlack => !lit_without_lights(scene),
+    };
+    if scene.lights.is_empty() && wanted {
         let (center, radius) = bounding_sphere(scene);
         let (eye, up) = scene
             .camera
@@ -131,7 +159,7 @@ mod tests {
     #[test]
     fn missing_camera_and_lights_are_added_with_notes() {
         let mut scene = one_sphere(Vec3::ZERO, 1.0);
-        add_missing_camera_and_lights(&mut scene);
+        add_missing_camera_and_lights(&mut scene, DefaultLights::WhenNoLights);
         assert!(scene.camera.is_some());
         assert_eq!(scene.lights.len(), 1);
         assert_eq!(scene.environment, Environment::Color(DEFAULT_ENVIRONMENT));
@@ -141,7 +169,7 @@ mod tests {
         };
         assert!(position.y > scene.camera.as_ref().unwrap().eye.y);
         // Nothing more is added the second time.
-        add_missing_camera_and_lights(&mut scene);
+        add_missing_camera_and_lights(&mut scene, DefaultLights::WhenNoLights);
         assert_eq!(scene.notes.len(), 2);
     }
 }

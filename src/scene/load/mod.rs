@@ -40,7 +40,7 @@ use std::path::Path;
 
 pub use default_scene::{default_scene, DEFAULT_SCENE_LABEL};
 pub use error::SceneError;
-pub use framing::{frame_camera, FRAMING_FOV_DEGREES};
+pub use framing::{frame_camera, DefaultLights, FRAMING_FOV_DEGREES};
 pub use validate::validate;
 
 use crate::scene::SceneDescription;
@@ -77,7 +77,8 @@ pub fn load_scene(path: &Path) -> Result<SceneDescription, SceneError> {
     let label = path.display().to_string();
     let base_dir = path.parent().unwrap_or(Path::new(""));
     let files = Files::disk(base_dir);
-    let scene = match format_of(path)? {
+    let format = format_of(path)?;
+    let scene = match format {
         Format::Toml => {
             let bytes = files.read(path)?;
             let text = String::from_utf8(bytes)
@@ -93,7 +94,12 @@ pub fn load_scene(path: &Path) -> Result<SceneDescription, SceneError> {
             scene
         }
     };
-    finish(scene)
+    let lights = if format == Format::Toml {
+        DefaultLights::WhenOtherwiseBlack
+    } else {
+        DefaultLights::WhenNoLights
+    };
+    finish(scene, lights)
 }
 
 /// Parses TOML scene text; relative file names resolve against `base_dir`, and messages name
@@ -103,11 +109,10 @@ pub fn load_toml_str(
     base_dir: &Path,
     source_label: &str,
 ) -> Result<SceneDescription, SceneError> {
-    finish(toml_format::parse(
-        text,
-        &Files::disk(base_dir),
-        source_label,
-    )?)
+    finish(
+        toml_format::parse(text, &Files::disk(base_dir), source_label)?,
+        DefaultLights::WhenOtherwiseBlack,
+    )
 }
 
 /// An OBJ or glTF file as a scene part (world-space meshes, materials, textures, lights,
@@ -124,8 +129,11 @@ fn load_part(files: &Files, path: &Path) -> Result<SceneDescription, SceneError>
 }
 
 /// Adds a missing camera and lights, then validates.
-fn finish(mut scene: SceneDescription) -> Result<SceneDescription, SceneError> {
-    framing::add_missing_camera_and_lights(&mut scene);
+fn finish(
+    mut scene: SceneDescription,
+    lights: DefaultLights,
+) -> Result<SceneDescription, SceneError> {
+    framing::add_missing_camera_and_lights(&mut scene, lights);
     validate(&scene)?;
     Ok(scene)
 }
