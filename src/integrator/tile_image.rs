@@ -19,7 +19,7 @@ pub struct AovSelection {
 pub struct TileImage {
     /// Linear RGB radiance, averaged over samples.
     pub color: Vec<[f32; 3]>,
-    /// Fraction of samples whose camera ray hit geometry.
+    /// 1 for a rendered pixel (the environment is part of the image).
     pub alpha: Vec<f32>,
     /// Camera-space depth of the first hit (f32::MAX where the camera ray missed).
     pub depth: Vec<f32>,

@@ -113,12 +113,14 @@ impl Integrator for Whitted {
             }
         }
         let scale = 1.0 / spp as f32;
-        for (c, a) in image.color.iter_mut().zip(image.alpha.iter_mut()) {
+        for c in image.color.iter_mut() {
             for v in c.iter_mut() {
                 *v *= scale;
             }
-            *a *= scale;
         }
+        // The background is rendered too: a finished pixel is opaque. (Alpha 0 marks pixels
+        // an interrupted render did not reach.)
+        image.alpha.fill(1.0);
     }
 }
 
@@ -286,7 +288,6 @@ fn shade_hit(
     let pixel = ray.pixel as usize;
 
     if ray.kind == RayKind::Camera {
-        image.alpha[pixel] += 1.0;
         if ray.first_sample && !image.depth.is_empty() {
             image.depth[pixel] = surface.t * ray.direction.dot(context.camera_forward);
             image.normal[pixel] = surface.shading_normal.to_array();
