@@ -11,6 +11,7 @@ packages=(
   openimageio-tools      # maketx, for mip-mapped reference textures
   python3-numpy
   assimp-testmodels      # real OBJ/glTF files, valid and malformed, used by the tests
+  libopenimageio-dev g++ # the C API's C++ example (OpenImageIO TextureSystem via the texture callback)
 )
 
 missing=()

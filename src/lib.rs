@@ -7,6 +7,7 @@
 //! filtering) -> [`film`] -> EXR/PNG. [`cli`] is the command line.
 
 pub mod camera;
+pub mod capi;
 pub mod cli;
 pub mod embree;
 pub mod film;

@@ -87,7 +87,15 @@ fn fullframe_psnr(dir: &Path, frame: &Path, texture: &Path, filter: &str) -> (us
         .arg(&script)
         .arg(frame)
         .arg(texture)
-        .args(["--maketx", "--filter", filter, "--wrap", "periodic", "--max-aniso", "16"])
+        .args([
+            "--maketx",
+            "--filter",
+            filter,
+            "--wrap",
+            "periodic",
+            "--max-aniso",
+            "16",
+        ])
         .current_dir(dir)
         .output()
         .unwrap_or_else(|e| panic!("/usr/bin/python3 not runnable ({e}): {SETUP_HINT}"));
@@ -117,7 +125,11 @@ fn rendered_texture_lookups_match_openimageio() {
     write_texture(&texture);
     write(dir.path(), "ground.obj", &square_obj(20.0, 0.0));
     write(dir.path(), "scene.toml", &scene(&texture));
-    for (filter, lod) in [("aniso", "cone"), ("trilinear", "cone"), ("aniso", "differential")] {
+    for (filter, lod) in [
+        ("aniso", "cone"),
+        ("trilinear", "cone"),
+        ("aniso", "differential"),
+    ] {
         let frame = dir.path().join(format!("{filter}-{lod}.exr"));
         let out = run_in(
             dir.path(),
@@ -136,10 +148,17 @@ fn rendered_texture_lookups_match_openimageio() {
                 lod,
             ],
         );
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let (pixels, psnr) = fullframe_psnr(dir.path(), &frame, &texture, filter);
         // Most of the frame shows the ground directly or in the mirror.
         assert!(pixels > 96 * 64 / 3, "only {pixels} textured pixels");
-        assert!(psnr >= 60.0, "{filter} with {lod}: PSNR {psnr} dB over {pixels} pixels");
+        assert!(
+            psnr >= 60.0,
+            "{filter} with {lod}: PSNR {psnr} dB over {pixels} pixels"
+        );
     }
 }

@@ -5,6 +5,11 @@
 //! OIIO is timed from Python, so the script also times the same loop calling an
 //! empty Python function; the table shows OIIO's rate both raw and with that
 //! per-call overhead subtracted. This is a measurement tool, never a test.
+//!
+//! Both sides are timed by the CPU time of the measuring thread (Linux
+//! `CLOCK_THREAD_CPUTIME_ID`; Python's `time.thread_time`), not by the wall clock:
+//! on a shared machine with more runnable jobs than cores, wall time mostly measures
+//! the other jobs. `--wall-clock` restores wall-clock timing on both sides.
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -42,7 +47,70 @@ pub struct BenchTexturesArgs {
     /// The OIIO benchmark script.
     #[arg(long, default_value = "bench/oiio_texture_bench.py")]
     pub oiio_script: PathBuf,
+    /// Time by the wall clock instead of the thread's CPU time (both sides).
+    #[arg(long)]
+    pub wall_clock: bool,
 }
+
+/// A stopwatch on the wall clock or on the calling thread's CPU time.
+#[derive(Clone, Copy)]
+enum Clock {
+    Wall(Instant),
+    ThreadCpu(Duration),
+}
+
+impl Clock {
+    fn start(wall: bool) -> Clock {
+        match thread_cpu_time() {
+            Some(t) if !wall => Clock::ThreadCpu(t),
+            _ => Clock::Wall(Instant::now()),
+        }
+    }
+
+    fn elapsed(&self) -> Duration {
+        match *self {
+            Clock::Wall(start) => start.elapsed(),
+            Clock::ThreadCpu(start) => thread_cpu_time()
+                .map(|now| now.saturating_sub(start))
+                .unwrap_or_default(),
+        }
+    }
+}
+
+/// CPU time consumed by the calling thread (Linux), or `None` where unavailable.
+#[cfg(target_os = "linux")]
+fn thread_cpu_time() -> Option<Duration> {
+    #[repr(C)]
+    struct Timespec {
+        tv_sec: i64,
+        tv_nsec: i64,
+    }
+    extern "C" {
+        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
+    }
+    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+    let mut ts = Timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes one timespec (two i64 on 64-bit Linux) to `ts`,
+    // which lives for the whole call.
+    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (rc == 0 && ts.tv_sec >= 0 && (0..1_000_000_000).contains(&ts.tv_nsec))
+        .then(|| Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32))
+}
+
+#[cfg(not(target_os = "linux"))]
+fn thread_cpu_time() -> Option<Duration> {
+    None
+}
+
+/// Runs the OIIO script with Python's `time.perf_counter` replaced by
+/// `time.thread_time` (CPU time of the calling thread), so it is timed like our side.
+const PYTHON_THREAD_TIME_SHIM: &str = "import runpy, sys, time\n\
+time.perf_counter = time.thread_time\n\
+sys.argv = sys.argv[1:]\n\
+runpy.run_path(sys.argv[0], run_name='__main__')\n";
 
 /// One row of the table: a filter on a query set.
 struct Row {
@@ -119,9 +187,10 @@ fn measure(
     queries: &[TextureQuery],
     opts: &FilterOptions,
     min_time: Duration,
+    wall: bool,
 ) -> f64 {
     let mut done = 0usize;
-    let start = Instant::now();
+    let start = Clock::start(wall);
     let mut acc = glam::Vec4::ZERO;
     loop {
         for q in queries {
@@ -164,7 +233,11 @@ fn run_oiio(
     filters: &[FilterMode],
 ) -> Result<OiioTimes, String> {
     let names: Vec<String> = filters.iter().map(|f| f.to_string()).collect();
-    let out = Command::new(&args.python)
+    let mut command = Command::new(&args.python);
+    if !args.wall_clock {
+        command.args(["-c", PYTHON_THREAD_TIME_SHIM]);
+    }
+    let out = command
         .arg(&args.oiio_script)
         .arg(tx)
         .arg(queries)
@@ -301,7 +374,7 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
                 wrap_t: WrapMode::Periodic,
                 max_aniso: args.max_aniso,
             };
-            let ours = measure(&tex, &queries, &opts, min_time);
+            let ours = measure(&tex, &queries, &opts, min_time, args.wall_clock);
             let oiio_raw_ns = oiio
                 .iter()
                 .find(|(name, _)| *name == filter.to_string())
@@ -320,8 +393,12 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
              texture() on a 1x1 texture (binding overhead + trivial lookup) costs {b:.0} ns (subtracted in \"OIIO C++ est.\").\n"
         );
     }
+    let clock = match Clock::start(args.wall_clock) {
+        Clock::Wall(_) => "wall-clock time",
+        Clock::ThreadCpu(_) => "thread CPU time",
+    };
     println!(
-        "Texture {} ({}x{}, {} levels), one thread, {} queries per set, max aniso {}.\n{}",
+        "Texture {} ({}x{}, {} levels), one thread, {} queries per set, max aniso {}, rates per second of {clock}.\n{}",
         source.display(),
         tex.width(),
         tex.height(),

@@ -166,8 +166,8 @@ fn read_resume_state(
     tile_count: usize,
 ) -> Result<(film::Film, Vec<bool>), CommandError> {
     let label = exr_path.display();
-    let (earlier, attributes) = film::read_exr(exr_path)
-        .map_err(|e| CommandError::bad_input(format!("--resume: {e}")))?;
+    let (earlier, attributes) =
+        film::read_exr(exr_path).map_err(|e| CommandError::bad_input(format!("--resume: {e}")))?;
     let stored = attributes.strings.get(SETTINGS_ATTRIBUTE).ok_or_else(|| {
         CommandError::bad_input(format!(
             "{label}: --resume: not a conetrace render (no {SETTINGS_ATTRIBUTE} attribute)"
@@ -444,4 +444,24 @@ fn progress_bar(quiet: bool, tiles: usize) -> indicatif::ProgressBar {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tile_lists_round_trip_through_their_text() {
+        for count in [1usize, 3, 4, 5, 17, 64] {
+            let finished: Vec<bool> = (0..count).map(|i| (i * 7) % 3 == 0).collect();
+            let text = encode_tiles(&finished);
+            assert_eq!(text.len(), count.div_ceil(4));
+            assert_eq!(decode_tiles(&text, count), Some(finished));
+        }
+        assert_eq!(encode_tiles(&[true, false, false, true, true]), "91");
+        // Wrong length, non-hex digits and bits past the end are refused.
+        assert_eq!(decode_tiles("9", 5), None);
+        assert_eq!(decode_tiles("9g", 5), None);
+        assert_eq!(decode_tiles("93", 5), None);
+    }
 }

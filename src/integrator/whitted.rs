@@ -260,7 +260,7 @@ fn shade_miss(
         &context.textures,
         ray.direction,
         gradients,
-        &context.options.filter,
+        &context.texture_filters,
         context.external_textures.as_deref(),
     );
     add_radiance(image, ray.pixel, ray.throughput * radiance);
@@ -516,6 +516,7 @@ fn surface_albedo(
         return material.base_color;
     };
     let options = &context.options;
+    let filter = &context.texture_filters[binding.texture];
     let gradients = if context.effects.footprints {
         let g = ray
             .footprint
@@ -535,10 +536,10 @@ fn surface_albedo(
             external.as_ref(),
             binding.texture,
             &query,
-            &options.filter,
+            filter,
         ),
-        (None, Some(tiles)) => texture.sample_recording(&query, &options.filter, tiles),
-        (None, None) => texture.sample(&query, &options.filter),
+        (None, Some(tiles)) => texture.sample_recording(&query, filter, tiles),
+        (None, None) => texture.sample(&query, filter),
     };
     let pixel = ray.pixel as usize;
     if ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel] {
@@ -550,7 +551,7 @@ fn surface_albedo(
             image.texcolor[pixel] = [texel.x, texel.y, texel.z, 1.0];
         }
         if !image.lod.is_empty() {
-            image.lod[pixel] = texture.lod(&query, &options.filter);
+            image.lod[pixel] = texture.lod(&query, filter);
             image.footprint[pixel] = ray.footprint.width();
         }
     }

@@ -45,6 +45,8 @@ pub struct RenderContext {
     pub camera_forward: Vec3,
     pub effects: EffectSet,
     pub options: RenderOptions,
+    /// Filter options per texture: the render's filter with each texture's own wrap modes.
+    pub texture_filters: Vec<FilterOptions>,
     /// Mean environment radiance: the ambient light of diffuse surfaces.
     pub environment_mean: Vec3,
     /// When set, base-colour and environment lookups go to this texture system instead of

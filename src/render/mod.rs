@@ -62,6 +62,7 @@ pub fn prepare(
         EffectSet::analyse(&scene, options.lod).0
     };
     let environment_mean = prepared::environment_mean(&scene.environment, &textures);
+    let texture_filters = prepared::texture_filters(&scene, &options.filter);
     Ok(RenderContext {
         materials: prepared::MaterialTable::new(&scene.materials),
         surfaces: prepared::SurfaceLookup::new(scene.clone(), geometries),
@@ -73,6 +74,7 @@ pub fn prepare(
         effects,
         options,
         environment_mean,
+        texture_filters,
         external_textures: None,
     })
 }

@@ -264,6 +264,19 @@ pub fn binding_query(transform: &Affine2, st: Vec2, g: [f32; 4]) -> TextureQuery
     }
 }
 
+/// The render's filter options with each texture's own wrap modes, one per texture.
+pub fn texture_filters(scene: &SceneDescription, filter: &FilterOptions) -> Vec<FilterOptions> {
+    scene
+        .textures
+        .iter()
+        .map(|desc| FilterOptions {
+            wrap_s: desc.wrap_s,
+            wrap_t: desc.wrap_t,
+            ..*filter
+        })
+        .collect()
+}
+
 /// The environment seen in direction `dir` (unfiltered background colour or filtered lat-long
 /// lookup with the given gradients), from `external` when given.
 pub fn environment_radiance(
@@ -271,12 +284,13 @@ pub fn environment_radiance(
     textures: &[Arc<Texture>],
     dir: Vec3,
     gradients: [f32; 4],
-    options: &FilterOptions,
+    texture_filters: &[FilterOptions],
     external: Option<&dyn crate::render::ExternalTextures>,
 ) -> Vec3 {
     match environment {
         Environment::Color(c) => *c,
         Environment::LatLong { texture, intensity } => {
+            let options = &texture_filters[*texture];
             let st = crate::footprint::direction_to_lat_long(dir);
             let q = TextureQuery {
                 s: st.x,

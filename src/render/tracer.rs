@@ -102,7 +102,8 @@ impl Tracer {
                     binding.transform,
                     material.alpha,
                     cutoff,
-                    options.filter.max_aniso,
+                    crate::render::prepared::texture_filters(scene, &options.filter)
+                        [binding.texture],
                 );
                 builder.set_alpha_filter(id, filter).map_err(embree_error)?;
             }
@@ -287,12 +288,12 @@ fn alpha_filter(
     transform: glam::Affine2,
     constant_alpha: f32,
     cutoff: f32,
-    max_aniso: f32,
+    texture_filter: FilterOptions,
 ) -> crate::embree::AlphaFilter {
+    // Coverage is filtered trilinearly with the texture's own wrap modes.
     let options = FilterOptions {
         filter: FilterMode::Trilinear,
-        max_aniso,
-        ..FilterOptions::default()
+        ..texture_filter
     };
     let texels = (texture.width() as f32) * (texture.height() as f32);
     Arc::new(move |candidate: &FilterCandidate| {

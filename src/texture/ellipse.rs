@@ -69,12 +69,50 @@ pub(crate) fn adjust_derivatives(q: &TextureQuery) -> Derivs {
     }
 }
 
-/// Major and minor lengths (full widths) and the major axis angle.
+/// Major and minor lengths (full widths) and the major axis direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Axes {
     pub major: f32,
     pub minor: f32,
-    pub theta: f32,
+    /// (b, a - c) of the ellipse's implicit form, in f32: the doubled angle's
+    /// sine and cosine up to a common factor. The angle itself costs an `atan2`
+    /// and is only needed when more than one probe is taken, so [`Axes::theta`]
+    /// computes it on demand.
+    pub doubled_angle: (f32, f32),
+}
+
+impl Axes {
+    /// Angle of the major axis from the s axis, in radians (OIIO's theta).
+    #[inline]
+    pub fn theta(&self) -> f32 {
+        let (y, x) = self.doubled_angle;
+        y.atan2(x) * 0.5 + std::f32::consts::FRAC_PI_2
+    }
+
+    /// (sin, cos) of [`Axes::theta`] without trigonometric calls: theta = phi + pi/2
+    /// with phi half the doubled angle, from the half-angle formulas in f64. Each of
+    /// sin(phi), cos(phi) comes from whichever formula is well conditioned (the
+    /// larger by a root, the other as sin(2 phi) / (2 * larger)), so the result
+    /// agrees with `theta().sin_cos()` to about 1e-7.
+    #[inline]
+    pub fn direction(&self) -> (f32, f32) {
+        let (y, x) = (self.doubled_angle.0 as f64, self.doubled_angle.1 as f64);
+        let r = (x * x + y * y).sqrt();
+        if !(r > 0.0) || !r.is_finite() {
+            // Circle (any direction serves) or unusable input: phi = 0.
+            return (1.0, 0.0);
+        }
+        let (cos2, sin2) = (x / r, y / r);
+        // phi = atan2(y, x) / 2 lies in [-pi/2, pi/2], so cos(phi) >= 0.
+        let (sin_phi, cos_phi) = if cos2 >= 0.0 {
+            let c = ((1.0 + cos2) * 0.5).sqrt();
+            (sin2 / (2.0 * c), c)
+        } else {
+            let s = ((1.0 - cos2) * 0.5).sqrt().copysign(y);
+            (s, sin2 / (2.0 * s))
+        };
+        (cos_phi as f32, -sin_phi as f32)
+    }
 }
 
 /// Step 2: singular values of the st Jacobian. Squares and their sums are f32,
@@ -92,7 +130,7 @@ pub(crate) fn ellipse_axes(d: &Derivs) -> Axes {
     Axes {
         major: major2.max(0.0).sqrt().min(1000.0),
         minor: minor2.max(0.0).sqrt().min(1000.0),
-        theta: (b as f32).atan2((a - c) as f32) * 0.5 + std::f32::consts::FRAC_PI_2,
+        doubled_angle: (b as f32, (a - c) as f32),
     }
 }
 
@@ -226,7 +264,7 @@ mod tests {
         let a = ellipse_axes(&adjust_derivatives(&q));
         assert!((a.major - 0.3).abs() < 1e-6 && (a.minor - 0.1).abs() < 1e-6);
         // Major along s: theta = 0 (mod pi).
-        assert!(a.theta.sin().abs() < 1e-6);
+        assert!(a.theta().sin().abs() < 1e-6);
         // A rotated Jacobian keeps its singular values.
         let (c, s) = (0.6f32, 0.8f32);
         let q = TextureQuery {
@@ -238,7 +276,38 @@ mod tests {
         };
         let a = ellipse_axes(&adjust_derivatives(&q));
         assert!((a.major - 0.3).abs() < 1e-6 && (a.minor - 0.1).abs() < 1e-6);
-        assert!((a.theta.cos().abs() - c).abs() < 1e-5);
+        assert!((a.theta().cos().abs() - c).abs() < 1e-5);
+    }
+
+    #[test]
+    fn direction_matches_the_angle_through_trigonometry() {
+        let mut worst = 0.0f32;
+        for k in -400..=400 {
+            let a = k as f32 * (std::f32::consts::PI / 400.0);
+            for len in [1e-12f32, 1e-3, 1.0, 3e6] {
+                let axes = Axes {
+                    major: 1.0,
+                    minor: 0.5,
+                    doubled_angle: (len * a.sin(), len * a.cos()),
+                };
+                let (sin, cos) = axes.direction();
+                let (sin_ref, cos_ref) = axes.theta().sin_cos();
+                worst = worst.max((sin - sin_ref).abs()).max((cos - cos_ref).abs());
+                assert!((sin * sin + cos * cos - 1.0).abs() < 1e-6);
+            }
+        }
+        // Exactly opposite doubled angles (+0 and -0 sine) keep atan2's sign convention.
+        for y in [0.0f32, -0.0] {
+            let axes = Axes {
+                major: 1.0,
+                minor: 0.5,
+                doubled_angle: (y, -2.0),
+            };
+            let (sin, cos) = axes.direction();
+            let (sin_ref, cos_ref) = axes.theta().sin_cos();
+            worst = worst.max((sin - sin_ref).abs()).max((cos - cos_ref).abs());
+        }
+        assert!(worst < 5e-7, "{worst}");
     }
 
     #[test]
@@ -267,7 +336,7 @@ mod tests {
         let mut axes = Axes {
             major: 1.0,
             minor: 0.01,
-            theta: 0.0,
+            doubled_angle: (0.0, 1.0),
         };
         let aspect = clamp_anisotropy(&mut axes, 16.0);
         assert_eq!(aspect, 16.0);

@@ -40,7 +40,7 @@ pub(crate) fn sample<O: TexelObserver>(
         // (bilinear) is the right kernel, as for a point sample.
         return bilinear(l0, 0, q.s, q.t, wrap, obs);
     }
-    let (sin, cos) = f.axes.theta.sin_cos();
+    let (sin, cos) = f.axes.theta().sin_cos();
     let major = [cos * f.axes.major, sin * f.axes.major];
     let minor = [-sin * f.axes.minor, cos * f.axes.minor];
     let mut sum = Vec4::ZERO;

@@ -64,7 +64,21 @@ pub(crate) fn closest<O: TexelObserver>(
     fetch(level, level_index, i, j, wrap, obs)
 }
 
+/// floor(x) as an integer for |x| < 2^31 (saturating beyond, 0 for NaN): truncate,
+/// then step down when truncation went up. Agrees with [`floor_f32`] wherever the
+/// result is a valid texel index.
+#[inline(always)]
+fn floor_i32(x: f32) -> i32 {
+    let t = x as i32;
+    t - ((t as f32 > x) as i32)
+}
+
 /// Bilinear interpolation of the four texels around (s, t).
+///
+/// The common case, all four texels inside the level, is decided with two unsigned
+/// compares on the integer texel coordinates and reads the texels directly; footprints
+/// across an edge go to [`bilinear_wrapped`], kept out of line so the loops of the
+/// mip-mapped filters stay small.
 #[inline(always)]
 pub(crate) fn bilinear<O: TexelObserver>(
     level: &MipLevel,
@@ -74,28 +88,65 @@ pub(crate) fn bilinear<O: TexelObserver>(
     wrap: (WrapMode, WrapMode),
     obs: &mut O,
 ) -> Vec4 {
-    let (i, fs) = to_texel(s, level.width);
-    let (j, ft) = to_texel(t, level.height);
-    let (w, h) = (level.width as f32, level.height as f32);
-    if i >= 0.0 && i + 1.0 < w && j >= 0.0 && j + 1.0 < h {
-        // All four texels inside: no wrapping needed (the common case).
-        let (x, y) = (i as usize, j as usize);
+    let x = s * level.width as f32 - 0.5;
+    let y = t * level.height as f32 - 0.5;
+    let (i, j) = (floor_i32(x), floor_i32(y));
+    // Negative i wraps to a huge u32, so one compare per axis tests 0 <= i < width - 1.
+    if (i as u32) < level.width - 1 && (j as u32) < level.height - 1 {
+        let (fs, ft) = (x - i as f32, y - j as f32);
+        let (xi, yi) = (i as usize, j as usize);
         let row = level.width as usize;
-        let k = y * row + x;
-        obs.touch(level_index, x, y);
-        obs.touch(level_index, x + 1, y);
-        obs.touch(level_index, x, y + 1);
-        obs.touch(level_index, x + 1, y + 1);
-        let t = &level.texels;
-        let (a, b) = (Vec4::from_array(t[k]), Vec4::from_array(t[k + 1]));
-        let (c, d) = (
-            Vec4::from_array(t[k + row]),
-            Vec4::from_array(t[k + row + 1]),
-        );
+        let k = yi * row + xi;
+        obs.touch(level_index, xi, yi);
+        obs.touch(level_index, xi + 1, yi);
+        obs.touch(level_index, xi, yi + 1);
+        obs.touch(level_index, xi + 1, yi + 1);
+        // One bounds check for the whole 2x2 footprint instead of four.
+        let (upper, lower) = match level.texels.get(k..k + row + 2) {
+            Some(block) => (&block[..2], &block[row..]),
+            None => return bilinear_wrapped(level, level_index, s, t, wrap, obs),
+        };
+        let (a, b) = (Vec4::from_array(upper[0]), Vec4::from_array(upper[1]));
+        let (c, d) = (Vec4::from_array(lower[0]), Vec4::from_array(lower[1]));
         let top = a * (1.0 - fs) + b * fs;
         let bottom = c * (1.0 - fs) + d * fs;
         return top * (1.0 - ft) + bottom * ft;
     }
+    bilinear_wrapped(level, level_index, s, t, wrap, obs)
+}
+
+/// [`bilinear`] for footprints that reach past an edge: every texel goes through
+/// [`wrap_texel`]; texels outside under [`WrapMode::Black`] count as zero.
+#[inline(never)]
+fn bilinear_wrapped<O: TexelObserver>(
+    level: &MipLevel,
+    level_index: usize,
+    s: f32,
+    t: f32,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    if wrap == (WrapMode::Periodic, WrapMode::Periodic) {
+        if let Some(v) = bilinear_periodic(level, level_index, s, t, obs) {
+            return v;
+        }
+    }
+    bilinear_any_wrap(level, level_index, s, t, wrap, obs)
+}
+
+/// Bilinear interpolation with every texel mapped by [`wrap_texel`]: any wrap mode,
+/// any coordinate.
+#[inline(always)]
+fn bilinear_any_wrap<O: TexelObserver>(
+    level: &MipLevel,
+    level_index: usize,
+    s: f32,
+    t: f32,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    let (i, fs) = to_texel(s, level.width);
+    let (j, ft) = to_texel(t, level.height);
     let xs = [
         wrap_texel(i, level.width, wrap.0),
         wrap_texel(i + 1.0, level.width, wrap.0),
@@ -117,6 +168,46 @@ pub(crate) fn bilinear<O: TexelObserver>(
     let top = corner[0] * (1.0 - fs) + corner[1] * fs;
     let bottom = corner[2] * (1.0 - fs) + corner[3] * fs;
     top * (1.0 - ft) + bottom * ft
+}
+
+/// Periodic wrap of both axes in integer arithmetic, for footprints within one period
+/// of the texture (all a filter produces from a reduced coordinate unless the
+/// footprint is larger than the texture, then `None`). Same texels and weights as
+/// [`wrap_texel`].
+#[inline(always)]
+fn bilinear_periodic<O: TexelObserver>(
+    level: &MipLevel,
+    level_index: usize,
+    s: f32,
+    t: f32,
+    obs: &mut O,
+) -> Option<Vec4> {
+    let (w, h) = (level.width as i32, level.height as i32);
+    let x = s * level.width as f32 - 0.5;
+    let y = t * level.height as f32 - 0.5;
+    let (i, j) = (floor_i32(x), floor_i32(y));
+    if !(-w..w).contains(&i) || !(-h..h).contains(&j) || x.is_nan() || y.is_nan() {
+        return None;
+    }
+    let (fs, ft) = (x - i as f32, y - j as f32);
+    // i in [-n, n): one step of n brings i and i + 1 into [0, n).
+    let wrap = |k: i32, n: i32| -> usize {
+        let k = if k < 0 { k + n } else { k };
+        (if k >= n { k - n } else { k }) as usize
+    };
+    let (x0, x1) = (wrap(i, w), wrap(i + 1, w));
+    let (y0, y1) = (wrap(j, h), wrap(j + 1, h));
+    obs.touch(level_index, x0, y0);
+    obs.touch(level_index, x1, y0);
+    obs.touch(level_index, x0, y1);
+    obs.touch(level_index, x1, y1);
+    let a = Vec4::from_array(level.texel(x0, y0));
+    let b = Vec4::from_array(level.texel(x1, y0));
+    let c = Vec4::from_array(level.texel(x0, y1));
+    let d = Vec4::from_array(level.texel(x1, y1));
+    let top = a * (1.0 - fs) + b * fs;
+    let bottom = c * (1.0 - fs) + d * fs;
+    Some(top * (1.0 - ft) + bottom * ft)
 }
 
 #[cfg(test)]
@@ -161,6 +252,57 @@ mod tests {
             let v = bilinear(&l, 0, s, t, P, &mut NoTiles);
             assert!((v - Vec4::ONE).abs().max_element() < 1e-6);
         }
+    }
+
+    #[test]
+    fn integer_floor_matches_floor() {
+        for x in [
+            0.0f32, -0.0, 0.25, -0.25, 1.0, -1.0, -1.5, 2.99, -2.99, 1023.5, -0.5, 8388607.5,
+        ] {
+            assert_eq!(floor_i32(x) as f32, x.floor(), "{x}");
+        }
+    }
+
+    #[test]
+    fn interior_fast_path_equals_the_wrapped_path() {
+        let (w, h) = (13u32, 7u32);
+        let mut state = 99u32;
+        let texels = (0..w * h)
+            .map(|_| {
+                std::array::from_fn(|_| {
+                    state = state.wrapping_mul(1664525).wrapping_add(1013904223);
+                    (state >> 8) as f32 / (1u32 << 24) as f32
+                })
+            })
+            .collect();
+        let l = MipLevel::new(w, h, texels).unwrap();
+        let mut interior = 0;
+        let mut periodic = 0;
+        for k in 0..2000 {
+            let s = -0.2 + 1.4 * ((k * 37) % 2000) as f32 / 2000.0;
+            let t = -0.2 + 1.4 * ((k * 91) % 2000) as f32 / 2000.0;
+            for wrap in [P, (WrapMode::Black, WrapMode::Clamp)] {
+                let fast = bilinear(&l, 0, s, t, wrap, &mut NoTiles);
+                let slow = bilinear_wrapped(&l, 0, s, t, wrap, &mut NoTiles);
+                assert_eq!(fast, slow, "s {s} t {t}");
+            }
+            // The integer periodic path against wrap_texel, also a period away.
+            for shift in [-1.0f32, 0.0, 0.9] {
+                let (ss, ts) = (s + shift, t - shift);
+                let generic = bilinear_any_wrap(&l, 0, ss, ts, P, &mut NoTiles);
+                if let Some(v) = bilinear_periodic(&l, 0, ss, ts, &mut NoTiles) {
+                    assert_eq!(v, generic, "s {ss} t {ts}");
+                    periodic += 1;
+                }
+            }
+            let (x, y) = (s * w as f32 - 0.5, t * h as f32 - 0.5);
+            if x >= 0.0 && x < (w - 1) as f32 && y >= 0.0 && y < (h - 1) as f32 {
+                interior += 1;
+            }
+        }
+        // Both paths were exercised.
+        assert!(interior > 500 && interior < 1900, "{interior}");
+        assert!(periodic > 1500, "{periodic}");
     }
 
     #[test]

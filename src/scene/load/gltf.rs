@@ -73,7 +73,26 @@ pub(crate) fn load_gltf(files: &Files, path: &Path) -> Result<SceneDescription, 
 /// extensions), except that missing POSITION `min`/`max` is tolerated: the specification
 /// requires them, but this loader computes bounds itself and exporters often omit them.
 fn check_schema(root: &gltf::json::Root) -> Result<(), String> {
-    use gltf::json::validation::{Error, Validate};
+    use gltf::json::validation::{Checked, Error, Validate};
+    // gltf-json 1.4's validation indexes `accessors` with a primitive's POSITION index
+    // before range-checking it, so an out-of-range POSITION would panic: report it first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&Checked::Valid(gltf::json::mesh::Semantic::Positions));
+            if let Some(index) = position {
+                if index.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "invalid glTF: meshes[{m}].primitives[{p}].attributes.POSITION: \
+                         accessor {} does not exist ({} accessors)",
+                        index.value(),
+                        root.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
     let mut problems = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let path = path().to_string();

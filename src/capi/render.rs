@@ -1,0 +1,403 @@
+//! Rendering a scene handle into an image handle: the options struct, its defaults, and
+//! `ct_render` with its progress and texture callbacks.
+
+use std::ffi::{c_void, CString};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
+use crate::footprint::LodStrategy;
+use crate::integrator::{AovSelection, Whitted};
+use crate::render::{self, RenderControl, RenderOptions};
+use crate::texture::{FilterMode, FilterOptions, WrapMode};
+
+use super::callbacks::{CallbackTextures, CtProgressFn, CtTextureFn, ProgressRelay, UserData};
+use super::errors::{guard, CapiError, CtStatus};
+use super::handles::{self, CtImage, CtScene, ImageObject, Object};
+use super::{read_sized, require_out};
+
+/// Level of detail: every lookup samples mip level 0.
+pub const CT_LOD_MIP0: u32 = 0;
+/// Level of detail from the camera's pixel spread times the path length.
+pub const CT_LOD_DISTANCE: u32 = 1;
+/// One ray cone.
+pub const CT_LOD_CONE1: u32 = 2;
+/// The two-cone envelope (the default).
+pub const CT_LOD_CONE: u32 = 3;
+/// Ray differentials.
+pub const CT_LOD_DIFFERENTIAL: u32 = 4;
+
+/// Nearest texel of level 0.
+pub const CT_FILTER_CLOSEST: u32 = 0;
+/// Bilinear on level 0.
+pub const CT_FILTER_BILINEAR: u32 = 1;
+/// Trilinear (OpenImageIO MipMode Trilinear).
+pub const CT_FILTER_TRILINEAR: u32 = 2;
+/// Anisotropic probes (OpenImageIO MipMode Aniso; the default).
+pub const CT_FILTER_ANISO: u32 = 3;
+/// Elliptical weighted average.
+pub const CT_FILTER_EWA: u32 = 4;
+
+/// The texture repeats.
+pub const CT_WRAP_PERIODIC: u32 = 0;
+/// Edge texels extend outward.
+pub const CT_WRAP_CLAMP: u32 = 1;
+/// Outside is black.
+pub const CT_WRAP_BLACK: u32 = 2;
+/// Mirrored repeat.
+pub const CT_WRAP_MIRROR: u32 = 3;
+
+/// AOV flag: add tex.s tex.t tex.dsdx tex.dtdx tex.dsdy tex.dtdy and texcolor.R/G/B/A.
+pub const CT_AOV_FOOTPRINT: u32 = 1;
+/// AOV flag: add `lod` and `footprint`.
+pub const CT_AOV_LOD: u32 = 2;
+
+/// How to render. Fill it with `ct_render_options_init`, then change fields.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CtRenderOptions {
+    /// `sizeof(CtRenderOptions)`, set by `ct_render_options_init`.
+    pub struct_size: u32,
+    /// Image width in pixels; 0 = the scene's.
+    pub width: u32,
+    /// Image height in pixels; 0 = the scene's.
+    pub height: u32,
+    /// Samples per pixel; 0 = the scene's.
+    pub spp: u32,
+    /// Maximum reflection/refraction depth; -1 = the scene's.
+    pub max_depth: i32,
+    /// Worker threads; 0 = one per core; at most 1024.
+    pub threads: u32,
+    /// Footprint strategy (`CT_LOD_*`).
+    pub lod: u32,
+    /// Texture filter (`CT_FILTER_*`).
+    pub filter: u32,
+    /// Anisotropy limit (>= 1) of the aniso and ewa filters.
+    pub max_aniso: f32,
+    /// Extra AOV layers (`CT_AOV_*` flags); colour, Z, N, albedo and uv are always there.
+    pub aovs: u32,
+    /// Optional progress callback (NULL: none).
+    pub progress: CtProgressFn,
+    /// Passed to `progress`.
+    pub progress_user_data: *mut c_void,
+    /// Optional texture callback serving the scene's base-colour and environment lookups
+    /// (NULL: the built-in texture system).
+    pub texture_callback: CtTextureFn,
+    /// Passed to `texture_callback`.
+    pub texture_user_data: *mut c_void,
+}
+
+impl CtRenderOptions {
+    fn defaults() -> CtRenderOptions {
+        CtRenderOptions {
+            struct_size: std::mem::size_of::<CtRenderOptions>() as u32,
+            width: 0,
+            height: 0,
+            spp: 0,
+            max_depth: -1,
+            threads: 0,
+            lod: CT_LOD_CONE,
+            filter: CT_FILTER_ANISO,
+            max_aniso: 16.0,
+            aovs: 0,
+            progress: None,
+            progress_user_data: std::ptr::null_mut(),
+            texture_callback: None,
+            texture_user_data: std::ptr::null_mut(),
+        }
+    }
+}
+
+pub(crate) fn filter_code(filter: FilterMode) -> u32 {
+    match filter {
+        FilterMode::Closest => CT_FILTER_CLOSEST,
+        FilterMode::Bilinear => CT_FILTER_BILINEAR,
+        FilterMode::Trilinear => CT_FILTER_TRILINEAR,
+        FilterMode::Aniso => CT_FILTER_ANISO,
+        FilterMode::Ewa => CT_FILTER_EWA,
+    }
+}
+
+pub(crate) fn wrap_code(wrap: WrapMode) -> u32 {
+    match wrap {
+        WrapMode::Periodic => CT_WRAP_PERIODIC,
+        WrapMode::Clamp => CT_WRAP_CLAMP,
+        WrapMode::Black => CT_WRAP_BLACK,
+        WrapMode::Mirror => CT_WRAP_MIRROR,
+    }
+}
+
+pub(crate) fn filter_from_code(code: u32) -> Result<FilterMode, CapiError> {
+    Ok(match code {
+        CT_FILTER_CLOSEST => FilterMode::Closest,
+        CT_FILTER_BILINEAR => FilterMode::Bilinear,
+        CT_FILTER_TRILINEAR => FilterMode::Trilinear,
+        CT_FILTER_ANISO => FilterMode::Aniso,
+        CT_FILTER_EWA => FilterMode::Ewa,
+        _ => {
+            return Err(CapiError::invalid(format!(
+                "unknown filter {code} (CT_FILTER_*)"
+            )))
+        }
+    })
+}
+
+pub(crate) fn wrap_from_code(code: u32) -> Result<WrapMode, CapiError> {
+    Ok(match code {
+        CT_WRAP_PERIODIC => WrapMode::Periodic,
+        CT_WRAP_CLAMP => WrapMode::Clamp,
+        CT_WRAP_BLACK => WrapMode::Black,
+        CT_WRAP_MIRROR => WrapMode::Mirror,
+        _ => {
+            return Err(CapiError::invalid(format!(
+                "unknown wrap mode {code} (CT_WRAP_*)"
+            )))
+        }
+    })
+}
+
+pub(crate) fn max_aniso_checked(max_aniso: f32) -> Result<f32, CapiError> {
+    if max_aniso.is_finite() && max_aniso >= 1.0 {
+        Ok(max_aniso)
+    } else {
+        Err(CapiError::invalid(format!(
+            "max_aniso must be a finite number >= 1, got {max_aniso}"
+        )))
+    }
+}
+
+fn lod_from_code(code: u32) -> Result<LodStrategy, CapiError> {
+    Ok(match code {
+        CT_LOD_MIP0 => LodStrategy::Mip0,
+        CT_LOD_DISTANCE => LodStrategy::Distance,
+        CT_LOD_CONE1 => LodStrategy::Cone1,
+        CT_LOD_CONE => LodStrategy::Cone,
+        CT_LOD_DIFFERENTIAL => LodStrategy::Differential,
+        _ => {
+            return Err(CapiError::invalid(format!(
+                "unknown LOD strategy {code} (CT_LOD_*)"
+            )))
+        }
+    })
+}
+
+/// Fills `*options` with the defaults (the scene's size, spp and depth; cone footprints; aniso
+/// filter, max_aniso 16; all cores; no callbacks). `struct_size` must be
+/// `sizeof(CtRenderOptions)`: a caller built against another version of the header gets
+/// `CT_ERROR_STRUCT_SIZE` and nothing is written.
+///
+/// Thread safety: any thread.
+///
+/// # Safety
+/// `options` points to at least `struct_size` writable bytes.
+#[no_mangle]
+pub unsafe extern "C" fn ct_render_options_init(
+    options: *mut CtRenderOptions,
+    struct_size: usize,
+) -> CtStatus {
+    guard(|| {
+        require_out(options, "options")?;
+        let expected = std::mem::size_of::<CtRenderOptions>();
+        if struct_size != expected {
+            return Err(CapiError::new(
+                CtStatus::CT_ERROR_STRUCT_SIZE,
+                format!("options: struct_size is {struct_size}, this library expects {expected}"),
+            ));
+        }
+        // SAFETY: non-null and `expected` bytes writable by contract.
+        unsafe { options.write_unaligned(CtRenderOptions::defaults()) };
+        Ok(CtStatus::CT_OK)
+    })
+}
+
+/// Renders `scene` into a new image, `*out_image`.
+///
+/// `options` may be NULL (defaults). Returns `CT_OK` with a complete image; `CT_CANCELLED`
+/// when the progress callback asked to stop before every tile was done — `*out_image` is then
+/// a valid partial image (unfinished 16x16 tiles are zero, `ct_image_is_complete` says 0) that
+/// must be freed like any other; `CT_ERROR_CALLBACK` when the texture callback returned an
+/// error (no image); other errors leave `*out_image` null.
+///
+/// Thread safety: any thread; several renders may run at once (each uses its own worker pool
+/// of `threads` threads). The scene may be freed by another thread meanwhile: the render holds
+/// its own reference. Callbacks run on the worker threads (see `CtProgressFn`, `CtTextureFn`).
+///
+/// # Safety
+/// `options` is NULL or a `CtRenderOptions` whose `struct_size` is correct; `out_image` is
+/// writable; the callbacks and user data follow their contracts.
+#[no_mangle]
+pub unsafe extern "C" fn ct_render(
+    scene: CtScene,
+    options: *const CtRenderOptions,
+    out_image: *mut CtImage,
+) -> CtStatus {
+    guard(|| {
+        require_out(out_image, "out_image")?;
+        // SAFETY: checked non-null above.
+        unsafe { out_image.write(CtImage::default()) };
+        let c_options = if options.is_null() {
+            CtRenderOptions::defaults()
+        } else {
+            // SAFETY: caller's contract.
+            unsafe { read_sized(options, "options") }?
+        };
+        let object = handles::scene(scene)?;
+        let scene = object.scene.clone();
+        let render_options = render_options(&c_options, &scene)?;
+
+        let cancel = Arc::new(AtomicBool::new(false));
+        let textures = c_options.texture_callback.map(|callback| {
+            Arc::new(CallbackTextures {
+                callback,
+                user_data: UserData(c_options.texture_user_data),
+                names: object.texture_names.clone(),
+                first_error: Mutex::new(None),
+                cancel: cancel.clone(),
+            })
+        });
+        let relay = c_options.progress.map(|callback| ProgressRelay {
+            callback,
+            user_data: UserData(c_options.progress_user_data),
+            cancel: cancel.clone(),
+            cancelled_by_callback: AtomicBool::new(false),
+            serial: Mutex::new(()),
+        });
+
+        let mut pool = rayon::ThreadPoolBuilder::new()
+            .start_handler(|_| crate::embree::enable_flush_denormals());
+        if c_options.threads > 1024 {
+            return Err(CapiError::invalid(format!(
+                "threads must be at most 1024, got {}",
+                c_options.threads
+            )));
+        }
+        if c_options.threads > 0 {
+            pool = pool.num_threads(c_options.threads as usize);
+        }
+        let pool = pool.build().map_err(|e| {
+            CapiError::new(
+                CtStatus::CT_ERROR_RENDER,
+                format!("cannot start worker threads: {e}"),
+            )
+        })?;
+        let result = pool.install(|| -> Result<render::RenderResult, CapiError> {
+            let mut context = render::prepare(scene.clone(), render_options)
+                .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))?;
+            if let Some(textures) = &textures {
+                context.external_textures = Some(textures.clone());
+            }
+            let progress = |done: usize, total: usize| {
+                if let Some(relay) = &relay {
+                    relay.report(done, total);
+                }
+            };
+            let control = RenderControl {
+                progress: Some(&progress),
+                cancel: Some(&cancel),
+                skip: None,
+            };
+            Ok(render::render(&context, &Whitted, &control))
+        })?;
+
+        if let Some(textures) = &textures {
+            let first = textures
+                .first_error
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .take();
+            if let Some(message) = first {
+                return Err(CapiError::new(CtStatus::CT_ERROR_CALLBACK, message));
+            }
+        }
+        let channel_names = result
+            .film
+            .channel_names()
+            .iter()
+            .map(|n| CString::new(n.as_str()).unwrap_or_default())
+            .collect();
+        let complete = result.stats.complete;
+        let image = ImageObject {
+            film: result.film,
+            channel_names,
+            complete,
+            finished_tiles: result.finished_tiles.iter().filter(|&&f| f).count() as u32,
+            tonemap: scene.settings.tonemap,
+            exposure: scene.settings.exposure,
+        };
+        let handle = CtImage {
+            id: handles::insert(Object::Image(Arc::new(image))),
+        };
+        // SAFETY: checked non-null above.
+        unsafe { out_image.write(handle) };
+        let cancelled = relay
+            .as_ref()
+            .is_some_and(|r| r.cancelled_by_callback.load(Ordering::Relaxed));
+        Ok(if cancelled && !complete {
+            CtStatus::CT_CANCELLED
+        } else {
+            CtStatus::CT_OK
+        })
+    })
+}
+
+/// The renderer's options from the C options over the scene's settings, validated.
+fn render_options(
+    c: &CtRenderOptions,
+    scene: &crate::scene::SceneDescription,
+) -> Result<RenderOptions, CapiError> {
+    let width = if c.width == 0 {
+        scene.settings.width
+    } else {
+        c.width
+    };
+    let height = if c.height == 0 {
+        scene.settings.height
+    } else {
+        c.height
+    };
+    if width == 0 || height == 0 || width > 65_536 || height > 65_536 {
+        return Err(CapiError::invalid(format!(
+            "image size {width}x{height} must be between 1 and 65536 on each side"
+        )));
+    }
+    let spp = if c.spp == 0 {
+        scene.settings.spp
+    } else {
+        c.spp
+    };
+    let max_depth = match c.max_depth {
+        -1 => scene.settings.max_depth,
+        d if d >= 0 => d as u32,
+        d => {
+            return Err(CapiError::invalid(format!(
+                "max_depth must be >= 0 (or -1 for the scene's), got {d}"
+            )))
+        }
+    };
+    if c.aovs & !(CT_AOV_FOOTPRINT | CT_AOV_LOD) != 0 {
+        return Err(CapiError::invalid(format!(
+            "aovs has unknown flags {:#x} (CT_AOV_*)",
+            c.aovs
+        )));
+    }
+    Ok(RenderOptions {
+        width,
+        height,
+        spp: spp.max(1),
+        max_depth,
+        min_throughput: scene.settings.min_throughput,
+        lod: lod_from_code(c.lod)?,
+        filter: FilterOptions {
+            filter: filter_from_code(c.filter)?,
+            max_aniso: max_aniso_checked(c.max_aniso)?,
+            ..FilterOptions::default()
+        },
+        fresnel: scene.settings.fresnel,
+        aovs: AovSelection {
+            surface: true,
+            texture_footprint: c.aovs & CT_AOV_FOOTPRINT != 0,
+            lod: c.aovs & CT_AOV_LOD != 0,
+        },
+        count_tiles: false,
+        all_effects: false,
+    })
+}
