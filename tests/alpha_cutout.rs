@@ -324,14 +324,11 @@ fn rendered_distant_textured_leaves_cover_the_mean_alpha() {
     );
 }
 
-/// The same with a material whose only texture is the alpha mask. The renderer's effect
-/// analysis (src/render/effects.rs) turns ray footprints on only for base-colour or
-/// environment textures, so here camera rays carry no cone, the alpha filter sees a zero
-/// footprint and tests single texels at the cutoff: the coverage is that of point samples
-/// (0.32 measured) instead of the mean alpha (0.25). Ignored until effects.rs also turns
-/// footprints on for materials with an alpha texture and a cutoff; see docs/footprints.md.
+/// The same with a material whose only texture is the alpha mask: the effect analysis
+/// (src/render/effects.rs) must still turn ray footprints on, or camera rays would carry no
+/// cone and the alpha filter would test single texels at the cutoff (coverage 0.32 was
+/// measured that way) instead of the mean alpha.
 #[test]
-#[ignore = "needs footprints enabled for alpha-textured materials in src/render/effects.rs"]
 fn rendered_distant_alpha_only_leaves_cover_the_mean_alpha() {
     let (covered, mean_alpha) = rendered_distant_coverage(false);
     eprintln!("rendered coverage {covered:.4}, mean alpha {mean_alpha:.4}");

@@ -143,6 +143,15 @@ impl EffectSet {
                     "ray footprints",
                     "the environment is a lat-long texture".to_string(),
                 );
+            } else if let Some(m) =
+                materials().find(|m| m.alpha_cutoff.is_some() && m.alpha_texture.is_some())
+            {
+                // Alpha cut-outs filter their mask over the ray cone (no shimmering leaves).
+                set.footprints = true;
+                because(
+                    "ray footprints",
+                    format!("material '{}' has an alpha texture", m.name),
+                );
             }
         }
         if let Some(m) = materials().find(|m| m.alpha_cutoff.is_some()) {
