@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
-use crate::integrator::Whitted;
+use crate::integrator::{block_order, Whitted};
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::{self, RenderContext, RenderControl, RenderOptions};
@@ -44,28 +44,17 @@ pub fn trace_camera_rays_only(context: &RenderContext) -> u64 {
             },
             |(rays, hits, counters), tile| {
                 rays.clear();
-                for by in (0..tile.height).step_by(4) {
-                    for bx in (0..tile.width).step_by(4) {
-                        for ly in 0..4 {
-                            for lx in 0..4 {
-                                let (x, y) = (bx + lx, by + ly);
-                                if x >= tile.width || y >= tile.height {
-                                    continue;
-                                }
-                                let px = (tile.x0 + x) as f32 + 0.5;
-                                let py = (tile.y0 + y) as f32 + 0.5;
-                                let (origin, direction) =
-                                    context.camera.generate_ray(px, py, Vec2::splat(0.5));
-                                rays.push(TraceRay {
-                                    origin,
-                                    direction,
-                                    tfar: f32::INFINITY,
-                                    cone_width: 0.0,
-                                    cone_spread: 0.0,
-                                });
-                            }
-                        }
-                    }
+                for (x, y) in block_order(*tile) {
+                    let px = (tile.x0 + x) as f32 + 0.5;
+                    let py = (tile.y0 + y) as f32 + 0.5;
+                    let (origin, direction) = context.camera.generate_ray(px, py, Vec2::splat(0.5));
+                    rays.push(TraceRay {
+                        origin,
+                        direction,
+                        tfar: f32::INFINITY,
+                        cone_width: 0.0,
+                        cone_spread: 0.0,
+                    });
                 }
                 context.tracer.intersect(rays, hits, true, counters);
                 rays.len() as u64

@@ -8,7 +8,7 @@
 pub mod tile_image;
 pub mod whitted;
 
-pub use tile_image::{AovSelection, TileImage, TileRect};
+pub use tile_image::{block_order, AovSelection, TileImage, TileRect};
 pub use whitted::Whitted;
 
 use crate::render::context::RenderContext;

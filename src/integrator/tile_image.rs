@@ -2,6 +2,19 @@
 
 pub use crate::film::TileRect;
 
+/// The pixels of `tile` (offsets inside it) ordered so that each run of 16 is one 4x4 block:
+/// the order camera rays are generated in, so a 16-wide packet is one block.
+pub fn block_order(tile: TileRect) -> impl Iterator<Item = (u32, u32)> {
+    let blocks_x = tile.width.div_ceil(4);
+    let blocks_y = tile.height.div_ceil(4);
+    (0..blocks_y * blocks_x).flat_map(move |block| {
+        let (bx, by) = ((block % blocks_x) * 4, (block / blocks_x) * 4);
+        (0..16u32)
+            .map(move |lane| (bx + lane % 4, by + lane / 4))
+            .filter(move |&(x, y)| x < tile.width && y < tile.height)
+    })
+}
+
 /// Which AOVs to fill (colour and alpha are always filled).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct AovSelection {
@@ -56,5 +69,26 @@ impl TileImage {
             footprint: vec![0.0; take(aovs.lod)],
             lookup_done: vec![false; take(aovs.texture_footprint || aovs.lod)],
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn block_order_visits_every_pixel_once_in_4x4_blocks() {
+        let tile = TileRect {
+            x0: 32,
+            y0: 16,
+            width: 10,
+            height: 7,
+        };
+        let order: Vec<(u32, u32)> = block_order(tile).collect();
+        assert_eq!(order.len(), 70);
+        let mut seen = std::collections::HashSet::new();
+        assert!(order.iter().all(|p| seen.insert(*p)));
+        // The first 16 pixels are the first full 4x4 block.
+        assert!(order[..16].iter().all(|&(x, y)| x < 4 && y < 4));
     }
 }

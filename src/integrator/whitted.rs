@@ -1,11 +1,12 @@
 //! Whitted ray tracing (seed 001's recursion, seed 004's Fresnel and Beer's law), traced in
-//! waves of packets.
+//! waves.
 //!
 //! Instead of recursing ray by ray, a tile is rendered breadth first: the camera rays of
 //! each 4x4 pixel block form one 16-wide packet; every hit is shaded, its shadow rays are
-//! batched and traced as occlusion packets, and the reflection and refraction rays it spawns
-//! form the next wave, traced in packets again. A ray carries its throughput (the product of
-//! the coefficients on its way from the camera), so the sum over all waves equals the
+//! batched and traced as one occlusion stream, and the reflection and refraction rays it
+//! spawns form the next wave, traced as an incoherent ray stream. A ray carries its
+//! throughput (the product of the coefficients on its way from the camera), so the sum over
+//! all waves equals the
 //! recursive formulation `local + k_r * trace(reflected) + k_t * trace(refracted)`.
 //!
 //! Recursion stops at the maximum depth or when a ray's throughput falls below the
@@ -17,7 +18,7 @@ use glam::{Vec2, Vec3};
 
 use crate::footprint::Footprint;
 use crate::hit::SurfaceHit;
-use crate::integrator::{Integrator, TileImage, TileRect};
+use crate::integrator::{block_order, Integrator, TileImage, TileRect};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{binding_query, environment_radiance, SurfaceDetail};
 use crate::render::sampling;
@@ -137,48 +138,38 @@ fn generate_camera_rays(
     let lod = context.options.lod;
     let spp = context.options.spp.max(1);
     let dof = context.effects.depth_of_field;
-    for by in (0..tile.height).step_by(4) {
-        for bx in (0..tile.width).step_by(4) {
-            for ly in 0..4 {
-                for lx in 0..4 {
-                    let (x, y) = (bx + lx, by + ly);
-                    if x >= tile.width || y >= tile.height {
-                        continue;
-                    }
-                    let (px, py) = (tile.x0 + x, tile.y0 + y);
-                    let pixel_id = py * image_width + px;
-                    let offset = sampling::pixel_offset(pixel_id, sample, spp);
-                    let lens = if dof {
-                        sampling::lens_sample(pixel_id, sample)
-                    } else {
-                        Vec2::splat(0.5)
-                    };
-                    let (fx, fy) = (px as f32 + offset.x, py as f32 + offset.y);
-                    let (origin, direction) = camera.generate_ray(fx, fy, lens);
-                    let footprint = if context.effects.footprints {
-                        camera.initial_footprint(lod, fx, fy, origin, direction)
-                    } else {
-                        Footprint::none()
-                    };
-                    out.push(PathRay {
-                        origin,
-                        direction,
-                        throughput: Vec3::ONE,
-                        footprint,
-                        pixel: y * tile.width + x,
-                        depth: 0,
-                        kind: RayKind::Camera,
-                        sigma: Vec3::ZERO,
-                        first_sample: sample == 0,
-                    });
-                }
-            }
-        }
+    for (x, y) in block_order(tile) {
+        let (px, py) = (tile.x0 + x, tile.y0 + y);
+        let pixel_id = py * image_width + px;
+        let offset = sampling::pixel_offset(pixel_id, sample, spp);
+        let lens = if dof {
+            sampling::lens_sample(pixel_id, sample)
+        } else {
+            Vec2::splat(0.5)
+        };
+        let (fx, fy) = (px as f32 + offset.x, py as f32 + offset.y);
+        let (origin, direction) = camera.generate_ray(fx, fy, lens);
+        let footprint = if context.effects.footprints {
+            camera.initial_footprint(lod, fx, fy, origin, direction)
+        } else {
+            Footprint::none()
+        };
+        out.push(PathRay {
+            origin,
+            direction,
+            throughput: Vec3::ONE,
+            footprint,
+            pixel: y * tile.width + x,
+            depth: 0,
+            kind: RayKind::Camera,
+            sigma: Vec3::ZERO,
+            first_sample: sample == 0,
+        });
     }
 }
 
 /// Trace the current wave: camera waves as coherent 4x4 packets, later waves as incoherent
-/// packets.
+/// ray streams (see `render::tracer`).
 fn trace_wave(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerState) {
     waves.trace_rays.clear();
     waves.trace_rays.extend(waves.current.iter().map(|ray| {
