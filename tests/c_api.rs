@@ -25,9 +25,29 @@ fn manifest_dir() -> PathBuf {
 }
 
 /// The directory holding the binary, libconetrace.so and libconetrace.a of this build.
+///
+/// `cargo test` links the tests against the rlib and does not produce the shared and static
+/// libraries, so on a fresh checkout they are built here with `cargo build --lib` (same
+/// profile and target directory; only the final link step is new work).
 fn library_dir() -> PathBuf {
+    static BUILD: std::sync::Once = std::sync::Once::new();
     let bin = PathBuf::from(env!("CARGO_BIN_EXE_conetrace"));
     let dir = bin.parent().expect("binary has a directory").to_path_buf();
+    BUILD.call_once(|| {
+        if dir.join("libconetrace.so").exists() && dir.join("libconetrace.a").exists() {
+            return;
+        }
+        let mut build = Command::new(env!("CARGO"));
+        build.args(["build", "--lib"]).current_dir(manifest_dir());
+        if dir.file_name().is_some_and(|name| name == "release") {
+            build.arg("--release");
+        }
+        if let Some(target) = dir.parent() {
+            build.env("CARGO_TARGET_DIR", target);
+        }
+        let status = build.status().expect("cargo runs");
+        assert!(status.success(), "cargo build --lib failed");
+    });
     assert!(
         dir.join("libconetrace.so").exists(),
         "{} has no libconetrace.so (is crate-type cdylib set in Cargo.toml?)",
