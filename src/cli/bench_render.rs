@@ -1,8 +1,11 @@
 //! `conetrace bench render`: raw packet traversal vs full shading, side by side in one run.
 //!
 //! Both passes use the same scene, camera rays (4x4 blocks as 16-wide packets), tiles and
-//! threads. The raw pass only traces camera rays; the full pass renders them with shading,
-//! shadow rays and secondary rays. Each pass runs several times and the median is kept.
+//! threads. The raw pass only traces camera rays; the traversal pass adds one occlusion ray
+//! per hit and light but shades nothing (the Embree work of camera-plus-shadow rendering);
+//! the full pass renders the rays with shading, shadow rays and secondary rays, and the
+//! direct pass with shading and shadow rays only. Each pass runs several times and the
+//! median is kept.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -17,6 +20,7 @@ use crate::integrator::{block_order, Whitted};
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::{self, RenderContext, RenderControl, RenderOptions};
+use crate::shading;
 
 #[derive(Args, Debug)]
 pub struct BenchRenderArgs {
@@ -63,6 +67,75 @@ pub fn trace_camera_rays_only(context: &RenderContext) -> u64 {
         .sum()
 }
 
+/// Camera rays traced as 16-wide packets, then, from every hit, one occlusion ray towards
+/// each light traced as a stream: the Embree work of camera-plus-shadow rendering with no
+/// shading at all (no hit reconstruction, footprints, texture lookups or light evaluation).
+/// The shadow origin steps back along the camera ray instead of along the surface normal,
+/// which needs no surface reconstruction. Returns (camera rays, shadow rays).
+pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) {
+    let options = &context.options;
+    let tiles = render::work_tiles(options.width, options.height);
+    let lights = &context.scene.lights;
+    tiles
+        .par_iter()
+        .map_init(
+            || {
+                crate::embree::enable_flush_denormals();
+                (
+                    Vec::<TraceRay>::new(),
+                    Vec::<TraceHit>::new(),
+                    Vec::<TraceRay>::new(),
+                    Vec::<bool>::new(),
+                    WorkCounters::default(),
+                )
+            },
+            |(rays, hits, shadow_rays, blocked, counters), tile| {
+                rays.clear();
+                for (x, y) in block_order(*tile) {
+                    let px = (tile.x0 + x) as f32 + 0.5;
+                    let py = (tile.y0 + y) as f32 + 0.5;
+                    let (origin, direction) = context.camera.generate_ray(px, py, Vec2::splat(0.5));
+                    rays.push(TraceRay {
+                        origin,
+                        direction,
+                        tfar: f32::INFINITY,
+                        cone_width: 0.0,
+                        cone_spread: 0.0,
+                    });
+                }
+                context.tracer.intersect(rays, hits, true, counters);
+                shadow_rays.clear();
+                for (ray, hit) in rays.iter().zip(hits.iter()) {
+                    if !hit.is_hit() {
+                        continue;
+                    }
+                    let position = ray.origin + ray.direction * hit.t;
+                    let origin = shading::offset_ray_origin(position, -ray.direction);
+                    for light in lights {
+                        let sample = shading::light_sample(light, position);
+                        let tfar = if sample.distance.is_finite() {
+                            sample.distance * (1.0 - 1e-4)
+                        } else {
+                            f32::INFINITY
+                        };
+                        shadow_rays.push(TraceRay {
+                            origin,
+                            direction: sample.direction_to_light,
+                            tfar,
+                            cone_width: 0.0,
+                            cone_spread: 0.0,
+                        });
+                    }
+                }
+                if !shadow_rays.is_empty() {
+                    context.tracer.occluded(shadow_rays, blocked, counters);
+                }
+                (rays.len() as u64, shadow_rays.len() as u64)
+            },
+        )
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+}
+
 fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(|a, b| a.total_cmp(b));
     values[values.len() / 2]
@@ -95,6 +168,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
         // Warm up every path once (page faults, lazy BVH parts).
         trace_camera_rays_only(&context);
+        trace_camera_and_shadow_rays_only(&context);
         let _ = render::render(&context, &Whitted, &RenderControl::default());
         let _ = render::render(&direct_context, &Whitted, &RenderControl::default());
 
@@ -103,11 +177,16 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         let mut direct_times = Vec::new();
         let mut direct_counters = WorkCounters::default();
         let mut raw_rays = 0;
+        let mut traversal_times = Vec::new();
+        let mut traversal_rays = (0, 0);
         let mut full_counters = WorkCounters::default();
         for _ in 0..repeat {
             let start = Instant::now();
             raw_rays = trace_camera_rays_only(&context);
             raw_times.push(start.elapsed().as_secs_f64());
+            let start = Instant::now();
+            traversal_rays = trace_camera_and_shadow_rays_only(&context);
+            traversal_times.push(start.elapsed().as_secs_f64());
             let result = render::render(&context, &Whitted, &RenderControl::default());
             full_times.push(result.stats.seconds);
             full_counters = result.stats.counters;
@@ -134,6 +213,14 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         println!("| pass | seconds | camera Mrays/s | all Mrays/s |");
         println!("|---|---|---|---|");
         println!("| raw packet traversal (camera rays, no shading) | {raw:.4} | {raw_rate:.2} | {raw_rate:.2} |");
+        let traversal = median(traversal_times);
+        let traversal_rate = (traversal_rays.0 + traversal_rays.1) as f64 / traversal / 1e6;
+        println!(
+            "| camera + shadow rays traced, nothing shaded ({} camera, {} shadow rays) | {traversal:.4} | {:.2} | {traversal_rate:.2} |",
+            traversal_rays.0,
+            traversal_rays.1,
+            traversal_rays.0 as f64 / traversal / 1e6
+        );
         println!(
             "| full shading ({} camera, {} shadow, {} reflection, {} refraction rays) | {full:.4} | {full_camera_rate:.2} | {full_ray_rate:.2} |",
             full_counters.camera_rays,
@@ -149,6 +236,10 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             "ratio camera+shadow/raw: {:.3} in all rays per second, {:.3} in camera rays per second (pixels)",
             direct_ray_rate / raw_rate,
             direct_camera_rate / raw_rate
+        );
+        println!(
+            "ratio camera+shadow traversal without shading/raw: {:.3} in all rays per second (the ceiling shading can approach)",
+            traversal_rate / raw_rate
         );
         println!(
             "ratio full/raw: {:.3} in all rays per second, {:.3} in camera rays per second (pixels)",
