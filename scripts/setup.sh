@@ -12,6 +12,7 @@ packages=(
   python3-numpy
   assimp-testmodels      # real OBJ/glTF files, valid and malformed, used by the tests
   libopenimageio-dev g++ # the C API's C++ example (OpenImageIO TextureSystem via the texture callback)
+  fonts-dejavu-core      # DejaVuSans.ttf: labels of `conetrace accuracy`'s plot and crops (drawn without text if absent)
 )
 
 missing=()

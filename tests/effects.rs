@@ -46,6 +46,17 @@ transmission = 1.0
 ior = 1.5
 
 [[material]]
+name = "matched"
+base_color = [0.0, 0.0, 0.0]
+transmission = 1.0
+ior = 1.0
+
+[[material]]
+name = "constant_cutout"
+base_color = [0.6, 0.6, 0.6]
+alpha_cutoff = 0.5
+
+[[material]]
 name = "tinted"
 base_color = [0.0, 0.0, 0.0]
 transmission = 1.0
@@ -125,7 +136,29 @@ fn secondary_rays_only_with_specular_materials() {
     assert!(effects(&mirror).iter().any(|e| e == "mirror reflection"));
     let glass = stats("matte", &format!("{LIGHT}{}", sphere("glass")), &[]);
     assert!(counter(&glass, "refraction_rays") > 0);
-    assert!(effects(&glass).iter().any(|e| e == "refraction + Fresnel"));
+    assert!(effects(&glass).iter().any(|e| e == "refraction"));
+}
+
+#[test]
+fn fresnel_only_with_an_index_contrast() {
+    // An index-matched medium (ior 1) refracts straight through and reflects nothing.
+    let matched = stats("matte", &format!("{LIGHT}{}", sphere("matched")), &[]);
+    let names = effects(&matched);
+    assert!(names.iter().any(|e| e == "refraction"), "{names:?}");
+    assert!(!names.iter().any(|e| e == "Fresnel"), "{names:?}");
+    assert!(counter(&matched, "refraction_rays") > 0);
+    assert_eq!(counter(&matched, "reflection_rays"), 0);
+    let glass = stats("matte", &format!("{LIGHT}{}", sphere("glass")), &[]);
+    assert!(effects(&glass).iter().any(|e| e == "Fresnel"));
+    assert!(counter(&glass, "reflection_rays") > 0);
+}
+
+#[test]
+fn cutout_filters_only_with_alpha_textures() {
+    // A cut-off over a constant alpha is decided once for the whole mesh: no filter runs.
+    let constant = stats("constant_cutout", LIGHT, &[]);
+    assert!(!effects(&constant).iter().any(|e| e == "alpha cut-out"));
+    assert_eq!(counter(&constant, "filter_callbacks"), 0);
 }
 
 #[test]
@@ -163,7 +196,8 @@ fn all_effects_forces_the_general_path() {
     for effect in [
         "shadows",
         "mirror reflection",
-        "refraction + Fresnel",
+        "refraction",
+        "Fresnel",
         "ray footprints",
     ] {
         assert!(
@@ -171,4 +205,190 @@ fn all_effects_forces_the_general_path() {
             "{effect} missing from {names:?}"
         );
     }
+}
+
+/// The shipped scenes (the default scene, the footprint figures and the benchmark scenes of
+/// `conetrace bench effects`), each of which lacks some effects.
+fn shipped_scenes() -> Vec<std::path::PathBuf> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let mut scenes = Vec::new();
+    for dir in [root.clone(), root.join("bench")] {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|x| x == "toml") {
+                scenes.push(path);
+            }
+        }
+    }
+    scenes.sort();
+    scenes
+}
+
+/// Prepare `path` at 48x32 with the scene's own depth and the renderer's default filtering.
+fn prepare_small(path: &std::path::Path) -> conetrace::render::RenderContext {
+    use conetrace::footprint::LodStrategy;
+    use conetrace::integrator::AovSelection;
+    use conetrace::render::RenderOptions;
+    use conetrace::texture::FilterOptions;
+    let scene = conetrace::scene::load::load_scene(path).unwrap();
+    let options = RenderOptions {
+        width: 48,
+        height: 32,
+        spp: 1,
+        max_depth: scene.settings.max_depth,
+        min_throughput: scene.settings.min_throughput,
+        lod: LodStrategy::Cone,
+        filter: FilterOptions::default(),
+        fresnel: scene.settings.fresnel,
+        aovs: AovSelection {
+            surface: true,
+            texture_footprint: true,
+            lod: true,
+        },
+        count_tiles: false,
+        all_effects: false,
+    };
+    conetrace::render::prepare(std::sync::Arc::new(scene), options).unwrap()
+}
+
+fn render_with(
+    context: &mut conetrace::render::RenderContext,
+    effects: conetrace::render::EffectSet,
+) -> conetrace::film::Film {
+    context.force_effects(effects).unwrap();
+    let result = conetrace::render::render(
+        context,
+        &conetrace::integrator::Whitted,
+        &conetrace::render::RenderControl::default(),
+    );
+    assert!(result.stats.complete);
+    result.film
+}
+
+/// Switching on effects a scene does not need never changes a pixel: the specialised path
+/// (analysed set), the general path (every effect, `--all-effects`) and the analysed set
+/// plus any one unneeded effect give bit-identical colour and AOVs on every shipped scene.
+#[test]
+fn specialised_and_general_paths_give_the_same_image() {
+    use conetrace::render::EffectSet;
+    let scenes = shipped_scenes();
+    assert!(scenes.len() >= 5, "{scenes:?}");
+    for path in scenes {
+        let mut context = prepare_small(&path);
+        let analysed = context.effects;
+        let specialised = render_with(&mut context, analysed);
+        let mut variants = vec![("all effects", EffectSet::all())];
+        for (name, single) in EffectSet::singles() {
+            if !analysed.includes(&single) {
+                variants.push((name, analysed.union(single)));
+            }
+        }
+        for (name, effects) in variants {
+            let film = render_with(&mut context, effects);
+            for channel in specialised.channel_names() {
+                let a = specialised.channel(&channel).unwrap();
+                let b = film.channel(&channel).unwrap();
+                let differing = a
+                    .iter()
+                    .zip(b)
+                    .filter(|(x, y)| x.to_bits() != y.to_bits())
+                    .count();
+                assert_eq!(
+                    differing,
+                    0,
+                    "{}: switching on {name} changed {differing} values of {channel}",
+                    path.display()
+                );
+            }
+        }
+    }
+}
+
+/// A forced effect set must include every effect the scene needs; a smaller one is refused
+/// and leaves the render's set as it was.
+#[test]
+fn forcing_effects_cannot_drop_a_needed_one() {
+    use conetrace::render::EffectSet;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml");
+    let mut context = prepare_small(&path);
+    let analysed = context.effects;
+    assert!(
+        analysed.shadows && analysed.footprints,
+        "{:?}",
+        analysed.names()
+    );
+    let missing = context.force_effects(EffectSet::default()).unwrap_err();
+    assert_eq!(missing, analysed);
+    assert_eq!(context.effects, analysed);
+    let without_shadows = EffectSet {
+        shadows: false,
+        ..EffectSet::all()
+    };
+    let missing = context.force_effects(without_shadows).unwrap_err();
+    assert_eq!(missing.names(), vec!["shadows"]);
+    assert_eq!(context.effects, analysed);
+    context.force_effects(EffectSet::all()).unwrap();
+    assert_eq!(context.effects, EffectSet::all());
+}
+
+/// `conetrace bench effects` on the matte benchmark scene: every unneeded effect gets a row,
+/// the footprint row shows the footprint work the general path adds, and every image matches
+/// the specialised one.
+#[test]
+fn bench_effects_reports_unneeded_work_and_identical_images() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = run_in(
+        root,
+        &[
+            "bench",
+            "effects",
+            "assets/scenes/bench/matte_lit.toml",
+            "--repeat",
+            "1",
+            "--width",
+            "32",
+            "--height",
+            "18",
+        ],
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("### Specialised path vs general path"),
+        "{text}"
+    );
+    let rows: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("| assets/scenes/bench/matte_lit.toml |"))
+        .collect();
+    // One comparison row plus one row per unneeded effect (all but shadows).
+    let unneeded = conetrace::render::EffectSet::singles().len() - 1;
+    assert_eq!(rows.len(), 1 + unneeded, "{text}");
+    let footprints = rows
+        .iter()
+        .find(|r| r.contains("| ray footprints |"))
+        .unwrap_or_else(|| panic!("no footprint row in {text}"));
+    assert!(footprints.contains("footprint_updates 0 →"), "{footprints}");
+    assert!(
+        rows.iter().all(|r| r.trim_end().ends_with("| identical |")),
+        "{text}"
+    );
+    // A scene that does not exist is bad input.
+    let missing = run_in(root, &["bench", "effects", "no/such/scene.toml"]);
+    assert_eq!(missing.status.code(), Some(2));
+}
+
+#[test]
+fn shadow_walks_only_through_transmissive_occluders() {
+    let opaque = stats("matte", &format!("{LIGHT}{}", sphere("mirror")), &[]);
+    assert!(counter(&opaque, "shadow_rays") > 0);
+    assert_eq!(counter(&opaque, "shadow_walk_queries"), 0);
+    assert!(!effects(&opaque).iter().any(|e| e == "transmissive shadows"));
+    let glass = stats("matte", &format!("{LIGHT}{}", sphere("glass")), &[]);
+    assert!(counter(&glass, "shadow_walk_queries") > 0);
+    assert!(effects(&glass).iter().any(|e| e == "transmissive shadows"));
 }

@@ -3,6 +3,8 @@
 //! Exit statuses: 0 success, 1 internal failure (a bug: please report), 2 bad input (a file
 //! or an option; the message names it), 3 interrupted (the finished part was saved).
 
+pub mod accuracy;
+pub mod bench_effects;
 pub mod bench_render;
 pub mod bench_textures;
 pub mod render_cmd;
@@ -61,6 +63,9 @@ pub enum Command {
     /// Benchmarks: raw packet traversal vs full shading, texture filtering vs OpenImageIO.
     #[command(subcommand)]
     Bench(BenchCommand),
+    /// Error against a supersampled ground truth and time of every footprint strategy and
+    /// filter; writes CSV, markdown, an error-vs-time plot and crops (default docs/accuracy).
+    Accuracy(accuracy::AccuracyArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -69,6 +74,8 @@ pub enum BenchCommand {
     Render(bench_render::BenchRenderArgs),
     /// Lookups per second per filter, ours and OpenImageIO's, on the same queries.
     Textures(bench_textures::BenchTexturesArgs),
+    /// Specialised path vs general path (--all-effects), and each unneeded effect's cost.
+    Effects(bench_effects::BenchEffectsArgs),
 }
 
 /// Run the parsed command line; returns the exit status.
@@ -77,6 +84,8 @@ pub fn run(cli: Cli) -> i32 {
         Command::Render(args) => render_cmd::run(&args),
         Command::SampleTexture(args) => sample_texture::run(&args).map_err(CommandError::bad_input),
         Command::Bench(BenchCommand::Render(args)) => bench_render::run(&args),
+        Command::Accuracy(args) => accuracy::run(&args),
+        Command::Bench(BenchCommand::Effects(args)) => bench_effects::run(&args),
         Command::Bench(BenchCommand::Textures(args)) => {
             bench_textures::run(&args).map_err(CommandError::bad_input)
         }

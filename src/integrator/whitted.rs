@@ -376,14 +376,17 @@ fn shade_hit(
     if effects.refraction && material.transmission > 0.0 {
         // Which side the ray comes from, eta = n_incident / n_transmitted (outside = 1).
         let boundary = DielectricBoundary::new(ray.direction, surface.shading_normal, material.ior);
-        let reflectance = shading::fresnel(options.fresnel, boundary.cos_i, boundary.eta);
         let refracted = shading::refract(ray.direction, boundary.normal, boundary.eta)
             .filter(|d| d.dot(ng) < 0.0);
-        // Total internal reflection (or a refracted ray that would stay on the incident side).
-        let reflectance = if refracted.is_some() {
-            reflectance
-        } else {
+        // Total internal reflection (or a refracted ray that would stay on the incident side)
+        // reflects everything; otherwise the Fresnel share (seed 004), which is zero for
+        // index-matched media (the `fresnel` effect is off when every medium has ior 1).
+        let reflectance = if refracted.is_none() {
             1.0
+        } else if effects.fresnel {
+            shading::fresnel(options.fresnel, boundary.cos_i, boundary.eta)
+        } else {
+            0.0
         };
         if let Some(refracted) = refracted {
             let footprint = if effects.footprints {
@@ -410,18 +413,21 @@ fn shade_hit(
                 sigma,
             );
         }
-        let reflected = reflect_above(ray.direction, ns, ng);
-        let footprint = footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
-        spawner.spawn(
-            waves,
-            worker,
-            reflected,
-            ng,
-            Vec3::splat(material.transmission * reflectance),
-            RayKind::Reflection,
-            footprint,
-            ray.sigma,
-        );
+        if reflectance > 0.0 {
+            let reflected = reflect_above(ray.direction, ns, ng);
+            let footprint =
+                footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
+            spawner.spawn(
+                waves,
+                worker,
+                reflected,
+                ng,
+                Vec3::splat(material.transmission * reflectance),
+                RayKind::Reflection,
+                footprint,
+                ray.sigma,
+            );
+        }
     }
 }
 
@@ -604,6 +610,7 @@ fn trace_shadows(
         walk.batch.clear();
         walk.batch
             .extend(walk.active.iter().map(|&i| waves.shadow_rays[i]));
+        worker.counters.shadow_walk_queries += walk.batch.len() as u64;
         context.tracer.intersect(
             &walk.batch,
             &mut waves.trace_hits,
@@ -633,13 +640,14 @@ fn trace_shadows(
             if front {
                 walk.entered_at[i] = walk.travelled[i] + hit.t;
             } else if context.effects.absorption {
-                // Leaving the medium: absorb over the distance travelled inside.
-                let inside = (walk.travelled[i] + hit.t - walk.entered_at[i]).max(0.0);
-                s *= shading::transmittance(
-                    context.materials.sigma[surface.material as usize],
-                    inside,
-                );
-                worker.counters.absorption_evaluations += 1;
+                // Leaving the medium: absorb over the distance travelled inside (clear media,
+                // sigma = 0, absorb nothing and are skipped).
+                let sigma = context.materials.sigma[surface.material as usize];
+                if sigma != Vec3::ZERO {
+                    let inside = (walk.travelled[i] + hit.t - walk.entered_at[i]).max(0.0);
+                    s *= shading::transmittance(sigma, inside);
+                    worker.counters.absorption_evaluations += 1;
+                }
             }
             walk.strength[i] = s;
             if s.max_element() < SHADOW_CUTOFF {

@@ -54,6 +54,22 @@ pub struct RenderContext {
     pub external_textures: Option<Arc<dyn crate::render::ExternalTextures>>,
 }
 
+impl RenderContext {
+    /// Render with `effects` instead of the set [`EffectSet::analyse`] gave, e.g. with
+    /// unneeded effects switched on to measure what they cost. Refused unless `effects`
+    /// includes every effect the scene needs (an unneeded effect never changes the image; a
+    /// missing needed one would): the error holds the needed effects `effects` lacks.
+    pub fn force_effects(&mut self, effects: EffectSet) -> Result<(), EffectSet> {
+        let (needed, _) = EffectSet::analyse(&self.scene, self.options.lod);
+        if effects.includes(&needed) {
+            self.effects = effects;
+            Ok(())
+        } else {
+            Err(needed.without(effects))
+        }
+    }
+}
+
 /// What one worker accumulates while rendering tiles.
 #[derive(Default)]
 pub struct WorkerState {

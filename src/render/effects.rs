@@ -19,8 +19,12 @@ pub struct EffectSet {
     pub transmissive_shadows: bool,
     /// Perfect-mirror reflection rays.
     pub mirror_reflection: bool,
-    /// Dielectric boundaries: Fresnel-weighted reflection and Snell refraction.
+    /// Dielectric boundaries: Snell refraction rays (seed 004).
     pub refraction: bool,
+    /// Fresnel reflectance at dielectric boundaries with an index contrast (seed 004): the
+    /// reflected share of a refraction event. Off for index-matched media (ior 1), which
+    /// reflect nothing.
+    pub fresnel: bool,
     /// Beer's-law absorption inside media.
     pub absorption: bool,
     /// Textures filtered by a ray footprint (cones or differentials).
@@ -41,6 +45,7 @@ impl EffectSet {
             transmissive_shadows: true,
             mirror_reflection: true,
             refraction: true,
+            fresnel: true,
             absorption: true,
             footprints: true,
             alpha_cutout: true,
@@ -103,9 +108,19 @@ impl EffectSet {
         if let Some(m) = materials().find(|m| m.transmission > 0.0) {
             set.refraction = true;
             because(
-                "refraction + Fresnel",
+                "refraction",
                 format!("material '{}' has transmission {}", m.name, m.transmission),
             );
+            if let Some(m) = materials().find(|m| m.transmission > 0.0 && m.ior != 1.0) {
+                set.fresnel = true;
+                because(
+                    "Fresnel",
+                    format!(
+                        "transmissive material '{}' has ior {} (an index contrast reflects)",
+                        m.name, m.ior
+                    ),
+                );
+            }
             if set.shadows {
                 set.transmissive_shadows = true;
                 because(
@@ -154,11 +169,23 @@ impl EffectSet {
                 );
             }
         }
-        if let Some(m) = materials().find(|m| m.alpha_cutoff.is_some()) {
+        // Cut-out filters run on meshes whose material has an alpha cutoff and an alpha
+        // texture (a constant alpha either keeps the whole mesh or drops it before tracing).
+        if let Some(mesh) = scene.meshes.iter().find(|mesh| {
+            !mesh.triangles.is_empty()
+                && scene.materials.get(mesh.material).is_some_and(|m| {
+                    m.alpha_cutoff.is_some() && m.alpha_texture.is_some() && !mesh.st.is_empty()
+                })
+        }) {
             set.alpha_cutout = true;
+            let m = &scene.materials[mesh.material];
             because(
                 "alpha cut-out",
-                format!("material '{}' has an alpha cutoff", m.name),
+                format!(
+                    "material '{}' has an alpha texture and cutoff {}",
+                    m.name,
+                    m.alpha_cutoff.unwrap_or_default()
+                ),
             );
         }
         let env_lit = match &scene.environment {
@@ -191,31 +218,130 @@ impl EffectSet {
 
     /// Names of the effects switched on.
     pub fn names(&self) -> Vec<&'static str> {
-        let mut names = Vec::new();
-        let flags = [
-            (self.shadows, "shadows"),
-            (self.transmissive_shadows, "transmissive shadows"),
-            (self.mirror_reflection, "mirror reflection"),
-            (self.refraction, "refraction + Fresnel"),
-            (self.absorption, "Beer's-law absorption"),
-            (self.footprints, "ray footprints"),
-            (self.alpha_cutout, "alpha cut-out"),
-            (self.environment, "environment light"),
-            (self.depth_of_field, "depth of field"),
-        ];
-        for (on, name) in flags {
-            if on {
-                names.push(name);
-            }
+        self.flags()
+            .into_iter()
+            .zip(EFFECT_NAMES)
+            .filter(|(on, _)| *on)
+            .map(|(_, name)| name)
+            .collect()
+    }
+
+    /// Every effect on its own, with its name, in the order of [`EffectSet::names`].
+    pub fn singles() -> Vec<(&'static str, EffectSet)> {
+        (0..EFFECT_NAMES.len())
+            .map(|i| {
+                let mut flags = [false; EFFECT_NAMES.len()];
+                flags[i] = true;
+                (EFFECT_NAMES[i], EffectSet::from_flags(flags))
+            })
+            .collect()
+    }
+
+    /// The effects on in `self` or in `other`.
+    pub fn union(self, other: EffectSet) -> EffectSet {
+        let (a, b) = (self.flags(), other.flags());
+        EffectSet::from_flags(std::array::from_fn(|i| a[i] || b[i]))
+    }
+
+    /// The effects on in `self` but not in `other`.
+    pub fn without(self, other: EffectSet) -> EffectSet {
+        let (a, b) = (self.flags(), other.flags());
+        EffectSet::from_flags(std::array::from_fn(|i| a[i] && !b[i]))
+    }
+
+    /// Whether every effect on in `other` is also on in `self`.
+    pub fn includes(&self, other: &EffectSet) -> bool {
+        other.without(*self) == EffectSet::default()
+    }
+
+    /// The flags in the order of [`EFFECT_NAMES`].
+    fn flags(&self) -> [bool; EFFECT_NAMES.len()] {
+        [
+            self.shadows,
+            self.transmissive_shadows,
+            self.mirror_reflection,
+            self.refraction,
+            self.fresnel,
+            self.absorption,
+            self.footprints,
+            self.alpha_cutout,
+            self.environment,
+            self.depth_of_field,
+        ]
+    }
+
+    fn from_flags(flags: [bool; EFFECT_NAMES.len()]) -> EffectSet {
+        let [shadows, transmissive_shadows, mirror_reflection, refraction, fresnel, absorption, footprints, alpha_cutout, environment, depth_of_field] =
+            flags;
+        EffectSet {
+            shadows,
+            transmissive_shadows,
+            mirror_reflection,
+            refraction,
+            fresnel,
+            absorption,
+            footprints,
+            alpha_cutout,
+            environment,
+            depth_of_field,
         }
-        names
     }
 }
+
+/// The effects' names, as the summary line and `--stats` print them.
+const EFFECT_NAMES: [&str; 10] = [
+    "shadows",
+    "transmissive shadows",
+    "mirror reflection",
+    "refraction",
+    "Fresnel",
+    "Beer's-law absorption",
+    "ray footprints",
+    "alpha cut-out",
+    "environment light",
+    "depth of field",
+];
 
 fn light_kind(light: &crate::scene::Light) -> &'static str {
     match light {
         crate::scene::Light::Point { .. } => "a point light",
         crate::scene::Light::Directional { .. } => "a directional light",
         crate::scene::Light::Spot { .. } => "a spot light",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn singles_cover_every_effect_once() {
+        let singles = EffectSet::singles();
+        assert_eq!(singles.len(), EFFECT_NAMES.len());
+        let mut all = EffectSet::default();
+        for (name, set) in &singles {
+            assert_eq!(set.names(), vec![*name]);
+            all = all.union(*set);
+        }
+        assert_eq!(all, EffectSet::all());
+    }
+
+    #[test]
+    fn union_without_and_includes() {
+        let shadows = EffectSet {
+            shadows: true,
+            ..EffectSet::default()
+        };
+        let mirror = EffectSet {
+            mirror_reflection: true,
+            ..EffectSet::default()
+        };
+        let both = shadows.union(mirror);
+        assert_eq!(both.names(), vec!["shadows", "mirror reflection"]);
+        assert!(both.includes(&shadows) && both.includes(&mirror));
+        assert!(!shadows.includes(&both));
+        assert_eq!(both.without(shadows), mirror);
+        assert!(EffectSet::all().includes(&both));
+        assert!(shadows.includes(&EffectSet::default()));
     }
 }

@@ -26,16 +26,29 @@ pub fn uniform(pixel: u32, sample: u32, dimension: u32) -> f32 {
     (h >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
+/// The stratification grid for `spp` samples: `columns x rows == spp` exactly, as square as
+/// the divisors of `spp` allow (8 -> 2 x 4, 32 -> 4 x 8, a prime -> 1 x spp strips). Every
+/// cell has the same area and receives exactly one sample, so the average is unbiased for
+/// any count, not only for perfect squares.
+#[inline]
+fn stratification_grid(spp: u32) -> (u32, u32) {
+    let mut columns = (spp as f64).sqrt().floor() as u32;
+    while columns > 1 && spp % columns != 0 {
+        columns -= 1;
+    }
+    let columns = columns.max(1);
+    (columns, spp / columns)
+}
+
 /// The offset inside the pixel, in [0,1)^2, of sample `sample` out of `spp`:
-/// the pixel centre for one sample, otherwise a jittered cell of a near-square grid
-/// (stratified sampling).
+/// the pixel centre for one sample, otherwise a jittered cell of an exact
+/// `columns x rows == spp` grid (stratified sampling).
 #[inline]
 pub fn pixel_offset(pixel: u32, sample: u32, spp: u32) -> Vec2 {
     if spp <= 1 {
         return Vec2::splat(0.5);
     }
-    let columns = (spp as f32).sqrt().ceil() as u32;
-    let rows = spp.div_ceil(columns);
+    let (columns, rows) = stratification_grid(spp);
     let cell_x = sample % columns;
     let cell_y = (sample / columns) % rows;
     let jx = uniform(pixel, sample, 0);
@@ -71,6 +84,27 @@ mod tests {
             cells[(o.y * 4.0) as usize * 4 + (o.x * 4.0) as usize] += 1;
         }
         assert!(cells.iter().all(|&c| c == 1), "{cells:?}");
+    }
+
+    #[test]
+    fn every_sample_count_fills_its_grid_exactly_once() {
+        for spp in [2u32, 3, 5, 6, 7, 8, 12, 32, 128, 1000, 1024] {
+            let (columns, rows) = stratification_grid(spp);
+            assert_eq!(columns * rows, spp, "{spp}");
+            assert!(columns <= rows, "{spp}: {columns} x {rows}");
+            let mut cells = vec![0u32; spp as usize];
+            for s in 0..spp {
+                let o = pixel_offset(9, s, spp);
+                assert!((0.0..1.0).contains(&o.x) && (0.0..1.0).contains(&o.y));
+                let cx = ((o.x * columns as f32) as u32).min(columns - 1);
+                let cy = ((o.y * rows as f32) as u32).min(rows - 1);
+                cells[(cy * columns + cx) as usize] += 1;
+            }
+            assert!(cells.iter().all(|&c| c == 1), "{spp}: {cells:?}");
+        }
+        assert_eq!(stratification_grid(8), (2, 4));
+        assert_eq!(stratification_grid(16), (4, 4));
+        assert_eq!(stratification_grid(7), (1, 7));
     }
 
     #[test]

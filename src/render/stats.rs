@@ -29,6 +29,9 @@ pub struct WorkCounters {
     pub filter_callbacks: u64,
     /// Absorption (Beer's law) evaluations.
     pub absorption_evaluations: u64,
+    /// Shadow-ray segments traced as closest-hit queries to walk through transmissive
+    /// occluders (with opaque occluders only, shadow rays are any-hit occlusion queries).
+    pub shadow_walk_queries: u64,
 }
 
 impl WorkCounters {
@@ -54,6 +57,7 @@ impl WorkCounters {
         self.texture_lookups += other.texture_lookups;
         self.filter_callbacks += other.filter_callbacks;
         self.absorption_evaluations += other.absorption_evaluations;
+        self.shadow_walk_queries += other.shadow_walk_queries;
     }
 }
 

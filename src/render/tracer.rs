@@ -84,7 +84,14 @@ impl Tracer {
         let mut builder = SceneBuilder::new(&device).map_err(embree_error)?;
         let mut geometries = Vec::new();
         for (index, mesh) in scene.meshes.iter().enumerate() {
-            if mesh.triangles.is_empty() {
+            let material = &scene.materials[mesh.material];
+            // A cut-off over a constant alpha (no alpha texture, or no texture coordinates to
+            // look it up with) keeps or drops the whole mesh: decided here, not per hit.
+            let textured_cutout = material.alpha_texture.is_some() && !mesh.st.is_empty();
+            let dropped = material
+                .alpha_cutoff
+                .is_some_and(|cutoff| !textured_cutout && material.alpha < cutoff);
+            if mesh.triangles.is_empty() || dropped {
                 continue;
             }
             let id = builder
@@ -92,9 +99,11 @@ impl Tracer {
                 .map_err(embree_error)?;
             debug_assert_eq!(id as usize, geometries.len());
             geometries.push(GeometryRef::Mesh(index));
-            let material = &scene.materials[mesh.material];
-            if let (Some(cutoff), Some(binding)) = (material.alpha_cutoff, &material.alpha_texture)
-            {
+            if let (Some(cutoff), Some(binding), true) = (
+                material.alpha_cutoff,
+                &material.alpha_texture,
+                textured_cutout,
+            ) {
                 let filter = alpha_filter(
                     scene.clone(),
                     index,

@@ -1,0 +1,545 @@
+//! `conetrace accuracy`: how close each footprint strategy and texture filter comes to the
+//! ground truth, and at what cost.
+//!
+//! Every scene (default: the built-in showcase and `assets/scenes/fp_*.toml`) is rendered
+//! with the twelve [`methods::compared_methods`] (nine strategy x filter pairs at one sample
+//! per pixel, `mip0` + `bilinear` at 4, 16 and 64 samples) and compared with a ground truth,
+//! `mip0` + `bilinear` with stratified supersampling at `--ground-truth-spp` (1024) samples:
+//! as the samples grow, the pixel value converges to the box-filtered integral of the
+//! unfiltered (bilinearly magnified) texture over the pixel, the image every filter
+//! approximates (docs/accuracy.md argues this).
+//!
+//! Textures whose files store mip levels other than level 0 reduced by maketx's box rule
+//! (the footprint scenes' `miplevels.exr` tints each level to show which one a lookup used)
+//! get their pyramid rebuilt from level 0, unless `--stored-mip-levels`: a filter is then
+//! compared with supersampling of the very image it filters.
+//!
+//! Timing: a first, untimed pass renders every method once with texture-tile counting on
+//! (it gives the image, the counters and the tiles touched, and warms the caches); then
+//! `--runs` timed passes render every method again, interleaved (method 1..12, then again),
+//! without counting; each row's time is the median of its timed renders. The ground truth is
+//! rendered once.
+//!
+//! Outputs in `--out` (docs/accuracy): per scene `<scene>.csv`, `<scene>.md`,
+//! `<scene>_error_vs_time.png` and `<scene>_crop.png`, and `README.md` indexing them with the
+//! machine and the command. Every file is written atomically. Bad input (a scene that does
+//! not load, an unusable output directory, a bad option) stops the command before it renders
+//! anything, with one line naming the problem and exit status 2.
+
+pub mod crop;
+pub mod files;
+pub mod font;
+pub mod index;
+pub mod methods;
+pub mod metrics;
+pub mod plot;
+pub mod report;
+
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use clap::{Args, FromArgMatches};
+
+use crate::cli::render_cmd::{self, RenderArgs};
+use crate::cli::CommandError;
+use crate::film::Film;
+use crate::integrator::{AovSelection, Whitted};
+use crate::render::{self, RenderContext, RenderControl, RenderOptions, RenderResult};
+use crate::scene::{SceneDescription, ToneMap};
+use crate::texture::{FilterOptions, Texture};
+
+use methods::Method;
+use metrics::DisplayImage;
+use report::{Row, SceneReport};
+
+/// The name that selects the built-in showcase scene among the `SCENE` arguments.
+pub const BUILT_IN_NAME: &str = "default";
+
+/// Where the footprint scenes are looked for when no scene is named.
+pub const FOOTPRINT_SCENE_DIR: &str = "assets/scenes";
+
+/// Options of `conetrace accuracy`.
+#[derive(Args, Debug, Clone)]
+pub struct AccuracyArgs {
+    /// Scenes (TOML, OBJ, glTF); `default` is the built-in showcase. Without any: the
+    /// built-in showcase and every assets/scenes/fp_*.toml (run from the repository root).
+    pub scenes: Vec<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "docs/accuracy")]
+    pub out: PathBuf,
+    /// Image width of every render.
+    #[arg(long, default_value_t = 320)]
+    pub width: u32,
+    /// Image height of every render.
+    #[arg(long, default_value_t = 180)]
+    pub height: u32,
+    /// Stratified samples per pixel of the ground truth (mip0 + bilinear). Smaller values
+    /// are accepted for quick checks; the checked-in results use 1024.
+    #[arg(long, default_value_t = 1024)]
+    pub ground_truth_spp: u32,
+    /// Timed runs of every method (interleaved); each row reports their median.
+    #[arg(long, default_value_t = 3)]
+    pub runs: usize,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Maximum anisotropy of the aniso and ewa filters.
+    #[arg(long, default_value_t = 16.0)]
+    pub max_aniso: f32,
+    /// Use the mip levels stored in texture files as they are. By default a texture whose
+    /// file stores levels that are not its level 0 reduced by maketx's box rule (the
+    /// footprint scenes' miplevels.exr tints each level to show which one a lookup used) is
+    /// rebuilt from level 0, so filtering is compared with supersampling of the same image.
+    #[arg(long)]
+    pub stored_mip_levels: bool,
+    /// Do not print progress lines.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// A scene to measure, loaded and checked, with the options every method starts from.
+struct SceneSetup {
+    /// Output file prefix: the file stem, or `default` for the built-in scene.
+    name: String,
+    scene: Arc<SceneDescription>,
+    /// One sample, no AOVs, no tile counting; methods override spp, lod and filter.
+    base: RenderOptions,
+    tonemap: ToneMap,
+    exposure: f32,
+}
+
+/// The scenes named on the command line, or the default set: `(name, path)`, `None` for the
+/// built-in scene.
+fn scene_inputs(args: &AccuracyArgs) -> Result<Vec<(String, Option<PathBuf>)>, CommandError> {
+    let mut inputs = Vec::new();
+    if args.scenes.is_empty() {
+        inputs.push((BUILT_IN_NAME.to_string(), None));
+        let dir = Path::new(FOOTPRINT_SCENE_DIR);
+        let entries = std::fs::read_dir(dir).map_err(|e| {
+            CommandError::bad_input(format!(
+                "{}: cannot list the footprint scenes ({e}); run from the repository root or \
+                 name the scenes",
+                dir.display()
+            ))
+        })?;
+        let mut found: Vec<PathBuf> = entries
+            .filter_map(|entry| entry.ok().map(|e| e.path()))
+            .filter(|path| {
+                let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+                name.is_some_and(|n| n.starts_with("fp_") && n.ends_with(".toml"))
+            })
+            .collect();
+        found.sort();
+        for path in found {
+            inputs.push((scene_name(&path), Some(path)));
+        }
+    } else {
+        for path in &args.scenes {
+            if path.as_os_str() == BUILT_IN_NAME && !path.exists() {
+                inputs.push((BUILT_IN_NAME.to_string(), None));
+            } else {
+                inputs.push((scene_name(path), Some(path.clone())));
+            }
+        }
+    }
+    for (i, (name, path)) in inputs.iter().enumerate() {
+        if inputs[..i].iter().any(|(other, _)| other == name) {
+            let label = path
+                .as_ref()
+                .map_or(BUILT_IN_NAME.to_string(), |p| p.display().to_string());
+            return Err(CommandError::bad_input(format!(
+                "{label}: another scene has the same name '{name}' (the output files would clash)"
+            )));
+        }
+    }
+    Ok(inputs)
+}
+
+fn scene_name(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".to_string())
+}
+
+/// The `render` command's arguments for one scene at the accuracy size, so scenes load and
+/// options are checked exactly as `conetrace render` does.
+fn render_args(args: &AccuracyArgs, path: Option<&Path>) -> Result<RenderArgs, CommandError> {
+    let mut argv: Vec<OsString> = vec![
+        "accuracy".into(),
+        "--quiet".into(),
+        format!("--width={}", args.width).into(),
+        format!("--height={}", args.height).into(),
+        format!("--max-aniso={}", args.max_aniso).into(),
+    ];
+    if let Some(path) = path {
+        argv.push("--".into());
+        argv.push(path.as_os_str().to_owned());
+    }
+    let command = <RenderArgs as Args>::augment_args(clap::Command::new("accuracy"));
+    let matches = command
+        .try_get_matches_from(argv)
+        .map_err(|e| CommandError::internal(format!("render options: {e}")))?;
+    RenderArgs::from_arg_matches(&matches)
+        .map_err(|e| CommandError::internal(format!("render options: {e}")))
+}
+
+fn load_scene(
+    args: &AccuracyArgs,
+    name: String,
+    path: Option<&Path>,
+) -> Result<SceneSetup, CommandError> {
+    let render_args = render_args(args, path)?;
+    let scene = render_cmd::load(&render_args)?;
+    let mut base = render_cmd::options(&render_args, &scene)?;
+    base.spp = 1;
+    base.aovs = AovSelection::default();
+    base.count_tiles = false;
+    Ok(SceneSetup {
+        name,
+        tonemap: scene.settings.tonemap,
+        exposure: scene.settings.exposure,
+        scene: Arc::new(scene),
+        base,
+    })
+}
+
+fn options_for(base: &RenderOptions, method: &Method) -> RenderOptions {
+    RenderOptions {
+        spp: method.spp,
+        lod: method.lod,
+        filter: FilterOptions {
+            filter: method.filter,
+            ..base.filter
+        },
+        ..base.clone()
+    }
+}
+
+/// Each texture's pyramid rebuilt from its level 0 by maketx's box rule; the texture itself
+/// where the stored pyramid already is that (every PNG/JPEG, and maketx's own EXRs).
+fn consistent_pyramids(textures: &[Arc<Texture>]) -> Result<Vec<Arc<Texture>>, CommandError> {
+    textures
+        .iter()
+        .map(|texture| {
+            let base = &texture.pyramid().levels[0];
+            let rebuilt = Texture::from_rgba_f32(base.width, base.height, base.texels.clone())
+                .map_err(|e| CommandError::internal(format!("{}: {e}", texture.label())))?;
+            Ok(if rebuilt.pyramid() == texture.pyramid() {
+                texture.clone()
+            } else {
+                Arc::new(rebuilt)
+            })
+        })
+        .collect()
+}
+
+/// Swaps a prepared context's surface textures for `textures` (same order) and recomputes
+/// what `prepare` derived from them (the environment's mean). Alpha cut-outs keep the
+/// textures the tracer was built with.
+fn use_textures(context: &mut RenderContext, textures: &[Arc<Texture>]) {
+    context.textures = textures.to_vec();
+    context.environment_mean =
+        render::prepared::environment_mean(&context.scene.environment, &context.textures);
+}
+
+fn median(values: &[f64]) -> f64 {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(|a, b| a.total_cmp(b));
+    match sorted.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => sorted[n / 2],
+        n => 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]),
+    }
+}
+
+fn tiles_touched(result: &RenderResult) -> u64 {
+    result.stats.texture_tiles.as_ref().map_or(0, |t| t.total)
+}
+
+/// What one scene's measurement produced: the report and the images behind it.
+struct SceneMeasurement {
+    report: SceneReport,
+    ground_truth: DisplayImage,
+    images: Vec<DisplayImage>,
+}
+
+/// Renders the ground truth, the textured-pixel mask and every method of one scene, and
+/// compares them.
+fn measure_scene(
+    setup: &SceneSetup,
+    args: &AccuracyArgs,
+) -> Result<SceneMeasurement, CommandError> {
+    let say = |text: String| {
+        if !args.quiet {
+            eprintln!("accuracy: {}: {text}", setup.name);
+        }
+    };
+    // Textures decoded once; their pyramids made consistent unless --stored-mip-levels.
+    let textures = render::prepared::decode_textures(&setup.scene)
+        .map_err(|e| CommandError::bad_input(e.to_string()))?;
+    let textures = if args.stored_mip_levels {
+        textures
+    } else {
+        consistent_pyramids(&textures)?
+    };
+    let prepare = |options: RenderOptions| {
+        let mut context = render::prepare(setup.scene.clone(), options)
+            .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        use_textures(&mut context, &textures);
+        Ok::<RenderContext, CommandError>(context)
+    };
+    let display = |film: &Film| {
+        DisplayImage::from_film(film, setup.tonemap, setup.exposure)
+            .ok_or_else(|| CommandError::internal("a render produced no colour layer"))
+    };
+    let control = RenderControl::default();
+
+    // The ground truth: one render, counting tiles.
+    let truth_method = methods::ground_truth(args.ground_truth_spp);
+    let mut truth_options = options_for(&setup.base, &truth_method);
+    truth_options.count_tiles = true;
+    let truth = render::render(&prepare(truth_options)?, &Whitted, &control);
+    say(format!(
+        "ground truth ({} spp) in {:.2} s",
+        truth_method.spp, truth.stats.seconds
+    ));
+    let ground_truth = display(&truth.film)?;
+
+    // Textured pixels: the pixel centre's camera path looked up a surface texture
+    // (texcolor.A = 1 at one sample per pixel).
+    let mut mask_options = options_for(&setup.base, &methods::ground_truth(1));
+    mask_options.aovs.texture_footprint = true;
+    let mask_render = render::render(&prepare(mask_options)?, &Whitted, &control);
+    let mask: Vec<bool> = mask_render
+        .film
+        .channel("texcolor.A")
+        .map(|a| a.iter().map(|&v| v > 0.5).collect())
+        .unwrap_or_else(|| vec![false; ground_truth.pixels.len()]);
+
+    // The compared methods: an untimed counting pass, then interleaved timed passes.
+    let compared = methods::compared_methods();
+    let mut contexts = Vec::with_capacity(compared.len());
+    for method in &compared {
+        let mut options = options_for(&setup.base, method);
+        options.count_tiles = true;
+        contexts.push(prepare(options)?);
+    }
+    let mut first: Vec<RenderResult> = Vec::with_capacity(compared.len());
+    for context in &mut contexts {
+        first.push(render::render(context, &Whitted, &control));
+        context.options.count_tiles = false;
+    }
+    let runs = args.runs;
+    let mut times = vec![Vec::with_capacity(runs); compared.len()];
+    for run in 0..runs {
+        for (index, context) in contexts.iter().enumerate() {
+            let result = render::render(context, &Whitted, &control);
+            times[index].push(result.stats.seconds);
+        }
+        say(format!("timed run {}/{runs} done", run + 1));
+    }
+
+    let mut rows = vec![Row {
+        method: truth_method,
+        seconds: truth.stats.seconds,
+        run_seconds: vec![truth.stats.seconds],
+        rays: truth.stats.counters.total_rays(),
+        texture_lookups: truth.stats.counters.texture_lookups,
+        tiles_touched: tiles_touched(&truth),
+        error: None,
+        textured_error: None,
+        relative_time: f64::NAN,
+    }];
+    let mut images = Vec::with_capacity(compared.len());
+    for ((method, result), run_seconds) in compared.iter().zip(&first).zip(times) {
+        let image = display(&result.film)?;
+        let comparison = metrics::compare(&ground_truth, &image, &mask);
+        rows.push(Row {
+            method: *method,
+            seconds: median(&run_seconds),
+            run_seconds,
+            rays: result.stats.counters.total_rays(),
+            texture_lookups: result.stats.counters.texture_lookups,
+            tiles_touched: tiles_touched(result),
+            error: Some(comparison.all),
+            textured_error: comparison.masked,
+            relative_time: f64::NAN,
+        });
+        images.push(image);
+    }
+    let fastest = rows
+        .iter()
+        .map(|r| r.seconds)
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    for row in &mut rows {
+        row.relative_time = row.seconds / fastest;
+    }
+
+    // The crop window: where the one-sample methods err most on average.
+    let (width, height) = (setup.base.width, setup.base.height);
+    let mut error = vec![0.0f64; ground_truth.pixels.len()];
+    let single: Vec<&DisplayImage> = compared
+        .iter()
+        .zip(&images)
+        .filter(|(m, _)| m.is_single_sample())
+        .map(|(_, image)| image)
+        .collect();
+    for image in &single {
+        for (sum, e) in error
+            .iter_mut()
+            .zip(metrics::squared_errors(&ground_truth, image))
+        {
+            *sum += e / single.len() as f64;
+        }
+    }
+    let crop = crop::hardest_window(&error, width, height, crop::window_side(width, height));
+
+    Ok(SceneMeasurement {
+        report: SceneReport {
+            name: setup.name.clone(),
+            source: setup.scene.source.clone(),
+            width,
+            height,
+            runs,
+            threads: rayon::current_num_threads(),
+            textured_pixels: mask.iter().filter(|&&m| m).count(),
+            crop,
+            rows,
+        },
+        ground_truth,
+        images,
+    })
+}
+
+/// The four files of one scene.
+fn write_scene_outputs(out: &Path, measurement: &SceneMeasurement) -> Result<(), CommandError> {
+    let report = &measurement.report;
+    let labels = font::labels_available();
+    files::write_text(
+        &out.join(format!("{}.csv", report.name)),
+        &report::csv(report),
+    )?;
+    files::write_text(
+        &out.join(format!("{}.md", report.name)),
+        &report::markdown(report),
+    )?;
+
+    let plot = plot::draw_error_vs_time(report, labels).map_err(CommandError::internal)?;
+    let (plot_width, plot_height) = plot::PLOT_SIZE;
+    files::write_rgb_png(
+        &out.join(format!("{}_error_vs_time.png", report.name)),
+        plot_width,
+        plot_height,
+        &plot,
+    )?;
+
+    let truth_row = &report.rows[0];
+    let mut panels = vec![crop::Panel {
+        title: "ground truth".to_string(),
+        subtitle: format!(
+            "{} {} spp",
+            truth_row.method.pair_name(),
+            truth_row.method.spp
+        ),
+        image: &measurement.ground_truth,
+    }];
+    for (row, image) in report.rows[1..].iter().zip(&measurement.images) {
+        let (rmse, flip) = row.error.map_or((f64::NAN, f64::NAN), |e| (e.rmse, e.flip));
+        panels.push(crop::Panel {
+            title: row.method.label(),
+            subtitle: format!("RMSE {rmse:.4}, FLIP {flip:.3}"),
+            image,
+        });
+    }
+    let (crop_width, crop_height, crop_rgb) =
+        crop::compose(&panels, report.crop, labels).map_err(CommandError::internal)?;
+    files::write_rgb_png(
+        &out.join(format!("{}_crop.png", report.name)),
+        crop_width,
+        crop_height,
+        &crop_rgb,
+    )
+}
+
+/// Measures every scene and writes its files, then the index; see the module docs.
+pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
+    if args.runs == 0 {
+        return Err(CommandError::bad_input("--runs must be at least 1"));
+    }
+    if args.ground_truth_spp == 0 {
+        return Err(CommandError::bad_input(
+            "--ground-truth-spp must be at least 1",
+        ));
+    }
+    // Load and check every scene before writing or rendering anything.
+    let mut setups = Vec::new();
+    for (name, path) in scene_inputs(args)? {
+        setups.push(load_scene(args, name, path.as_deref())?);
+    }
+    files::check_output_dir(&args.out)?;
+
+    let mut pool =
+        rayon::ThreadPoolBuilder::new().start_handler(|_| crate::embree::enable_flush_denormals());
+    if let Some(threads) = args.threads {
+        if threads == 0 {
+            return Err(CommandError::bad_input("--threads must be at least 1"));
+        }
+        pool = pool.num_threads(threads);
+    }
+    let pool = pool
+        .build()
+        .map_err(|e| CommandError::internal(format!("cannot start worker threads: {e}")))?;
+
+    let mut reports = Vec::with_capacity(setups.len());
+    for setup in &setups {
+        let measurement = pool.install(|| measure_scene(setup, args))?;
+        write_scene_outputs(&args.out, &measurement)?;
+        println!(
+            "{}: wrote {}/{}.csv, .md, _error_vs_time.png, _crop.png",
+            setup.name,
+            args.out.display(),
+            setup.name
+        );
+        reports.push(measurement.report);
+    }
+    let index_path = args.out.join("README.md");
+    files::write_text(&index_path, &index::index_markdown(&reports, args))?;
+    println!("wrote {}", index_path.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert!(median(&[]).is_nan());
+    }
+
+    #[test]
+    fn only_inconsistent_pyramids_are_rebuilt() {
+        // A pyramid built from level 0 is kept as it is.
+        let texels: Vec<[f32; 4]> = (0..64).map(|i| [i as f32 / 64.0, 0.5, 0.25, 1.0]).collect();
+        let built = Arc::new(Texture::from_rgba_f32(8, 8, texels).unwrap());
+        let kept = consistent_pyramids(std::slice::from_ref(&built)).unwrap();
+        assert!(Arc::ptr_eq(&kept[0], &built));
+        // miplevels.exr stores tinted levels: level 0 stays, the others become its box
+        // reductions.
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textures/miplevels.exr");
+        let tinted =
+            Arc::new(Texture::from_file(&path, crate::texture::ColorSpace::Linear).unwrap());
+        let rebuilt = consistent_pyramids(std::slice::from_ref(&tinted)).unwrap();
+        assert!(!Arc::ptr_eq(&rebuilt[0], &tinted));
+        let (old, new) = (tinted.pyramid(), rebuilt[0].pyramid());
+        assert_eq!(old.levels[0], new.levels[0]);
+        assert_eq!(old.levels.len(), new.levels.len());
+        assert_ne!(old.levels[1], new.levels[1]);
+        let reference = crate::texture::MipPyramid::build(old.levels[0].clone());
+        assert_eq!(new, &reference);
+    }
+}
