@@ -519,17 +519,7 @@ pub fn run(args: &BenchEffectsArgs) -> Result<(), CommandError> {
         args.scenes.clone()
     };
     let repeat = args.repeat.max(1);
-    let mut pool =
-        rayon::ThreadPoolBuilder::new().start_handler(|_| crate::embree::enable_flush_denormals());
-    if let Some(threads) = args.threads {
-        if threads == 0 {
-            return Err(CommandError::bad_input("--threads must be at least 1"));
-        }
-        pool = pool.num_threads(threads);
-    }
-    let pool = pool
-        .build()
-        .map_err(|e| CommandError::internal(format!("cannot start worker threads: {e}")))?;
+    let pool = crate::cli::worker_pool(args.threads)?;
     let command = std::iter::once("conetrace".to_string())
         .chain(std::env::args().skip(1))
         .collect::<Vec<_>>()

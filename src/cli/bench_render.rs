@@ -16,7 +16,7 @@ use rayon::prelude::*;
 
 use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
-use crate::integrator::{block_order, Whitted};
+use crate::integrator::{block_order, TileRect, Whitted};
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::{self, RenderContext, RenderControl, RenderOptions};
@@ -29,6 +29,24 @@ pub struct BenchRenderArgs {
     /// Repetitions of each pass (the median is reported).
     #[arg(long, default_value_t = 5)]
     pub repeat: usize,
+}
+
+/// The pixel-centre camera rays of `tile`, each run of 16 one 4x4 block (as the integrator
+/// orders them).
+fn camera_rays_of_tile(context: &RenderContext, tile: TileRect, rays: &mut Vec<TraceRay>) {
+    rays.clear();
+    for (x, y) in block_order(tile) {
+        let px = (tile.x0 + x) as f32 + 0.5;
+        let py = (tile.y0 + y) as f32 + 0.5;
+        let (origin, direction) = context.camera.generate_ray(px, py, Vec2::splat(0.5));
+        rays.push(TraceRay {
+            origin,
+            direction,
+            tfar: f32::INFINITY,
+            cone_width: 0.0,
+            cone_spread: 0.0,
+        });
+    }
 }
 
 /// Camera rays of every pixel traced through Embree with no shading; returns rays traced.
@@ -47,19 +65,7 @@ pub fn trace_camera_rays_only(context: &RenderContext) -> u64 {
                 )
             },
             |(rays, hits, counters), tile| {
-                rays.clear();
-                for (x, y) in block_order(*tile) {
-                    let px = (tile.x0 + x) as f32 + 0.5;
-                    let py = (tile.y0 + y) as f32 + 0.5;
-                    let (origin, direction) = context.camera.generate_ray(px, py, Vec2::splat(0.5));
-                    rays.push(TraceRay {
-                        origin,
-                        direction,
-                        tfar: f32::INFINITY,
-                        cone_width: 0.0,
-                        cone_spread: 0.0,
-                    });
-                }
+                camera_rays_of_tile(context, *tile, rays);
                 context.tracer.intersect(rays, hits, true, counters);
                 rays.len() as u64
             },
@@ -90,19 +96,7 @@ pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) 
                 )
             },
             |(rays, hits, shadow_rays, blocked, counters), tile| {
-                rays.clear();
-                for (x, y) in block_order(*tile) {
-                    let px = (tile.x0 + x) as f32 + 0.5;
-                    let py = (tile.y0 + y) as f32 + 0.5;
-                    let (origin, direction) = context.camera.generate_ray(px, py, Vec2::splat(0.5));
-                    rays.push(TraceRay {
-                        origin,
-                        direction,
-                        tfar: f32::INFINITY,
-                        cone_width: 0.0,
-                        cone_spread: 0.0,
-                    });
-                }
+                camera_rays_of_tile(context, *tile, rays);
                 context.tracer.intersect(rays, hits, true, counters);
                 shadow_rays.clear();
                 for (ray, hit) in rays.iter().zip(hits.iter()) {
@@ -146,14 +140,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
     let mut options = render_cmd::options(&args.render, &scene)?;
     options.count_tiles = false;
     let repeat = args.repeat.max(1);
-    let mut pool =
-        rayon::ThreadPoolBuilder::new().start_handler(|_| crate::embree::enable_flush_denormals());
-    if let Some(threads) = args.render.threads {
-        pool = pool.num_threads(threads.max(1));
-    }
-    let pool = pool
-        .build()
-        .map_err(|e| CommandError::internal(format!("cannot start worker threads: {e}")))?;
+    let pool = crate::cli::worker_pool(args.render.threads)?;
     let scene = Arc::new(scene);
     pool.install(|| {
         let context = render::prepare(scene.clone(), options.clone())

@@ -78,6 +78,21 @@ pub enum BenchCommand {
     Effects(bench_effects::BenchEffectsArgs),
 }
 
+/// The worker threads of a command: `threads` of them (all cores when `None`), each with
+/// denormals flushed as Embree expects. `Some(0)` is bad input.
+pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, CommandError> {
+    let mut pool =
+        rayon::ThreadPoolBuilder::new().start_handler(|_| crate::embree::enable_flush_denormals());
+    if let Some(threads) = threads {
+        if threads == 0 {
+            return Err(CommandError::bad_input("--threads must be at least 1"));
+        }
+        pool = pool.num_threads(threads);
+    }
+    pool.build()
+        .map_err(|e| CommandError::internal(format!("cannot start worker threads: {e}")))
+}
+
 /// Run the parsed command line; returns the exit status.
 pub fn run(cli: Cli) -> i32 {
     let result = match cli.command {

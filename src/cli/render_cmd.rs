@@ -317,17 +317,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let (exr_path, png_path) = output_paths(args);
     let exposure = scene.settings.exposure;
 
-    let mut pool =
-        rayon::ThreadPoolBuilder::new().start_handler(|_| crate::embree::enable_flush_denormals());
-    if let Some(threads) = args.threads {
-        if threads == 0 {
-            return Err(CommandError::bad_input("--threads must be at least 1"));
-        }
-        pool = pool.num_threads(threads);
-    }
-    let pool = pool
-        .build()
-        .map_err(|e| CommandError::internal(format!("cannot start worker threads: {e}")))?;
+    let pool = crate::cli::worker_pool(args.threads)?;
 
     let tiles = render::work_tiles(options.width, options.height);
     let signature = settings_signature(&scene, &options);

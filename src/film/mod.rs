@@ -43,4 +43,4 @@ pub use error::OutputError;
 pub use exr_input::read_exr;
 pub use exr_output::{write_exr, ExrAttributes};
 pub use film::{Film, FilmLayout, FilmTile, TileRect};
-pub use png_output::{linear_to_srgb, tonemap_to_srgb8, write_png};
+pub use png_output::{display_value, linear_to_srgb, tonemap_to_srgb8, write_png};

@@ -30,10 +30,10 @@ pub fn linear_to_srgb(x: f32) -> f32 {
     }
 }
 
-/// One linear radiance value to an 8-bit sRGB code: exposure scale, tone map, transfer
-/// function, rounding. Negative values and NaN give 0.
+/// One linear radiance value to its display value in [0, 1]: exposure scale, tone map and
+/// the sRGB transfer function. Negative values and NaN give 0.
 #[inline]
-pub fn tonemap_to_srgb8(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> u8 {
+pub fn display_value(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> f32 {
     let x = linear * exposure_scale;
     let x = if x > 0.0 { x } else { 0.0 }; // also maps NaN to 0
     let mapped = match tonemap {
@@ -46,7 +46,13 @@ pub fn tonemap_to_srgb8(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> u
             }
         }
     };
-    (linear_to_srgb(mapped) * 255.0 + 0.5).clamp(0.0, 255.0) as u8
+    linear_to_srgb(mapped)
+}
+
+/// One linear radiance value to an 8-bit sRGB code: [`display_value`], then rounding.
+#[inline]
+pub fn tonemap_to_srgb8(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> u8 {
+    (display_value(linear, tonemap, exposure_scale) * 255.0 + 0.5).clamp(0.0, 255.0) as u8
 }
 
 /// Writes the film's colour layer to `path` as 8-bit sRGB PNG (atomically; the parent

@@ -415,8 +415,7 @@ fn shade_hit(
         }
         if reflectance > 0.0 {
             let reflected = reflect_above(ray.direction, ns, ng);
-            let footprint =
-                footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
+            let footprint = footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
             spawner.spawn(
                 waves,
                 worker,

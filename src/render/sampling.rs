@@ -33,7 +33,7 @@ pub fn uniform(pixel: u32, sample: u32, dimension: u32) -> f32 {
 #[inline]
 fn stratification_grid(spp: u32) -> (u32, u32) {
     let mut columns = (spp as f64).sqrt().floor() as u32;
-    while columns > 1 && spp % columns != 0 {
+    while columns > 1 && !spp.is_multiple_of(columns) {
         columns -= 1;
     }
     let columns = columns.max(1);

@@ -14,7 +14,7 @@
 //!   pixels considered. FLIP is computed on the whole image (its filters look at
 //!   neighbours) and then averaged over the mask.
 
-use crate::film::{linear_to_srgb, tonemap_to_srgb8, Film};
+use crate::film::{display_value, tonemap_to_srgb8, Film};
 use crate::scene::ToneMap;
 
 /// A display-referred RGB image: values in [0, 1], row-major, top row first.
@@ -28,24 +28,6 @@ pub struct DisplayImage {
     pub pixels: Vec<[f32; 3]>,
     /// The same pixels as 8-bit sRGB (what the PNG would store), `width * height * 3` bytes.
     pub srgb8: Vec<u8>,
-}
-
-/// One linear radiance value to its display value in [0, 1]: exposure scale, tone map and
-/// the sRGB transfer function, exactly as [`tonemap_to_srgb8`] does before rounding.
-pub fn display_value(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> f32 {
-    let x = linear * exposure_scale;
-    let x = if x > 0.0 { x } else { 0.0 }; // also maps NaN to 0
-    let mapped = match tonemap {
-        ToneMap::Clamp => x.min(1.0),
-        ToneMap::Reinhard => {
-            if x.is_finite() {
-                x / (1.0 + x)
-            } else {
-                1.0
-            }
-        }
-    };
-    linear_to_srgb(mapped)
 }
 
 impl DisplayImage {

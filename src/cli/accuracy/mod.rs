@@ -480,17 +480,7 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
     }
     files::check_output_dir(&args.out)?;
 
-    let mut pool =
-        rayon::ThreadPoolBuilder::new().start_handler(|_| crate::embree::enable_flush_denormals());
-    if let Some(threads) = args.threads {
-        if threads == 0 {
-            return Err(CommandError::bad_input("--threads must be at least 1"));
-        }
-        pool = pool.num_threads(threads);
-    }
-    let pool = pool
-        .build()
-        .map_err(|e| CommandError::internal(format!("cannot start worker threads: {e}")))?;
+    let pool = crate::cli::worker_pool(args.threads)?;
 
     let mut reports = Vec::with_capacity(setups.len());
     for setup in &setups {
