@@ -359,18 +359,7 @@ fn shade_hit(
         min_throughput: options.min_throughput,
     };
     if effects.mirror_reflection && material.mirror > 0.0 {
-        let reflected = reflect_above(ray.direction, ns, ng);
-        let footprint = footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
-        spawner.spawn(
-            waves,
-            worker,
-            reflected,
-            ng,
-            Vec3::splat(material.mirror),
-            RayKind::Reflection,
-            footprint,
-            ray.sigma,
-        );
+        spawner.spawn_reflection(context, surface, ns, ng, material.mirror, waves, worker);
     }
 
     if effects.refraction && material.transmission > 0.0 {
@@ -414,18 +403,8 @@ fn shade_hit(
             );
         }
         if reflectance > 0.0 {
-            let reflected = reflect_above(ray.direction, ns, ng);
-            let footprint = footprint_reflect(effects.footprints, &ray, surface, reflected, worker);
-            spawner.spawn(
-                waves,
-                worker,
-                reflected,
-                ng,
-                Vec3::splat(material.transmission * reflectance),
-                RayKind::Reflection,
-                footprint,
-                ray.sigma,
-            );
+            let weight = material.transmission * reflectance;
+            spawner.spawn_reflection(context, surface, ns, ng, weight, waves, worker);
         }
     }
 }
@@ -468,6 +447,36 @@ impl Spawner<'_> {
             sigma,
             first_sample: self.parent.first_sample,
         });
+    }
+
+    /// Queue the mirror reflection of the parent ray (about the shading normal `ns`, kept
+    /// above the geometric normal `ng`, both on the incident side) with weight `weight`, its
+    /// footprint reflected too.
+    #[allow(clippy::too_many_arguments)]
+    fn spawn_reflection(
+        &self,
+        context: &RenderContext,
+        surface: &SurfaceHit,
+        ns: Vec3,
+        ng: Vec3,
+        weight: f32,
+        waves: &mut Waves,
+        worker: &mut WorkerState,
+    ) {
+        let ray = self.parent;
+        let reflected = reflect_above(ray.direction, ns, ng);
+        let footprint =
+            footprint_reflect(context.effects.footprints, ray, surface, reflected, worker);
+        self.spawn(
+            waves,
+            worker,
+            reflected,
+            ng,
+            Vec3::splat(weight),
+            RayKind::Reflection,
+            footprint,
+            ray.sigma,
+        );
     }
 }
 

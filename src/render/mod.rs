@@ -46,13 +46,24 @@ pub fn prepare(
     scene: Arc<SceneDescription>,
     options: RenderOptions,
 ) -> Result<RenderContext, PrepareError> {
+    let textures = prepared::decode_textures(&scene)?;
+    prepare_with_textures(scene, options, textures)
+}
+
+/// Like [`prepare`], with the scene's textures already decoded (one per
+/// `scene.textures` entry, as [`prepared::decode_textures`] returns them): for callers that
+/// render one scene many times, or with pyramids of their own.
+pub fn prepare_with_textures(
+    scene: Arc<SceneDescription>,
+    options: RenderOptions,
+    textures: Vec<Arc<crate::texture::Texture>>,
+) -> Result<RenderContext, PrepareError> {
     let Some(camera_desc) = scene.camera.clone() else {
         return Err(PrepareError::Invalid {
             source_label: scene.source.clone(),
             message: "the scene has no camera".to_string(),
         });
     };
-    let textures = prepared::decode_textures(&scene)?;
     let (tracer, geometries) = tracer::Tracer::build(&scene, &textures, &options)?;
     let camera = crate::camera::Camera::new(&camera_desc, options.width, options.height);
     let camera_forward = (camera_desc.target - camera_desc.eye).normalize_or(glam::Vec3::NEG_Z);

@@ -45,7 +45,7 @@ use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
 use crate::film::Film;
 use crate::integrator::{AovSelection, Whitted};
-use crate::render::{self, RenderContext, RenderControl, RenderOptions, RenderResult};
+use crate::render::{self, RenderControl, RenderOptions, RenderResult};
 use crate::scene::{SceneDescription, ToneMap};
 use crate::texture::{FilterOptions, Texture};
 
@@ -234,15 +234,6 @@ fn consistent_pyramids(textures: &[Arc<Texture>]) -> Result<Vec<Arc<Texture>>, C
         .collect()
 }
 
-/// Swaps a prepared context's surface textures for `textures` (same order) and recomputes
-/// what `prepare` derived from them (the environment's mean). Alpha cut-outs keep the
-/// textures the tracer was built with.
-fn use_textures(context: &mut RenderContext, textures: &[Arc<Texture>]) {
-    context.textures = textures.to_vec();
-    context.environment_mean =
-        render::prepared::environment_mean(&context.scene.environment, &context.textures);
-}
-
 fn median(values: &[f64]) -> f64 {
     let mut sorted = values.to_vec();
     sorted.sort_by(|a, b| a.total_cmp(b));
@@ -275,7 +266,8 @@ fn measure_scene(
             eprintln!("accuracy: {}: {text}", setup.name);
         }
     };
-    // Textures decoded once; their pyramids made consistent unless --stored-mip-levels.
+    // Textures decoded once for every render of the scene (surfaces, environment and alpha
+    // cut-outs alike); their pyramids made consistent unless --stored-mip-levels.
     let textures = render::prepared::decode_textures(&setup.scene)
         .map_err(|e| CommandError::bad_input(e.to_string()))?;
     let textures = if args.stored_mip_levels {
@@ -284,10 +276,8 @@ fn measure_scene(
         consistent_pyramids(&textures)?
     };
     let prepare = |options: RenderOptions| {
-        let mut context = render::prepare(setup.scene.clone(), options)
-            .map_err(|e| CommandError::bad_input(e.to_string()))?;
-        use_textures(&mut context, &textures);
-        Ok::<RenderContext, CommandError>(context)
+        render::prepare_with_textures(setup.scene.clone(), options, textures.clone())
+            .map_err(|e| CommandError::bad_input(e.to_string()))
     };
     let display = |film: &Film| {
         DisplayImage::from_film(film, setup.tonemap, setup.exposure)
