@@ -56,12 +56,6 @@ impl ConeEnvelope {
         self.bounce(|c| c.refract(curvature, eta))
     }
 
-    /// Both cones after BSDF scattering (seed 000).
-    #[inline]
-    pub fn scatter(self, bsdf_value: f32) -> ConeEnvelope {
-        self.bounce(|c| c.scatter(bsdf_value))
-    }
-
     #[inline]
     fn bounce(self, f: impl Fn(RayCone) -> RayCone) -> ConeEnvelope {
         ConeEnvelope {

@@ -1,13 +1,10 @@
-//! Environment-map parameterisations and their footprint gradients.
+//! The lat-long environment parameterisation and its footprint gradients.
 //!
 //! Lat-long convention (used everywhere in conetrace, including the sphere's st):
 //! with polar angle theta measured from +Y and azimuth phi measured from +X towards +Z,
 //! a unit direction is `(sin(theta) cos(phi), cos(theta), sin(theta) sin(phi))` and
 //! `s = phi / 2pi` in [0, 1), `t = theta / pi` in [0, 1] (t = 0 at +Y, growing downwards as
 //! OpenImageIO's t does).
-//!
-//! Cube-map convention: faces +X, -X, +Y, -Y, +Z, -Z (indices 0..6) with the usual
-//! major-axis projection and t growing downwards on the side faces.
 //!
 //! An environment map is infinitely far away, so only a footprint's angular spread matters
 //! (seed 000, "Texture Derivatives on an Environment Map"); ray differentials use the exact
@@ -54,20 +51,27 @@ pub fn lat_long_frame(n: Vec3, radius: f32) -> (Vec2, Vec3, Vec3) {
     (st, dpdphi * (TAU * radius), dpdtheta * (PI * radius))
 }
 
-/// Lat-long gradients of a cone with spread angle `angle` (seed 000:
-/// ddx = (alpha / 2pi, 0), ddy = (0, alpha / pi)); direction independent.
+/// Lat-long gradients of a cone with spread angle `angle` around direction `dir`:
+/// ddx = (alpha / (2pi sin theta), 0), ddy = (0, alpha / pi).
+///
+/// Seed 000 gives (alpha / 2pi, 0), (0, alpha / pi), which holds at the equator only: a
+/// circle of latitude at polar angle theta has radius sin theta, so alpha radians across it
+/// are alpha / sin theta radians of azimuth and ds = dphi / 2pi widens by 1 / sin theta
+/// towards the poles (the derivative [`lat_long_offset`] takes for differentials). Where
+/// the cone reaches over the pole ds is capped at 1, the whole circle of latitude.
 #[inline]
-pub fn lat_long_cone_gradients(angle: f32) -> TextureGradients {
+pub fn lat_long_cone_gradients(angle: f32, dir: Vec3) -> TextureGradients {
     let a = finite(angle).abs();
-    TextureGradients::from_axes(Vec2::new(a / TAU, 0.0), Vec2::new(0.0, a / PI))
-}
-
-/// Cube-map gradients of a cone with spread angle `angle` (seed 000:
-/// ddx = (2 alpha / pi, 0), ddy = (0, 2 alpha / pi)).
-#[inline]
-pub fn cube_map_cone_gradients(angle: f32) -> TextureGradients {
-    let a = 2.0 * finite(angle).abs() / PI;
-    TextureGradients::from_axes(Vec2::new(a, 0.0), Vec2::new(0.0, a))
+    let d = unit_or(dir, Vec3::Y);
+    let sin_theta = (d.x * d.x + d.z * d.z).sqrt();
+    let ds = if a == 0.0 {
+        0.0
+    } else if a >= TAU * sin_theta {
+        1.0
+    } else {
+        a / (TAU * sin_theta)
+    };
+    TextureGradients::from_axes(Vec2::new(ds, 0.0), Vec2::new(0.0, a / PI))
 }
 
 /// Derivative of the lat-long st of unit direction `d` along the direction change `dd`.
@@ -79,68 +83,6 @@ pub fn lat_long_offset(d: Vec3, dd: Vec3) -> Vec2 {
     let ds = (d.x * dd.z - d.z * dd.x) / (TAU * rho2);
     let dt = -dd.y / (PI * rho2.sqrt());
     Vec2::new(finite(ds), finite(dt))
-}
-
-/// A cube-map face index (0..6 for +X, -X, +Y, -Y, +Z, -Z) and st on it.
-#[inline]
-pub fn direction_to_cube_map(dir: Vec3) -> (usize, Vec2) {
-    let d = unit_or(dir, Vec3::Z);
-    let (face, sc, tc, ma) = cube_face_axes(d);
-    let inv = 1.0 / ma.abs().max(1.0e-30);
-    (
-        face,
-        Vec2::new(0.5 * (sc * inv + 1.0), 0.5 * (tc * inv + 1.0)),
-    )
-}
-
-/// Face and (s numerator, t numerator, major axis) of the projection of `d`.
-#[inline]
-fn cube_face_axes(d: Vec3) -> (usize, f32, f32, f32) {
-    let a = d.abs();
-    if a.x >= a.y && a.x >= a.z {
-        if d.x >= 0.0 {
-            (0, -d.z, -d.y, d.x)
-        } else {
-            (1, d.z, -d.y, d.x)
-        }
-    } else if a.y >= a.z {
-        if d.y >= 0.0 {
-            (2, d.x, d.z, d.y)
-        } else {
-            (3, d.x, -d.z, d.y)
-        }
-    } else if d.z >= 0.0 {
-        (4, d.x, -d.y, d.z)
-    } else {
-        (5, -d.x, -d.y, d.z)
-    }
-}
-
-/// Derivative of the cube-map st of direction `d` along the direction change `dd`, on the
-/// face `d` falls on.
-#[inline]
-pub fn cube_map_offset(d: Vec3, dd: Vec3) -> Vec2 {
-    let (face, sc, tc, ma) = cube_face_axes(d);
-    // The same linear selection applied to dd gives d(sc), d(tc), d(ma).
-    let probe = |v: Vec3| -> (f32, f32, f32) {
-        match face {
-            0 => (-v.z, -v.y, v.x),
-            1 => (v.z, -v.y, v.x),
-            2 => (v.x, v.z, v.y),
-            3 => (v.x, -v.z, v.y),
-            4 => (v.x, -v.y, v.z),
-            _ => (-v.x, -v.y, v.z),
-        }
-    };
-    let (dsc, dtc, dma) = probe(dd);
-    // s = (sc / |ma| + 1) / 2  =>  ds = (dsc |ma| - sc d|ma|) / (2 ma^2).
-    let m = ma.abs().max(1.0e-30);
-    let dm = dma * ma.signum();
-    let inv = 0.5 / (m * m);
-    Vec2::new(
-        finite((dsc * m - sc * dm) * inv),
-        finite((dtc * m - tc * dm) * inv),
-    )
 }
 
 #[cfg(test)]
@@ -192,33 +134,28 @@ mod tests {
     }
 
     #[test]
-    fn cube_map_offset_matches_finite_differences() {
-        for d in [
-            Vec3::new(0.9, 0.2, -0.3),
-            Vec3::new(-0.1, -0.8, 0.3),
-            Vec3::new(0.2, 0.1, -0.9),
-        ] {
-            let d = d.normalize();
-            let dd = Vec3::new(0.013, -0.007, 0.011);
-            let h = 1e-2;
-            let (f0, a) = direction_to_cube_map(d + dd * h);
-            let (f1, b) = direction_to_cube_map(d - dd * h);
-            assert_eq!(f0, f1);
-            let fd = (a - b) / (2.0 * h);
-            let an = cube_map_offset(d, dd);
-            assert!(
-                (an - fd).length() < 1e-2 * an.length().max(1e-3),
-                "{an:?} {fd:?}"
-            );
-        }
-    }
-
-    #[test]
-    fn cone_gradients_follow_seed_000() {
-        let g = lat_long_cone_gradients(-0.02);
+    fn cone_gradients_follow_seed_000_at_the_equator_and_widen_towards_the_poles() {
+        let g = lat_long_cone_gradients(-0.02, Vec3::X);
         assert!((g.dsdx - 0.02 / TAU).abs() < 1e-9 && (g.dtdy - 0.02 / PI).abs() < 1e-9);
         assert_eq!((g.dtdx, g.dsdy), (0.0, 0.0));
-        let c = cube_map_cone_gradients(0.02);
-        assert!((c.dsdx - 0.04 / PI).abs() < 1e-9 && (c.dtdy - 0.04 / PI).abs() < 1e-9);
+        for theta in [0.1f32, 0.7, 2.9] {
+            let d = lat_long_to_direction(Vec2::new(0.3, theta / PI));
+            let g = lat_long_cone_gradients(0.02, d);
+            let expected = 0.02 / (TAU * theta.sin());
+            assert!(
+                (g.dsdx - expected).abs() < 1e-4 * expected,
+                "{theta}: {g:?}"
+            );
+            assert!((g.dtdy - 0.02 / PI).abs() < 1e-9);
+        }
+        // At the poles (and for degenerate directions) the whole row, never infinity.
+        for d in [Vec3::Y, Vec3::NEG_Y, Vec3::ZERO, Vec3::splat(f32::NAN)] {
+            let g = lat_long_cone_gradients(0.02, d);
+            assert!(g.is_finite() && g.dsdx == 1.0, "{d}: {g:?}");
+        }
+        assert_eq!(
+            lat_long_cone_gradients(0.0, Vec3::Y),
+            TextureGradients::ZERO
+        );
     }
 }

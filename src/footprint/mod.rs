@@ -11,9 +11,8 @@
 //! A footprint is created by the camera (`crate::camera::Camera::initial_footprint`), moved
 //! to each hit with [`Footprint::transfer`], turned into texture gradients there with
 //! [`Footprint::texture_gradients`], and carried onto secondary rays with
-//! [`Footprint::reflect`], [`Footprint::refract`] or [`Footprint::scatter`]. It knows
-//! nothing of textures or Embree: it reads the hit record (`crate::hit::SurfaceHit`) and
-//! returns st derivatives.
+//! [`Footprint::reflect`] or [`Footprint::refract`]. It knows nothing of textures or
+//! Embree: it reads the hit record (`crate::hit::SurfaceHit`) and returns st derivatives.
 //!
 //! Robustness contract: for any finite input (grazing hits down to |D.N| = 1e-7, degenerate
 //! or collinear triangles, zero-area st mappings, zero or NaN normals, total internal
@@ -40,8 +39,8 @@ pub use cone_envelope::ConeEnvelope;
 pub use curvature::{curvature_at, sphere_curvature, triangle_curvature};
 pub use distance::DistanceFootprint;
 pub use environment::{
-    cube_map_cone_gradients, cube_map_offset, direction_to_cube_map, direction_to_lat_long,
-    lat_long_cone_gradients, lat_long_frame, lat_long_offset, lat_long_to_direction,
+    direction_to_lat_long, lat_long_cone_gradients, lat_long_frame, lat_long_offset,
+    lat_long_to_direction,
 };
 pub use gradients::{
     barycentric_offsets, general_st_offset, project_cone_to_ellipse, surface_gradients,
@@ -49,7 +48,7 @@ pub use gradients::{
 };
 pub use normal_derivatives::shading_normal_derivative;
 pub use packed_cone::PackedCone;
-pub use ray_cone::{bsdf_spread, RayCone, DIFFUSE_SPREAD};
+pub use ray_cone::RayCone;
 pub use ray_differential::{normalized_derivative, RayDifferential};
 pub use strategy::{LodStrategy, UnknownLodStrategy};
 
@@ -135,20 +134,6 @@ impl Footprint {
         }
     }
 
-    /// The footprint after scattering by a BSDF (or phase function) whose value in the
-    /// sampled direction is `bsdf_value`: the spread grows by 0.25 min(1, 1 / (pi F_s))
-    /// radians (seed 000, "BSDF scattering"); differentials grow their direction
-    /// derivatives by the same amount. The distance metric is unchanged.
-    #[inline]
-    pub fn scatter(&self, bsdf_value: f32) -> Footprint {
-        match self {
-            Footprint::Mip0 | Footprint::Distance(_) => *self,
-            Footprint::Cone1(c) => Footprint::Cone1(c.scatter(bsdf_value)),
-            Footprint::Cone(e) => Footprint::Cone(e.scatter(bsdf_value)),
-            Footprint::Differential(d) => Footprint::Differential(d.scatter(bsdf_value)),
-        }
-    }
-
     /// After [`Self::transfer`]: texture gradients in st units at `hit` for a ray along `dir`.
     /// Cones and the distance metric project their circle onto the surface's tangent plane
     /// as an ellipse, clamping the stretch to `max_aniso` (seed 000), then map it to st
@@ -176,8 +161,10 @@ impl Footprint {
     }
 
     /// Gradients for a lat-long environment lookup in direction `dir` (convention of
-    /// [`direction_to_lat_long`]). Cones: (alpha / 2pi, 0), (0, alpha / pi) (seed 000);
-    /// differentials: the derivative of the mapping along dD/dx, dD/dy.
+    /// [`direction_to_lat_long`]). Cones: seed 000's (alpha / 2pi, 0), (0, alpha / pi) with
+    /// the s axis widened by 1 / sin(theta) towards the poles ([`lat_long_cone_gradients`]);
+    /// differentials: the derivative of the mapping along dD/dx, dD/dy, which holds the
+    /// same 1 / sin(theta).
     #[inline]
     pub fn environment_gradients(&self, dir: Vec3) -> TextureGradients {
         match self {
@@ -188,24 +175,7 @@ impl Footprint {
                     lat_long_offset(d, diff.dddy),
                 )
             }
-            _ => lat_long_cone_gradients(self.spread_angle()),
-        }
-    }
-
-    /// Gradients for a cube-map environment lookup in direction `dir` (convention of
-    /// [`direction_to_cube_map`]). Cones: (2 alpha / pi, 0), (0, 2 alpha / pi) (seed 000);
-    /// differentials: the derivative of the face projection along dD/dx, dD/dy.
-    #[inline]
-    pub fn cube_map_gradients(&self, dir: Vec3) -> TextureGradients {
-        match self {
-            Footprint::Differential(diff) => {
-                let d = unit_direction(dir);
-                TextureGradients::from_axes(
-                    cube_map_offset(d, diff.dddx),
-                    cube_map_offset(d, diff.dddy),
-                )
-            }
-            _ => cube_map_cone_gradients(self.spread_angle()),
+            _ => lat_long_cone_gradients(self.spread_angle(), dir),
         }
     }
 

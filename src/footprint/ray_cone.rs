@@ -3,17 +3,12 @@
 //! Under the small-angle approximation a cone is two numbers, its width `w` at the ray's
 //! current position and its spread angle `alpha` (positive diverging, negative converging).
 //! This file holds the cone's own algebra: initialisation per camera model, propagation,
-//! reflection, refraction and BSDF spread. Projecting a cone onto a surface lives in
+//! reflection and refraction. Projecting a cone onto a surface lives in
 //! `gradients.rs`; the two-cone envelope in `cone_envelope.rs`.
-
-use std::f32::consts::PI;
 
 use glam::Vec3;
 
 use super::robust::finite;
-
-/// Spread added by an ideal diffuse bounce, in radians (seed 000, "BSDF scattering").
-pub const DIFFUSE_SPREAD: f32 = 0.25;
 
 /// A ray cone: `width` at the current position along the ray and spread `angle` in radians.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -119,29 +114,10 @@ impl RayCone {
         RayCone::new(self.width, eta * self.angle + (eta - 1.0) * kw)
     }
 
-    /// The cone after scattering by a BSDF whose value in the sampled direction is
-    /// `bsdf_value` (seed 000): alpha' = alpha + s_max min(1, 1 / (pi F_s)), s_max = 0.25.
-    /// A zero, negative or NaN BSDF value counts as fully diffuse.
-    #[inline]
-    pub fn scatter(self, bsdf_value: f32) -> RayCone {
-        RayCone::new(self.width, self.angle + bsdf_spread(bsdf_value))
-    }
-
     /// Width as a non-negative length.
     #[inline]
     pub fn abs_width(&self) -> f32 {
         self.width.abs()
-    }
-}
-
-/// The angular spread a BSDF adds (seed 000): s_max min(1, 1 / (pi F_s)).
-#[inline]
-pub fn bsdf_spread(bsdf_value: f32) -> f32 {
-    let ratio = (PI * bsdf_value).recip();
-    if ratio.is_finite() && ratio > 0.0 {
-        DIFFUSE_SPREAD * ratio.min(1.0)
-    } else {
-        DIFFUSE_SPREAD
     }
 }
 
@@ -191,14 +167,5 @@ mod tests {
         assert!((r.angle - ((0.01 + 0.1) / 1.5 - 0.1)).abs() < 1e-7);
         assert_eq!(cone.refract(0.5, 1.0).angle, cone.angle);
         assert_eq!(cone.refract(0.5, f32::NAN).angle, cone.angle);
-    }
-
-    #[test]
-    fn bsdf_spread_saturates_at_the_diffuse_value() {
-        assert_eq!(bsdf_spread(1.0 / PI), DIFFUSE_SPREAD);
-        assert_eq!(bsdf_spread(0.0), DIFFUSE_SPREAD);
-        assert_eq!(bsdf_spread(f32::NAN), DIFFUSE_SPREAD);
-        assert!((bsdf_spread(10.0 / PI) - DIFFUSE_SPREAD / 10.0).abs() < 1e-7);
-        assert!((RayCone::new(0.0, 0.1).scatter(0.01).angle - 0.35).abs() < 1e-6);
     }
 }

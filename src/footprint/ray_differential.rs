@@ -14,7 +14,6 @@ use glam::Vec3;
 
 use super::gradients::{surface_gradients, TextureGradients};
 use super::normal_derivatives::shading_normal_derivative;
-use super::ray_cone::bsdf_spread;
 use super::robust::{away_from_zero, finite, finite3, unit_direction, unit_normal, MIN_COSINE};
 use crate::hit::SurfaceHit;
 
@@ -235,22 +234,6 @@ impl RayDifferential {
             Some(r) => r,
             None => self.reflect_about(d, n, dndx, dndy),
         }
-    }
-
-    /// BSDF scattering: both direction derivatives grow by seed 000's spread
-    /// s_max min(1, 1 / (pi F_s)) (the cone heuristic carried over to differentials; a zero
-    /// direction derivative grows along the matching position derivative, or any axis).
-    #[inline]
-    pub fn scatter(self, bsdf_value: f32) -> RayDifferential {
-        let s = bsdf_spread(bsdf_value);
-        let grow = |dd: Vec3, dp: Vec3, other: Vec3| {
-            let fallback = super::robust::unit_or(other, Vec3::X).any_orthonormal_vector();
-            let axis = super::robust::unit_or(dd, super::robust::unit_or(dp, fallback));
-            dd + axis * s
-        };
-        let x = grow(self.dddx, self.dpdx, Vec3::Z);
-        let y = grow(self.dddy, self.dpdy, x);
-        RayDifferential::new(self.dpdx, self.dpdy, x, y)
     }
 
     /// World-space footprint width: the square root of the area of the parallelogram
@@ -506,16 +489,5 @@ mod tests {
         );
         assert!(huge.width().is_finite() && huge.equivalent_cone().1.is_finite());
         assert!((same.dddx - diff.dddx).length() < 1e-7);
-    }
-
-    #[test]
-    fn scatter_widens_direction_derivatives() {
-        let diff = RayDifferential::from_point(VIEW, RIGHT, UP);
-        let s = diff.scatter(1.0 / std::f32::consts::PI);
-        assert!((s.dddx.length() - diff.dddx.length() - 0.25).abs() < 1e-5);
-        let zero = RayDifferential::default().scatter(0.0);
-        assert!(
-            (zero.dddx.length() - 0.25).abs() < 1e-5 && (zero.dddy.length() - 0.25).abs() < 1e-5
-        );
     }
 }

@@ -311,26 +311,119 @@ pub fn environment_radiance(
     }
 }
 
-/// Average radiance of the environment, the ambient term that lights diffuse surfaces.
+/// Average radiance of the environment over the sphere of directions, (1 / 4pi) times the
+/// integral of L over solid angle: the ambient term that lights diffuse surfaces.
+///
+/// A lat-long map's texel row j covers the band of polar angles [pi j / h, pi (j + 1) / h],
+/// whose share of the sphere is (cos theta0 - cos theta1) / 2 (the integral of
+/// sin theta dtheta dphi / 4pi). Each row is weighted by that exact share, so rows near the
+/// poles, stretched over the full width of the map, count for the little sky they cover.
 pub fn environment_mean(environment: &Environment, textures: &[Arc<Texture>]) -> Vec3 {
     match environment {
         Environment::Color(c) => *c,
         Environment::LatLong { texture, intensity } => {
-            // The coarsest mip level is the mean of the map.
-            let q = TextureQuery {
-                s: 0.5,
-                t: 0.5,
-                dsdx: 1.0,
-                dtdx: 0.0,
-                dsdy: 0.0,
-                dtdy: 1.0,
-            };
-            let options = FilterOptions {
-                filter: crate::texture::FilterMode::Trilinear,
-                ..FilterOptions::default()
-            };
-            textures[*texture].sample(&q, &options).truncate() * *intensity
+            let level = &textures[*texture].pyramid().levels[0];
+            let (width, height) = (level.width as usize, level.height as usize);
+            let polar_angle = |row: usize| std::f64::consts::PI * row as f64 / height as f64;
+            let mut mean = [0.0f64; 3];
+            for (row, texels) in level.texels.chunks_exact(width).enumerate() {
+                let band_share = (polar_angle(row).cos() - polar_angle(row + 1).cos()) / 2.0;
+                let weight = band_share / width as f64;
+                for texel in texels {
+                    for (sum, &value) in mean.iter_mut().zip(texel) {
+                        *sum += weight * f64::from(value);
+                    }
+                }
+            }
+            Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32) * *intensity
         }
+    }
+}
+
+#[cfg(test)]
+mod environment_mean_tests {
+    use super::*;
+
+    /// A lat-long map that is dim everywhere except a bright band of rows near the +Y pole.
+    fn polar_band_map() -> (Texture, impl Fn(usize, usize) -> Vec3) {
+        let (w, h) = (64usize, 32usize);
+        let texel = |_x: usize, y: usize| {
+            if (2..4).contains(&y) {
+                Vec3::new(10.0, 0.5, 4.0)
+            } else {
+                Vec3::new(0.1, 0.2, 0.3)
+            }
+        };
+        let texels = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| texel(x, y).extend(1.0).to_array())
+            .collect();
+        let texture = Texture::from_rgba_f32(w as u32, h as u32, texels).unwrap();
+        (texture, texel)
+    }
+
+    #[test]
+    fn the_mean_is_weighted_by_solid_angle() {
+        let (texture, texel) = polar_band_map();
+        let (w, h) = (texture.width() as f32, texture.height() as f32);
+        let intensity = 2.0;
+        let environment = Environment::LatLong {
+            texture: 0,
+            intensity,
+        };
+        let mean = environment_mean(&environment, &[Arc::new(texture)]);
+        // Reference: (1 / 4pi) times the integral of the map over the sphere, by a fine
+        // quadrature that is uniform in cos(theta) and phi (equal areas on the sphere), each
+        // direction reading the texel it falls in through the lat-long mapping.
+        // Rings far finer than the map's rows keep the band edges' misassignment below
+        // 1/8000 of the sphere each.
+        let (rings, segments) = (4000, 64);
+        let mut sum = [0.0f64; 3];
+        for ring in 0..rings {
+            let cos_theta = 1.0 - 2.0 * (ring as f64 + 0.5) / rings as f64;
+            let sin_theta = (1.0 - cos_theta * cos_theta).sqrt();
+            for segment in 0..segments {
+                let phi = std::f64::consts::TAU * (segment as f64 + 0.5) / segments as f64;
+                let dir = Vec3::new(
+                    (sin_theta * phi.cos()) as f32,
+                    cos_theta as f32,
+                    (sin_theta * phi.sin()) as f32,
+                );
+                let st = crate::footprint::direction_to_lat_long(dir);
+                let x = ((st.x * w) as usize).min(w as usize - 1);
+                let y = ((st.y * h) as usize).min(h as usize - 1);
+                let value = texel(x, y);
+                for (total, v) in sum.iter_mut().zip(value.to_array()) {
+                    *total += f64::from(v);
+                }
+            }
+        }
+        let n = (rings * segments) as f64;
+        let reference = Vec3::new(
+            (sum[0] / n) as f32,
+            (sum[1] / n) as f32,
+            (sum[2] / n) as f32,
+        ) * intensity;
+        eprintln!("environment mean {mean} vs quadrature over the sphere {reference}");
+        assert!(
+            (mean - reference).abs().max_element() < 1e-2 * reference.max_element(),
+            "mean {mean} vs the sphere's {reference}"
+        );
+    }
+
+    #[test]
+    fn a_uniform_map_has_its_own_value_as_mean() {
+        let texels = vec![[0.25, 0.5, 0.75, 1.0]; 8 * 5];
+        let texture = Arc::new(Texture::from_rgba_f32(8, 5, texels).unwrap());
+        let environment = Environment::LatLong {
+            texture: 0,
+            intensity: 4.0,
+        };
+        let mean = environment_mean(&environment, &[texture]);
+        assert!(
+            (mean - Vec3::new(1.0, 2.0, 3.0)).abs().max_element() < 1e-5,
+            "{mean}"
+        );
     }
 }
 

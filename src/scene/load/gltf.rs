@@ -191,12 +191,50 @@ fn component(data_type: DataType, bytes: &[u8], normalized: bool) -> f32 {
     }
 }
 
-fn index_value(data_type: DataType, bytes: &[u8]) -> Option<u32> {
-    match data_type {
-        DataType::U8 => Some(u32::from(bytes[0])),
-        DataType::U16 => Some(u32::from(u16::from_le_bytes([bytes[0], bytes[1]]))),
-        DataType::U32 => Some(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
-        _ => None,
+/// The component types glTF allows for vertex and sparse indices (unsigned integers).
+/// Choosing it once per accessor, and rejecting every other type there, leaves no index
+/// that could be read as a stand-in value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum IndexType {
+    U8,
+    U16,
+    U32,
+}
+
+impl IndexType {
+    /// The index type of an accessor's component type; `None` for signed or float types.
+    fn of(data_type: DataType) -> Option<IndexType> {
+        match data_type {
+            DataType::U8 => Some(IndexType::U8),
+            DataType::U16 => Some(IndexType::U16),
+            DataType::U32 => Some(IndexType::U32),
+            DataType::I8 | DataType::I16 | DataType::F32 => None,
+        }
+    }
+
+    fn of_sparse(index_type: gltf::accessor::sparse::IndexType) -> IndexType {
+        match index_type {
+            gltf::accessor::sparse::IndexType::U8 => IndexType::U8,
+            gltf::accessor::sparse::IndexType::U16 => IndexType::U16,
+            gltf::accessor::sparse::IndexType::U32 => IndexType::U32,
+        }
+    }
+
+    fn size(self) -> usize {
+        match self {
+            IndexType::U8 => 1,
+            IndexType::U16 => 2,
+            IndexType::U32 => 4,
+        }
+    }
+
+    /// The little-endian index at the start of `bytes` (at least [`Self::size`] long).
+    fn read(self, bytes: &[u8]) -> u32 {
+        match self {
+            IndexType::U8 => u32::from(bytes[0]),
+            IndexType::U16 => u32::from(u16::from_le_bytes([bytes[0], bytes[1]])),
+            IndexType::U32 => u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
+        }
     }
 }
 
@@ -277,11 +315,7 @@ fn read_floats(
     if let Some(sparse) = accessor.sparse() {
         let n = sparse.count();
         let indices = sparse.indices();
-        let index_type = match indices.index_type() {
-            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
-            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
-            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
-        };
+        let index_type = IndexType::of_sparse(indices.index_type());
         let index_size = index_type.size();
         let index_bytes = view_bytes(&indices.view(), buffers)?;
         let index_elements = Elements::new(
@@ -303,8 +337,7 @@ fn read_floats(
             &what,
         )?;
         for j in 0..n {
-            let target =
-                index_value(index_type, index_elements.get(j)).unwrap_or(u32::MAX) as usize;
+            let target = index_type.read(index_elements.get(j)) as usize;
             let slot = out
                 .get_mut(target * components..(target + 1) * components)
                 .ok_or_else(|| format!("{what}: sparse index {target} out of range"))?;
@@ -318,9 +351,15 @@ fn read_floats(
 fn read_indices(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
     let what = format!("index accessor {}", accessor.index());
     let data_type = accessor.data_type();
-    if accessor.dimensions() != Dimensions::Scalar || index_value(data_type, &[0; 4]).is_none() {
-        return Err(format!("{what} is not unsigned scalar integers"));
-    }
+    let index_type = match (accessor.dimensions(), IndexType::of(data_type)) {
+        (Dimensions::Scalar, Some(index_type)) => index_type,
+        (dimensions, _) => {
+            return Err(format!(
+                "{what} holds {dimensions:?} of {data_type:?}; indices must be unsigned \
+                 scalar integers (5121, 5123 or 5125)"
+            ))
+        }
+    };
     if accessor.sparse().is_some() {
         return Err(format!("{what}: sparse index accessors are not supported"));
     }
@@ -328,7 +367,7 @@ fn read_indices(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u3
         .view()
         .ok_or_else(|| format!("{what} has no buffer view"))?;
     let bytes = view_bytes(&view, buffers)?;
-    let size = data_type.size();
+    let size = index_type.size();
     let stride = view.stride().unwrap_or(size).max(size);
     let elements = Elements::new(
         bytes,
@@ -339,7 +378,7 @@ fn read_indices(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u3
         &what,
     )?;
     Ok((0..accessor.count())
-        .map(|i| index_value(data_type, elements.get(i)).unwrap_or(0))
+        .map(|i| index_type.read(elements.get(i)))
         .collect())
 }
 
@@ -712,10 +751,23 @@ fn wrap_mode(mode: gltf::texture::WrappingMode) -> WrapMode {
 }
 
 /// `KHR_texture_transform`: `uv' = T(offset) * R(rotation) * S(scale) * uv`, with the
-/// extension's rotation matrix columns (cos, sin) and (-sin, cos). Because glTF's uv is
-/// already OpenImageIO's st, the same matrix applies to st.
+/// rotation matrix as the extension writes it, rows (cos, sin) and (-sin, cos):
+/// `u' = cos u + sin v`, `v' = -sin u + cos v`. (The extension prints the matrix inside a
+/// GLSL `mat3(...)` constructor, which would read the rows as columns; its own example, "the
+/// lower left quadrant rotated clockwise 90 degrees" from offset (0, 1), rotation pi/2 and
+/// scale 0.5, and Khronos' TextureTransformTest model hold only for the rows.) Seen on the
+/// image, whose v points down, the uv axes turn counter-clockwise and the texture clockwise.
+/// glTF's uv is OpenImageIO's st unchanged (`t = v`, in `Loader::add_mesh`), so the same
+/// matrix applies to st.
 pub(crate) fn texture_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Affine2 {
-    Affine2::from_scale_angle_translation(Vec2::from(scale), rotation, Vec2::from(offset))
+    let (sin, cos) = rotation.sin_cos();
+    let [scale_u, scale_v] = scale;
+    // Columns of R * S: the images of (1, 0) and (0, 1).
+    Affine2::from_cols(
+        Vec2::new(cos, -sin) * scale_u,
+        Vec2::new(sin, cos) * scale_v,
+        Vec2::from(offset),
+    )
 }
 
 /// A glTF camera looks down its node's -Z with +Y up.
@@ -795,14 +847,37 @@ mod tests {
         let (offset, rotation, scale) = ([0.25, -0.5], 0.3f32, [2.0, 3.0]);
         let m = texture_transform(offset, rotation, scale);
         let uv = Vec2::new(0.7, 0.2);
-        // T * R * S written out with the extension's column-major matrices.
+        // T * R * S with R's rows (cos, sin) and (-sin, cos), as the extension writes it.
         let (s, c) = rotation.sin_cos();
         let scaled = Vec2::new(uv.x * scale[0], uv.y * scale[1]);
-        let rotated = Vec2::new(c * scaled.x - s * scaled.y, s * scaled.x + c * scaled.y);
+        let rotated = Vec2::new(c * scaled.x + s * scaled.y, -s * scaled.x + c * scaled.y);
         let expected = rotated + Vec2::from(offset);
         assert!((m.transform_point2(uv) - expected).length() < 1e-6);
+        // A quarter turn takes u to -v: up on the image, whose v points down.
         let quarter = texture_transform([0.0, 0.0], FRAC_PI_2, [1.0, 1.0]);
-        assert!((quarter.transform_point2(Vec2::X) - Vec2::Y).length() < 1e-6);
+        assert!((quarter.transform_point2(Vec2::X) - Vec2::NEG_Y).length() < 1e-6);
+    }
+
+    #[test]
+    fn texture_transform_reproduces_the_extension_example() {
+        // Offset (0, 1), a quarter turn and half scale read the lower left quadrant of the
+        // image (u in [0, 0.5], v in [0.5, 1] with v down), turned clockwise by 90 degrees:
+        // the quad's top edge (v = 0, left to right) shows the quadrant's left edge (u = 0)
+        // from bottom to top.
+        let m = texture_transform([0.0, 1.0], FRAC_PI_2, [0.5, 0.5]);
+        let corners = [
+            (Vec2::new(0.0, 0.0), Vec2::new(0.0, 1.0)),
+            (Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.5)),
+            (Vec2::new(1.0, 1.0), Vec2::new(0.5, 0.5)),
+            (Vec2::new(0.0, 1.0), Vec2::new(0.5, 1.0)),
+        ];
+        for (uv, expected) in corners {
+            let got = m.transform_point2(uv);
+            assert!(
+                (got - expected).length() < 1e-6,
+                "{uv} -> {got}, not {expected}"
+            );
+        }
     }
 
     fn base64(bytes: &[u8]) -> String {
@@ -1023,6 +1098,18 @@ mod tests {
                 Box::new(|j| j["meshes"][0]["primitives"][0]["material"] = 7.into()),
                 "Index out of bounds",
             ),
+            (
+                Box::new(|j| j["accessors"][3]["componentType"] = 5122.into()),
+                "index accessor 3 holds Scalar of I16; indices must be unsigned",
+            ),
+            (
+                Box::new(|j| j["accessors"][3]["componentType"] = 5126.into()),
+                "index accessor 3 holds Scalar of F32; indices must be unsigned",
+            ),
+            (
+                Box::new(|j| j["accessors"][3]["type"] = "VEC2".into()),
+                "index accessor 3 holds Vec2 of U16; indices must be unsigned",
+            ),
         ];
         for (edit, expected) in cases {
             let e = synthetic(edit, TRIANGLE).unwrap_err().to_string();
@@ -1038,6 +1125,27 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("not finite"));
+    }
+
+    #[test]
+    fn indices_of_every_unsigned_width_are_read_little_endian() {
+        let bytes = [0xfe, 0xdc, 0xba, 0x98];
+        assert_eq!(IndexType::U8.read(&bytes), 0xfe);
+        assert_eq!(IndexType::U16.read(&bytes), 0xdcfe);
+        assert_eq!(IndexType::U32.read(&bytes), 0x98ba_dcfe);
+        for (data_type, index_type) in [
+            (DataType::U8, Some(IndexType::U8)),
+            (DataType::U16, Some(IndexType::U16)),
+            (DataType::U32, Some(IndexType::U32)),
+            (DataType::I8, None),
+            (DataType::I16, None),
+            (DataType::F32, None),
+        ] {
+            assert_eq!(IndexType::of(data_type), index_type, "{data_type:?}");
+            if let Some(index_type) = index_type {
+                assert_eq!(index_type.size(), data_type.size());
+            }
+        }
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //! mesh files and produces a [`SceneDescription`]. Values that reference something keep
 //! their [`Spanned`] position so resolution errors point at the right place too.
 
-use glam::{Affine2, Vec2, Vec3};
+use glam::{Affine2, Vec3};
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::Deserialize;
 use std::collections::HashMap;
@@ -338,6 +338,8 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
 
     // Textures, by name.
     let mut texture_names: HashMap<String, usize> = HashMap::new();
+    // Whether each texture's t wrap was written (`wrap_t` or `wrap`) rather than defaulted.
+    let mut wrap_t_written: Vec<bool> = Vec::new();
     for t in &raw.texture {
         let name = t.name.get_ref().clone();
         if texture_names.contains_key(&name) {
@@ -358,6 +360,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             wrap_s: t.wrap_s.map_or(wrap, RawWrap::mode),
             wrap_t: t.wrap_t.map_or(wrap, RawWrap::mode),
         });
+        wrap_t_written.push(t.wrap_t.is_some() || t.wrap.is_some());
         texture_names.insert(name, scene.textures.len() - 1);
     }
     let texture = |name: &Spanned<String>| {
@@ -510,6 +513,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
 
     if let Some(env) = &raw.environment {
         scene.environment = environment(env, &texture_names, loc)?;
+        clamp_lat_long_poles(&mut scene, &wrap_t_written);
     }
     if let Some(camera) = &raw.camera {
         scene.camera = Some(camera_desc(camera, loc)?);
@@ -520,17 +524,14 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
     Ok(scene)
 }
 
-/// `texture_scale`, `texture_offset`, `texture_rotation` (degrees) as `T * R * S`, the same
-/// composition as glTF's `KHR_texture_transform`, applied to st.
+/// `texture_scale`, `texture_offset`, `texture_rotation` as `T * R * S` applied to st:
+/// glTF's `KHR_texture_transform` exactly, with the rotation in degrees instead of radians
+/// (same sign: `texture_rotation = 90` is glTF's `rotation = pi/2`, taking (1, 0) to (0, -1)).
 fn texture_transform(m: &RawMaterial) -> Affine2 {
-    let scale = m
-        .texture_scale
-        .map_or(Vec2::ONE, |s| Vec2::new(s[0].0, s[1].0));
-    let offset = m
-        .texture_offset
-        .map_or(Vec2::ZERO, |o| Vec2::new(o[0].0, o[1].0));
+    let scale = m.texture_scale.map_or([1.0, 1.0], |s| [s[0].0, s[1].0]);
+    let offset = m.texture_offset.map_or([0.0, 0.0], |o| [o[0].0, o[1].0]);
     let rotation = m.texture_rotation.map_or(0.0, |r| r.0.to_radians());
-    Affine2::from_scale_angle_translation(scale, rotation, offset)
+    super::gltf::texture_transform(offset, rotation, scale)
 }
 
 fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> {
@@ -684,6 +685,34 @@ fn light_desc(l: &Spanned<RawLight>, loc: &Located) -> Result<Light, SceneError>
     })
 }
 
+/// A lat-long map's t runs from one pole (t = 0) to the other (t = 1): wrapping it
+/// periodically would blend the two poles' texels into each other, so an environment texture
+/// whose `wrap_t` was not written is clamped in t (s stays as written, periodic by default,
+/// which is right for the azimuth). A texture that materials also use keeps its own wrap
+/// for them; the environment then gets its own entry.
+fn clamp_lat_long_poles(scene: &mut SceneDescription, wrap_t_written: &[bool]) {
+    let Environment::LatLong { texture, .. } = &mut scene.environment else {
+        return;
+    };
+    if wrap_t_written.get(*texture).copied().unwrap_or(true) {
+        return;
+    }
+    let used_by_materials = scene.materials.iter().any(|m| {
+        [&m.base_color_texture, &m.alpha_texture]
+            .into_iter()
+            .flatten()
+            .any(|binding| binding.texture == *texture)
+    });
+    if used_by_materials {
+        let mut own = scene.textures[*texture].clone();
+        own.wrap_t = WrapMode::Clamp;
+        scene.textures.push(own);
+        *texture = scene.textures.len() - 1;
+    } else {
+        scene.textures[*texture].wrap_t = WrapMode::Clamp;
+    }
+}
+
 fn environment(
     e: &Spanned<RawEnvironment>,
     textures: &HashMap<String, usize>,
@@ -710,6 +739,7 @@ fn environment(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec2;
     use std::path::Path;
 
     fn parse_here(text: &str) -> Result<SceneDescription, SceneError> {
@@ -896,9 +926,81 @@ material = "glass"
             matches!(&t.source, crate::scene::TextureSource::File(p) if *p == dir.path().join("c.png"))
         );
         let binding = s.materials[0].base_color_texture.as_ref().unwrap();
-        // (1, 0) -> scale (4, 0) -> rotate 90 deg (0, 4) -> offset (0.5, 4).
+        // (1, 0) -> scale (4, 0) -> rotate 90 deg (0, -4) -> offset (0.5, -4).
         let st = binding.transform.transform_point2(Vec2::X);
-        assert!((st - Vec2::new(0.5, 4.0)).length() < 1e-5, "{st}");
+        assert!((st - Vec2::new(0.5, -4.0)).length() < 1e-5, "{st}");
+    }
+
+    #[test]
+    fn texture_rotation_is_gltf_rotation_in_degrees() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("c.png"), b"x").unwrap();
+        for degrees in [30.0f32, -75.0, 90.0, 200.0] {
+            let text = format!(
+                "[[texture]]\nname = 'c'\nfile = 'c.png'\n[[material]]\nname = 'm'\n\
+                 base_color_texture = 'c'\ntexture_scale = [2, 3]\n\
+                 texture_offset = [0.25, -0.5]\ntexture_rotation = {degrees}\n"
+            );
+            let s = parse(&text, &Files::disk(dir.path()), "s.toml").unwrap();
+            let toml = s.materials[0]
+                .base_color_texture
+                .as_ref()
+                .unwrap()
+                .transform;
+            // The same sign as KHR_texture_transform's `rotation`, in degrees.
+            let gltf = super::super::gltf::texture_transform(
+                [0.25, -0.5],
+                degrees.to_radians(),
+                [2.0, 3.0],
+            );
+            assert!(
+                toml.abs_diff_eq(gltf, 1e-6),
+                "{degrees}: {toml:?} vs {gltf:?}"
+            );
+            // Written out: (1, 0) turns to (cos, -sin), towards -t (up on the image).
+            let (sin, cos) = degrees.to_radians().sin_cos();
+            let turned = toml.transform_vector2(Vec2::X) / 2.0;
+            assert!(
+                (turned - Vec2::new(cos, -sin)).length() < 1e-5,
+                "{degrees}: {turned}"
+            );
+        }
+    }
+
+    #[test]
+    fn environment_textures_default_to_clamp_in_t() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("sky.png"), b"x").unwrap();
+        let scene = |texture_keys: &str, material: &str| {
+            let text = format!(
+                "[[texture]]\nname = 'sky'\nfile = 'sky.png'\n{texture_keys}\n{material}\n\
+                 [environment]\ntexture = 'sky'\n"
+            );
+            parse(&text, &Files::disk(dir.path()), "s.toml").unwrap()
+        };
+        let environment_wrap = |s: &SceneDescription| match s.environment {
+            Environment::LatLong { texture, .. } => {
+                (s.textures[texture].wrap_s, s.textures[texture].wrap_t)
+            }
+            Environment::Color(_) => panic!("not a lat-long environment"),
+        };
+        // Unset: periodic around the azimuth, clamped at the poles.
+        let s = scene("", "");
+        assert_eq!(environment_wrap(&s), (WrapMode::Periodic, WrapMode::Clamp));
+        assert_eq!(s.textures.len(), 1);
+        // Set explicitly, by `wrap_t` or by `wrap`: as written.
+        let s = scene("wrap_t = 'mirror'", "");
+        assert_eq!(environment_wrap(&s), (WrapMode::Periodic, WrapMode::Mirror));
+        let s = scene("wrap = 'periodic'", "");
+        assert_eq!(
+            environment_wrap(&s),
+            (WrapMode::Periodic, WrapMode::Periodic)
+        );
+        // A material sharing the image keeps the texture's own (periodic) wrap.
+        let s = scene("", "[[material]]\nname = 'm'\nbase_color_texture = 'sky'\n");
+        let material_texture = s.materials[0].base_color_texture.as_ref().unwrap().texture;
+        assert_eq!(s.textures[material_texture].wrap_t, WrapMode::Periodic);
+        assert_eq!(environment_wrap(&s), (WrapMode::Periodic, WrapMode::Clamp));
     }
 
     #[test]
