@@ -57,8 +57,8 @@ pub fn lat_long_frame(n: Vec3, radius: f32) -> (Vec2, Vec3, Vec3) {
 /// Seed 000 gives (alpha / 2pi, 0), (0, alpha / pi), which holds at the equator only: a
 /// circle of latitude at polar angle theta has radius sin theta, so alpha radians across it
 /// are alpha / sin theta radians of azimuth and ds = dphi / 2pi widens by 1 / sin theta
-/// towards the poles (the derivative [`lat_long_offset`] takes for differentials). Where
-/// the cone reaches over the pole ds is capped at 1, the whole circle of latitude.
+/// towards the poles (the derivative [`lat_long_offset`] takes for differentials). Right at
+/// the poles, where that would exceed the whole circle of latitude, ds is capped at 1.
 #[inline]
 pub fn lat_long_cone_gradients(angle: f32, dir: Vec3) -> TextureGradients {
     let a = finite(angle).abs();

@@ -340,6 +340,14 @@ pub fn environment_mean(environment: &Environment, textures: &[Arc<Texture>]) ->
     }
 }
 
+/// Needed to keep the camera next to the lookups in the render context.
+pub fn camera_for(scene: &SceneDescription, width: u32, height: u32) -> Option<Camera> {
+    scene
+        .camera
+        .as_ref()
+        .map(|desc| Camera::new(desc, width, height))
+}
+
 #[cfg(test)]
 mod environment_mean_tests {
     use super::*;
@@ -425,12 +433,4 @@ mod environment_mean_tests {
             "{mean}"
         );
     }
-}
-
-/// Needed to keep the camera next to the lookups in the render context.
-pub fn camera_for(scene: &SceneDescription, width: u32, height: u32) -> Option<Camera> {
-    scene
-        .camera
-        .as_ref()
-        .map(|desc| Camera::new(desc, width, height))
 }
