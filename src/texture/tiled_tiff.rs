@@ -127,10 +127,15 @@ fn decode_directory(
         Some(other) => return Err(format!("unknown planar configuration {other}")),
     };
 
-    let mut data = DecodingResult::U8(Vec::new());
-    decoder
-        .read_image_to_buffer(&mut data)
-        .map_err(|e| e.to_string())?;
+    let data = if separate_planes {
+        read_separate_planes(decoder, width, height, channels, usize::from(bits / 8))?
+    } else {
+        let mut data = DecodingResult::U8(Vec::new());
+        decoder
+            .read_image_to_buffer(&mut data)
+            .map_err(|e| e.to_string())?;
+        data
+    };
     let layout = Layout {
         width,
         height,
@@ -167,11 +172,88 @@ fn decode_directory(
         DecodingResult::F16(v) => layout.assemble(v.len(), |i, _| v[i].to_f32()),
         DecodingResult::F32(v) => layout.assemble(v.len(), |i, _| v[i]),
         DecodingResult::F64(v) => layout.assemble(v.len(), |i, _| v[i] as f32),
-        _ => {
-            Err("unsupported sample type (expected unsigned integer or floating point)".to_string())
-        }
+        _ => Err(UNSUPPORTED_SAMPLES.to_string()),
     }
 }
+
+/// Reads a level stored as separate planes chunk by chunk (tile or strip), placing each
+/// chunk's rows into one plane-major buffer: all of channel 0, then channel 1, ... The
+/// `tiff` crate's whole-image read does not lay out tiled separate planes correctly, and
+/// a chunk holds a single channel, so the assembly is done here.
+fn read_separate_planes(
+    decoder: &mut Decoder<Cursor<&[u8]>>,
+    width: u32,
+    height: u32,
+    channels: usize,
+    bytes_per_sample: usize,
+) -> Result<DecodingResult, String> {
+    let (chunk_w, chunk_h) = decoder.chunk_dimensions();
+    if chunk_w == 0 || chunk_h == 0 {
+        return Err(format!("chunks of {chunk_w}x{chunk_h} texels"));
+    }
+    let (across, down) = (width.div_ceil(chunk_w), height.div_ceil(chunk_h));
+    let (w, h) = (width as usize, height as usize);
+    let mut image: Option<DecodingResult> = None;
+    for plane in 0..channels {
+        for cy in 0..down {
+            for cx in 0..across {
+                let index = u32::try_from(plane)
+                    .ok()
+                    .and_then(|p| {
+                        p.checked_mul(down)?
+                            .checked_add(cy)?
+                            .checked_mul(across)?
+                            .checked_add(cx)
+                    })
+                    .ok_or("too many chunks")?;
+                let mut chunk = decoder.read_chunk(index).map_err(|e| e.to_string())?;
+                let image = match &mut image {
+                    Some(image) => image,
+                    None => image.insert(zeroed_like(&chunk, w * h * channels)?),
+                };
+                let (x0, y0) = ((cx * chunk_w) as usize, (cy * chunk_h) as usize);
+                let data_w = (w - x0).min(chunk_w as usize);
+                let data_h = (h - y0).min(chunk_h as usize);
+                let row_bytes = data_w * bytes_per_sample;
+                let source = chunk.as_buffer(0);
+                let source = source.as_bytes();
+                let mut target = image.as_buffer(0);
+                let target = target.as_bytes_mut();
+                if source.len() < row_bytes * data_h
+                    || target.len() != w * h * channels * bytes_per_sample
+                {
+                    return Err(format!(
+                        "chunk {index} holds {} bytes, expected {}",
+                        source.len(),
+                        row_bytes * data_h
+                    ));
+                }
+                for row in 0..data_h {
+                    let to = ((plane * h + y0 + row) * w + x0) * bytes_per_sample;
+                    target[to..to + row_bytes]
+                        .copy_from_slice(&source[row * row_bytes..(row + 1) * row_bytes]);
+                }
+            }
+        }
+    }
+    image.ok_or_else(|| "no image data".to_string())
+}
+
+/// A zeroed buffer of `len` samples of the same type as `chunk`.
+fn zeroed_like(chunk: &DecodingResult, len: usize) -> Result<DecodingResult, String> {
+    Ok(match chunk {
+        DecodingResult::U8(_) => DecodingResult::U8(vec![0; len]),
+        DecodingResult::U16(_) => DecodingResult::U16(vec![0; len]),
+        DecodingResult::U32(_) => DecodingResult::U32(vec![0; len]),
+        DecodingResult::F16(_) => DecodingResult::F16(vec![half::f16::ZERO; len]),
+        DecodingResult::F32(_) => DecodingResult::F32(vec![0.0; len]),
+        DecodingResult::F64(_) => DecodingResult::F64(vec![0.0; len]),
+        _ => return Err(UNSUPPORTED_SAMPLES.to_string()),
+    })
+}
+
+const UNSUPPORTED_SAMPLES: &str =
+    "unsupported sample type (expected unsigned integer or floating point)";
 
 /// What a stored sample becomes: colour (R, G, B or grey) or alpha.
 #[derive(Clone, Copy, PartialEq, Eq)]
