@@ -13,7 +13,7 @@ use crate::texture::{ColorSpace, FilterMode, FilterOptions, Texture, TextureQuer
 /// Arguments of `sample-texture`.
 #[derive(clap::Args, Debug)]
 pub struct SampleTextureArgs {
-    /// Texture file (PNG, JPEG or OpenEXR, mip-mapped OpenEXR from maketx included).
+    /// Texture file (PNG, JPEG, OpenEXR or TIFF; maketx's mip-mapped .exr and .tx keep their levels).
     pub texture: PathBuf,
     /// CSV with header `s,t,dsdx,dtdx,dsdy,dtdy`, one lookup per row.
     #[arg(long)]

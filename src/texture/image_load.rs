@@ -1,11 +1,13 @@
 //! Decoding texture files into linear RGBA f32 levels.
 //!
 //! PNG and JPEG (8 or 16 bit; grey, grey-alpha, RGB, RGBA) go through the `image`
-//! crate; OpenEXR (half, float or uint channels) through the `exr` crate. The format
-//! is sniffed from the bytes, not the file name. Missing alpha is 1; grey is copied
-//! to R, G and B. With [`ColorSpace::Srgb`] the colour channels of PNG/JPEG are
-//! decoded from sRGB to linear; alpha and OpenEXR data are always used as stored.
-//! A mip-mapped OpenEXR (as `maketx` writes) returns all its levels, finest first.
+//! crate; OpenEXR (half, float or uint channels) through the `exr` crate; TIFF,
+//! including `maketx`'s tiled, mip-mapped `.tx`, through [`super::tiled_tiff`]. The
+//! format is sniffed from the bytes, not the file name. Missing alpha is 1; grey is
+//! copied to R, G and B. With [`ColorSpace::Srgb`] the colour channels of PNG/JPEG and
+//! of integer TIFF are decoded from sRGB to linear; alpha, OpenEXR and floating-point
+//! TIFF data are always used as stored. A mip-mapped OpenEXR or `.tx` (as `maketx`
+//! writes) returns all its levels, finest first.
 
 use std::io::Cursor;
 
@@ -13,9 +15,9 @@ use exr::prelude::{FlatSamples, Levels, ReadChannels, ReadLayers};
 use image::DynamicImage;
 
 use super::mip_pyramid::MipLevel;
-use super::{ColorSpace, TextureError};
+use super::{tiled_tiff, ColorSpace, TextureError};
 
-/// Decodes `bytes` (PNG, JPEG or OpenEXR) into one or more levels, finest first.
+/// Decodes `bytes` (PNG, JPEG, OpenEXR or TIFF) into one or more levels, finest first.
 pub(crate) fn decode(
     bytes: &[u8],
     label: &str,
@@ -25,6 +27,8 @@ pub(crate) fn decode(
         decode_exr(bytes, label)
     } else if bytes.starts_with(b"\x89PNG\r\n\x1a\n") || bytes.starts_with(&[0xff, 0xd8, 0xff]) {
         decode_png_jpeg(bytes, label, color_space).map(|l| vec![l])
+    } else if tiled_tiff::is_tiff(bytes) {
+        tiled_tiff::decode(bytes, label, color_space)
     } else {
         Err(TextureError::UnknownFormat {
             label: label.to_string(),
@@ -34,7 +38,7 @@ pub(crate) fn decode(
 
 /// sRGB transfer function inverse (IEC 61966-2-1).
 #[inline]
-fn srgb_to_linear(c: f32) -> f32 {
+pub(super) fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {

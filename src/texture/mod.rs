@@ -29,6 +29,7 @@ mod ewa;
 mod filter_closest_bilinear;
 mod image_load;
 mod mip_pyramid;
+mod tiled_tiff;
 mod tiles;
 mod trilinear;
 mod wrap;
@@ -137,8 +138,8 @@ pub enum TextureError {
         /// Underlying error.
         source: std::io::Error,
     },
-    /// The bytes are not PNG, JPEG or OpenEXR.
-    #[error("{label}: unrecognised image format (expected PNG, JPEG or OpenEXR)")]
+    /// The bytes are not PNG, JPEG, OpenEXR or TIFF.
+    #[error("{label}: unrecognised image format (expected PNG, JPEG, OpenEXR or TIFF)")]
     UnknownFormat {
         /// File path or label.
         label: String,
@@ -154,6 +155,14 @@ pub enum TextureError {
     /// The OpenEXR reader failed.
     #[error("{label}: cannot read OpenEXR: {message}")]
     Exr {
+        /// File path or label.
+        label: String,
+        /// Reader message.
+        message: String,
+    },
+    /// The TIFF reader failed, or the TIFF holds samples a texture cannot use.
+    #[error("{label}: cannot read TIFF: {message}")]
+    Tiff {
         /// File path or label.
         label: String,
         /// Reader message.
@@ -180,7 +189,7 @@ pub struct Texture {
 }
 
 impl Texture {
-    /// Loads PNG, JPEG or OpenEXR from a file (format sniffed from the bytes).
+    /// Loads PNG, JPEG, OpenEXR or TIFF from a file (format sniffed from the bytes).
     pub fn from_file(path: &Path, color_space: ColorSpace) -> Result<Texture, TextureError> {
         let label = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| TextureError::Io {
@@ -190,8 +199,8 @@ impl Texture {
         Self::from_encoded(&bytes, &label, color_space)
     }
 
-    /// Decodes PNG, JPEG or OpenEXR bytes; `label` names the source in errors.
-    /// Mip-mapped OpenEXR files (e.g. written by `maketx`) keep their own levels.
+    /// Decodes PNG, JPEG, OpenEXR or TIFF bytes; `label` names the source in errors.
+    /// Mip-mapped OpenEXR and `.tx` files (e.g. written by `maketx`) keep their own levels.
     pub fn from_encoded(
         bytes: &[u8],
         label: &str,
