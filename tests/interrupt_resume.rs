@@ -268,8 +268,14 @@ fn an_interrupted_render_leaves_the_finished_outputs_of_an_earlier_run_alone() {
         std::fs::write(dir.path().join("keep.png"), &png).unwrap();
     };
     interrupted_render_with(dir.path(), "keep.exr", "INT", &[], restore);
-    assert_eq!(std::fs::read(dir.path().join("keep.exr")).unwrap(), exr);
-    assert_eq!(std::fs::read(dir.path().join("keep.png")).unwrap(), png);
+    assert!(
+        std::fs::read(dir.path().join("keep.exr")).unwrap() == exr,
+        "the interrupted run replaced the finished keep.exr"
+    );
+    assert!(
+        std::fs::read(dir.path().join("keep.png")).unwrap() == png,
+        "the interrupted run replaced the finished keep.png"
+    );
     let (_, attributes) = read_exr(&dir.path().join("keep.partial.exr")).expect("partial EXR");
     assert!(attributes.incomplete);
 }
