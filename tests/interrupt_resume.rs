@@ -1,6 +1,8 @@
-//! Nothing is lost (issue 6, part 6): Ctrl-C or SIGTERM during a render writes the finished
-//! tiles as a valid EXR (unfinished pixels alpha 0, `conetrace.incomplete = 1`, the finished
-//! tiles listed) and exits with status 3; `--resume` renders only the missing tiles and gives
+//! Nothing is lost: Ctrl-C or SIGTERM during a render writes the finished tiles as a valid
+//! EXR of its own beside the output (`<name>.partial.exr`: unfinished pixels alpha 0,
+//! `conetrace.incomplete = 1`, the finished tiles listed) and exits with status 3, leaving
+//! the outputs of an earlier complete run as they were; `--resume` refuses a partial render
+//! whose scene, referenced files or options changed, renders only the missing tiles and gives
 //! the same image, bit for bit, as an uninterrupted run; a failing run never replaces an
 //! existing output.
 //!
@@ -44,6 +46,11 @@ fn render_args(spp: u32, out: &str) -> Vec<String> {
     .collect()
 }
 
+/// `x.exr` -> `x.partial.exr`: where an interrupted render's finished part goes.
+fn partial(out: &str) -> String {
+    out.replace(".exr", ".partial.exr")
+}
+
 fn start(dir: &Path, args: &[String]) -> Child {
     conetrace()
         .args(args)
@@ -73,18 +80,36 @@ fn finish(child: Child) -> (ExitStatus, String) {
 /// Start a render and interrupt it with `signal_name`, adapting delay and samples until the
 /// interruption lands mid-render. Returns the spp used.
 fn interrupted_render(dir: &Path, out: &str, signal_name: &str) -> u32 {
+    interrupted_render_with(dir, out, signal_name, &[], || {})
+}
+
+/// [`interrupted_render`] with `extra` arguments (e.g. a scene) placed after `render`;
+/// `restore` runs after a render that finished before the signal, to put back the files an
+/// attempt expects to find.
+fn interrupted_render_with(
+    dir: &Path,
+    out: &str,
+    signal_name: &str,
+    extra: &[String],
+    restore: impl Fn(),
+) -> u32 {
     let mut spp = 4;
     let mut delay_ms = 400;
     for _attempt in 0..8 {
-        let child = start(dir, &render_args(spp, out));
+        let mut args = render_args(spp, out);
+        for (i, arg) in extra.iter().enumerate() {
+            args.insert(1 + i, arg.clone());
+        }
+        let child = start(dir, &args);
         sleep(Duration::from_millis(delay_ms));
         signal(&child, signal_name);
         let (status, stderr) = finish(child);
         match status.code() {
             Some(3) if stderr.contains("nothing written") => {
                 assert!(
-                    !dir.join(out).exists(),
-                    "nothing finished, yet {out} exists"
+                    !dir.join(partial(out)).exists(),
+                    "nothing finished, yet {} exists",
+                    partial(out)
                 );
                 delay_ms *= 2;
             }
@@ -96,6 +121,7 @@ fn interrupted_render(dir: &Path, out: &str, signal_name: &str) -> u32 {
             Some(0) => {
                 // Finished before the signal: more work next time, fresh output.
                 std::fs::remove_file(dir.join(out)).expect("remove finished output");
+                restore();
                 spp *= 4;
             }
             other => panic!("interrupted render: status {other:?} ({status}), stderr {stderr}"),
@@ -120,10 +146,12 @@ fn assert_films_identical(a: &Film, b: &Film) {
 #[test]
 fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
     let dir = temp_dir();
-    let spp = interrupted_render(dir.path(), "partial.exr", "INT");
+    let spp = interrupted_render(dir.path(), "render.exr", "INT");
+    assert!(!dir.path().join("render.exr").exists());
 
     // The partial file is a valid EXR that says it is incomplete.
-    let (partial, attributes) = read_exr(&dir.path().join("partial.exr")).expect("valid EXR");
+    let (partial, attributes) =
+        read_exr(&dir.path().join("render.partial.exr")).expect("valid EXR");
     assert!(attributes.incomplete);
     let tiles = work_tiles(WIDTH, HEIGHT);
     let done = decode_tiles(&attributes.strings[TILES_DONE_ATTRIBUTE], tiles.len())
@@ -140,26 +168,32 @@ fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
             assert_eq!(rgba, [0.0; 4], "unfinished pixel ({x},{y})");
         }
     }
-    assert!(!dir.path().join("partial.png").exists());
+    assert!(!dir.path().join("render.png").exists());
 
-    // A resume with other settings is refused and leaves the partial file untouched.
-    let before = std::fs::read(dir.path().join("partial.exr")).unwrap();
-    let mut other = render_args(spp + 1, "partial.exr");
+    // A resume with other settings is refused, says which, and leaves the partial file
+    // untouched.
+    let before = std::fs::read(dir.path().join("render.partial.exr")).unwrap();
+    let mut other = render_args(spp + 1, "render.exr");
     other.push("--resume".into());
     let (status, stderr) = finish(start(dir.path(), &other));
     assert_eq!(status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("different settings"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("--spp changed") && stderr.contains(&format!("now: {}", spp + 1)),
+        "{stderr}"
+    );
     assert_eq!(
-        std::fs::read(dir.path().join("partial.exr")).unwrap(),
+        std::fs::read(dir.path().join("render.partial.exr")).unwrap(),
         before
     );
 
-    // --resume finishes it.
-    let mut resume = render_args(spp, "partial.exr");
+    // --resume finishes it into the output and removes the partial file.
+    let mut resume = render_args(spp, "render.exr");
     resume.push("--resume".into());
     let (status, stderr) = finish(start(dir.path(), &resume));
     assert!(status.success(), "resume failed: {stderr}");
-    let (resumed, attributes) = read_exr(&dir.path().join("partial.exr")).unwrap();
+    let (resumed, attributes) = read_exr(&dir.path().join("render.exr")).unwrap();
+    assert!(!dir.path().join("render.partial.exr").exists());
     assert!(!attributes.incomplete);
     assert_eq!(attributes.finished_tiles, Some(tiles.len() as u32));
 
@@ -180,7 +214,7 @@ fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
 fn sigterm_also_interrupts_with_status_3() {
     let dir = temp_dir();
     interrupted_render(dir.path(), "t.exr", "TERM");
-    let (_, attributes) = read_exr(&dir.path().join("t.exr")).expect("valid EXR");
+    let (_, attributes) = read_exr(&dir.path().join("t.partial.exr")).expect("valid EXR");
     assert!(attributes.incomplete);
     assert!(attributes.strings.contains_key(TILES_DONE_ATTRIBUTE));
 }
@@ -193,7 +227,7 @@ fn resume_without_an_earlier_file_is_bad_input() {
     let (status, stderr) = finish(start(dir.path(), &args));
     assert_eq!(status.code(), Some(2), "{stderr}");
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
-    assert!(stderr.contains("absent.exr"), "{stderr}");
+    assert!(stderr.contains("absent.partial.exr"), "{stderr}");
     assert!(!dir.path().join("absent.exr").exists());
 }
 
@@ -215,4 +249,104 @@ fn a_failing_run_leaves_an_existing_output_untouched() {
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(std::fs::read(dir.path().join("keep.exr")).unwrap(), old);
     assert_eq!(std::fs::read(dir.path().join("keep.png")).unwrap(), old);
+}
+
+#[test]
+fn an_interrupted_render_leaves_the_finished_outputs_of_an_earlier_run_alone() {
+    let dir = temp_dir();
+    let finished = |spp: u32| {
+        let mut args = render_args(spp, "keep.exr");
+        args.retain(|a| a != "--no-png");
+        let (status, stderr) = finish(start(dir.path(), &args));
+        assert!(status.success(), "{stderr}");
+    };
+    finished(1);
+    let exr = std::fs::read(dir.path().join("keep.exr")).unwrap();
+    let png = std::fs::read(dir.path().join("keep.png")).unwrap();
+    let restore = || {
+        std::fs::write(dir.path().join("keep.exr"), &exr).unwrap();
+        std::fs::write(dir.path().join("keep.png"), &png).unwrap();
+    };
+    interrupted_render_with(dir.path(), "keep.exr", "INT", &[], restore);
+    assert!(
+        std::fs::read(dir.path().join("keep.exr")).unwrap() == exr,
+        "the interrupted run replaced the finished keep.exr"
+    );
+    assert!(
+        std::fs::read(dir.path().join("keep.png")).unwrap() == png,
+        "the interrupted run replaced the finished keep.png"
+    );
+    let (_, attributes) = read_exr(&dir.path().join("keep.partial.exr")).expect("partial EXR");
+    assert!(attributes.incomplete);
+}
+
+/// The default scene as a TOML file in `dir/scenes/`, its models and textures reached through
+/// links to the repository's assets, so the test can edit it.
+fn editable_default_scene(dir: &Path) -> std::path::PathBuf {
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
+    std::fs::create_dir_all(dir.join("scenes")).unwrap();
+    for sub in ["models", "textures"] {
+        std::os::unix::fs::symlink(assets.join(sub), dir.join(sub)).unwrap();
+    }
+    let scene = dir.join("scenes/default.toml");
+    std::fs::copy(assets.join("scenes/default.toml"), &scene).expect("assets/scenes/default.toml");
+    scene
+}
+
+#[test]
+fn resume_names_what_changed_and_accepts_the_same_scene_by_another_path() {
+    let dir = temp_dir();
+    let scene = editable_default_scene(dir.path());
+    let original = std::fs::read_to_string(&scene).unwrap();
+    let relative = vec!["scenes/default.toml".to_string()];
+    let spp = interrupted_render_with(dir.path(), "s.exr", "INT", &relative, || {});
+    let resume_with = |scene_arg: &str| {
+        let mut args = render_args(spp, "s.exr");
+        args.insert(1, scene_arg.to_string());
+        args.push("--resume".into());
+        finish(start(dir.path(), &args))
+    };
+
+    // A brighter light: one image would show two scenes, so it is refused.
+    let intensity = original
+        .lines()
+        .find(|l| l.trim_start().starts_with("intensity"))
+        .expect("the default scene's light has an intensity")
+        .to_string();
+    let brighter = original.replacen(&intensity, "intensity = 123.0", 1);
+    assert_ne!(brighter, original);
+    std::fs::write(&scene, &brighter).unwrap();
+    let (status, stderr) = resume_with("scenes/default.toml");
+    assert_eq!(status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("lights changed"), "{stderr}");
+
+    // A changed texture file is refused too, and named.
+    std::fs::write(&scene, &original).unwrap();
+    let checker = dir.path().join("textures_copy");
+    std::fs::remove_file(dir.path().join("textures")).unwrap();
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textures");
+    std::fs::create_dir(&checker).unwrap();
+    for entry in std::fs::read_dir(&assets).unwrap() {
+        let entry = entry.unwrap();
+        std::fs::copy(entry.path(), checker.join(entry.file_name())).unwrap();
+    }
+    std::fs::rename(&checker, dir.path().join("textures")).unwrap();
+    let texture_file = std::fs::read_dir(dir.path().join("textures"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| original.contains(&*p.file_name().unwrap().to_string_lossy()))
+        .expect("the default scene names one of assets/textures");
+    let mut bytes = std::fs::read(&texture_file).unwrap();
+    bytes.extend_from_slice(b"trailing bytes change the file");
+    std::fs::write(&texture_file, &bytes).unwrap();
+    let (status, stderr) = resume_with("scenes/default.toml");
+    assert_eq!(status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("texture") && stderr.contains("changed"), "{stderr}");
+    std::fs::copy(assets.join(texture_file.file_name().unwrap()), &texture_file).unwrap();
+
+    // The unchanged scene given by its absolute path is the same scene.
+    let (status, stderr) = resume_with(scene.to_str().unwrap());
+    assert!(status.success(), "{stderr}");
+    assert!(dir.path().join("s.exr").exists());
 }

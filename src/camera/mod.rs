@@ -13,6 +13,7 @@
 //! camera, the origin moves and the direction does not).
 
 mod lens;
+mod matrices;
 
 use glam::{Vec2, Vec3};
 

@@ -135,7 +135,26 @@ fn median(mut values: Vec<f64>) -> f64 {
     values[values.len() / 2]
 }
 
+/// `bench render` measures and writes no image: options about output files would be ignored,
+/// so they are refused instead.
+fn refuse_output_options(render: &RenderArgs) -> Result<(), CommandError> {
+    let given = [
+        ("-o", render.output.is_some()),
+        ("--png", render.png.is_some()),
+        ("--no-png", render.no_png),
+        ("--stats", render.stats.is_some()),
+        ("--resume", render.resume),
+    ];
+    match given.iter().find(|(_, present)| *present) {
+        Some((option, _)) => Err(CommandError::bad_input(format!(
+            "bench render: {option} does not apply (the benchmark writes no image)"
+        ))),
+        None => Ok(()),
+    }
+}
+
 pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
+    refuse_output_options(&args.render)?;
     let scene = render_cmd::load(&args.render)?;
     let mut options = render_cmd::options(&args.render, &scene)?;
     options.count_tiles = false;

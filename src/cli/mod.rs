@@ -7,7 +7,9 @@ pub mod accuracy;
 pub mod bench_effects;
 pub mod bench_render;
 pub mod bench_textures;
+pub mod outputs;
 pub mod render_cmd;
+pub mod resume;
 pub mod sample_texture;
 
 use clap::{Parser, Subcommand};

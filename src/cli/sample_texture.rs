@@ -19,13 +19,13 @@ pub struct SampleTextureArgs {
     #[arg(long)]
     pub queries: PathBuf,
     /// Filter: closest, bilinear, trilinear, aniso or ewa.
-    #[arg(long, default_value = "aniso")]
+    #[arg(long, default_value = "aniso", value_parser = crate::cli::render_cmd::filter_parser())]
     pub filter: FilterMode,
     /// Wrap mode for both axes: periodic, clamp, black or mirror.
-    #[arg(long, default_value = "periodic")]
+    #[arg(long, default_value = "periodic", value_parser = wrap_parser())]
     pub wrap: WrapMode,
     /// Anisotropy limit.
-    #[arg(long, default_value_t = 16.0)]
+    #[arg(long, default_value_t = 16.0, allow_negative_numbers = true)]
     pub max_aniso: f32,
     /// How 8-bit colour is decoded: linear (as OIIO does) or srgb.
     #[arg(long, default_value = "linear")]
@@ -86,8 +86,22 @@ pub fn read_queries(path: &Path) -> Result<Vec<TextureQuery>, String> {
     Ok(queries)
 }
 
+/// `--wrap`'s values, listed in `--help` and in errors.
+fn wrap_parser() -> impl clap::builder::TypedValueParser<Value = WrapMode> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(["periodic", "clamp", "black", "mirror"])
+        .try_map(|name| name.parse::<WrapMode>())
+}
+
 /// Runs the command; `Err` is a one-line message naming the file and problem.
 pub fn run(args: &SampleTextureArgs) -> Result<(), String> {
+    // The same rule as `render --max-aniso`.
+    if !(args.max_aniso.is_finite() && args.max_aniso >= 1.0) {
+        return Err(format!(
+            "--max-aniso must be a finite number >= 1, got {}",
+            args.max_aniso
+        ));
+    }
     let texture = Texture::from_file(&args.texture, args.color_space).map_err(|e| e.to_string())?;
     let queries = read_queries(&args.queries)?;
     let opts = FilterOptions {

@@ -5,7 +5,11 @@
 //! Besides the standard `software` attribute, the header carries `conetrace.incomplete`
 //! (int, 1 while the render is unfinished) and `conetrace.finished_tiles` (int) so that
 //! `--resume` can tell a partial image from a finished one, plus any free-form text
-//! attributes. The file is written atomically (see [`super::atomic_file`]).
+//! attributes, the standard `worldToCamera` and `worldToNDC` camera matrices when known, and
+//! plain text attributes. The file is written atomically (see [`super::atomic_file`]).
+//!
+//! Header attributes are written sorted by name (see [`super::exr_header_order`]), so two
+//! renders of the same scene with the same settings give byte-identical files.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -15,7 +19,7 @@ use exr::prelude::{
     WritableImage,
 };
 
-use super::atomic_file::write_atomically;
+use super::atomic_file::OutputSet;
 use super::error::OutputError;
 use super::film::Film;
 
@@ -25,7 +29,7 @@ pub const INCOMPLETE_ATTRIBUTE: &str = "conetrace.incomplete";
 pub const FINISHED_TILES_ATTRIBUTE: &str = "conetrace.finished_tiles";
 
 /// Metadata stored in (and read back from) an EXR header.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ExrAttributes {
     /// The standard `software` attribute, e.g. `conetrace 0.1.0`.
     pub software: Option<String>,
@@ -37,7 +41,18 @@ pub struct ExrAttributes {
     /// they cannot collide with standard OpenEXR attributes. Names and values must be
     /// Latin-1 text.
     pub strings: BTreeMap<String, String>,
+    /// OpenEXR's standard `worldToCamera` matrix (row-vector convention: `p_camera = p_world
+    /// * M`, camera looking down -Z with +Y up), row-major.
+    pub world_to_camera: Option<[[f32; 4]; 4]>,
+    /// OpenEXR's standard `worldToNDC` matrix (row-vector convention, then divide by w):
+    /// normalized device coordinates in [0, 1] with (0, 0) at the image's top-left corner,
+    /// as OpenImageIO defines them.
+    pub world_to_ndc: Option<[[f32; 4]; 4]>,
 }
+
+/// Names of the standard camera-matrix attributes.
+pub const WORLD_TO_CAMERA_ATTRIBUTE: &str = "worldToCamera";
+pub const WORLD_TO_NDC_ATTRIBUTE: &str = "worldToNDC";
 
 fn exr_text(path: &Path, what: &str, text: &str) -> Result<Text, OutputError> {
     Text::new_or_none(text)
@@ -47,6 +62,27 @@ fn exr_text(path: &Path, what: &str, text: &str) -> Result<Text, OutputError> {
 /// Writes every channel of `film` as `f32` to `path` (atomically; the parent directory is
 /// created if missing) with the header `attributes`.
 pub fn write_exr(film: &Film, path: &Path, attributes: &ExrAttributes) -> Result<(), OutputError> {
+    let mut set = OutputSet::default();
+    stage_exr(&mut set, film, path, attributes)?;
+    set.commit()
+}
+
+/// Row-major rows as OpenEXR's 16 floats.
+fn flat_matrix(m: &[[f32; 4]; 4]) -> [f32; 16] {
+    let mut flat = [0.0f32; 16];
+    for (row, values) in m.iter().enumerate() {
+        flat[row * 4..row * 4 + 4].copy_from_slice(values);
+    }
+    flat
+}
+
+/// Encodes `film` as [`write_exr`] does into a file of `set`, replaced when the set commits.
+pub fn stage_exr(
+    set: &mut OutputSet,
+    film: &Film,
+    path: &Path,
+    attributes: &ExrAttributes,
+) -> Result<(), OutputError> {
     if film.width() == 0 || film.height() == 0 {
         return Err(OutputError::invalid(
             path,
@@ -85,12 +121,18 @@ pub fn write_exr(film: &Film, path: &Path, attributes: &ExrAttributes) -> Result
             AttributeValue::I32(tiles),
         );
     }
+    layer_attributes.world_to_camera = attributes.world_to_camera.as_ref().map(flat_matrix);
+    layer_attributes.world_to_normalized_device =
+        attributes.world_to_ndc.as_ref().map(flat_matrix);
+    let other = &mut layer_attributes.other;
     for (name, value) in &attributes.strings {
         // A NUL would end the name early in the header and corrupt the file.
         if name.is_empty()
             || name.contains('\0')
             || name == INCOMPLETE_ATTRIBUTE
             || name == FINISHED_TILES_ATTRIBUTE
+            || name == WORLD_TO_CAMERA_ATTRIBUTE
+            || name == WORLD_TO_NDC_ATTRIBUTE
         {
             return Err(OutputError::invalid(
                 path,
@@ -110,15 +152,21 @@ pub fn write_exr(film: &Film, path: &Path, attributes: &ExrAttributes) -> Result
         AnyChannels::sort(channels.into()),
     );
     let image = Image::from_layer(layer);
-    write_atomically(path, |writer| {
+    set.stage(path, |writer| {
         image
             .write()
-            .to_buffered(writer)
+            .to_buffered(&mut *writer)
             .map_err(|source| OutputError::Exr {
                 path: path.to_path_buf(),
                 action: "encoding",
                 source,
-            })
+            })?;
+        // The encoder keeps attributes in a hash map, whose order changes from run to run:
+        // put them in a fixed order, in place (the header keeps its length, so the offsets
+        // that follow it stay valid).
+        std::io::Write::flush(writer).map_err(|e| OutputError::io(path, "write", e))?;
+        super::exr_header_order::sort_header_attributes_in_file(writer.get_mut())
+            .map_err(|problem| OutputError::invalid(path, problem))
     })
 }
 

@@ -32,6 +32,7 @@
 pub mod atomic_file;
 pub mod channels;
 pub mod error;
+pub mod exr_header_order;
 pub mod exr_input;
 pub mod exr_output;
 #[allow(clippy::module_inception)]
@@ -41,6 +42,7 @@ pub mod png_output;
 pub use channels::Layer;
 pub use error::OutputError;
 pub use exr_input::read_exr;
-pub use exr_output::{write_exr, ExrAttributes};
+pub use atomic_file::OutputSet;
+pub use exr_output::{stage_exr, write_exr, ExrAttributes};
 pub use film::{Film, FilmLayout, FilmTile, TileRect};
-pub use png_output::{display_value, linear_to_srgb, tonemap_to_srgb8, write_png};
+pub use png_output::{display_value, linear_to_srgb, stage_png, tonemap_to_srgb8, write_png};

@@ -14,7 +14,7 @@ use std::path::Path;
 
 use image::{codecs::png::PngEncoder, ExtendedColorType, ImageEncoder};
 
-use super::atomic_file::write_atomically;
+use super::atomic_file::OutputSet;
 use super::channels::Layer;
 use super::error::OutputError;
 use super::film::Film;
@@ -59,6 +59,19 @@ pub fn tonemap_to_srgb8(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> u
 /// directory is created if missing), after multiplying by `2^exposure_stops` and tone
 /// mapping. Fails if the film has no [`Layer::Color`].
 pub fn write_png(
+    film: &Film,
+    path: &Path,
+    tonemap: ToneMap,
+    exposure_stops: f32,
+) -> Result<(), OutputError> {
+    let mut set = OutputSet::default();
+    stage_png(&mut set, film, path, tonemap, exposure_stops)?;
+    set.commit()
+}
+
+/// Encodes the PNG of [`write_png`] into a file of `set`, replaced when the set commits.
+pub fn stage_png(
+    set: &mut OutputSet,
     film: &Film,
     path: &Path,
     tonemap: ToneMap,
@@ -112,7 +125,7 @@ pub fn write_png(
     } else {
         ExtendedColorType::Rgba8
     };
-    write_atomically(path, |writer| {
+    set.stage(path, |writer| {
         PngEncoder::new(writer)
             .write_image(&bytes, film.width(), film.height(), color_type)
             .map_err(|source| OutputError::Png {

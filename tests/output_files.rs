@@ -1,0 +1,202 @@
+//! Output files a pipeline can trust: every output path is checked before any work, a failed
+//! run writes nothing, the EXR, PNG and statistics of one run are never mixed with another
+//! run's, links and permissions survive, the EXR header carries the standard camera matrices
+//! in a fixed order, and the command line explains itself.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+use conetrace::film::{read_exr as read_film, tonemap_to_srgb8, Layer};
+use conetrace::scene::ToneMap;
+
+const SMALL: [&str; 6] = ["--width", "48", "--height", "32", "--quiet", "--threads"];
+
+fn render(dir: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["render"];
+    args.extend_from_slice(&SMALL);
+    args.push("2");
+    args.extend_from_slice(extra);
+    run_in(dir, &args)
+}
+
+fn stderr(out: &std::process::Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Every file in `dir`, sorted (hidden temporary files included).
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn bad_output_paths_are_refused_before_any_work_and_nothing_is_written() {
+    let dir = temp_dir();
+    std::fs::write(dir.path().join("blocker"), b"a file, not a directory").unwrap();
+    let cases: [(&[&str], &str); 6] = [
+        (&["-o", "out.png"], "out.png"),
+        (&["-o", "out.jpg"], "out.jpg"),
+        (&["-o", "same.exr", "--png", "same.exr"], "same.exr"),
+        (&["-o", "a.exr", "--stats", "a.png"], "a.png"),
+        (&["-o", "a.exr", "--stats", "blocker/stats.json"], "blocker/stats.json"),
+        (&["-o", "a.exr", "--png", "x.png", "--no-png"], "--no-png"),
+    ];
+    for (args, named) in cases {
+        let out = render(dir.path(), args);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {message}");
+        assert_eq!(message.lines().count(), 1, "{args:?}: {message}");
+        assert!(message.contains(named), "{args:?}: {message}");
+        assert!(!message.contains(".tmp-"), "{args:?}: {message}");
+        assert_eq!(listing(dir.path()), ["blocker"], "{args:?} wrote something");
+    }
+}
+
+#[test]
+fn the_exr_png_and_stats_of_two_concurrent_runs_are_never_mixed() {
+    let dir = temp_dir();
+    for round in 0..3 {
+        let runs: Vec<_> = ["1", "4"]
+            .iter()
+            .map(|spp| {
+                let mut args = vec!["render".to_string()];
+                args.extend(SMALL.iter().map(|s| s.to_string()));
+                args.push("1".into());
+                for a in ["-o", "shared.exr", "--stats", "shared.json", "--spp", spp] {
+                    args.push(a.to_string());
+                }
+                conetrace()
+                    .args(&args)
+                    .current_dir(dir.path())
+                    .stdout(std::process::Stdio::null())
+                    .spawn()
+                    .expect("start conetrace")
+            })
+            .collect();
+        for run in runs {
+            let out = run.wait_with_output().unwrap();
+            assert!(out.status.success(), "{}", stderr(&out));
+        }
+        // The PNG is the EXR's colour, tone-mapped: both come from the same run.
+        let (film, _) = read_film(&dir.path().join("shared.exr")).unwrap();
+        let png = image::open(dir.path().join("shared.png")).unwrap().to_rgb8();
+        let mut rgba = [0.0f32; 4];
+        let mut mismatched = 0;
+        for (x, y, pixel) in png.enumerate_pixels() {
+            film.get(Layer::Color, x, y, &mut rgba);
+            let expected = [0, 1, 2].map(|c| tonemap_to_srgb8(rgba[c], ToneMap::Clamp, 1.0));
+            if pixel.0 != expected {
+                mismatched += 1;
+            }
+        }
+        assert_eq!(mismatched, 0, "round {round}: PNG pixels not from the EXR's run");
+        let stats: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("shared.json")).unwrap())
+                .unwrap();
+        let spp = stats["spp"].as_u64().expect("stats give the spp");
+        let header = std::fs::read(dir.path().join("shared.exr")).unwrap();
+        let marker = "conetrace.option.spp\0string\0";
+        let at = find(&header, marker.as_bytes()).expect("the EXR records its spp");
+        let value_at = at + marker.len() + 4;
+        let header_spp = (header[value_at] - b'0') as u64;
+        assert_eq!(spp, header_spp, "round {round}: statistics and EXR from different runs");
+    }
+}
+
+fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
+    haystack.windows(needle.len()).position(|w| w == needle)
+}
+
+#[test]
+fn identical_renders_give_identical_bytes_with_standard_camera_matrices() {
+    let dir = temp_dir();
+    for name in ["a.exr", "b.exr"] {
+        let out = render(dir.path(), &["-o", name, "--no-png"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let a = std::fs::read(dir.path().join("a.exr")).unwrap();
+    let b = std::fs::read(dir.path().join("b.exr")).unwrap();
+    assert!(a == b, "two identical renders wrote different bytes");
+    // Standard OpenEXR camera attributes, as 4x4 float matrices ("m44f").
+    for attribute in ["worldToCamera\0m44f\0", "worldToNDC\0m44f\0"] {
+        assert!(find(&a, attribute.as_bytes()).is_some(), "{attribute:?} missing");
+    }
+    assert!(find(&a, b"conetrace.settings").is_none(), "Debug-formatted settings remain");
+    assert!(find(&a, b"conetrace.option.filter\0string\0").is_some());
+}
+
+#[test]
+fn a_symlinked_output_stays_a_link_and_keeps_its_permissions() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = temp_dir();
+    std::fs::create_dir(dir.path().join("store")).unwrap();
+    std::fs::write(dir.path().join("store/real.exr"), b"old").unwrap();
+    std::fs::set_permissions(
+        dir.path().join("store/real.exr"),
+        std::fs::Permissions::from_mode(0o604),
+    )
+    .unwrap();
+    std::os::unix::fs::symlink("store/real.exr", dir.path().join("link.exr")).unwrap();
+    let out = render(dir.path(), &["-o", "link.exr", "--no-png"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let link = std::fs::symlink_metadata(dir.path().join("link.exr")).unwrap();
+    assert!(link.file_type().is_symlink());
+    let real = std::fs::metadata(dir.path().join("store/real.exr")).unwrap();
+    assert_eq!(real.permissions().mode() & 0o777, 0o604);
+    assert!(real.len() > 100, "the link's target was not replaced by the render");
+}
+
+#[test]
+fn the_command_line_explains_itself() {
+    let dir = temp_dir();
+    let help = run_in(dir.path(), &["render", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout).into_owned();
+    for expected in [
+        "else 640",
+        "else 360",
+        "mip0, distance, cone1, cone, differential",
+        "closest, bilinear, trilinear, aniso, ewa",
+        "clamp, reinhard",
+        "--resume",
+    ] {
+        assert!(help.contains(expected), "render --help lacks {expected:?}:\n{help}");
+    }
+    let texture_help = run_in(dir.path(), &["sample-texture", "--help"]);
+    let texture_help = String::from_utf8_lossy(&texture_help.stdout).into_owned();
+    assert!(
+        texture_help.contains("periodic, clamp, black, mirror"),
+        "{texture_help}"
+    );
+
+    let negative = render(dir.path(), &["--max-depth", "-1"]);
+    let message = stderr(&negative);
+    assert_eq!(negative.status.code(), Some(2), "{message}");
+    assert!(!message.contains("-- -1"), "misleading tip: {message}");
+    assert!(message.contains("--max-depth"), "{message}");
+
+    let bench = run_in(dir.path(), &["bench", "render", "-o", "x.exr"]);
+    assert_eq!(bench.status.code(), Some(2), "{}", stderr(&bench));
+    assert!(stderr(&bench).contains("-o"), "{}", stderr(&bench));
+
+    write(dir.path(), "q.csv", "s,t,dsdx,dtdx,dsdy,dtdy\n0.5,0.5,0,0,0,0\n");
+    let texture = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textures/checker.png");
+    let zero = run_in(
+        dir.path(),
+        &[
+            "sample-texture",
+            texture.to_str().unwrap(),
+            "--queries",
+            "q.csv",
+            "--max-aniso",
+            "0",
+        ],
+    );
+    assert_eq!(zero.status.code(), Some(2), "{}", stderr(&zero));
+    assert!(stderr(&zero).contains("--max-aniso"), "{}", stderr(&zero));
+}
