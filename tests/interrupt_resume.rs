@@ -11,11 +11,13 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Child, Command, ExitStatus, Stdio};
+use std::process::{Child, ExitStatus, Stdio};
 use std::thread::sleep;
 use std::time::Duration;
 
 use common::*;
+use nix::sys::signal::{kill, Signal};
+use nix::unistd::Pid;
 use conetrace::cli::render_cmd::{decode_tiles, TILES_DONE_ATTRIBUTE};
 use conetrace::film::{read_exr, Film, Layer};
 use conetrace::render::work_tiles;
@@ -54,12 +56,10 @@ fn start(dir: &Path, args: &[String]) -> Child {
         .expect("start conetrace")
 }
 
-fn signal(child: &Child, name: &str) {
-    let status = Command::new("kill")
-        .args([&format!("-{name}"), &child.id().to_string()])
-        .status()
-        .expect("run kill");
-    assert!(status.success(), "kill -{name} failed");
+/// Send `signal` to the child directly (kill(2)), so the test needs no `kill` program.
+fn signal(child: &Child, signal: Signal) {
+    let pid = Pid::from_raw(i32::try_from(child.id()).expect("a pid fits in i32"));
+    kill(pid, signal).unwrap_or_else(|e| panic!("kill({pid}, {signal}) failed: {e}"));
 }
 
 fn finish(child: Child) -> (ExitStatus, String) {
@@ -72,7 +72,7 @@ fn finish(child: Child) -> (ExitStatus, String) {
 
 /// Start a render and interrupt it with `signal_name`, adapting delay and samples until the
 /// interruption lands mid-render. Returns the spp used.
-fn interrupted_render(dir: &Path, out: &str, signal_name: &str) -> u32 {
+fn interrupted_render(dir: &Path, out: &str, signal_name: Signal) -> u32 {
     let mut spp = 4;
     let mut delay_ms = 400;
     for _attempt in 0..8 {
@@ -120,7 +120,7 @@ fn assert_films_identical(a: &Film, b: &Film) {
 #[test]
 fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
     let dir = temp_dir();
-    let spp = interrupted_render(dir.path(), "partial.exr", "INT");
+    let spp = interrupted_render(dir.path(), "partial.exr", Signal::SIGINT);
 
     // The partial file is a valid EXR that says it is incomplete.
     let (partial, attributes) = read_exr(&dir.path().join("partial.exr")).expect("valid EXR");
@@ -179,7 +179,7 @@ fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
 #[test]
 fn sigterm_also_interrupts_with_status_3() {
     let dir = temp_dir();
-    interrupted_render(dir.path(), "t.exr", "TERM");
+    interrupted_render(dir.path(), "t.exr", Signal::SIGTERM);
     let (_, attributes) = read_exr(&dir.path().join("t.exr")).expect("valid EXR");
     assert!(attributes.incomplete);
     assert!(attributes.strings.contains_key(TILES_DONE_ATTRIBUTE));
