@@ -57,7 +57,11 @@ mod unsafe_boundary {
             }
             let text = std::fs::read_to_string(file).expect("source is UTF-8");
             let lifts = text.matches(concat!("allow(", "unsafe_code)")).count();
-            let expected = if relative == Path::new("lib.rs") { 2 } else { 0 };
+            let expected = if relative == Path::new("lib.rs") {
+                2
+            } else {
+                0
+            };
             if lifts != expected {
                 offenders.push(format!("{}: {lifts}", relative.display()));
             }
@@ -67,7 +71,10 @@ mod unsafe_boundary {
         let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
         for module in ["capi", "embree"] {
             let allowed = format!("#[allow({})]\npub mod {module};", "unsafe_code");
-            assert!(lib.contains(&allowed), "lib.rs: {module} is not the allowed module");
+            assert!(
+                lib.contains(&allowed),
+                "lib.rs: {module} is not the allowed module"
+            );
         }
         let main = std::fs::read_to_string(src.join("main.rs")).unwrap();
         assert!(main.contains(concat!("#![deny(", "unsafe_code)]")));

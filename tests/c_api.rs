@@ -824,16 +824,28 @@ fn textures_served_by_the_callback_need_no_readable_file() {
     options.texture_user_data = &calls as *const AtomicUsize as *mut c_void;
     let mut image = CtImage::default();
     let status = unsafe { ct_render(scene, &options, &mut image) };
-    println!("render with the callback and no files: {status:?} {}", last_error());
+    println!(
+        "render with the callback and no files: {status:?} {}",
+        last_error()
+    );
     assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
-    assert!(calls.load(Ordering::Relaxed) > 100, "the callback was called");
-    let (r, g) = (image_plane(image, "albedo.R"), image_plane(image, "albedo.G"));
+    assert!(
+        calls.load(Ordering::Relaxed) > 100,
+        "the callback was called"
+    );
+    let (r, g) = (
+        image_plane(image, "albedo.R"),
+        image_plane(image, "albedo.G"),
+    );
     let red = r
         .iter()
         .zip(&g)
         .filter(|(r, g)| **r == 1.0 && **g == 0.0)
         .count();
-    assert!(red > r.len() / 16, "the sphere's albedo is the callback's red ({red} pixels)");
+    assert!(
+        red > r.len() / 16,
+        "the sphere's albedo is the callback's red ({red} pixels)"
+    );
     assert_eq!(ct_image_free(image), CtStatus::CT_OK);
 
     // Without the callback the library needs the files, and says which one is missing.
@@ -903,7 +915,11 @@ unsafe extern "C" fn counting_grey_textures(
 unsafe extern "C" fn parking_progress(_done: u32, _total: u32, user: *mut c_void) -> i32 {
     // SAFETY: the test passes a ParkedProgress.
     let state = unsafe { &*(user as *const ParkedProgress) };
-    state.threads.lock().unwrap().push(std::thread::current().id());
+    state
+        .threads
+        .lock()
+        .unwrap()
+        .push(std::thread::current().id());
     let mut first = state.first_call.lock().unwrap();
     if first.is_some() {
         return 0;
@@ -968,7 +984,11 @@ fn workers_keep_rendering_while_the_progress_callback_runs() {
     assert_eq!(ct_image_free(image), CtStatus::CT_OK);
     assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
 
-    let (at_entry, at_exit) = state.first_call.lock().unwrap().expect("progress was called");
+    let (at_entry, at_exit) = state
+        .first_call
+        .lock()
+        .unwrap()
+        .expect("progress was called");
     println!(
         "first progress call: {at_entry} lookups at entry, {at_exit} when it returned, \
          {total_lookups} in the render"

@@ -16,11 +16,11 @@ use std::thread::sleep;
 use std::time::Duration;
 
 use common::*;
-use nix::sys::signal::{kill, Signal};
-use nix::unistd::Pid;
 use conetrace::cli::render_cmd::{decode_tiles, TILES_DONE_ATTRIBUTE};
 use conetrace::film::{read_exr, Film, Layer};
 use conetrace::render::work_tiles;
+use nix::sys::signal::{kill, Signal};
+use nix::unistd::Pid;
 
 const WIDTH: u32 = 96;
 const HEIGHT: u32 = 64;

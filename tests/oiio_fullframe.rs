@@ -322,7 +322,10 @@ fn openimageio_given_analytic_footprints_matches_the_rendered_lookups() {
     write(dir.path(), "scene.toml", &scene(&texture));
     let (csv, direct) = analytic_lookups();
     // The ground fills most of the lower two thirds of the frame.
-    assert!(direct > 96 * 64 / 3, "only {direct} pixels see the ground directly");
+    assert!(
+        direct > 96 * 64 / 3,
+        "only {direct} pixels see the ground directly"
+    );
     let lookups = write(dir.path(), "analytic.csv", &csv);
     for filter in ["aniso", "trilinear"] {
         let frame = dir.path().join(format!("{filter}-analytic.exr"));
