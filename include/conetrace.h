@@ -116,8 +116,12 @@ typedef struct CtImage {
 // other value to cancel (tiles in flight finish; the result is a valid partial image and
 // `ct_render` returns `CT_CANCELLED`).
 //
-// Called from the render's worker threads, one call at a time (calls are serialised by the
-// library), never after `ct_render` returns. Must not throw C++ exceptions or call `ct_render`.
+// Called on the thread that called `ct_render`, never on a worker thread and never after
+// `ct_render` returns; the workers go on rendering while it runs, so a slow callback does
+// not slow the render down. `finished_tiles` grows from call to call; when several tiles
+// finish during one call, the next call reports them together. Unless the callback cancelled,
+// the last call reports every tile finished. Must not throw C++ exceptions or call
+// `ct_render`.
 typedef int32_t (*CtProgressFn)(uint32_t finished_tiles, uint32_t total_tiles, void *user_data);
 
 // One texture lookup the renderer asks the texture callback to answer.
@@ -194,7 +198,8 @@ typedef struct CtRenderOptions {
   // Passed to `progress`.
   void *progress_user_data;
   // Optional texture callback serving the scene's base-colour and environment lookups
-  // (NULL: the built-in texture system).
+  // (NULL: the built-in texture system). Textures it serves are not decoded by the library;
+  // alpha cut-out masks (and, with `CT_AOV_LOD`, every texture) still are.
   CtTextureFn texture_callback;
   // Passed to `texture_callback`.
   void *texture_user_data;
@@ -366,7 +371,8 @@ enum CtStatus ct_render_options_init(struct CtRenderOptions *options, size_t str
 //
 // Thread safety: any thread; several renders may run at once (each uses its own worker pool
 // of `threads` threads). The scene may be freed by another thread meanwhile: the render holds
-// its own reference. Callbacks run on the worker threads (see `CtProgressFn`, `CtTextureFn`).
+// its own reference. The texture callback runs on the worker threads (`CtTextureFn`), the
+// progress callback on the calling thread (`CtProgressFn`).
 //
 // # Safety
 // `options` is NULL or a `CtRenderOptions` whose `struct_size` is correct; `out_image` is

@@ -3,10 +3,16 @@
 # Debian bookworm, as root (or with sudo available). Safe to run repeatedly.
 set -euo pipefail
 
+# Every program the build and the tests run is here: cc (the build script's Embree shim, the
+# C example), g++ (the FLIP metric's C++ source, the C++ example), pkg-config (tests/c_api.rs),
+# /usr/bin/python3 with OpenImageIO and numpy, and maketx (tests/oiio_*.rs). The tests send
+# signals through kill(2) themselves and need no `kill` program.
 packages=(
   libembree-dev          # Embree 3.13.5 headers and libembree3 (ray traversal)
   libclang-dev clang     # libclang for bindgen, which generates the Embree bindings at build time
-  pkg-config
+  gcc libc6-dev          # cc: the build script's C shim (wrapper/) and the C API's C example
+  pkg-config             # tests/c_api.rs builds the examples with `pkg-config --cflags --libs`
+  python3                # /usr/bin/python3 runs tests/oiio/*.py
   python3-openimageio    # OpenImageIO's TextureSystem: the filtering reference in the tests
   openimageio-tools      # maketx, for mip-mapped reference textures
   python3-numpy

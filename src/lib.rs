@@ -5,10 +5,17 @@
 //! one safe layer over Embree) -> [`camera`] rays with [`footprint`]s -> packets through
 //! [`render::tracer`] -> [`hit`]s -> [`shading`] in an [`integrator`] (with [`texture`]
 //! filtering) -> [`film`] -> EXR/PNG. [`cli`] is the command line.
+//!
+//! Every `unsafe` block lives in [`embree`] (the FFI to Embree) and [`capi`] (the C
+//! interface); the rest of the crate is denied unsafe code by the compiler.
+
+#![deny(unsafe_code)]
 
 pub mod camera;
+#[allow(unsafe_code)]
 pub mod capi;
 pub mod cli;
+#[allow(unsafe_code)]
 pub mod embree;
 pub mod film;
 pub mod footprint;
@@ -18,3 +25,58 @@ pub mod render;
 pub mod scene;
 pub mod shading;
 pub mod texture;
+
+#[cfg(test)]
+mod unsafe_boundary {
+    use std::path::{Path, PathBuf};
+
+    fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).expect("src/ is readable") {
+            let path = entry.expect("directory entry").path();
+            if path.is_dir() {
+                rust_files(&path, out);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                out.push(path);
+            }
+        }
+    }
+
+    /// The compiler denies unsafe code crate-wide; this keeps the only exceptions the two
+    /// allow attributes on `embree` and `capi` above (a module could otherwise lift the lint
+    /// for itself).
+    #[test]
+    fn only_embree_and_capi_may_use_unsafe_code() {
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+        let mut files = Vec::new();
+        rust_files(&src, &mut files);
+        let mut offenders = Vec::new();
+        for file in &files {
+            let relative = file.strip_prefix(&src).expect("under src/");
+            if relative.starts_with("embree") || relative.starts_with("capi") {
+                continue;
+            }
+            let text = std::fs::read_to_string(file).expect("source is UTF-8");
+            let lifts = text.matches(concat!("allow(", "unsafe_code)")).count();
+            let expected = if relative == Path::new("lib.rs") {
+                2
+            } else {
+                0
+            };
+            if lifts != expected {
+                offenders.push(format!("{}: {lifts}", relative.display()));
+            }
+        }
+        assert!(files.len() > 50, "only {} source files found", files.len());
+        assert!(offenders.is_empty(), "unsafe_code allowed in {offenders:?}");
+        let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
+        for module in ["capi", "embree"] {
+            let allowed = format!("#[allow({})]\npub mod {module};", "unsafe_code");
+            assert!(
+                lib.contains(&allowed),
+                "lib.rs: {module} is not the allowed module"
+            );
+        }
+        let main = std::fs::read_to_string(src.join("main.rs")).unwrap();
+        assert!(main.contains(concat!("#![deny(", "unsafe_code)]")));
+    }
+}

@@ -1,5 +1,7 @@
 //! The `conetrace` binary: parses the command line and maps failures to exit statuses.
 
+#![deny(unsafe_code)]
+
 use clap::Parser;
 
 fn main() {

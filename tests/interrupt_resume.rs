@@ -13,7 +13,7 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Child, Command, ExitStatus, Stdio};
+use std::process::{Child, ExitStatus, Stdio};
 use std::thread::sleep;
 use std::time::Duration;
 
@@ -21,6 +21,8 @@ use common::*;
 use conetrace::cli::render_cmd::{decode_tiles, TILES_DONE_ATTRIBUTE};
 use conetrace::film::{read_exr, Film, Layer};
 use conetrace::render::work_tiles;
+use nix::sys::signal::{kill, Signal};
+use nix::unistd::Pid;
 
 const WIDTH: u32 = 96;
 const HEIGHT: u32 = 64;
@@ -61,12 +63,10 @@ fn start(dir: &Path, args: &[String]) -> Child {
         .expect("start conetrace")
 }
 
-fn signal(child: &Child, name: &str) {
-    let status = Command::new("kill")
-        .args([&format!("-{name}"), &child.id().to_string()])
-        .status()
-        .expect("run kill");
-    assert!(status.success(), "kill -{name} failed");
+/// Send `signal` to the child directly (kill(2)), so the test needs no `kill` program.
+fn signal(child: &Child, signal: Signal) {
+    let pid = Pid::from_raw(i32::try_from(child.id()).expect("a pid fits in i32"));
+    kill(pid, signal).unwrap_or_else(|e| panic!("kill({pid}, {signal}) failed: {e}"));
 }
 
 fn finish(child: Child) -> (ExitStatus, String) {
@@ -79,7 +79,7 @@ fn finish(child: Child) -> (ExitStatus, String) {
 
 /// Start a render and interrupt it with `signal_name`, adapting delay and samples until the
 /// interruption lands mid-render. Returns the spp used.
-fn interrupted_render(dir: &Path, out: &str, signal_name: &str) -> u32 {
+fn interrupted_render(dir: &Path, out: &str, signal_name: Signal) -> u32 {
     interrupted_render_with(dir, out, signal_name, &[], || {})
 }
 
@@ -89,7 +89,7 @@ fn interrupted_render(dir: &Path, out: &str, signal_name: &str) -> u32 {
 fn interrupted_render_with(
     dir: &Path,
     out: &str,
-    signal_name: &str,
+    signal_name: Signal,
     extra: &[String],
     restore: impl Fn(),
 ) -> u32 {
@@ -146,7 +146,7 @@ fn assert_films_identical(a: &Film, b: &Film) {
 #[test]
 fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
     let dir = temp_dir();
-    let spp = interrupted_render(dir.path(), "render.exr", "INT");
+    let spp = interrupted_render(dir.path(), "render.exr", Signal::SIGINT);
     assert!(!dir.path().join("render.exr").exists());
 
     // The partial file is a valid EXR that says it is incomplete.
@@ -213,7 +213,7 @@ fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
 #[test]
 fn sigterm_also_interrupts_with_status_3() {
     let dir = temp_dir();
-    interrupted_render(dir.path(), "t.exr", "TERM");
+    interrupted_render(dir.path(), "t.exr", Signal::SIGTERM);
     let (_, attributes) = read_exr(&dir.path().join("t.partial.exr")).expect("valid EXR");
     assert!(attributes.incomplete);
     assert!(attributes.strings.contains_key(TILES_DONE_ATTRIBUTE));
@@ -267,7 +267,7 @@ fn an_interrupted_render_leaves_the_finished_outputs_of_an_earlier_run_alone() {
         std::fs::write(dir.path().join("keep.exr"), &exr).unwrap();
         std::fs::write(dir.path().join("keep.png"), &png).unwrap();
     };
-    interrupted_render_with(dir.path(), "keep.exr", "INT", &[], restore);
+    interrupted_render_with(dir.path(), "keep.exr", Signal::SIGINT, &[], restore);
     assert!(
         std::fs::read(dir.path().join("keep.exr")).unwrap() == exr,
         "the interrupted run replaced the finished keep.exr"
@@ -299,7 +299,7 @@ fn resume_names_what_changed_and_accepts_the_same_scene_by_another_path() {
     let scene = editable_default_scene(dir.path());
     let original = std::fs::read_to_string(&scene).unwrap();
     let relative = vec!["scenes/default.toml".to_string()];
-    let spp = interrupted_render_with(dir.path(), "s.exr", "INT", &relative, || {});
+    let spp = interrupted_render_with(dir.path(), "s.exr", Signal::SIGINT, &relative, || {});
     let resume_with = |scene_arg: &str| {
         let mut args = render_args(spp, "s.exr");
         args.insert(1, scene_arg.to_string());

@@ -11,8 +11,12 @@
 //!
 //! Queries whose anisotropic probe count (or magnification aspect rule) sits within
 //! float rounding of a discontinuity are detected with an independent f64
-//! computation; they are compared like the others, and a mismatch on them is printed
-//! and counted as a rounding-boundary case instead of failing the test.
+//! computation; they are compared like the others, and for the `aniso` filter (the only
+//! one with those discontinuities) a mismatch on them is printed and counted as a
+//! rounding-boundary case instead of failing the test. The exemption is capped: at most
+//! [`MAX_FLAGGED_SHARE`] of the queries may be flagged, at most
+//! [`MAX_BOUNDARY_MISMATCHES`] lookups per texture may be exempted, and none by more than
+//! [`MAX_BOUNDARY_DIFF`].
 //!
 //! If /usr/bin/python3 cannot import OpenImageIO the tests fail and name the set-up
 //! command `bash scripts/setup.sh`.
@@ -26,6 +30,16 @@ const SETUP_HINT: &str =
 const FILTERS: [&str; 4] = ["closest", "bilinear", "trilinear", "aniso"];
 const WRAPS: [&str; 4] = ["periodic", "clamp", "black", "mirror"];
 const MAX_ANISO: f64 = 16.0;
+
+/// Largest share of the queries the rounding-boundary detector may flag (35 of 223, 16 %,
+/// with today's query sets: the exact aspect ratios 2, 3, 4, 8 and 16 sit on boundaries).
+const MAX_FLAGGED_SHARE: f64 = 0.2;
+/// Most aniso lookups (over the four wrap modes) of one texture that may differ from OIIO
+/// beyond the tolerance because their query is flagged. None does today.
+const MAX_BOUNDARY_MISMATCHES: usize = 4;
+/// Largest exempted difference: a probe count one off (n vs n + 1 probes, n >= 2) moves an
+/// average of values in [0, 1] by at most 1 / (n + 1) <= 1/3.
+const MAX_BOUNDARY_DIFF: f64 = 1.0 / 3.0;
 
 /// Directory of this file (works in the final crate and in a crate that includes
 /// this file by absolute path).
@@ -312,6 +326,13 @@ fn crosscheck(case: Case) {
         qs.len(),
         n_boundary
     );
+    assert!(
+        n_boundary as f64 <= MAX_FLAGGED_SHARE * qs.len() as f64,
+        "{}: {n_boundary} of {} queries flagged as rounding-boundary cases (at most {:.0} %)",
+        case.name,
+        qs.len(),
+        100.0 * MAX_FLAGGED_SHARE
+    );
     let mut failures = Vec::new();
     let mut boundary_mismatches = 0;
     for filter in FILTERS {
@@ -334,7 +355,7 @@ fn crosscheck(case: Case) {
             for (i, (o, t)) in ours.iter().zip(&theirs).enumerate() {
                 let d = (0..4).map(|c| (o[c] - t[c]).abs()).fold(0.0, f64::max);
                 if d > tolerance {
-                    if boundary[i] {
+                    if boundary[i] && filter == "aniso" && d <= MAX_BOUNDARY_DIFF {
                         boundary_mismatches += 1;
                         println!(
                             "  boundary case {filter}/{wrap} query {i} {:?}: ours {o:?} oiio {t:?} (diff {d:.3e})",
@@ -347,7 +368,7 @@ fn crosscheck(case: Case) {
                         qs[i]
                     ));
                 }
-                if !boundary[i] {
+                if !(boundary[i] && filter == "aniso") {
                     max_diff = max_diff.max(d);
                 }
             }
@@ -355,8 +376,14 @@ fn crosscheck(case: Case) {
         }
     }
     println!(
-        "{}: {} mismatches on rounding-boundary queries (reported, not failed)",
+        "{}: {} mismatches on rounding-boundary queries (exempted, at most {MAX_BOUNDARY_MISMATCHES})",
         case.name, boundary_mismatches
+    );
+    assert!(
+        boundary_mismatches <= MAX_BOUNDARY_MISMATCHES,
+        "{}: {boundary_mismatches} rounding-boundary mismatches, more than the \
+         {MAX_BOUNDARY_MISMATCHES} allowed",
+        case.name
     );
     assert!(
         failures.is_empty(),

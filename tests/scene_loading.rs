@@ -1,7 +1,7 @@
 //! Scene loading against real-world files: Debian's assimp test models (glTF 2.0, OBJ),
 //! including its deliberately malformed ones, which must give an error and never panic.
-//! Tests that need `/usr/share/assimp/models` (package `assimp-testmodels`) print a note
-//! and pass when it is absent.
+//! Tests that need `/usr/share/assimp/models` (package `assimp-testmodels`) fail with a
+//! message naming `bash scripts/setup.sh` when it is absent.
 
 use std::panic;
 use std::path::{Path, PathBuf};
@@ -10,15 +10,17 @@ use conetrace::scene::load::{default_scene, load_scene};
 use conetrace::scene::{Projection, TextureSource, WrapMode};
 
 const MODELS: &str = "/usr/share/assimp/models";
+const SETUP_HINT: &str = "run `bash scripts/setup.sh` (installs assimp-testmodels)";
 
-fn model(relative: &str) -> Option<PathBuf> {
+/// The installed model at `relative`; a missing file fails the test.
+fn model(relative: &str) -> PathBuf {
     let path = Path::new(MODELS).join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("skipping: {} not installed", path.display());
-        None
-    }
+    assert!(
+        path.exists(),
+        "{} is not installed: {SETUP_HINT}",
+        path.display()
+    );
+    path
 }
 
 fn all_model_files(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -41,10 +43,10 @@ fn all_model_files(dir: &Path, out: &mut Vec<PathBuf>) {
 fn no_model_file_makes_the_loader_panic() {
     let mut files = Vec::new();
     all_model_files(Path::new(MODELS), &mut files);
-    if files.is_empty() {
-        eprintln!("skipping: no models under {MODELS}");
-        return;
-    }
+    assert!(
+        !files.is_empty(),
+        "no OBJ or glTF files under {MODELS}: {SETUP_HINT}"
+    );
     files.sort();
     let mut panicked = Vec::new();
     let (mut ok, mut err) = (0, 0);
@@ -85,9 +87,7 @@ fn malformed_models_are_errors() {
         "glTF2/RecursiveNodes/RecursiveNodes.gltf",
         "glTF/CesiumMilkTruck/CesiumMilkTruck.gltf",
     ] {
-        let Some(path) = model(relative) else {
-            continue;
-        };
+        let path = model(relative);
         match load_scene(&path) {
             Ok(_) => panic!("{relative} loaded but is malformed"),
             Err(e) => eprintln!("{relative}: {e}"),
@@ -102,9 +102,7 @@ fn box_textured_loads_in_all_three_containers() {
         ("glTF2/BoxTextured-glTF-Binary/BoxTextured.glb", false),
         ("glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf", false),
     ] {
-        let Some(path) = model(relative) else {
-            continue;
-        };
+        let path = model(relative);
         let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(scene.meshes.len(), 1, "{relative}");
         let mesh = &scene.meshes[0];
@@ -144,9 +142,7 @@ fn engine_and_obj_models_load() {
         "OBJ/WusonOBJ.obj",
         "OBJ/box.obj",
     ] {
-        let Some(path) = model(relative) else {
-            continue;
-        };
+        let path = model(relative);
         let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
         let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
         assert!(triangles >= 12, "{relative}: {triangles} triangles");
@@ -156,9 +152,7 @@ fn engine_and_obj_models_load() {
 
 #[test]
 fn texture_transform_test_model_has_transforms_and_clamp_samplers() {
-    let Some(path) = model("glTF2/textureTransform/TextureTransformTest.gltf") else {
-        return;
-    };
+    let path = model("glTF2/textureTransform/TextureTransformTest.gltf");
     let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
     let transformed = scene
         .materials
@@ -172,9 +166,7 @@ fn texture_transform_test_model_has_transforms_and_clamp_samplers() {
 
 #[test]
 fn gltf_cameras_become_scene_cameras() {
-    let Some(path) = model("glTF2/cameras/Cameras.gltf") else {
-        return;
-    };
+    let path = model("glTF2/cameras/Cameras.gltf");
     let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
     let camera = scene.camera.unwrap();
     assert!(matches!(

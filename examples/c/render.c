@@ -21,7 +21,8 @@ static void check(CtStatus status, const char *what) {
     }
 }
 
-/* Progress callback: called from worker threads, one call at a time; 0 = keep going. */
+/* Progress callback: called on the thread that called ct_render, while the workers go on
+   rendering; 0 = keep going. */
 static int32_t on_progress(uint32_t finished_tiles, uint32_t total_tiles, void *user_data) {
     uint32_t *last = (uint32_t *)user_data;
     *last = finished_tiles;

@@ -2,8 +2,9 @@
 //! callback that serves the scene's texture lookups ("bring your own texture system").
 
 use std::ffi::{c_void, CString};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
+use std::thread::Thread;
 
 use glam::Vec4;
 
@@ -16,8 +17,12 @@ use super::render::{filter_code, wrap_code};
 /// other value to cancel (tiles in flight finish; the result is a valid partial image and
 /// `ct_render` returns `CT_CANCELLED`).
 ///
-/// Called from the render's worker threads, one call at a time (calls are serialised by the
-/// library), never after `ct_render` returns. Must not throw C++ exceptions or call `ct_render`.
+/// Called on the thread that called `ct_render`, never on a worker thread and never after
+/// `ct_render` returns; the workers go on rendering while it runs, so a slow callback does
+/// not slow the render down. `finished_tiles` grows from call to call; when several tiles
+/// finish during one call, the next call reports them together. Unless the callback cancelled,
+/// the last call reports every tile finished. Must not throw C++ exceptions or call
+/// `ct_render`.
 pub type CtProgressFn = Option<
     unsafe extern "C" fn(finished_tiles: u32, total_tiles: u32, user_data: *mut c_void) -> i32,
 >;
@@ -83,23 +88,89 @@ unsafe impl Send for UserData {}
 // SAFETY: as above.
 unsafe impl Sync for UserData {}
 
-/// Calls the progress callback, one call at a time, and raises `cancel` when it asks to stop.
+/// Where the render's workers publish progress without waiting for anyone: the count of
+/// finished tiles, and whether the render is over. The thread that waits for the render reads
+/// it and calls the C progress callback ([`ProgressRelay::run`]); workers only store atomics
+/// and wake that thread, so a slow callback never blocks a worker.
+pub(crate) struct ProgressBoard {
+    finished_tiles: AtomicUsize,
+    total_tiles: AtomicUsize,
+    render_over: AtomicBool,
+    /// The thread running [`ProgressRelay::run`].
+    reporter: Thread,
+}
+
+impl ProgressBoard {
+    /// A board whose news wake `reporter`.
+    pub fn new(reporter: Thread) -> ProgressBoard {
+        ProgressBoard {
+            finished_tiles: AtomicUsize::new(0),
+            total_tiles: AtomicUsize::new(0),
+            render_over: AtomicBool::new(false),
+            reporter,
+        }
+    }
+
+    /// A worker finished a tile: `finished` of `total` are done.
+    pub fn publish(&self, finished: usize, total: usize) {
+        self.total_tiles.store(total, Ordering::Release);
+        self.finished_tiles.fetch_max(finished, Ordering::AcqRel);
+        self.reporter.unpark();
+    }
+
+    /// The render returned (or unwound): the reporter makes its last call and stops.
+    pub fn close(&self) {
+        self.render_over.store(true, Ordering::Release);
+        self.reporter.unpark();
+    }
+}
+
+/// Closes a [`ProgressBoard`] when dropped, so the reporter stops even if the render panics.
+pub(crate) struct CloseOnDrop<'a>(pub &'a ProgressBoard);
+
+impl Drop for CloseOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.close();
+    }
+}
+
+/// The C progress callback, called from one thread only, and the cancel flag it can raise.
 pub(crate) struct ProgressRelay {
     pub callback: unsafe extern "C" fn(u32, u32, *mut c_void) -> i32,
     pub user_data: UserData,
     pub cancel: Arc<AtomicBool>,
     pub cancelled_by_callback: AtomicBool,
-    pub serial: Mutex<()>,
 }
 
 impl ProgressRelay {
-    pub fn report(&self, done: usize, total: usize) {
-        let _one_at_a_time = self.serial.lock().unwrap_or_else(|e| e.into_inner());
-        // SAFETY: a C function pointer the caller supplied, with its own user data.
-        let answer = unsafe { (self.callback)(done as u32, total as u32, self.user_data.0) };
-        if answer != 0 {
-            self.cancelled_by_callback.store(true, Ordering::Relaxed);
-            self.cancel.store(true, Ordering::Relaxed);
+    /// Reports `board`'s progress to the callback until the render is over: one call per
+    /// change of the finished-tile count seen (changes during a call are reported together
+    /// by the next one), then a last call with the final count if it was not reported yet.
+    /// Stops calling once the callback asked to cancel. Must run on `board`'s reporter thread.
+    pub fn run(&self, board: &ProgressBoard) {
+        let mut reported = 0;
+        loop {
+            // Read "over" before the count: a count published before the render ended is
+            // then seen by this pass.
+            let over = board.render_over.load(Ordering::Acquire);
+            let finished = board.finished_tiles.load(Ordering::Acquire);
+            if finished != reported && !self.cancelled_by_callback.load(Ordering::Relaxed) {
+                reported = finished;
+                let total = board.total_tiles.load(Ordering::Acquire);
+                // SAFETY: a C function pointer the caller supplied, with its own user data.
+                let answer =
+                    unsafe { (self.callback)(finished as u32, total as u32, self.user_data.0) };
+                if answer != 0 {
+                    self.cancelled_by_callback.store(true, Ordering::Relaxed);
+                    self.cancel.store(true, Ordering::Relaxed);
+                }
+                continue;
+            }
+            if over {
+                return;
+            }
+            // Woken by every publish and by close (an unpark before this park is kept).
+            std::thread::park();
         }
     }
 }

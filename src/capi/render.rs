@@ -10,7 +10,10 @@ use crate::integrator::{AovSelection, Whitted};
 use crate::render::{self, RenderControl, RenderOptions};
 use crate::texture::{FilterMode, FilterOptions, WrapMode};
 
-use super::callbacks::{CallbackTextures, CtProgressFn, CtTextureFn, ProgressRelay, UserData};
+use super::callbacks::{
+    CallbackTextures, CloseOnDrop, CtProgressFn, CtTextureFn, ProgressBoard, ProgressRelay,
+    UserData,
+};
 use super::errors::{guard, CapiError, CtStatus};
 use super::handles::{self, CtImage, CtScene, ImageObject, Object};
 use super::{read_sized, require_out};
@@ -80,7 +83,8 @@ pub struct CtRenderOptions {
     /// Passed to `progress`.
     pub progress_user_data: *mut c_void,
     /// Optional texture callback serving the scene's base-colour and environment lookups
-    /// (NULL: the built-in texture system).
+    /// (NULL: the built-in texture system). Textures it serves are not decoded by the library;
+    /// alpha cut-out masks (and, with `CT_AOV_LOD`, every texture) still are.
     pub texture_callback: CtTextureFn,
     /// Passed to `texture_callback`.
     pub texture_user_data: *mut c_void,
@@ -219,7 +223,8 @@ pub unsafe extern "C" fn ct_render_options_init(
 ///
 /// Thread safety: any thread; several renders may run at once (each uses its own worker pool
 /// of `threads` threads). The scene may be freed by another thread meanwhile: the render holds
-/// its own reference. Callbacks run on the worker threads (see `CtProgressFn`, `CtTextureFn`).
+/// its own reference. The texture callback runs on the worker threads (`CtTextureFn`), the
+/// progress callback on the calling thread (`CtProgressFn`).
 ///
 /// # Safety
 /// `options` is NULL or a `CtRenderOptions` whose `struct_size` is correct; `out_image` is
@@ -259,7 +264,6 @@ pub unsafe extern "C" fn ct_render(
             user_data: UserData(c_options.progress_user_data),
             cancel: cancel.clone(),
             cancelled_by_callback: AtomicBool::new(false),
-            serial: Mutex::new(()),
         });
 
         let mut pool = rayon::ThreadPoolBuilder::new()
@@ -279,24 +283,47 @@ pub unsafe extern "C" fn ct_render(
                 format!("cannot start worker threads: {e}"),
             )
         })?;
-        let result = pool.install(|| -> Result<render::RenderResult, CapiError> {
-            let mut context = render::prepare(scene.clone(), render_options)
-                .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))?;
-            if let Some(textures) = &textures {
-                context.external_textures = Some(textures.clone());
-            }
-            let progress = |done: usize, total: usize| {
-                if let Some(relay) = &relay {
-                    relay.report(done, total);
+        // Workers publish finished tiles here; this thread calls the progress callback.
+        let board = ProgressBoard::new(std::thread::current());
+        let render_on_pool = || {
+            pool.install(|| -> Result<render::RenderResult, CapiError> {
+                let context = match &textures {
+                    Some(textures) => render::external_textures::prepare_with_external(
+                        scene.clone(),
+                        render_options,
+                        textures.clone(),
+                    ),
+                    None => render::prepare(scene.clone(), render_options),
                 }
-            };
-            let control = RenderControl {
-                progress: Some(&progress),
-                cancel: Some(&cancel),
-                skip: None,
-            };
-            Ok(render::render(&context, &Whitted, &control))
-        })?;
+                .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))?;
+                let publish = |done: usize, total: usize| board.publish(done, total);
+                let progress: Option<&(dyn Fn(usize, usize) + Sync)> = if relay.is_some() {
+                    Some(&publish)
+                } else {
+                    None
+                };
+                let control = RenderControl {
+                    progress,
+                    cancel: Some(&cancel),
+                    skip: None,
+                };
+                Ok(render::render(&context, &Whitted, &control))
+            })
+        };
+        let result = match &relay {
+            // The render waits on a helper thread while this one reports its progress.
+            Some(relay) => std::thread::scope(|scope| {
+                let renderer = scope.spawn(|| {
+                    let _close = CloseOnDrop(&board);
+                    render_on_pool()
+                });
+                relay.run(&board);
+                renderer
+                    .join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            }),
+            None => render_on_pool(),
+        }?;
 
         if let Some(textures) = &textures {
             let first = textures

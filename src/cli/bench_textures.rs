@@ -80,24 +80,11 @@ impl Clock {
 /// CPU time consumed by the calling thread (Linux), or `None` where unavailable.
 #[cfg(target_os = "linux")]
 fn thread_cpu_time() -> Option<Duration> {
-    #[repr(C)]
-    struct Timespec {
-        tv_sec: i64,
-        tv_nsec: i64,
-    }
-    extern "C" {
-        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
-    }
-    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
-    let mut ts = Timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: clock_gettime writes one timespec (two i64 on 64-bit Linux) to `ts`,
-    // which lives for the whole call.
-    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    (rc == 0 && ts.tv_sec >= 0 && (0..1_000_000_000).contains(&ts.tv_nsec))
-        .then(|| Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32))
+    use nix::time::{clock_gettime, ClockId};
+    let now = clock_gettime(ClockId::CLOCK_THREAD_CPUTIME_ID).ok()?;
+    let (seconds, nanos) = (now.tv_sec(), now.tv_nsec());
+    (seconds >= 0 && (0..1_000_000_000).contains(&nanos))
+        .then(|| Duration::new(seconds as u64, nanos as u32))
 }
 
 #[cfg(not(target_os = "linux"))]

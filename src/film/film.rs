@@ -232,24 +232,6 @@ impl Film {
         true
     }
 
-    /// The image cut into `tile_size` x `tile_size` rectangles (smaller at the right and
-    /// bottom edges), row by row from the top left.
-    pub fn tiles(&self, tile_size: u32) -> Vec<TileRect> {
-        let size = tile_size.max(1);
-        let mut rects = Vec::new();
-        for y0 in (0..self.height).step_by(size as usize) {
-            for x0 in (0..self.width).step_by(size as usize) {
-                rects.push(TileRect {
-                    x0,
-                    y0,
-                    width: size.min(self.width - x0),
-                    height: size.min(self.height - y0),
-                });
-            }
-        }
-        rects
-    }
-
     /// An empty (zero) tile covering `rect` (clipped to the film) with this film's layout.
     pub fn new_tile(&self, rect: TileRect) -> FilmTile {
         let mut tile = FilmTile::default();
@@ -444,19 +426,6 @@ mod tests {
     }
 
     #[test]
-    fn tiles_cover_the_image_exactly_once() {
-        let film = Film::new(10, 7, &[Layer::Depth]);
-        let mut count = vec![0u32; 70];
-        for rect in film.tiles(4) {
-            for (x, y) in rect.pixels() {
-                count[(y * 10 + x) as usize] += 1;
-            }
-        }
-        assert!(count.iter().all(|c| *c == 1));
-        assert_eq!(film.tiles(4).len(), 3 * 2);
-    }
-
-    #[test]
     fn parallel_tiles_merge_into_the_same_image_as_serial_writes() {
         let layers = [Layer::Color, Layer::Depth, Layer::TexFootprint];
         let (w, h) = (37, 23);
@@ -474,7 +443,8 @@ mod tests {
 
         let film = Mutex::new(Film::new(w, h, &layers));
         let layout = film.lock().unwrap().layout();
-        let rects = film.lock().unwrap().tiles(4);
+        // The renderer's own tiling (16x16, clipped at the right and bottom edges).
+        let rects = crate::render::work_tiles(w, h);
         rects
             .par_iter()
             .for_each_init(FilmTile::default, |tile, rect| {

@@ -3,12 +3,11 @@
 
 use std::sync::Arc;
 
-use glam::{Affine2, Vec2, Vec3, Vec4};
+use glam::{Affine2, Vec2, Vec3};
 
-use crate::camera::Camera;
 use crate::hit::{Patch, SurfaceHit};
 use crate::render::tracer::TraceHit;
-use crate::scene::{Environment, Material, SceneDescription, TextureBinding, TextureSource};
+use crate::scene::{Environment, Material, SceneDescription, TextureDesc, TextureSource};
 use crate::texture::{FilterOptions, Texture, TextureQuery};
 
 /// What an Embree geometry id stands for.
@@ -48,16 +47,18 @@ pub fn decode_textures(scene: &SceneDescription) -> Result<Vec<Arc<Texture>>, Pr
     scene
         .textures
         .iter()
-        .map(|desc| {
-            let texture = match &desc.source {
-                TextureSource::File(path) => Texture::from_file(path, desc.color_space)?,
-                TextureSource::Encoded { label, bytes } => {
-                    Texture::from_encoded(bytes, label, desc.color_space)?
-                }
-            };
-            Ok(Arc::new(texture))
-        })
+        .map(|desc| Ok(Arc::new(decode_texture(desc)?)))
         .collect()
+}
+
+/// Decode one texture of a scene from its file or embedded bytes.
+pub fn decode_texture(desc: &TextureDesc) -> Result<Texture, crate::texture::TextureError> {
+    match &desc.source {
+        TextureSource::File(path) => Texture::from_file(path, desc.color_space),
+        TextureSource::Encoded { label, bytes } => {
+            Texture::from_encoded(bytes, label, desc.color_space)
+        }
+    }
 }
 
 impl MaterialTable {
@@ -235,19 +236,6 @@ fn triangle_position_derivatives(p: [Vec3; 3], t: [Vec2; 3]) -> (Vec3, Vec3) {
     }
 }
 
-/// A texture bound to a material slot, ready to sample.
-#[inline]
-pub fn sample_binding(
-    textures: &[Arc<Texture>],
-    binding: &TextureBinding,
-    st: Vec2,
-    gradients: [f32; 4],
-    options: &FilterOptions,
-) -> Vec4 {
-    let query = binding_query(&binding.transform, st, gradients);
-    textures[binding.texture].sample(&query, options)
-}
-
 /// The query for a binding: st and gradients through the binding's affine transform.
 #[inline]
 pub fn binding_query(transform: &Affine2, st: Vec2, g: [f32; 4]) -> TextureQuery {
@@ -338,14 +326,6 @@ pub fn environment_mean(environment: &Environment, textures: &[Arc<Texture>]) ->
             Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32) * *intensity
         }
     }
-}
-
-/// Needed to keep the camera next to the lookups in the render context.
-pub fn camera_for(scene: &SceneDescription, width: u32, height: u32) -> Option<Camera> {
-    scene
-        .camera
-        .as_ref()
-        .map(|desc| Camera::new(desc, width, height))
 }
 
 #[cfg(test)]

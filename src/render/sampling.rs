@@ -108,8 +108,15 @@ mod tests {
     }
 
     #[test]
-    fn uniform_is_deterministic_and_spread() {
-        assert_eq!(uniform(3, 4, 5), uniform(3, 4, 5));
+    fn uniform_depends_on_every_argument_and_is_spread() {
+        // Pixel, sample and dimension each decorrelate the value (a hash ignoring one of them
+        // would give equal numbers here), and values stay in [0, 1).
+        let base = uniform(3, 4, 5);
+        assert!((0.0..1.0).contains(&base), "{base}");
+        for other in [uniform(4, 4, 5), uniform(3, 5, 5), uniform(3, 4, 6)] {
+            assert!((0.0..1.0).contains(&other), "{other}");
+            assert_ne!(base, other);
+        }
         let mean: f32 = (0..10_000).map(|i| uniform(i, 0, 0)).sum::<f32>() / 10_000.0;
         assert!((mean - 0.5).abs() < 0.01, "mean {mean}");
     }

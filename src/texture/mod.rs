@@ -4,8 +4,7 @@
 //! a texture coordinate and its screen-space derivatives (seed 002, eqs. 25-26;
 //! seed 000, "Texture Derivatives on a Triangle") and filters the mip pyramid with
 //! one of the [`FilterMode`]s. The closest, bilinear, trilinear and anisotropic
-//! filters reproduce OpenImageIO's `TextureSystem` (see
-//! `docs/texture-filtering.md` and `/work/shared/reference/oiio-texture-filtering.md`);
+//! filters reproduce OpenImageIO's `TextureSystem` (see `docs/texture-filtering.md`);
 //! `ewa` is an elliptical Gaussian in the manner of Heckbert and pbrt.
 //!
 //! Conventions follow OpenImageIO: `s` grows to the right, `t` grows downwards,

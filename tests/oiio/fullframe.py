@@ -2,7 +2,7 @@
 """PSNR between a render's texture lookups and OpenImageIO's, pixel by pixel.
 
 usage: fullframe.py FRAME.exr TEXTURE [--filter aniso] [--wrap periodic] [--max-aniso 16]
-                    [--maketx] [--channels 3]
+                    [--maketx] [--lookups LOOKUPS.csv]
 
 FRAME.exr holds per pixel the lookup the renderer made (channels tex.s, tex.t,
 tex.dsdx, tex.dtdx, tex.dsdy, tex.dtdy) and its result (texcolor.R, texcolor.G,
@@ -12,6 +12,11 @@ is looked up with TextureSystem.texture() using the options of oiio_lookup.py, a
 the PSNR (peak 1) between OIIO's RGB and texcolor is printed, with the pixel count
 and the max abs difference. TEXTURE should be a maketx output; with --maketx the
 script runs `maketx --filter box` on it first (into a temporary file).
+
+With --lookups, the lookups come from LOOKUPS.csv instead of the frame's tex.* channels:
+header x,y,s,t,dsdx,dtdx,dsdy,dtdy, one row per pixel to compare (the caller computes them
+independently of the renderer). Each such pixel must have a lookup in the frame
+(texcolor.A > 0), else the script exits 2 naming the first one.
 Run with /usr/bin/python3 (Debian's python3-openimageio); exit 2 on bad input.
 """
 import argparse
@@ -51,6 +56,33 @@ def read_channels(path, names):
     return np.stack(out, axis=-1)
 
 
+def lookups_from_csv(path, frame, shape):
+    """(mask of listed pixels, per-pixel s t dsdx dtdx dsdy dtdy) from the caller's CSV."""
+    height, width = shape
+    lookup = np.zeros((height, width, 6), dtype=np.float64)
+    valid = np.zeros((height, width), dtype=bool)
+    has_lookup = read_channels(frame, ["texcolor.A"])[:, :, 0] > 0
+    with open(path) as f:
+        header = f.readline().strip()
+        if header != "x,y,s,t,dsdx,dtdx,dsdy,dtdy":
+            sys.stderr.write(f"{path}: bad header {header!r}\n")
+            sys.exit(2)
+        for n, line in enumerate(f, start=2):
+            if not line.strip():
+                continue
+            fields = line.split(",")
+            x, y = int(fields[0]), int(fields[1])
+            if not (0 <= x < width and 0 <= y < height):
+                sys.stderr.write(f"{path}:{n}: pixel ({x}, {y}) outside the frame\n")
+                sys.exit(2)
+            if not has_lookup[y, x]:
+                sys.stderr.write(f"{path}:{n}: the frame has no texture lookup at ({x}, {y})\n")
+                sys.exit(2)
+            lookup[y, x] = [float(v) for v in fields[2:8]]
+            valid[y, x] = True
+    return valid, lookup
+
+
 def psnr(mse):
     return float("inf") if mse == 0 else 10.0 * math.log10(1.0 / mse)
 
@@ -63,6 +95,7 @@ def main():
     ap.add_argument("--wrap", default="periodic", choices=sorted(WRAPS))
     ap.add_argument("--max-aniso", type=float, default=16)
     ap.add_argument("--maketx", action="store_true")
+    ap.add_argument("--lookups")
     a = ap.parse_args()
 
     texture = a.texture
@@ -76,11 +109,14 @@ def main():
             sys.stderr.write(f"{a.texture}: maketx failed: {r.stderr.strip()}\n")
             sys.exit(2)
 
-    lookup = read_channels(a.frame, LOOKUP)
     ours = read_channels(a.frame, COLOR)
-    valid = np.all(np.isfinite(lookup), axis=-1)
-    if "texcolor.A" in oiio.ImageBuf(a.frame).spec().channelnames:
-        valid &= read_channels(a.frame, ["texcolor.A"])[:, :, 0] > 0
+    if a.lookups:
+        valid, lookup = lookups_from_csv(a.lookups, a.frame, ours.shape[:2])
+    else:
+        lookup = read_channels(a.frame, LOOKUP)
+        valid = np.all(np.isfinite(lookup), axis=-1)
+        if "texcolor.A" in oiio.ImageBuf(a.frame).spec().channelnames:
+            valid &= read_channels(a.frame, ["texcolor.A"])[:, :, 0] > 0
     ts = oiio.TextureSystem(shared=False)
     theirs = np.zeros_like(ours)
     ys, xs = np.nonzero(valid)
