@@ -30,9 +30,9 @@
 //! sphere's quadratic with rounding of its own, which the bounds above do not model;
 //! [`INTERSECTOR_SLACK`] widens them for it. `tests/spawn_points.rs` traces rays leaving
 //! triangles and spheres through Embree (sizes 1e-4 to 1e6, up to 1e6 from the origin,
-//! grazing to normal): none meets its surface, and none does with only a quarter of the
-//! `gamma(7)` bound either, while with no offset beyond one float 48 of 17,904 triangle rays
-//! and 205 of 13,951 sphere rays do.
+//! grazing to normal): none meets its surface. Without the slack, none does with only a
+//! quarter of the `gamma(7)` bound either, while with no offset beyond one float 48 of
+//! 17,904 triangle rays and 205 of 13,951 sphere rays do.
 //!
 //! Two more places where rounding grows with distance are handled here: a shadow ray towards
 //! a point light stops short of it by a margin measured from the ray's own origin and the
