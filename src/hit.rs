@@ -3,9 +3,12 @@
 //! `crate::render` builds a [`SurfaceHit`] from Embree's hit (geometry id, primitive id,
 //! barycentrics, distance) and the scene's vertex data. Footprints (`crate::footprint`) read
 //! the [`Patch`] to differentiate positions, normals and texture coordinates; shading reads
-//! the normals, texture coordinates and material.
+//! the normals, texture coordinates and material; rays leaving the hit start from its
+//! [`SurfaceHit::spawn_point`].
 
 use glam::{Vec2, Vec3};
+
+use crate::shading::ray_offset::SpawnPoint;
 
 /// The local surface a hit lies on, with what footprints need to differentiate it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,8 +28,12 @@ pub enum Patch {
 /// A hit on a surface, in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceHit {
-    /// Distance along the (unit-length) ray direction.
+    /// Distance along the (unit-length) ray direction, as the intersector reported it.
     pub t: f32,
+    /// The point on the surface, recomputed from the surface itself (barycentric
+    /// interpolation of the triangle's vertices, projection onto the sphere), not from the
+    /// ray: its rounding error does not grow with the ray's origin or length (see
+    /// [`SurfaceHit::spawn_point`]).
     pub position: Vec3,
     /// Unit geometric normal, facing outward (as the geometry is wound / the sphere's outside).
     pub geometric_normal: Vec3,
@@ -50,5 +57,21 @@ impl SurfaceHit {
     /// True when the ray arrived from the side the geometric normal points to.
     pub fn is_front_face(&self, ray_direction: Vec3) -> bool {
         ray_direction.dot(self.geometric_normal) < 0.0
+    }
+
+    /// `position` with the bound on its rounding error, where rays leaving this hit start
+    /// (`crate::shading::ray_offset`). The bound follows from the patch: a triangle point is
+    /// `b0 p0 + b1 p1 + b2 p2` at `barycentric`, a sphere point the projection onto the
+    /// sphere, exactly as `crate::render` computes `position`.
+    #[inline]
+    pub fn spawn_point(&self) -> SpawnPoint {
+        match self.patch {
+            Patch::Triangle { p, .. } => {
+                SpawnPoint::on_triangle(p, self.barycentric.x, self.barycentric.y)
+            }
+            Patch::Sphere { center, radius } => {
+                SpawnPoint::on_sphere(center, radius, self.position).0
+            }
+        }
     }
 }

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::cli::render_cmd::{self, RenderArgs};
@@ -20,7 +20,7 @@ use crate::integrator::{block_order, TileRect, Whitted};
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::{self, RenderContext, RenderControl, RenderOptions};
-use crate::shading;
+use crate::shading::{self, SpawnPoint};
 
 #[derive(Args, Debug)]
 pub struct BenchRenderArgs {
@@ -76,8 +76,9 @@ pub fn trace_camera_rays_only(context: &RenderContext) -> u64 {
 /// Camera rays traced as 16-wide packets, then, from every hit, one occlusion ray towards
 /// each light traced as a stream: the Embree work of camera-plus-shadow rendering with no
 /// shading at all (no hit reconstruction, footprints, texture lookups or light evaluation).
-/// The shadow origin steps back along the camera ray instead of along the surface normal,
-/// which needs no surface reconstruction. Returns (camera rays, shadow rays).
+/// The shadow origin steps back along the camera ray, past the error bound of
+/// `origin + t * direction` (`shading::SpawnPoint::along_ray`), instead of along the surface
+/// normal from a recomputed point, which needs no surface reconstruction. Returns (camera rays, shadow rays).
 pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) {
     let options = &context.options;
     let tiles = render::work_tiles(options.width, options.height);
@@ -103,15 +104,14 @@ pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) 
                     if !hit.is_hit() {
                         continue;
                     }
-                    let position = ray.origin + ray.direction * hit.t;
-                    let origin = shading::offset_ray_origin(position, -ray.direction);
+                    let origin = SpawnPoint::along_ray(ray.origin, ray.direction, hit.t)
+                        .offset_origin(-ray.direction);
                     for light in lights {
-                        let sample = shading::light_sample(light, position);
-                        let tfar = if sample.distance.is_finite() {
-                            sample.distance * (1.0 - 1e-4)
-                        } else {
-                            f32::INFINITY
-                        };
+                        let sample = shading::light_sample(light, origin);
+                        let tfar = shading::shadow_ray_end(
+                            sample.distance,
+                            shading::light_position(light).unwrap_or(Vec3::ZERO),
+                        );
                         shadow_rays.push(TraceRay {
                             origin,
                             direction: sample.direction_to_light,

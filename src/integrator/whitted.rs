@@ -10,9 +10,14 @@
 //! recursive formulation `local + k_r * trace(reflected) + k_t * trace(refracted)`.
 //!
 //! Recursion stops at the maximum depth or when a ray's throughput falls below the
-//! threshold (seed 001's termination rules). Rays leave surfaces from an origin offset by a
-//! few ULPs along the geometric normal, which scales with the scene
-//! (`shading::ray_offset`).
+//! threshold (seed 001's termination rules).
+//!
+//! Every ray that leaves a surface (shadow rays, reflections, refractions, and shadow rays
+//! continuing past a transmissive occluder) starts from the hit's spawn point: the point
+//! recomputed from the surface, moved along the geometric normal just past the bound on its
+//! rounding error (`shading::ray_offset`), so no ray meets the surface it leaves, whatever
+//! the scene's scale or the camera's distance. The geometric normal is also the one rule for
+//! which side of a dielectric a ray is on (`shading::DielectricBoundary`).
 
 use glam::{Vec2, Vec3};
 
@@ -25,7 +30,7 @@ use crate::render::sampling;
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::scene::Material;
-use crate::shading::{self, DielectricBoundary};
+use crate::shading::{self, DielectricBoundary, SpawnPoint};
 
 /// Shadow rays stop passing through transmissive occluders below this strength (seed 001).
 const SHADOW_CUTOFF: f32 = 0.002;
@@ -41,6 +46,9 @@ pub struct Whitted;
 struct PathRay {
     origin: Vec3,
     direction: Vec3,
+    /// Where tracing starts along the ray: just before the scene's bounds for camera rays
+    /// from far away (`shading::entry_distance`), 0 for rays leaving a surface.
+    start: f32,
     throughput: Vec3,
     footprint: Footprint,
     /// Index of the pixel inside the tile.
@@ -58,7 +66,11 @@ struct PathRay {
 struct ShadowRay {
     origin: Vec3,
     direction: Vec3,
-    distance: f32,
+    /// Where the ray stops (`shading::shadow_ray_end`).
+    tfar: f32,
+    /// The point light's position (`None` for directional lights): continuations past
+    /// transmissive occluders measure their far end from it.
+    light: Option<Vec3>,
     contribution: Vec3,
     pixel: u32,
 }
@@ -149,6 +161,9 @@ fn generate_camera_rays(
         };
         let (fx, fy) = (px as f32 + offset.x, py as f32 + offset.y);
         let (origin, direction) = camera.generate_ray(fx, fy, lens);
+        let start = context.surfaces.bounds.map_or(0.0, |bounds| {
+            shading::entry_distance(origin, direction, bounds)
+        });
         let footprint = if context.effects.footprints {
             camera.initial_footprint(lod, fx, fy, origin, direction)
         } else {
@@ -157,6 +172,7 @@ fn generate_camera_rays(
         out.push(PathRay {
             origin,
             direction,
+            start,
             throughput: Vec3::ONE,
             footprint,
             pixel: y * tile.width + x,
@@ -174,11 +190,12 @@ fn trace_wave(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerSta
     waves.trace_rays.clear();
     waves.trace_rays.extend(waves.current.iter().map(|ray| {
         let (cone_width, cone_spread) = ray.footprint.cone_at_origin();
+        // Traced from `start`: the cone is as wide there as it has grown by then.
         TraceRay {
-            origin: ray.origin,
+            origin: ray.origin + ray.direction * ray.start,
             direction: ray.direction,
             tfar: f32::INFINITY,
-            cone_width,
+            cone_width: cone_width + cone_spread * ray.start,
             cone_spread,
         }
     }));
@@ -192,6 +209,12 @@ fn trace_wave(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerSta
         coherent,
         &mut worker.counters,
     );
+    // Distances count from the ray's origin again.
+    for (hit, ray) in waves.trace_hits.iter_mut().zip(&waves.current) {
+        if ray.start > 0.0 && hit.is_hit() {
+            hit.t += ray.start;
+        }
+    }
 }
 
 fn shade_wave(
@@ -308,6 +331,7 @@ fn shade_hit(
         (-surface.geometric_normal, -surface.shading_normal)
     };
     let mut radiance = material.emission;
+    let spawn = surface.spawn_point();
 
     // Local illumination of the opaque part: direct light with shadow rays, plus ambient
     // environment light.
@@ -315,9 +339,11 @@ fn shade_hit(
     if opaque > 0.0 {
         let wo = -ray.direction;
         if effects.shadows {
-            let origin = shading::offset_ray_origin(surface.position, ng);
+            let origin = spawn.offset_origin(ng);
             for light in &context.scene.lights {
-                let sample = shading::light_sample(light, surface.position);
+                // Direction and distance from the shadow ray's own origin, so its far end
+                // is measured from where it starts.
+                let sample = shading::light_sample(light, origin);
                 let wi = sample.direction_to_light;
                 if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 {
                     continue;
@@ -334,10 +360,12 @@ fn shade_hit(
                 if contribution.max_element() <= 0.0 {
                     continue;
                 }
+                let light_position = shading::light_position(light);
                 waves.shadows.push(ShadowRay {
                     origin,
                     direction: wi,
-                    distance: sample.distance,
+                    tfar: shadow_tfar(sample.distance, light_position),
+                    light: light_position,
                     contribution,
                     pixel: ray.pixel,
                 });
@@ -355,7 +383,7 @@ fn shade_hit(
     }
     let spawner = Spawner {
         parent: &ray,
-        position: surface.position,
+        spawn,
         min_throughput: options.min_throughput,
     };
     if effects.mirror_reflection && material.mirror > 0.0 {
@@ -363,8 +391,14 @@ fn shade_hit(
     }
 
     if effects.refraction && material.transmission > 0.0 {
-        // Which side the ray comes from, eta = n_incident / n_transmitted (outside = 1).
-        let boundary = DielectricBoundary::new(ray.direction, surface.shading_normal, material.ior);
+        // Which side the ray comes from, eta = n_incident / n_transmitted (outside = 1): the
+        // geometric normal decides, as it decides `front` and the medium below.
+        let boundary = DielectricBoundary::with_shading_normal(
+            ray.direction,
+            surface.geometric_normal,
+            surface.shading_normal,
+            material.ior,
+        );
         let refracted = shading::refract(ray.direction, boundary.normal, boundary.eta)
             .filter(|d| d.dot(ng) < 0.0);
         // Total internal reflection (or a refracted ray that would stay on the incident side)
@@ -412,7 +446,8 @@ fn shade_hit(
 /// Spawns the secondary rays of one hit.
 struct Spawner<'a> {
     parent: &'a PathRay,
-    position: Vec3,
+    /// The hit's position with its error bound: rays start just past it.
+    spawn: SpawnPoint,
     min_throughput: f32,
 }
 
@@ -437,8 +472,9 @@ impl Spawner<'_> {
         }
         worker.counters.count_rays(kind, 1);
         waves.next.push(PathRay {
-            origin: shading::offset_ray_origin(self.position, leave_normal),
+            origin: self.spawn.offset_origin(leave_normal),
             direction,
+            start: 0.0,
             throughput,
             footprint,
             pixel: self.parent.pixel,
@@ -583,7 +619,7 @@ fn trace_shadows(
         .extend(waves.shadows.iter().map(|s| TraceRay {
             origin: s.origin,
             direction: s.direction,
-            tfar: shadow_tfar(s.distance),
+            tfar: s.tfar,
             cone_width: 0.0,
             cone_spread: 0.0,
         }));
@@ -667,10 +703,16 @@ fn trace_shadows(
             } else {
                 surface.geometric_normal
             };
-            let origin = shading::offset_ray_origin(surface.position, leave);
+            let origin = surface.spawn_point().offset_origin(leave);
             let moved = (origin - ray.origin).dot(ray.direction);
             walk.travelled[i] += moved;
-            let remaining = ray.tfar - moved;
+            // The far end is measured again from the new origin, not carried over, so its
+            // margin does not depend on how far the walk has come.
+            let light = waves.shadows[i].light;
+            let remaining = match light {
+                Some(position) => shadow_tfar((position - origin).length(), light),
+                None => ray.tfar - moved,
+            };
             if remaining <= 0.0 {
                 continue;
             }
@@ -695,12 +737,12 @@ fn trace_shadows(
     }
 }
 
-/// Shadow rays stop just short of the light so the light's own position is not an occluder.
+/// Shadow rays stop short of a point light robustly (`shading::shadow_ray_end`); towards a
+/// directional light (no position) they are unbounded.
 #[inline]
-fn shadow_tfar(distance: f32) -> f32 {
-    if distance.is_finite() {
-        distance * (1.0 - 1e-4)
-    } else {
-        f32::INFINITY
+fn shadow_tfar(distance: f32, light: Option<Vec3>) -> f32 {
+    match light {
+        Some(position) => shading::shadow_ray_end(distance, position),
+        None => f32::INFINITY,
     }
 }

@@ -8,6 +8,7 @@ use glam::{Affine2, Vec2, Vec3};
 use crate::hit::{Patch, SurfaceHit};
 use crate::render::tracer::TraceHit;
 use crate::scene::{Environment, Material, SceneDescription, TextureDesc, TextureSource};
+use crate::shading::ray_offset::SpawnPoint;
 use crate::texture::{FilterOptions, Texture, TextureQuery};
 
 /// What an Embree geometry id stands for.
@@ -84,6 +85,9 @@ pub struct SurfaceLookup {
     pub geometries: Vec<GeometryRef>,
     /// Per material: whether shading it reads a texture (so hits need texture coordinates).
     pub textured_materials: Vec<bool>,
+    /// Bounds of every surface (`None` for an empty scene): camera rays start tracing
+    /// where they enter them (`crate::shading::entry_distance`).
+    pub bounds: Option<(Vec3, Vec3)>,
 }
 
 /// How much of the surface a caller needs.
@@ -102,10 +106,12 @@ impl SurfaceLookup {
             .iter()
             .map(|m| m.base_color_texture.is_some())
             .collect();
+        let bounds = scene.bounds();
         SurfaceLookup {
             scene,
             geometries,
             textured_materials,
+            bounds,
         }
     }
 
@@ -120,6 +126,12 @@ impl SurfaceLookup {
     }
 
     /// The surface at `hit` of the ray (`origin`, unit `direction`).
+    ///
+    /// The position is recomputed from the surface, not taken as `origin + t * direction`:
+    /// that point carries rounding errors of the ray's origin and length (a camera 1e4 units
+    /// away puts it some 1e-3 off a unit sphere), while the recomputed point's error bound
+    /// depends only on the surface (`crate::shading::ray_offset`). `t` stays as the
+    /// intersector reported it.
     pub fn surface_hit(
         &self,
         origin: Vec3,
@@ -128,7 +140,6 @@ impl SurfaceLookup {
         detail: SurfaceDetail,
     ) -> SurfaceHit {
         let texturing = detail == SurfaceDetail::Texturing;
-        let position = origin + direction * hit.t;
         match self.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(index) => {
                 let mesh = &self.scene.meshes[index];
@@ -137,6 +148,7 @@ impl SurfaceLookup {
                 let p = [mesh.positions[i0], mesh.positions[i1], mesh.positions[i2]];
                 let (u, v) = (hit.u, hit.v);
                 let w = 1.0 - u - v;
+                let position = SpawnPoint::on_triangle(p, u, v).position;
                 let e1 = p[1] - p[0];
                 let e2 = p[2] - p[0];
                 let geometric_normal = e1.cross(e2).normalize_or(Vec3::Y);
@@ -186,9 +198,11 @@ impl SurfaceLookup {
             }
             GeometryRef::Spheres => {
                 let sphere = &self.scene.spheres[hit.primitive as usize];
-                // Recompute the point from the centre so it lies on the sphere exactly.
-                let normal = (position - sphere.center).normalize_or(Vec3::Y);
-                let position = sphere.center + normal * sphere.radius;
+                // Project the ray's point onto the sphere: the ray only picks the direction
+                // from the centre, so the point's error does not depend on the ray.
+                let (spawn, normal) =
+                    SpawnPoint::on_sphere(sphere.center, sphere.radius, origin + direction * hit.t);
+                let position = spawn.position;
                 // The lat-long frame costs two inverse trigonometric functions: only when needed.
                 let (st, dpds, dpdt) = if texturing {
                     crate::footprint::lat_long_frame(normal, sphere.radius)

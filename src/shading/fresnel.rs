@@ -91,38 +91,64 @@ pub fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
 
 /// A ray meeting the boundary of a dielectric object, resolved into the quantities
 /// [`fresnel`] and [`crate::shading::refract`] expect.
+///
+/// One rule decides the side: the geometric normal. Whether the ray enters or leaves, hence
+/// `eta`, total internal reflection and (in the integrator) the medium a refracted ray
+/// travels in, all follow it. A smooth-shading normal only tilts the boundary the ray
+/// refracts through, and only while it faces the incident ray: at silhouettes of coarse
+/// meshes an interpolated normal can face away from a ray that geometrically arrives from
+/// outside, and taking the side from it would treat that ray as leaving the glass.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DielectricBoundary {
-    /// True when the ray arrives from outside the object (against the outward normal).
+    /// True when the ray arrives from outside the object (against the outward geometric
+    /// normal).
     pub entering: bool,
-    /// The given normal, flipped to face the incident ray (the side reflections leave from;
-    /// refractions leave from `-normal`).
+    /// The normal the ray refracts and reflects about, facing the incident ray (the side
+    /// reflections leave from; refractions leave from the other side).
     pub normal: Vec3,
     /// `n_incident / n_transmitted` for this ray.
     pub eta: f32,
-    /// Cosine of the angle of incidence, in `[0, 1]`.
+    /// Cosine of the angle of incidence against `normal`, in `[0, 1]`.
     pub cos_i: f32,
 }
 
 impl DielectricBoundary {
-    /// Resolves the boundary for the unit incident direction `d`, the unit `outward_normal`
-    /// of the object's surface (the geometric normal decides inside/outside), and the
-    /// object's index of refraction `ior` (the outside has index 1, as in
-    /// `crate::scene::Material::ior`).
+    /// Resolves the boundary for the unit incident direction `d`, the unit
+    /// `outward_normal` of the object's surface and the object's index of refraction `ior`
+    /// (the outside has index 1, as in `crate::scene::Material::ior`).
     #[inline]
     pub fn new(d: Vec3, outward_normal: Vec3, ior: f32) -> Self {
-        let d_dot_n = d.dot(outward_normal);
-        let entering = d_dot_n <= 0.0;
-        let (normal, eta) = if entering {
-            (outward_normal, 1.0 / ior)
+        Self::with_shading_normal(d, outward_normal, outward_normal, ior)
+    }
+
+    /// As [`DielectricBoundary::new`] for a surface with a shading normal: the unit
+    /// `outward_geometric` normal decides the side; `outward_shading` (the same side's
+    /// shading normal) is the boundary's normal when it faces the incident ray, the
+    /// geometric normal otherwise.
+    #[inline]
+    pub fn with_shading_normal(
+        d: Vec3,
+        outward_geometric: Vec3,
+        outward_shading: Vec3,
+        ior: f32,
+    ) -> Self {
+        // The same test as `SurfaceHit::is_front_face`: a ray exactly in the plane leaves.
+        let entering = d.dot(outward_geometric) < 0.0;
+        let (geometric, shading, eta) = if entering {
+            (outward_geometric, outward_shading, 1.0 / ior)
         } else {
-            (-outward_normal, ior)
+            (-outward_geometric, -outward_shading, ior)
+        };
+        let normal = if d.dot(shading) < 0.0 {
+            shading
+        } else {
+            geometric
         };
         DielectricBoundary {
             entering,
             normal,
             eta,
-            cos_i: d_dot_n.abs().min(1.0),
+            cos_i: d.dot(normal).abs().min(1.0),
         }
     }
 }
@@ -242,6 +268,41 @@ mod tests {
         assert_eq!(b.normal, -n);
         assert_eq!(b.eta, 1.5);
         assert!((b.cos_i - 0.8).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_geometric_normal_decides_the_side() {
+        let ng = Vec3::Y;
+        // A ray arriving from above (outside) at a grazing angle, with a shading normal
+        // tilted so far that it faces away from the ray.
+        let d = Vec3::new(0.99, -0.141_067, 0.0).normalize();
+        let ns = Vec3::new(0.8, 0.6, 0.0);
+        assert!(d.dot(ns) > 0.0);
+        let b = DielectricBoundary::with_shading_normal(d, ng, ns, 1.5);
+        assert!(b.entering, "the ray arrives from outside");
+        assert!((b.eta - 1.0 / 1.5).abs() < 1e-7);
+        assert_eq!(
+            b.normal, ng,
+            "an averted shading normal falls back to the geometric"
+        );
+        assert!(
+            crate::shading::refract(d, b.normal, b.eta).is_some(),
+            "no TIR from air"
+        );
+
+        // A shading normal that faces the ray tilts the boundary, and the side stays.
+        let ns = Vec3::new(-0.3, 0.95, 0.0).normalize();
+        let b = DielectricBoundary::with_shading_normal(d, ng, ns, 1.5);
+        assert!(b.entering);
+        assert_eq!(b.normal, ns);
+        assert!((b.cos_i - (-d.dot(ns))).abs() < 1e-6);
+
+        // From inside: leaving, whatever the shading normal says.
+        let up = Vec3::new(0.99, 0.141_067, 0.0).normalize();
+        let b = DielectricBoundary::with_shading_normal(up, ng, Vec3::new(-0.8, 0.6, 0.0), 1.5);
+        assert!(!b.entering);
+        assert_eq!(b.eta, 1.5);
+        assert_eq!(b.normal, -ng);
     }
 
     proptest! {

@@ -106,6 +106,16 @@ pub fn light_sample(light: &Light, p: Vec3) -> LightSample {
     }
 }
 
+/// Where a point or spot light sits (`None` for a directional light, which is infinitely
+/// far away): the end shadow rays stop short of.
+#[inline]
+pub fn light_position(light: &Light) -> Option<Vec3> {
+    match light {
+        Light::Point { position, .. } | Light::Spot { position, .. } => Some(*position),
+        Light::Directional { .. } => None,
+    }
+}
+
 /// Inverse-square sample of a point source of radiant intensity `intensity_rgb`.
 #[inline]
 fn point_sample(position: Vec3, p: Vec3, intensity_rgb: Vec3) -> LightSample {

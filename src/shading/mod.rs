@@ -11,8 +11,9 @@
 //! - [`brdf`]: the local illumination model of a hit (Lambert plus normalised Blinn-Phong).
 //! - [`lights`]: direction, distance and irradiance scale towards each punctual light, for
 //!   shadow rays (seed 001, "Shadow Rays").
-//! - [`ray_offset`]: moving secondary-ray origins off the surface they start on without a
-//!   scene-scale epsilon (seed 001, "self intersection").
+//! - [`ray_offset`]: spawn points, hit points with a bound on their rounding error, and
+//!   ray origins moved just past that bound off the surface they start on (seed 001,
+//!   "self intersection"), at any scene scale and camera distance.
 //!
 //! Conventions: directions are unit `glam::Vec3`; an *incident* direction `d` points
 //! towards the surface (the ray's travel direction), `wo`/`wi` point away from it.
@@ -29,7 +30,7 @@ pub mod refraction;
 pub use beer::{sigma_from_attenuation, transmittance};
 pub use brdf::eval_surface;
 pub use fresnel::{fresnel, fresnel_dielectric, fresnel_schlick, DielectricBoundary};
-pub use lights::{light_sample, LightSample};
-pub use ray_offset::{offset_ray_origin, offset_ray_origin_with_scale};
+pub use lights::{light_position, light_sample, LightSample};
+pub use ray_offset::{entry_distance, shadow_ray_end, SpawnPoint};
 pub use reflection::reflect;
 pub use refraction::refract;

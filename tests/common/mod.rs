@@ -43,6 +43,60 @@ pub fn square_obj(half: f32, y: f32) -> String {
     )
 }
 
+/// A UV sphere of `segments` x `rings` around `center` with radius `radius`, as OBJ with
+/// unit vertex normals (smooth shading) and counter-clockwise (outward) winding.
+pub fn uv_sphere_obj(center: [f64; 3], radius: f64, segments: usize, rings: usize) -> String {
+    use std::fmt::Write;
+    let mut obj = String::new();
+    // Vertex 1: north pole; then rings - 1 rings of `segments` vertices; last: south pole.
+    let vertex = |obj: &mut String, n: [f64; 3]| {
+        let p = [
+            center[0] + radius * n[0],
+            center[1] + radius * n[1],
+            center[2] + radius * n[2],
+        ];
+        writeln!(obj, "v {:.9} {:.9} {:.9}", p[0], p[1], p[2]).unwrap();
+        writeln!(obj, "vn {:.9} {:.9} {:.9}", n[0], n[1], n[2]).unwrap();
+    };
+    vertex(&mut obj, [0.0, 1.0, 0.0]);
+    for ring in 1..rings {
+        let theta = std::f64::consts::PI * ring as f64 / rings as f64;
+        for segment in 0..segments {
+            let phi = 2.0 * std::f64::consts::PI * segment as f64 / segments as f64;
+            vertex(
+                &mut obj,
+                [
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    -theta.sin() * phi.sin(),
+                ],
+            );
+        }
+    }
+    vertex(&mut obj, [0.0, -1.0, 0.0]);
+    let south = 1 + (rings - 1) * segments + 1;
+    let ring_vertex = |ring: usize, segment: usize| 2 + (ring - 1) * segments + segment % segments;
+    let face = |obj: &mut String, a: usize, b: usize, c: usize| {
+        writeln!(obj, "f {a}//{a} {b}//{b} {c}//{c}").unwrap();
+    };
+    for s in 0..segments {
+        face(&mut obj, 1, ring_vertex(1, s), ring_vertex(1, s + 1));
+        for ring in 1..rings - 1 {
+            let (a, b) = (ring_vertex(ring, s), ring_vertex(ring, s + 1));
+            let (c, d) = (ring_vertex(ring + 1, s), ring_vertex(ring + 1, s + 1));
+            face(&mut obj, a, c, d);
+            face(&mut obj, a, d, b);
+        }
+        face(
+            &mut obj,
+            ring_vertex(rings - 1, s),
+            south,
+            ring_vertex(rings - 1, s + 1),
+        );
+    }
+    obj
+}
+
 /// An image read back from an EXR: width, height and named channels.
 pub struct ExrImage {
     pub width: usize,
