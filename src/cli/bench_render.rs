@@ -144,6 +144,7 @@ fn refuse_output_options(render: &RenderArgs) -> Result<(), CommandError> {
         ("--no-png", render.no_png),
         ("--stats", render.stats.is_some()),
         ("--resume", render.resume),
+        ("--max-memory", render.max_memory.is_some()),
     ];
     match given.iter().find(|(_, present)| *present) {
         Some((option, _)) => Err(CommandError::bad_input(format!(

@@ -16,6 +16,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::time::Instant;
 
 use clap::Args;
 
@@ -25,6 +26,7 @@ use crate::cli::{CommandError, EXIT_INTERRUPTED};
 use crate::film::{self, ExrAttributes, OutputSet};
 use crate::footprint::LodStrategy;
 use crate::integrator::{AovSelection, Whitted};
+use crate::render::stats::PhaseSeconds;
 use crate::render::{self, RenderControl, RenderOptions};
 use crate::scene::load::{default_scene, frame_camera, load_scene};
 use crate::scene::{FresnelMode, SceneDescription, ToneMap};
@@ -94,6 +96,10 @@ pub struct RenderArgs {
     /// Force every effect on (the general path), for comparisons.
     #[arg(long)]
     pub all_effects: bool,
+    /// Refuse the render when its estimated memory (film, tiles, outputs, decoded textures)
+    /// exceeds this size, e.g. 8G or 512M [default: the memory the system reports available].
+    #[arg(long, value_parser = crate::render::memory::parse_memory_size)]
+    pub max_memory: Option<u64>,
     /// Do not show a progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -221,10 +227,22 @@ fn tonemap(args: &RenderArgs, scene: &SceneDescription) -> Result<ToneMap, Comma
 pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     // Outputs are checked before anything is loaded or rendered: a bad path costs nothing.
     let outputs = OutputPlan::from_args(args)?;
+    let started = Instant::now();
     let scene = load(args)?;
+    let mut phases = PhaseSeconds {
+        load: started.elapsed().as_secs_f64(),
+        ..PhaseSeconds::default()
+    };
     let options = options(args, &scene)?;
     let tonemap = tonemap(args, &scene)?;
     let exposure = scene.settings.exposure;
+
+    // Refused before anything large is allocated: an image or texture set that cannot fit
+    // gets the estimate, not an allocation failure halfway.
+    let estimate = render::memory::estimate(&scene, &options)
+        .map_err(|e| CommandError::bad_input(e.to_string()))?;
+    render::memory::check(&estimate, args.max_memory, &scene.source)
+        .map_err(CommandError::bad_input)?;
 
     let pool = crate::cli::worker_pool(args.threads)?;
 
@@ -247,8 +265,13 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     let scene = Arc::new(scene);
     let (mut result, camera) = pool.install(|| -> Result<_, CommandError> {
-        let context = render::prepare(scene.clone(), options.clone())
+        let decoding = Instant::now();
+        let textures = decode_textures(&scene, args.quiet)?;
+        phases.textures = decoding.elapsed().as_secs_f64();
+        let preparing = Instant::now();
+        let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        phases.prepare = preparing.elapsed().as_secs_f64();
         let bar = progress_bar(args.quiet, tiles.len());
         let progress = |done: usize, _total: usize| bar.set_position(done as u64);
         let control = RenderControl {
@@ -277,6 +300,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let finished_count = result.finished_tiles.iter().filter(|&&d| d).count();
     let complete = finished_count == tiles.len();
     result.stats.complete = complete;
+    phases.render = result.stats.seconds;
+    result.stats.phases = Some(phases);
     if !complete && finished_count == 0 {
         return Err(CommandError {
             message: format!(
@@ -328,10 +353,15 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
             status: EXIT_INTERRUPTED,
         });
     }
+    let writing = Instant::now();
     film::stage_exr(&mut set, &result.film, &outputs.exr, &attributes).map_err(written)?;
     if let Some(png_path) = &outputs.png {
         film::stage_png(&mut set, &result.film, png_path, tonemap, exposure).map_err(written)?;
     }
+    // The statistics file cannot time its own writing: "write" is the images'.
+    phases.write = writing.elapsed().as_secs_f64();
+    phases.total = started.elapsed().as_secs_f64();
+    result.stats.phases = Some(phases);
     if let Some(stats_path) = &outputs.stats {
         stage_text(&mut set, stats_path, &stats_json(&result.stats)?).map_err(written)?;
     }
@@ -349,6 +379,36 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     }
     println!("{line}");
     Ok(())
+}
+
+/// Decodes the scene's textures one by one, showing which one while large files load.
+fn decode_textures(
+    scene: &SceneDescription,
+    quiet: bool,
+) -> Result<Vec<Arc<crate::texture::Texture>>, CommandError> {
+    let bar = if quiet || scene.textures.is_empty() {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let bar = indicatif::ProgressBar::new(scene.textures.len() as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{elapsed_precise} decoding textures {pos}/{len}: {msg}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar.enable_steady_tick(std::time::Duration::from_millis(250));
+        bar
+    };
+    let mut textures = Vec::with_capacity(scene.textures.len());
+    for desc in &scene.textures {
+        bar.set_message(desc.source.label());
+        let texture = crate::render::prepared::decode_texture(desc)
+            .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        textures.push(Arc::new(texture));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(textures)
 }
 
 /// Stages a text file (the statistics) into `set`.

@@ -9,6 +9,7 @@
 pub mod context;
 pub mod effects;
 pub mod external_textures;
+pub mod memory;
 pub mod prepared;
 pub mod sampling;
 pub mod stats;
@@ -272,6 +273,17 @@ pub fn render(
         effects,
         notes: context.scene.notes.clone(),
         complete: finished_tiles.iter().all(|&f| f),
+        phases: None,
+        texture_memory: context
+            .scene
+            .textures
+            .iter()
+            .zip(&context.textures)
+            .map(|(desc, texture)| stats::TextureMemory {
+                texture: desc.source.label(),
+                bytes: texture.memory_bytes() as u64,
+            })
+            .collect(),
     };
     RenderResult {
         film,

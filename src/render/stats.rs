@@ -90,6 +90,35 @@ pub struct RenderStats {
     pub effects: Vec<EffectReason>,
     pub notes: Vec<String>,
     pub complete: bool,
+    /// Wall time of each phase of a command-line render (`None` where the caller did not
+    /// time them, e.g. the C API).
+    pub phases: Option<PhaseSeconds>,
+    /// Decoded memory of each texture (all mip levels), in scene order.
+    pub texture_memory: Vec<TextureMemory>,
+}
+
+/// Seconds spent in each phase of a render, and in all of them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct PhaseSeconds {
+    /// Reading and validating the scene and its meshes.
+    pub load: f64,
+    /// Decoding textures and building their mip pyramids.
+    pub textures: f64,
+    /// Building Embree's BVH and the render's tables.
+    pub prepare: f64,
+    /// Tracing and shading.
+    pub render: f64,
+    /// Encoding the EXR and PNG (the statistics file cannot time its own writing).
+    pub write: f64,
+    /// From the start of loading to the end of writing the images.
+    pub total: f64,
+}
+
+/// One texture's decoded size.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct TextureMemory {
+    pub texture: String,
+    pub bytes: u64,
 }
 
 #[derive(Clone, Debug, Serialize, PartialEq, Eq)]
@@ -99,18 +128,30 @@ pub struct EffectReason {
 }
 
 impl RenderStats {
+    /// The render's time, with every phase when they were timed.
+    fn time_text(&self) -> String {
+        match &self.phases {
+            Some(p) => format!(
+                "{:.3} s (load {:.3} s, textures {:.3} s, BVH and set-up {:.3} s, render {:.3} s, \
+                 write {:.3} s)",
+                p.total, p.load, p.textures, p.prepare, p.render, p.write
+            ),
+            None => format!("{:.3} s", self.seconds),
+        }
+    }
+
     /// The one-line summary printed at the end of a render.
     pub fn summary_line(&self) -> String {
         let c = &self.counters;
         let mut line = format!(
-            "rendered {} ({}x{}, {} spp, lod {}, filter {}) in {:.3} s: {} camera, {} shadow, {} reflection, {} refraction rays, {:.2} Mrays/s",
+            "rendered {} ({}x{}, {} spp, lod {}, filter {}) in {}: {} camera, {} shadow, {} reflection, {} refraction rays, {:.2} Mrays/s",
             self.scene,
             self.width,
             self.height,
             self.spp,
             self.lod,
             self.filter,
-            self.seconds,
+            self.time_text(),
             c.camera_rays,
             c.shadow_rays,
             c.reflection_rays,

@@ -27,6 +27,7 @@ mod ellipse;
 mod ewa;
 mod filter_closest_bilinear;
 mod image_load;
+mod image_size;
 mod mip_pyramid;
 mod tiled_tiff;
 mod tiles;
@@ -40,6 +41,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::Vec4;
 
+pub use image_size::{decoded_texture_bytes, encoded_image_size, file_image_size};
 pub use mip_pyramid::{MipLevel, MipPyramid};
 pub use tiles::{TileSet, TILE_SIZE};
 

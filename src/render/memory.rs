@@ -1,0 +1,193 @@
+//! The memory a render will need, estimated before anything large is allocated.
+//!
+//! An image or a texture set that cannot fit is refused up front with the estimate, instead
+//! of the process aborting halfway when an allocation fails. The estimate counts what the
+//! render holds at its peak:
+//!
+//! - the film: one f32 plane per channel of the layers the options ask for;
+//! - the finished tiles awaiting their copy into the film (as large as the film);
+//! - the outputs: the EXR encoder's copy of every plane and the PNG's 8-bit pixels;
+//! - every texture decoded with its mip levels (from the file headers, nothing decoded).
+//!
+//! The limit is `--max-memory` when given, else the memory the system reports available
+//! (`MemAvailable` in `/proc/meminfo`); where neither is known, nothing is refused.
+
+use std::fmt;
+
+use crate::render::context::RenderOptions;
+use crate::scene::{SceneDescription, TextureSource};
+use crate::texture::{decoded_texture_bytes, encoded_image_size, file_image_size};
+
+/// What a render is estimated to need, in bytes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MemoryEstimate {
+    pub film: u64,
+    pub tiles: u64,
+    pub outputs: u64,
+    /// Per texture: its label and decoded size.
+    pub textures: Vec<(String, u64)>,
+}
+
+impl MemoryEstimate {
+    /// The sum of every part.
+    pub fn total(&self) -> u64 {
+        self.film + self.tiles + self.outputs + self.textures.iter().map(|t| t.1).sum::<u64>()
+    }
+}
+
+/// Bytes as a person reads them (GiB, MiB, KiB, bytes).
+pub struct Bytes(pub u64);
+
+impl fmt::Display for Bytes {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let b = self.0 as f64;
+        const KIB: f64 = 1024.0;
+        if b >= KIB * KIB * KIB {
+            write!(f, "{:.1} GiB", b / (KIB * KIB * KIB))
+        } else if b >= KIB * KIB {
+            write!(f, "{:.1} MiB", b / (KIB * KIB))
+        } else if b >= KIB {
+            write!(f, "{:.1} KiB", b / KIB)
+        } else {
+            write!(f, "{} bytes", self.0)
+        }
+    }
+}
+
+/// Estimates the memory of rendering `scene` with `options`. A texture whose header cannot
+/// be read is an error naming it (the render would fail on it anyway).
+pub fn estimate(
+    scene: &SceneDescription,
+    options: &RenderOptions,
+) -> Result<MemoryEstimate, crate::texture::TextureError> {
+    let pixels = u64::from(options.width) * u64::from(options.height);
+    let channels: u64 = crate::render::film_layers(options.aovs)
+        .iter()
+        .map(|layer| layer.channel_count() as u64)
+        .sum();
+    let film = pixels * channels * 4;
+    let textures = scene
+        .textures
+        .iter()
+        .map(|texture| {
+            let (width, height) = match &texture.source {
+                TextureSource::File(path) => file_image_size(path)?,
+                TextureSource::Encoded { label, bytes } => encoded_image_size(bytes, label)?,
+            };
+            Ok((texture.source.label(), decoded_texture_bytes(width, height)))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(MemoryEstimate {
+        film,
+        tiles: film,
+        outputs: film + pixels * 4,
+        textures,
+    })
+}
+
+/// `MemAvailable` from `/proc/meminfo`, in bytes, where the system reports it.
+pub fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    parse_mem_available(&text)
+}
+
+fn parse_mem_available(meminfo: &str) -> Option<u64> {
+    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Parses a memory size such as `512M`, `8G`, `1.5GiB` or `1000000` (bytes).
+pub fn parse_memory_size(text: &str) -> Result<u64, String> {
+    let trimmed = text.trim();
+    let split = trimmed
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(trimmed.len());
+    let (number, unit) = trimmed.split_at(split);
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("'{text}' is not a memory size (e.g. 512M, 8G)"))?;
+    let scale: f64 = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1.0,
+        "k" | "kb" | "kib" => 1024.0,
+        "m" | "mb" | "mib" => 1024.0 * 1024.0,
+        "g" | "gb" | "gib" => 1024.0 * 1024.0 * 1024.0,
+        "t" | "tb" | "tib" => 1024.0 * 1024.0 * 1024.0 * 1024.0,
+        other => return Err(format!("'{text}': unknown unit '{other}' (K, M, G or T)")),
+    };
+    let bytes = value * scale;
+    if !(bytes.is_finite() && bytes >= 1.0) {
+        return Err(format!("'{text}' is not a positive memory size"));
+    }
+    Ok(bytes as u64)
+}
+
+/// Refuses a render whose estimate exceeds `limit` (or the available memory when `None`),
+/// with a one-line message giving the estimate and its largest parts.
+pub fn check(estimate: &MemoryEstimate, limit: Option<u64>, label: &str) -> Result<(), String> {
+    let (limit, source) = match limit {
+        Some(limit) => (limit, "--max-memory"),
+        None => match available_memory() {
+            Some(available) => (available, "available memory"),
+            None => return Ok(()),
+        },
+    };
+    let total = estimate.total();
+    if total <= limit {
+        return Ok(());
+    }
+    let largest_texture = estimate
+        .textures
+        .iter()
+        .max_by_key(|t| t.1)
+        .map(|(name, bytes)| format!(", largest texture {name} {}", Bytes(*bytes)))
+        .unwrap_or_default();
+    Err(format!(
+        "{label}: the render needs about {} (film {}, tiles {}, outputs {}, textures {}{}), \
+         more than the {} of {source}",
+        Bytes(total),
+        Bytes(estimate.film),
+        Bytes(estimate.tiles),
+        Bytes(estimate.outputs),
+        Bytes(estimate.textures.iter().map(|t| t.1).sum()),
+        largest_texture,
+        Bytes(limit),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_with_units() {
+        assert_eq!(parse_memory_size("1000").unwrap(), 1000);
+        assert_eq!(parse_memory_size("512M").unwrap(), 512 << 20);
+        assert_eq!(parse_memory_size("1.5GiB").unwrap(), 3 << 29);
+        assert_eq!(parse_memory_size("8g").unwrap(), 8 << 30);
+        for bad in ["", "-1G", "12Q", "G", "0"] {
+            assert!(parse_memory_size(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn mem_available_is_read_from_meminfo_text() {
+        let text = "MemTotal:       24000000 kB\nMemAvailable:   20000000 kB\n";
+        assert_eq!(parse_mem_available(text), Some(20_000_000 * 1024));
+        assert_eq!(parse_mem_available("MemTotal: 1 kB\n"), None);
+    }
+
+    #[test]
+    fn a_large_image_is_refused_with_its_estimate() {
+        let estimate = MemoryEstimate {
+            film: 200 << 30,
+            tiles: 200 << 30,
+            outputs: 216 << 30,
+            textures: vec![("sky.png".into(), 1 << 20)],
+        };
+        let message = check(&estimate, Some(8 << 30), "scene.toml").unwrap_err();
+        assert!(message.contains("616.0 GiB") && message.contains("8.0 GiB"), "{message}");
+        assert!(message.contains("--max-memory") && message.contains("sky.png"), "{message}");
+        assert!(check(&estimate, Some(1 << 40), "scene.toml").is_ok());
+    }
+}
