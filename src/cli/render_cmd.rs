@@ -347,7 +347,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         };
         let result = render::render(&context, &Whitted, &control);
         bar.finish_and_clear();
-        Ok(result)
+        result.map_err(crate::cli::render_failed)
     })?;
 
     // Tiles an earlier run finished come from its file.
