@@ -142,9 +142,11 @@ struct WatertightCost {
 }
 
 impl WatertightCost {
-    /// One round: each pass on the robust scene, then on the fast one.
+    /// One round: each pass on both scenes, the robust one first in even rounds and the
+    /// fast one first in odd rounds, so neither profits from running second.
     fn measure(
         &mut self,
+        round: usize,
         robust: &RenderContext,
         fast: &RenderContext,
         render_timed: &dyn Fn(&RenderContext) -> Result<render::RenderResult, CommandError>,
@@ -154,22 +156,34 @@ impl WatertightCost {
             f();
             start.elapsed().as_secs_f64()
         };
-        let r = time(&|| {
-            trace_camera_rays_only(robust);
-        });
-        let f = time(&|| {
-            trace_camera_rays_only(fast);
-        });
+        let order = if round % 2 == 0 {
+            [robust, fast]
+        } else {
+            [fast, robust]
+        };
+        // (robust, fast) seconds of one pass, run in `order`.
+        let pair = |seconds: [f64; 2]| {
+            if round % 2 == 0 {
+                (seconds[0], seconds[1])
+            } else {
+                (seconds[1], seconds[0])
+            }
+        };
+        let (r, f) = pair(order.map(|c| {
+            time(&|| {
+                trace_camera_rays_only(c);
+            })
+        }));
         self.rounds.push(("camera rays, no shading", r, f));
-        let r = time(&|| {
-            trace_camera_and_shadow_rays_only(robust);
-        });
-        let f = time(&|| {
-            trace_camera_and_shadow_rays_only(fast);
-        });
+        let (r, f) = pair(order.map(|c| {
+            time(&|| {
+                trace_camera_and_shadow_rays_only(c);
+            })
+        }));
         self.rounds.push(("camera + shadow rays, no shading", r, f));
-        let r = render_timed(robust)?.stats.seconds;
-        let f = render_timed(fast)?.stats.seconds;
+        let first = render_timed(order[0])?.stats.seconds;
+        let second = render_timed(order[1])?.stats.seconds;
+        let (r, f) = pair([first, second]);
         self.rounds.push(("full render", r, f));
         Ok(())
     }
@@ -257,7 +271,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         let mut traversal_times = Vec::new();
         let mut traversal_rays = (0, 0);
         let mut full_counters = WorkCounters::default();
-        for _ in 0..repeat {
+        for round in 0..repeat {
             let start = Instant::now();
             raw_rays = trace_camera_rays_only(&context);
             raw_times.push(start.elapsed().as_secs_f64());
@@ -272,7 +286,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             direct_times.push(result.stats.seconds);
             direct_counters = result.stats.counters;
             // Robust vs fast, paired within the round.
-            robust_cost.measure(&context, &fast_context, &render_timed)?;
+            robust_cost.measure(round, &context, &fast_context, &render_timed)?;
             check_traversal(&context)?;
             check_traversal(&fast_context)?;
         }
