@@ -329,7 +329,10 @@ fn forcing_effects_cannot_drop_a_needed_one() {
         Err(ForceEffectsError::MissingNeeded(missing)) => missing,
         other => panic!("expected a refusal, got {other:?}"),
     };
-    assert_eq!(missing(context.force_effects(EffectSet::default())), analysed);
+    assert_eq!(
+        missing(context.force_effects(EffectSet::default())),
+        analysed
+    );
     assert_eq!(context.effects, analysed);
     let without_shadows = EffectSet {
         shadows: false,
@@ -422,7 +425,12 @@ fn statistics_report_the_forced_effects() {
     let analysed = context.effects;
     assert_ne!(analysed, EffectSet::all());
     let result = render_forced(&mut context, EffectSet::all());
-    let mut reported: Vec<&str> = result.stats.effects.iter().map(|e| e.effect.as_str()).collect();
+    let mut reported: Vec<&str> = result
+        .stats
+        .effects
+        .iter()
+        .map(|e| e.effect.as_str())
+        .collect();
     reported.sort();
     let mut all = EffectSet::all().names();
     all.sort();
@@ -439,7 +447,12 @@ fn statistics_report_the_forced_effects() {
     }
     // Back to the analysed set: the statistics follow.
     let result = render_forced(&mut context, analysed);
-    let mut reported: Vec<&str> = result.stats.effects.iter().map(|e| e.effect.as_str()).collect();
+    let mut reported: Vec<&str> = result
+        .stats
+        .effects
+        .iter()
+        .map(|e| e.effect.as_str())
+        .collect();
     reported.sort();
     let mut needed = analysed.names();
     needed.sort();

@@ -739,7 +739,10 @@ fn narrower_devices_fall_back_to_packets_they_support_or_single_rays() {
         let what = format!("packets <= {max_width}, streams {streams}");
         assert!(device.packet_width() <= max_width.max(1), "{what}");
         let scene = random_scene(&device, 3000);
-        assert_eq!(scene.stream_supported(), streams && native.stream_supported());
+        assert_eq!(
+            scene.stream_supported(),
+            streams && native.stream_supported()
+        );
         let reference = single_hits(&scene, &rays);
         let tiles = packet_hits::<16>(&scene, &rays, true);
         let sixteen = packet_hits::<16>(&scene, &rays, false);
@@ -761,14 +764,25 @@ fn narrower_devices_fall_back_to_packets_they_support_or_single_rays() {
             .expect("occluded stream");
         let mut tile = RayPacket::<16>::new();
         for (chunk_index, chunk) in rays.chunks(16).enumerate() {
-            chunk.iter().enumerate().for_each(|(l, r)| tile.set_ray(l, r));
+            chunk
+                .iter()
+                .enumerate()
+                .for_each(|(l, r)| tile.set_ray(l, r));
             scene
                 .occluded_tile(&mut tile, TraceOptions::coherent())
                 .expect("occluded tile");
             for lane in 0..chunk.len() {
                 let i = chunk_index * 16 + lane;
-                assert_eq!(tile.is_occluded(lane), reference[i].is_some(), "{what}: tile {i}");
-                assert_eq!(shadow[i].is_occluded(), reference[i].is_some(), "{what}: stream {i}");
+                assert_eq!(
+                    tile.is_occluded(lane),
+                    reference[i].is_some(),
+                    "{what}: tile {i}"
+                );
+                assert_eq!(
+                    shadow[i].is_occluded(),
+                    reference[i].is_some(),
+                    "{what}: stream {i}"
+                );
             }
         }
     }
@@ -810,11 +824,14 @@ fn single_ray_fallback_keeps_lane_payloads() {
         .expect("tile");
     let mut stream: Vec<RayHit> = (0..16).map(|l| RayHit::new(&quad_ray(l))).collect();
     scene
-        .intersect_stream(&mut stream, TraceOptions::incoherent().with_payload(&payload))
+        .intersect_stream(
+            &mut stream,
+            TraceOptions::incoherent().with_payload(&payload),
+        )
         .expect("stream");
-    for lane in 0..16 {
+    for (lane, ray_hit) in stream.iter().enumerate() {
         assert_eq!(tile.hit(lane).is_some(), lane < 8, "tile lane {lane}");
-        assert_eq!(stream[lane].hit().is_some(), lane < 8, "stream ray {lane}");
+        assert_eq!(ray_hit.hit().is_some(), lane < 8, "stream ray {lane}");
     }
 }
 
@@ -922,8 +939,8 @@ fn a_render_whose_alpha_filter_panics_fails_with_the_message() {
     let mask = Arc::new(
         conetrace::texture::Texture::from_rgba_f32(2, 2, vec![[1.0; 4]; 4]).expect("mask"),
     );
-    let context = render::prepare_with_textures(scene, render_options(), vec![mask])
-        .expect("prepare");
+    let context =
+        render::prepare_with_textures(scene, render_options(), vec![mask]).expect("prepare");
     let result = render::render(
         &context,
         &conetrace::integrator::Whitted,
@@ -938,7 +955,11 @@ fn a_render_whose_alpha_filter_panics_fails_with_the_message() {
             );
         }
         Ok(result) => {
-            let depth = result.film.channel("Z").map(|z| z.to_vec()).unwrap_or_default();
+            let depth = result
+                .film
+                .channel("Z")
+                .map(|z| z.to_vec())
+                .unwrap_or_default();
             let missed = depth.iter().filter(|&&z| z == f32::MAX).count();
             panic!(
                 "the render succeeded (complete: {}) with {missed} of {} pixels missed",

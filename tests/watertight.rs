@@ -147,11 +147,7 @@ fn tracer_for(transform: Affine3A) -> Tracer {
 
 /// Rays towards every shared-edge target from `distance` along `direction_to_origin`
 /// (world space, before normalisation), ending `overshoot` past the target.
-fn rays_at_targets(
-    transform: Affine3A,
-    direction_to_origin: Vec3,
-    distance: f32,
-) -> Vec<TraceRay> {
+fn rays_at_targets(transform: Affine3A, direction_to_origin: Vec3, distance: f32) -> Vec<TraceRay> {
     let away = transform.transform_vector3(direction_to_origin).normalize();
     shared_edge_targets()
         .into_iter()
@@ -184,10 +180,7 @@ fn misses(tracer: &Tracer, rays: &[TraceRay]) -> Vec<(&'static str, usize)> {
         hits.iter().filter(|h| !h.is_hit()).count(),
     ));
     tracer.intersect_one_by_one(rays, &mut hits, &mut counters);
-    out.push((
-        "single rays",
-        hits.iter().filter(|h| !h.is_hit()).count(),
-    ));
+    out.push(("single rays", hits.iter().filter(|h| !h.is_hit()).count()));
     // Shadow rays that end well behind the surface must all be blocked.
     let shadow: Vec<TraceRay> = rays
         .iter()
@@ -287,7 +280,14 @@ fn missed_pixels(obj: &str, scene: &str, size: u32) -> usize {
     write(dir.path(), "quad.toml", scene);
     let out = run_in(
         dir.path(),
-        &["render", "quad.toml", "-o", "quad.exr", "--no-png", "--quiet"],
+        &[
+            "render",
+            "quad.toml",
+            "-o",
+            "quad.exr",
+            "--no-png",
+            "--quiet",
+        ],
     );
     assert!(
         out.status.success(),
@@ -296,7 +296,11 @@ fn missed_pixels(obj: &str, scene: &str, size: u32) -> usize {
     );
     let image = read_exr(&dir.path().join("quad.exr"));
     assert_eq!((image.width, image.height), (size as usize, size as usize));
-    image.channel("Z").iter().filter(|&&z| z == f32::MAX).count()
+    image
+        .channel("Z")
+        .iter()
+        .filter(|&&z| z == f32::MAX)
+        .count()
 }
 
 /// Every view lies inside the mesh, so every camera ray must hit it. The far, narrow view of
@@ -312,10 +316,30 @@ fn renders_of_translated_meshes_show_no_crack() {
         "[camera]\ntype = \"pinhole\"\neye = [20.3, 40.7, 400.0]\ntarget = [0.3, 0.7, 0.0]\nfov = 0.25";
     let grid = grid_obj();
     let cases = [
-        ("two-triangle quad, head-on pinhole", QUAD_OBJ, head_on_pinhole, 64),
-        ("two-triangle quad, head-on orthographic", QUAD_OBJ, head_on_orthographic, 64),
-        ("6x6 grid, head-on orthographic", grid.as_str(), head_on_orthographic, 65),
-        ("6x6 grid, far oblique pinhole", grid.as_str(), far_oblique, 129),
+        (
+            "two-triangle quad, head-on pinhole",
+            QUAD_OBJ,
+            head_on_pinhole,
+            64,
+        ),
+        (
+            "two-triangle quad, head-on orthographic",
+            QUAD_OBJ,
+            head_on_orthographic,
+            64,
+        ),
+        (
+            "6x6 grid, head-on orthographic",
+            grid.as_str(),
+            head_on_orthographic,
+            65,
+        ),
+        (
+            "6x6 grid, far oblique pinhole",
+            grid.as_str(),
+            far_oblique,
+            129,
+        ),
     ];
     let mut cracks = Vec::new();
     for (what, obj, camera, size) in cases {

@@ -156,14 +156,14 @@ impl WatertightCost {
             f();
             start.elapsed().as_secs_f64()
         };
-        let order = if round % 2 == 0 {
+        let order = if round.is_multiple_of(2) {
             [robust, fast]
         } else {
             [fast, robust]
         };
         // (robust, fast) seconds of one pass, run in `order`.
         let pair = |seconds: [f64; 2]| {
-            if round % 2 == 0 {
+            if round.is_multiple_of(2) {
                 (seconds[0], seconds[1])
             } else {
                 (seconds[1], seconds[0])

@@ -136,7 +136,9 @@ mod tests {
         });
         assert_eq!(error.status, EXIT_INTERNAL);
         assert!(
-            error.message.starts_with("quad.toml: ray traversal failed: ")
+            error
+                .message
+                .starts_with("quad.toml: ray traversal failed: ")
                 && error.message.contains("alpha texture lookup failed"),
             "{}",
             error.message

@@ -380,7 +380,9 @@ impl CommittedScene {
                 (_, false) => {
                     ffi::rtcIntersect4(valid, self.raw(), ctx, rays as *mut ffi::RTCRayHit4)
                 }
-                (16, true) => ffi::rtcOccluded16(valid, self.raw(), ctx, rays as *mut ffi::RTCRay16),
+                (16, true) => {
+                    ffi::rtcOccluded16(valid, self.raw(), ctx, rays as *mut ffi::RTCRay16)
+                }
                 (8, true) => ffi::rtcOccluded8(valid, self.raw(), ctx, rays as *mut ffi::RTCRay8),
                 (_, true) => ffi::rtcOccluded4(valid, self.raw(), ctx, rays as *mut ffi::RTCRay4),
             }
@@ -439,7 +441,11 @@ impl CommittedScene {
         }
         self.finish_trace(
             context,
-            if occlusion { "rtcOccluded1" } else { "rtcIntersect1" },
+            if occlusion {
+                "rtcOccluded1"
+            } else {
+                "rtcIntersect1"
+            },
         )
     }
 }
@@ -553,7 +559,9 @@ mod tests {
             "occluded tile",
         );
         is_invalid_argument(
-            scene.intersect1(&ray(0), TraceOptions::incoherent()).map(|_| ()),
+            scene
+                .intersect1(&ray(0), TraceOptions::incoherent())
+                .map(|_| ()),
             "single",
         );
         let mut stream: Vec<RayHit> = (0..16).map(|lane| RayHit::new(&ray(lane))).collect();

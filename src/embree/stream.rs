@@ -52,7 +52,12 @@ impl CommittedScene {
 
     /// One `rtcIntersect1` / `rtcOccluded1` call; the caller reads the device's error state
     /// and the filters' panics afterwards ([`CommittedScene::finish_trace`]).
-    pub(super) fn trace_one(&self, ray_hit: &mut RayHit, context: &mut TraceContext, occlusion: bool) {
+    pub(super) fn trace_one(
+        &self,
+        ray_hit: &mut RayHit,
+        context: &mut TraceContext,
+        occlusion: bool,
+    ) {
         let ctx = context.as_raw();
         // SAFETY: the scene is committed; `ray_hit` is a properly aligned RTCRayHit (RTCRay
         // is its first member, for rtcOccluded1) and the context is live for the call.

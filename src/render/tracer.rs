@@ -60,8 +60,8 @@ use crate::embree::{
     CommittedScene, Device, EmbreeError, FilterCandidate, Ray, RayHit, RayPacket, RayPayload,
     SceneBuilder, TraceOptions,
 };
-use crate::render::effects::EffectSet;
 use crate::render::context::RenderOptions;
+use crate::render::effects::EffectSet;
 use crate::render::prepared::{GeometryRef, PrepareError};
 use crate::render::stats::WorkCounters;
 use crate::scene::SceneDescription;
@@ -300,8 +300,10 @@ impl Tracer {
                 let (ray_hits, payload) = &mut *stream;
                 fill_stream(rays, ray_hits, payload);
                 self.note(
-                    self.scene
-                        .intersect_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
+                    self.scene.intersect_stream(
+                        ray_hits,
+                        TraceOptions::incoherent().with_payload(payload),
+                    ),
                 );
                 for (out, ray_hit) in hits.iter_mut().zip(ray_hits.iter()) {
                     if let Some(hit) = ray_hit.hit() {
