@@ -255,14 +255,22 @@ fn render_with(
     context: &mut conetrace::render::RenderContext,
     effects: conetrace::render::EffectSet,
 ) -> conetrace::film::Film {
+    render_forced(context, effects).film
+}
+
+fn render_forced(
+    context: &mut conetrace::render::RenderContext,
+    effects: conetrace::render::EffectSet,
+) -> conetrace::render::RenderResult {
     context.force_effects(effects).unwrap();
     let result = conetrace::render::render(
         context,
         &conetrace::integrator::Whitted,
         &conetrace::render::RenderControl::default(),
-    );
+    )
+    .expect("traversal succeeds");
     assert!(result.stats.complete);
-    result.film
+    result
 }
 
 /// Switching on effects a scene does not need never changes a pixel: the specialised path
@@ -308,7 +316,7 @@ fn specialised_and_general_paths_give_the_same_image() {
 /// and leaves the render's set as it was.
 #[test]
 fn forcing_effects_cannot_drop_a_needed_one() {
-    use conetrace::render::EffectSet;
+    use conetrace::render::{EffectSet, ForceEffectsError};
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml");
     let mut context = prepare_small(&path);
     let analysed = context.effects;
@@ -317,15 +325,23 @@ fn forcing_effects_cannot_drop_a_needed_one() {
         "{:?}",
         analysed.names()
     );
-    let missing = context.force_effects(EffectSet::default()).unwrap_err();
-    assert_eq!(missing, analysed);
+    let missing = |result: Result<(), ForceEffectsError>| match result {
+        Err(ForceEffectsError::MissingNeeded(missing)) => missing,
+        other => panic!("expected a refusal, got {other:?}"),
+    };
+    assert_eq!(
+        missing(context.force_effects(EffectSet::default())),
+        analysed
+    );
     assert_eq!(context.effects, analysed);
     let without_shadows = EffectSet {
         shadows: false,
         ..EffectSet::all()
     };
-    let missing = context.force_effects(without_shadows).unwrap_err();
-    assert_eq!(missing.names(), vec!["shadows"]);
+    assert_eq!(
+        missing(context.force_effects(without_shadows)).names(),
+        vec!["shadows"]
+    );
     assert_eq!(context.effects, analysed);
     context.force_effects(EffectSet::all()).unwrap();
     assert_eq!(context.effects, EffectSet::all());
@@ -373,6 +389,12 @@ fn bench_effects_reports_unneeded_work_and_identical_images() {
         .find(|r| r.contains("| ray footprints |"))
         .unwrap_or_else(|| panic!("no footprint row in {text}"));
     assert!(footprints.contains("footprint_updates 0 →"), "{footprints}");
+    // A forced alpha cut-out runs alpha tests on every mesh: its cost is real work.
+    let cutout = rows
+        .iter()
+        .find(|r| r.contains("| alpha cut-out |"))
+        .unwrap_or_else(|| panic!("no alpha cut-out row in {text}"));
+    assert!(cutout.contains("filter_callbacks 0 →"), "{cutout}");
     assert!(
         rows.iter().all(|r| r.trim_end().ends_with("| identical |")),
         "{text}"
@@ -391,4 +413,100 @@ fn shadow_walks_only_through_transmissive_occluders() {
     let glass = stats("matte", &format!("{LIGHT}{}", sphere("glass")), &[]);
     assert!(counter(&glass, "shadow_walk_queries") > 0);
     assert!(effects(&glass).iter().any(|e| e == "transmissive shadows"));
+}
+
+/// The statistics of a render with a forced effect set report that set (each forced effect
+/// marked as forced), not a fresh analysis of the scene.
+#[test]
+fn statistics_report_the_forced_effects() {
+    use conetrace::render::EffectSet;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml");
+    let mut context = prepare_small(&path);
+    let analysed = context.effects;
+    assert_ne!(analysed, EffectSet::all());
+    let result = render_forced(&mut context, EffectSet::all());
+    let mut reported: Vec<&str> = result
+        .stats
+        .effects
+        .iter()
+        .map(|e| e.effect.as_str())
+        .collect();
+    reported.sort();
+    let mut all = EffectSet::all().names();
+    all.sort();
+    assert_eq!(reported, all, "the statistics after forcing every effect");
+    for reason in &result.stats.effects {
+        let needed = analysed.names().contains(&reason.effect.as_str());
+        assert_eq!(
+            !needed,
+            reason.because.contains("forced"),
+            "{}: {}",
+            reason.effect,
+            reason.because
+        );
+    }
+    // Back to the analysed set: the statistics follow.
+    let result = render_forced(&mut context, analysed);
+    let mut reported: Vec<&str> = result
+        .stats
+        .effects
+        .iter()
+        .map(|e| e.effect.as_str())
+        .collect();
+    reported.sort();
+    let mut needed = analysed.names();
+    needed.sort();
+    assert_eq!(reported, needed);
+}
+
+/// `render --all-effects` writes the forced (complete) set into the statistics.
+#[test]
+fn all_effects_statistics_list_every_effect() {
+    let general = stats("matte", LIGHT, &["--all-effects"]);
+    let mut names = effects(&general);
+    names.sort();
+    let mut all: Vec<String> = conetrace::render::EffectSet::all()
+        .names()
+        .into_iter()
+        .map(String::from)
+        .collect();
+    all.sort();
+    assert_eq!(names, all);
+}
+
+/// The tracer obeys the effect analysis: a scene without alpha cut-outs installs no filter
+/// (no callback runs), and forcing the cut-out effect on installs alpha tests on every mesh,
+/// whose callbacks then run (the general path's real cost) without changing the image.
+#[test]
+fn alpha_tests_follow_the_effect_set() {
+    use conetrace::render::tracer::AlphaTests;
+    use conetrace::render::EffectSet;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/default.toml");
+    let mut context = prepare_small(&path);
+    let analysed = context.effects;
+    assert!(!analysed.alpha_cutout, "{:?}", analysed.names());
+    assert_eq!(context.tracer.settings().alpha_tests, AlphaTests::Off);
+    let specialised = render_forced(&mut context, analysed);
+    assert_eq!(specialised.stats.counters.filter_callbacks, 0);
+    let forced = EffectSet {
+        alpha_cutout: true,
+        ..analysed
+    };
+    let general = render_forced(&mut context, forced);
+    assert_eq!(context.tracer.settings().alpha_tests, AlphaTests::EveryMesh);
+    assert!(
+        general.stats.counters.filter_callbacks > 0,
+        "forced alpha cut-out ran no filter callback"
+    );
+    for channel in specialised.film.channel_names() {
+        assert_eq!(
+            specialised.film.channel(&channel),
+            general.film.channel(&channel),
+            "{channel}"
+        );
+    }
+    // And back: no filter again.
+    let again = render_forced(&mut context, analysed);
+    assert_eq!(context.tracer.settings().alpha_tests, AlphaTests::Off);
+    assert_eq!(again.stats.counters.filter_callbacks, 0);
 }

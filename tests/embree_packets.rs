@@ -727,3 +727,253 @@ fn denormal_bits_are_set_after_enabling() {
     .join()
     .expect("thread");
 }
+
+/// Devices without wide packets or without streams: tiles, packets and streams fall back to
+/// narrower packets or single rays and still agree with single-ray traces hit for hit.
+#[test]
+fn narrower_devices_fall_back_to_packets_they_support_or_single_rays() {
+    let native = Device::new().expect("device");
+    let rays = random_rays(512);
+    for (max_width, streams) in [(1, false), (4, false), (8, true), (1, true)] {
+        let device = native.with_traversal_limits(max_width, streams);
+        let what = format!("packets <= {max_width}, streams {streams}");
+        assert!(device.packet_width() <= max_width.max(1), "{what}");
+        let scene = random_scene(&device, 3000);
+        assert_eq!(
+            scene.stream_supported(),
+            streams && native.stream_supported()
+        );
+        let reference = single_hits(&scene, &rays);
+        let tiles = packet_hits::<16>(&scene, &rays, true);
+        let sixteen = packet_hits::<16>(&scene, &rays, false);
+        let eight = packet_hits::<8>(&scene, &rays, false);
+        let mut stream: Vec<RayHit> = rays.iter().map(RayHit::new).collect();
+        scene
+            .intersect_stream(&mut stream, TraceOptions::incoherent())
+            .expect("stream");
+        for i in 0..rays.len() {
+            assert_same_hit(reference[i], tiles[i], &format!("{what}: tile"), i);
+            assert_same_hit(reference[i], sixteen[i], &format!("{what}: 16"), i);
+            assert_same_hit(reference[i], eight[i], &format!("{what}: 8"), i);
+            assert_same_hit(reference[i], stream[i].hit(), &format!("{what}: stream"), i);
+        }
+        // Occlusion through every path agrees with intersect.
+        let mut shadow: Vec<RayHit> = rays.iter().map(RayHit::new).collect();
+        scene
+            .occluded_stream(&mut shadow, TraceOptions::incoherent())
+            .expect("occluded stream");
+        let mut tile = RayPacket::<16>::new();
+        for (chunk_index, chunk) in rays.chunks(16).enumerate() {
+            chunk
+                .iter()
+                .enumerate()
+                .for_each(|(l, r)| tile.set_ray(l, r));
+            scene
+                .occluded_tile(&mut tile, TraceOptions::coherent())
+                .expect("occluded tile");
+            for lane in 0..chunk.len() {
+                let i = chunk_index * 16 + lane;
+                assert_eq!(
+                    tile.is_occluded(lane),
+                    reference[i].is_some(),
+                    "{what}: tile {i}"
+                );
+                assert_eq!(
+                    shadow[i].is_occluded(),
+                    reference[i].is_some(),
+                    "{what}: stream {i}"
+                );
+            }
+        }
+    }
+}
+
+/// Filters see the lane index as ray id on the single-ray fallback too.
+#[test]
+fn single_ray_fallback_keeps_lane_payloads() {
+    let device = Device::new()
+        .expect("device")
+        .with_traversal_limits(1, false);
+    let mut builder = SceneBuilder::new(&device).expect("builder");
+    let quad = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+    let front = builder
+        .add_triangle_mesh(&quad, &[[0, 1, 2], [0, 2, 3]])
+        .expect("front");
+    builder
+        .set_alpha_filter(
+            front,
+            Arc::new(|c: &FilterCandidate| c.payload.cone_width < 8.0),
+        )
+        .expect("filter");
+    let scene = builder.commit().expect("commit");
+    let payload: Vec<RayPayload> = (0..16)
+        .map(|i| RayPayload {
+            cone_width: i as f32,
+            cone_spread: 0.0,
+        })
+        .collect();
+    let mut tile = RayPacket::<16>::new();
+    (0..16).for_each(|l| tile.set_ray(l, &quad_ray(l)));
+    scene
+        .intersect_tile(&mut tile, TraceOptions::coherent().with_payload(&payload))
+        .expect("tile");
+    let mut stream: Vec<RayHit> = (0..16).map(|l| RayHit::new(&quad_ray(l))).collect();
+    scene
+        .intersect_stream(
+            &mut stream,
+            TraceOptions::incoherent().with_payload(&payload),
+        )
+        .expect("stream");
+    for (lane, ray_hit) in stream.iter().enumerate() {
+        assert_eq!(tile.hit(lane).is_some(), lane < 8, "tile lane {lane}");
+        assert_eq!(ray_hit.hit().is_some(), lane < 8, "stream ray {lane}");
+    }
+}
+
+/// The render's Embree device is limited to the worker pool's thread count (`threads=N`),
+/// so BVH builds respect `--threads`; a configuration Embree rejects is an error naming it.
+#[test]
+fn the_embree_device_gets_the_worker_pool_thread_count() {
+    use conetrace::render;
+    for threads in [1usize, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        let context = pool
+            .install(|| render::prepare(Arc::new(quad_scene(None)), render_options()))
+            .expect("prepare");
+        assert_eq!(
+            context.tracer.device().config(),
+            format!("threads={threads}")
+        );
+        assert_eq!(context.tracer.settings().threads, threads);
+    }
+    assert_eq!(conetrace::embree::thread_config(8), "threads=8");
+    let err = Device::with_config("threads=eight").unwrap_err();
+    assert!(err.to_string().contains("threads=eight"), "{err}");
+}
+
+/// A one-quad scene seen head-on; with `cutout_st`, the quad's material is an alpha cut-out
+/// and its texture coordinates are `cutout_st` (a description built in code, unvalidated).
+fn quad_scene(cutout_st: Option<Vec<glam::Vec2>>) -> conetrace::scene::SceneDescription {
+    use conetrace::scene::*;
+    let mut material = Material::default();
+    let mut textures = Vec::new();
+    let mut st = Vec::new();
+    if let Some(cutout_st) = cutout_st {
+        material.alpha_cutoff = Some(0.5);
+        material.alpha_texture = Some(TextureBinding {
+            texture: 0,
+            transform: glam::Affine2::IDENTITY,
+        });
+        textures.push(TextureDesc {
+            name: "mask".to_string(),
+            source: TextureSource::Encoded {
+                label: "mask".to_string(),
+                bytes: Arc::new(Vec::new()),
+            },
+            color_space: ColorSpace::Linear,
+            wrap_s: WrapMode::Clamp,
+            wrap_t: WrapMode::Clamp,
+        });
+        st = cutout_st;
+    }
+    SceneDescription {
+        source: "quad in code".to_string(),
+        camera: Some(CameraDesc {
+            eye: Vec3::new(0.0, 0.0, 3.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            projection: Projection::Pinhole { vfov_degrees: 30.0 },
+        }),
+        materials: vec![material],
+        textures,
+        meshes: vec![TriangleMesh {
+            name: "quad".to_string(),
+            positions: vec![
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 0.0),
+            ],
+            st,
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            ..TriangleMesh::default()
+        }],
+        ..SceneDescription::default()
+    }
+}
+
+fn render_options() -> conetrace::render::RenderOptions {
+    conetrace::render::RenderOptions {
+        width: 16,
+        height: 16,
+        spp: 1,
+        max_depth: 1,
+        min_throughput: 0.0,
+        lod: conetrace::footprint::LodStrategy::Cone,
+        filter: conetrace::texture::FilterOptions::default(),
+        fresnel: conetrace::scene::FresnelMode::Exact,
+        aovs: conetrace::integrator::AovSelection {
+            surface: true,
+            ..Default::default()
+        },
+        count_tiles: false,
+        all_effects: false,
+    }
+}
+
+/// A render whose alpha filter panics (here: a cut-out mesh described in code with one
+/// texture coordinate for four vertices, which the filter indexes out of bounds) ends with
+/// an error carrying the panic's message, not with an image of misses.
+#[test]
+fn a_render_whose_alpha_filter_panics_fails_with_the_message() {
+    use conetrace::render::{self, RenderControl, RenderError};
+    let scene = Arc::new(quad_scene(Some(vec![glam::Vec2::ZERO])));
+    let mask = Arc::new(
+        conetrace::texture::Texture::from_rgba_f32(2, 2, vec![[1.0; 4]; 4]).expect("mask"),
+    );
+    let context =
+        render::prepare_with_textures(scene, render_options(), vec![mask]).expect("prepare");
+    let result = render::render(
+        &context,
+        &conetrace::integrator::Whitted,
+        &RenderControl::default(),
+    );
+    match result {
+        Err(RenderError::Traversal { scene, source }) => {
+            assert_eq!(scene, "quad in code");
+            assert!(
+                matches!(&source, EmbreeError::FilterPanicked { geom_id: 0, message, .. } if message.contains("out of bounds")),
+                "{source}"
+            );
+        }
+        Ok(result) => {
+            let depth = result
+                .film
+                .channel("Z")
+                .map(|z| z.to_vec())
+                .unwrap_or_default();
+            let missed = depth.iter().filter(|&&z| z == f32::MAX).count();
+            panic!(
+                "the render succeeded (complete: {}) with {missed} of {} pixels missed",
+                result.stats.complete,
+                depth.len()
+            );
+        }
+    }
+    // The context renders again (the failure is the render's, not the context's) and fails
+    // the same way.
+    assert!(render::render(
+        &context,
+        &conetrace::integrator::Whitted,
+        &RenderControl::default()
+    )
+    .is_err());
+}

@@ -51,7 +51,8 @@ pub fn load_prepare_render(file: &std::path::Path) {
     let Ok(context) = render::prepare(Arc::new(scene), tiny_options()) else {
         return;
     };
-    let result = render::render(&context, &Whitted, &RenderControl::default());
+    let result = render::render(&context, &Whitted, &RenderControl::default())
+        .expect("a validated scene renders without traversal failures");
     for name in result.film.channel_names() {
         if name == "Z" {
             continue; // f32::MAX where the camera ray missed, by design

@@ -307,7 +307,8 @@ pub unsafe extern "C" fn ct_render(
                     cancel: Some(&cancel),
                     skip: None,
                 };
-                Ok(render::render(&context, &Whitted, &control))
+                render::render(&context, &Whitted, &control)
+                    .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))
             })
         };
         let result = match &relay {

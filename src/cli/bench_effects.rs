@@ -243,18 +243,17 @@ fn counter_changes(base: &WorkCounters, other: &WorkCounters) -> String {
     }
 }
 
-fn render_once(
-    context: &mut RenderContext,
-    effects: EffectSet,
-) -> Result<render::RenderResult, CommandError> {
+/// Switches `context` to `effects` (rebuilding the Embree scene when the alpha tests change:
+/// outside the timed render).
+fn use_effects(context: &mut RenderContext, effects: EffectSet) -> Result<(), CommandError> {
     // Configurations are built from the analysed set, so a refusal is a bug.
-    context.force_effects(effects).map_err(|missing| {
-        CommandError::internal(format!(
-            "bench effects: a configuration lacks {}",
-            missing.names().join(", ")
-        ))
-    })?;
-    Ok(render::render(context, &Whitted, &RenderControl::default()))
+    context
+        .force_effects(effects)
+        .map_err(|e| CommandError::internal(format!("bench effects: {e}")))
+}
+
+fn render_once(context: &RenderContext) -> Result<render::RenderResult, CommandError> {
+    render::render(context, &Whitted, &RenderControl::default()).map_err(crate::cli::render_failed)
 }
 
 /// Measure every configuration of one scene.
@@ -287,7 +286,8 @@ fn bench_scene(
     let mut reference: Option<Film> = None;
     let mut configs = Vec::new();
     for (variant, effects) in variants {
-        let result = render_once(&mut context, effects)?;
+        use_effects(&mut context, effects)?;
+        let result = render_once(&context)?;
         let max_difference = match &reference {
             Some(film) => max_difference(film, &result.film),
             None => 0.0,
@@ -308,8 +308,9 @@ fn bench_scene(
     for round in 0..repeat {
         for j in 0..n {
             let i = (j + round) % n;
+            use_effects(&mut context, configs[i].effects)?;
             let cpu_before = cpu_seconds();
-            let result = render_once(&mut context, configs[i].effects)?;
+            let result = render_once(&context)?;
             if let (Some(before), Some(after)) = (cpu_before, cpu_seconds()) {
                 configs[i].cpu_seconds.push(after - before);
             }

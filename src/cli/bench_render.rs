@@ -6,6 +6,10 @@
 //! the full pass renders the rays with shading, shadow rays and secondary rays, and the
 //! direct pass with shading and shadow rays only. Each pass runs several times and the
 //! median is kept.
+//!
+//! The same passes also run on a second Embree scene built without robust mode (Embree's
+//! faster, non-watertight triangle test), interleaved with the robust ones, to state what
+//! watertight traversal costs: the "robust / fast" ratios of the last table.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -130,6 +134,84 @@ pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) 
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
+/// Paired times of the robust (watertight) and the fast (Embree default) scene, per pass.
+#[derive(Default)]
+struct WatertightCost {
+    /// (pass name, robust seconds, fast seconds) per round.
+    rounds: Vec<(&'static str, f64, f64)>,
+}
+
+impl WatertightCost {
+    /// One round: each pass on both scenes, the robust one first in even rounds and the
+    /// fast one first in odd rounds, so neither profits from running second.
+    fn measure(
+        &mut self,
+        round: usize,
+        robust: &RenderContext,
+        fast: &RenderContext,
+        render_timed: &dyn Fn(&RenderContext) -> Result<render::RenderResult, CommandError>,
+    ) -> Result<(), CommandError> {
+        let time = |f: &dyn Fn()| {
+            let start = Instant::now();
+            f();
+            start.elapsed().as_secs_f64()
+        };
+        let order = if round.is_multiple_of(2) {
+            [robust, fast]
+        } else {
+            [fast, robust]
+        };
+        // (robust, fast) seconds of one pass, run in `order`.
+        let pair = |seconds: [f64; 2]| {
+            if round.is_multiple_of(2) {
+                (seconds[0], seconds[1])
+            } else {
+                (seconds[1], seconds[0])
+            }
+        };
+        let (r, f) = pair(order.map(|c| {
+            time(&|| {
+                trace_camera_rays_only(c);
+            })
+        }));
+        self.rounds.push(("camera rays, no shading", r, f));
+        let (r, f) = pair(order.map(|c| {
+            time(&|| {
+                trace_camera_and_shadow_rays_only(c);
+            })
+        }));
+        self.rounds.push(("camera + shadow rays, no shading", r, f));
+        let first = render_timed(order[0])?.stats.seconds;
+        let second = render_timed(order[1])?.stats.seconds;
+        let (r, f) = pair([first, second]);
+        self.rounds.push(("full render", r, f));
+        Ok(())
+    }
+
+    fn print(&self, repeat: usize) {
+        println!(
+            "watertight traversal (Embree robust mode) vs Embree's default, paired per round, median of {repeat}:"
+        );
+        println!("| pass | robust seconds | fast seconds | robust / fast |");
+        println!("|---|---|---|---|");
+        for pass in [
+            "camera rays, no shading",
+            "camera + shadow rays, no shading",
+            "full render",
+        ] {
+            let rows: Vec<&(&str, f64, f64)> =
+                self.rounds.iter().filter(|(p, _, _)| *p == pass).collect();
+            if rows.is_empty() {
+                continue;
+            }
+            let robust = median(rows.iter().map(|r| r.1).collect());
+            let fast = median(rows.iter().map(|r| r.2).collect());
+            let ratio = median(rows.iter().map(|r| r.1 / r.2.max(1e-12)).collect());
+            println!("| {pass} | {robust:.4} | {fast:.4} | {ratio:.3} |");
+        }
+    }
+}
+
 fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(|a, b| a.total_cmp(b));
     values[values.len() / 2]
@@ -173,11 +255,33 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         };
         let direct_context = render::prepare(scene.clone(), direct_options)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        // The same scene without Embree's robust mode: what watertight traversal costs.
+        let mut fast_context = render::prepare(scene.clone(), options.clone())
+            .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        fast_context
+            .set_robust_traversal(false)
+            .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        let render_timed = |context: &RenderContext| {
+            render::render(context, &Whitted, &RenderControl::default())
+                .map_err(crate::cli::render_failed)
+        };
+        // Traversal-only passes record failures in the tracer instead of returning them.
+        let check_traversal = |context: &RenderContext| match context.tracer.take_failure() {
+            Some(error) => Err(crate::cli::render_failed(render::RenderError::Traversal {
+                scene: context.scene.source.clone(),
+                source: error,
+            })),
+            None => Ok(()),
+        };
         // Warm up every path once (page faults, lazy BVH parts).
-        trace_camera_rays_only(&context);
-        trace_camera_and_shadow_rays_only(&context);
-        let _ = render::render(&context, &Whitted, &RenderControl::default());
-        let _ = render::render(&direct_context, &Whitted, &RenderControl::default());
+        for c in [&context, &fast_context] {
+            trace_camera_rays_only(c);
+            trace_camera_and_shadow_rays_only(c);
+            check_traversal(c)?;
+            render_timed(c)?;
+        }
+        render_timed(&direct_context)?;
+        let mut robust_cost = WatertightCost::default();
 
         let mut raw_times = Vec::new();
         let mut full_times = Vec::new();
@@ -187,19 +291,24 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         let mut traversal_times = Vec::new();
         let mut traversal_rays = (0, 0);
         let mut full_counters = WorkCounters::default();
-        for _ in 0..repeat {
+        for round in 0..repeat {
             let start = Instant::now();
             raw_rays = trace_camera_rays_only(&context);
             raw_times.push(start.elapsed().as_secs_f64());
             let start = Instant::now();
             traversal_rays = trace_camera_and_shadow_rays_only(&context);
             traversal_times.push(start.elapsed().as_secs_f64());
-            let result = render::render(&context, &Whitted, &RenderControl::default());
+            check_traversal(&context)?;
+            let result = render_timed(&context)?;
             full_times.push(result.stats.seconds);
             full_counters = result.stats.counters;
-            let result = render::render(&direct_context, &Whitted, &RenderControl::default());
+            let result = render_timed(&direct_context)?;
             direct_times.push(result.stats.seconds);
             direct_counters = result.stats.counters;
+            // Robust vs fast, paired within the round.
+            robust_cost.measure(round, &context, &fast_context, &render_timed)?;
+            check_traversal(&context)?;
+            check_traversal(&fast_context)?;
         }
         let raw = median(raw_times);
         let full = median(full_times);
@@ -253,6 +362,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             full_ray_rate / raw_rate,
             full_camera_rate / raw_rate
         );
+        robust_cost.print(repeat);
         Ok(())
     })
 }

@@ -80,6 +80,12 @@ pub enum BenchCommand {
     Effects(bench_effects::BenchEffectsArgs),
 }
 
+/// A render whose ray traversal failed: an internal failure (exit status 1) with the
+/// failure's message, never an image of misses.
+pub fn render_failed(error: crate::render::RenderError) -> CommandError {
+    CommandError::internal(error.to_string())
+}
+
 /// The worker threads of a command: `threads` of them (all cores when `None`), each with
 /// denormals flushed as Embree expects. `Some(0)` is bad input.
 pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, CommandError> {
@@ -113,5 +119,31 @@ pub fn run(cli: Cli) -> i32 {
             eprintln!("conetrace: error: {}", error.message);
             error.status
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_traversal_is_an_internal_error_with_its_message() {
+        let error = render_failed(crate::render::RenderError::Traversal {
+            scene: "quad.toml".to_string(),
+            source: crate::embree::EmbreeError::FilterPanicked {
+                geom_id: 0,
+                count: 3,
+                message: "alpha texture lookup failed".to_string(),
+            },
+        });
+        assert_eq!(error.status, EXIT_INTERNAL);
+        assert!(
+            error
+                .message
+                .starts_with("quad.toml: ray traversal failed: ")
+                && error.message.contains("alpha texture lookup failed"),
+            "{}",
+            error.message
+        );
     }
 }

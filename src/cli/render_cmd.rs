@@ -281,6 +281,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         };
         let result = render::render(&context, &Whitted, &control);
         bar.finish_and_clear();
+        let result = result.map_err(crate::cli::render_failed)?;
         Ok((result, context.camera))
     })?;
 

@@ -1,9 +1,12 @@
-//! The Embree device: creation from a configuration string, Embree's error callback turned
-//! into `Result`s carrying Embree's message, device properties (native packet widths) and
-//! memory accounting.
+//! The Embree device: creation from a configuration string (with the worker-thread count
+//! Embree's BVH builders may use), Embree's error callback turned into `Result`s carrying
+//! Embree's message, device properties (native packet widths, ray-stream support) and memory
+//! accounting.
 //!
 //! A [`Device`] is a cheap handle (`Arc`); scenes keep a clone, so the device outlives every
-//! scene built on it.
+//! scene built on it. The traversal paths a handle uses (packet width, streams) can be
+//! narrowed with [`Device::with_traversal_limits`], which is how the single-ray fallbacks of
+//! devices built without packet or stream support are exercised on any machine.
 
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::sync::atomic::{AtomicI64, Ordering};
@@ -25,8 +28,8 @@ struct DeviceInner {
     /// Read by Embree through the user pointer of the error and memory callbacks; dropped
     /// only after `rtcReleaseDevice` (see `Drop`).
     callbacks: Box<CallbackState>,
-    packet_width: usize,
-    stream_supported: bool,
+    /// The configuration string the device was created with.
+    config: String,
 }
 
 // SAFETY: an RTCDevice may be used from any thread; Embree synchronises its own state, and
@@ -48,15 +51,27 @@ impl Drop for DeviceInner {
 #[derive(Clone)]
 pub struct Device {
     inner: Arc<DeviceInner>,
+    /// The widest packet traces through this handle use: the device's native width, or
+    /// less after [`Device::with_traversal_limits`]; 1 means single rays only.
+    packet_width: usize,
+    /// Whether traces through this handle use Embree's ray streams (`rtcIntersect1M`).
+    stream_supported: bool,
 }
 
 impl std::fmt::Debug for Device {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Device")
-            .field("packet_width", &self.inner.packet_width)
-            .field("stream_supported", &self.inner.stream_supported)
+            .field("packet_width", &self.packet_width)
+            .field("stream_supported", &self.stream_supported)
             .finish()
     }
+}
+
+/// The Embree configuration string that limits a device to `threads` worker threads
+/// (Embree's `threads=N` option), so BVH builds use no more threads than the render's
+/// worker pool.
+pub fn thread_config(threads: usize) -> String {
+    format!("threads={}", threads.max(1))
 }
 
 /// Embree's error callback: records the message for the failing call to return.
@@ -102,6 +117,11 @@ impl Device {
     /// Creates a device with Embree's default configuration.
     pub fn new() -> Result<Device, EmbreeError> {
         Device::with_config("")
+    }
+
+    /// Creates a device whose BVH builds use at most `threads` threads ([`thread_config`]).
+    pub fn with_threads(threads: usize) -> Result<Device, EmbreeError> {
+        Device::with_config(&thread_config(threads))
     }
 
     /// Creates a device from an Embree configuration string (e.g. `"threads=2,isa=avx2"`).
@@ -152,23 +172,51 @@ impl Device {
             inner: Arc::new(DeviceInner {
                 raw,
                 callbacks,
-                packet_width,
-                stream_supported,
+                config: config.to_owned(),
             }),
+            packet_width,
+            stream_supported,
         };
         device.check("rtcNewDevice")?;
         Ok(device)
     }
 
     /// The widest packet (16, 8, 4, or 1 if none) this device traverses natively
-    /// (`RTC_DEVICE_PROPERTY_NATIVE_RAY*_SUPPORTED`).
+    /// (`RTC_DEVICE_PROPERTY_NATIVE_RAY*_SUPPORTED`), or the limit set with
+    /// [`Device::with_traversal_limits`]. Packet traces wider than this are split; with 1,
+    /// every packet trace becomes single-ray traces.
     pub fn packet_width(&self) -> usize {
-        self.inner.packet_width
+        self.packet_width
     }
 
-    /// Whether the device was built with ray-stream support (`rtcIntersect1M`).
+    /// Whether ray streams (`rtcIntersect1M`) are used: the device was built with stream
+    /// support and no limit switched them off. Without them, streams are traced ray by ray.
     pub fn stream_supported(&self) -> bool {
-        self.inner.stream_supported
+        self.stream_supported
+    }
+
+    /// A handle to the same device whose traces use packets at most `max_packet_width` wide
+    /// (rounded down to 16, 8, 4 or 1) and streams only if `streams` is true (and the device
+    /// supports them): the paths a device built without wide packets or streams takes.
+    /// Limits only narrow what the device supports; scenes built on the returned handle
+    /// trace with these limits.
+    pub fn with_traversal_limits(&self, max_packet_width: usize, streams: bool) -> Device {
+        let limit = match max_packet_width {
+            16.. => 16,
+            8..=15 => 8,
+            4..=7 => 4,
+            _ => 1,
+        };
+        Device {
+            inner: Arc::clone(&self.inner),
+            packet_width: self.packet_width.min(limit),
+            stream_supported: self.stream_supported && streams,
+        }
+    }
+
+    /// The configuration string the device was created with (e.g. `"threads=4"`).
+    pub fn config(&self) -> &str {
+        &self.inner.config
     }
 
     /// Bytes Embree currently holds for this device's scenes and geometries.
@@ -251,6 +299,29 @@ mod tests {
             Device::with_config("a\0b"),
             Err(EmbreeError::InvalidConfig { .. })
         ));
+    }
+
+    #[test]
+    fn thread_config_is_embree_threads_option() {
+        assert_eq!(thread_config(3), "threads=3");
+        // Zero threads would mean "all cores" to Embree; the pool never has fewer than one.
+        assert_eq!(thread_config(0), "threads=1");
+        let device = Device::with_threads(2).expect("a two-thread device");
+        assert_eq!(device.config(), "threads=2");
+        assert!([1, 4, 8, 16].contains(&device.packet_width()));
+    }
+
+    #[test]
+    fn traversal_limits_only_narrow() {
+        let device = Device::new().expect("default Embree device");
+        let single = device.with_traversal_limits(1, false);
+        assert_eq!(single.packet_width(), 1);
+        assert!(!single.stream_supported());
+        let four = device.with_traversal_limits(7, true);
+        assert_eq!(four.packet_width(), 4.min(device.packet_width()));
+        assert_eq!(four.stream_supported(), device.stream_supported());
+        let wide = device.with_traversal_limits(64, true);
+        assert_eq!(wide.packet_width(), device.packet_width());
     }
 
     #[test]

@@ -35,6 +35,11 @@
 //! [`CommittedScene::intersect_stream`] / [`CommittedScene::occluded_stream`] and
 //! `TraceOptions::incoherent()`.
 //!
+//! Every trace call reads Embree's device error state afterwards and returns what Embree
+//! reported (and any panic of a filter callback) as an [`EmbreeError`]; packet and stream
+//! traces fall back to narrower packets or single rays where the device lacks them; scenes
+//! are built in Embree's robust (watertight) mode.
+//!
 //! What this module must not do: shading, footprints or any knowledge of materials; the
 //! renderer maps `geom_id` (assigned 0, 1, 2, ... in the order geometries are added) to its
 //! own meshes and spheres.
@@ -53,7 +58,7 @@ mod stream;
 
 pub use context::{Coherence, RayPayload, TraceOptions};
 pub use denormals::{enable_flush_denormals, flush_denormals_enabled};
-pub use device::Device;
+pub use device::{thread_config, Device};
 pub use error::EmbreeError;
 pub use filter::{AlphaFilter, FilterCandidate};
 pub use packet::RayPacket;

@@ -4,9 +4,11 @@
 //! [`RayPacket<N>`] stores the rays and hits exactly as Embree's `RTCRayHitN` (rows of N
 //! 4-byte values: origin, tnear, direction, time, tfar, mask, id, flags, then Ng, u, v,
 //! primID, geomID, instID) followed by the validity mask, so it is passed to Embree without
-//! copying. Camera tiles are 4x4 = 16 lanes; [`CommittedScene::intersect_tile`] traces such a
-//! tile with the device's native width, splitting it into 8- or 4-wide packets when 16-wide
-//! traversal is not native. A lane's ray id is its lane index, which filter callbacks use to
+//! copying. Camera tiles are 4x4 = 16 lanes. Every packet trace honours the device's packet
+//! width ([`CommittedScene::packet_width`]): a packet wider than it is split into 8- or
+//! 4-wide packets, and on a device without packet support (width 1) each lane is traced as a
+//! single ray. After every Embree call the device's error state is read, so an error Embree
+//! reports during traversal is returned, never left as misses. A lane's ray id is its lane index, which filter callbacks use to
 //! find the lane's [`RayPayload`](super::RayPayload).
 //!
 //! Packets are the path for camera rays (coherent 4x4 tiles, `Coherence::Coherent`). For
@@ -22,7 +24,7 @@ use super::context::TraceContext;
 use super::context::TraceOptions;
 use super::error::EmbreeError;
 use super::ffi;
-use super::ray::{Hit, Ray, INVALID_GEOMETRY_ID};
+use super::ray::{Hit, Ray, RayHit, INVALID_GEOMETRY_ID};
 use super::scene::CommittedScene;
 
 // Row indices of Embree's RTCRayHitN layout (rtcore_ray.h, RTCRayN_* / RTCHitN_* accessors).
@@ -225,56 +227,28 @@ impl<const N: usize> RayPacket<N> {
 }
 
 impl CommittedScene {
-    /// Closest hits for the valid lanes of an N-wide packet (`rtcIntersect4/8/16`).
+    /// Closest hits for the valid lanes of an N-wide packet: one `rtcIntersect4/8/16` call
+    /// when N is within the device's packet width ([`CommittedScene::packet_width`]), else
+    /// split into packets of that width, or traced lane by lane with `rtcIntersect1` on a
+    /// device without packet support. Lane ids stay the packet's lane indices either way, so
+    /// payload lookup in filters is unchanged.
     pub fn intersect_packet<const N: usize>(
         &self,
         packet: &mut RayPacket<N>,
         options: TraceOptions,
     ) -> Result<(), EmbreeError> {
-        #[allow(clippy::let_unit_value)]
-        let () = RayPacket::<N>::SUPPORTED_WIDTH;
-        let mut context = TraceContext::new(&options);
-        let ctx = context.as_raw();
-        let valid = packet.valid.as_ptr();
-        let rays = packet.rows.as_mut_ptr() as *mut std::ffi::c_void;
-        // SAFETY: `RayPacket<N>` has Embree's RTCRayHitN layout for N = 4, 8, 16 (checked
-        // by the const assertions above; other N do not compile), it is 64-byte aligned and
-        // `valid` is aligned to N * 4 bytes as Embree requires. The scene is committed; the
-        // context outlives the call; Embree writes only valid lanes of `packet`, which we
-        // borrow mutably for the call.
-        unsafe {
-            match N {
-                16 => ffi::rtcIntersect16(valid, self.raw(), ctx, rays as *mut ffi::RTCRayHit16),
-                8 => ffi::rtcIntersect8(valid, self.raw(), ctx, rays as *mut ffi::RTCRayHit8),
-                _ => ffi::rtcIntersect4(valid, self.raw(), ctx, rays as *mut ffi::RTCRayHit4),
-            }
-        }
-        context.finish()
+        self.trace_packet(packet, options, false)
     }
 
-    /// Occlusion for the valid lanes of an N-wide packet (`rtcOccluded4/8/16`); blocked
-    /// lanes get `tfar = -inf` (see [`RayPacket::is_occluded`]).
+    /// Occlusion for the valid lanes of an N-wide packet (`rtcOccluded4/8/16`, split or
+    /// single rays as for [`CommittedScene::intersect_packet`]); blocked lanes get
+    /// `tfar = -inf` (see [`RayPacket::is_occluded`]).
     pub fn occluded_packet<const N: usize>(
         &self,
         packet: &mut RayPacket<N>,
         options: TraceOptions,
     ) -> Result<(), EmbreeError> {
-        #[allow(clippy::let_unit_value)]
-        let () = RayPacket::<N>::SUPPORTED_WIDTH;
-        let mut context = TraceContext::new(&options);
-        let ctx = context.as_raw();
-        let valid = packet.valid.as_ptr();
-        let rays = packet.rows.as_mut_ptr() as *mut std::ffi::c_void;
-        // SAFETY: as in `intersect_packet`; the ray rows are Embree's RTCRayN, the first
-        // member of RTCRayHitN, and occluded calls write only `tfar` of valid lanes.
-        unsafe {
-            match N {
-                16 => ffi::rtcOccluded16(valid, self.raw(), ctx, rays as *mut ffi::RTCRay16),
-                8 => ffi::rtcOccluded8(valid, self.raw(), ctx, rays as *mut ffi::RTCRay8),
-                _ => ffi::rtcOccluded4(valid, self.raw(), ctx, rays as *mut ffi::RTCRay4),
-            }
-        }
-        context.finish()
+        self.trace_packet(packet, options, true)
     }
 
     /// `rtcIntersect16` on a 16-lane packet.
@@ -337,59 +311,174 @@ impl CommittedScene {
         self.occluded_packet(packet, options)
     }
 
-    /// Closest hits for a 16-lane tile (4x4 pixels) with the device's native packet width
-    /// ([`CommittedScene::packet_width`]): one 16-wide call, or two 8-wide, or four 4-wide.
+    /// Closest hits for a 16-lane tile (4x4 pixels) with the device's packet width: one
+    /// 16-wide call, or two 8-wide, or four 4-wide, or 16 single rays.
     pub fn intersect_tile(
         &self,
         packet: &mut RayPacket<16>,
         options: TraceOptions,
     ) -> Result<(), EmbreeError> {
-        match self.packet_width() {
-            16 => self.intersect_packet(packet, options),
-            8 => self.trace_split::<8>(packet, options, false),
-            _ => self.trace_split::<4>(packet, options, false),
-        }
+        self.intersect_packet(packet, options)
     }
 
-    /// Occlusion for a 16-lane tile with the device's native packet width.
+    /// Occlusion for a 16-lane tile with the device's packet width.
     pub fn occluded_tile(
         &self,
         packet: &mut RayPacket<16>,
         options: TraceOptions,
     ) -> Result<(), EmbreeError> {
-        match self.packet_width() {
-            16 => self.occluded_packet(packet, options),
-            8 => self.trace_split::<8>(packet, options, true),
-            _ => self.trace_split::<4>(packet, options, true),
+        self.occluded_packet(packet, options)
+    }
+
+    /// Dispatches an N-wide trace on the device's packet width.
+    fn trace_packet<const N: usize>(
+        &self,
+        packet: &mut RayPacket<N>,
+        options: TraceOptions,
+        occlusion: bool,
+    ) -> Result<(), EmbreeError> {
+        #[allow(clippy::let_unit_value)]
+        let () = RayPacket::<N>::SUPPORTED_WIDTH;
+        let width = self.packet_width();
+        if N <= width {
+            self.trace_native(packet, options, occlusion)
+        } else if width >= 8 {
+            self.trace_split::<N, 8>(packet, options, occlusion)
+        } else if width >= 4 {
+            self.trace_split::<N, 4>(packet, options, occlusion)
+        } else {
+            self.trace_lanes_one_by_one(packet, options, occlusion)
         }
     }
 
-    /// Traces a 16-lane packet as 16 / M packets of M lanes. Lane ids stay the 16-lane
-    /// indices, so payload lookup in filters is unchanged.
-    fn trace_split<const M: usize>(
+    /// One `rtcIntersectN` / `rtcOccludedN` call, then the device's error state and the
+    /// filters' panics.
+    fn trace_native<const N: usize>(
         &self,
-        packet: &mut RayPacket<16>,
+        packet: &mut RayPacket<N>,
+        options: TraceOptions,
+        occlusion: bool,
+    ) -> Result<(), EmbreeError> {
+        let mut context = TraceContext::new(&options);
+        let ctx = context.as_raw();
+        let valid = packet.valid.as_ptr();
+        let rays = packet.rows.as_mut_ptr() as *mut std::ffi::c_void;
+        // SAFETY: `RayPacket<N>` has Embree's RTCRayHitN layout for N = 4, 8, 16 (checked
+        // by the const assertions above; other N do not compile), it is 64-byte aligned and
+        // `valid` is aligned to N * 4 bytes as Embree requires. The ray rows are Embree's
+        // RTCRayN, the first member of RTCRayHitN (for the occluded calls, which write only
+        // `tfar` of valid lanes). The scene is committed; the context outlives the call;
+        // Embree writes only valid lanes of `packet`, which we borrow mutably for the call.
+        unsafe {
+            match (N, occlusion) {
+                (16, false) => {
+                    ffi::rtcIntersect16(valid, self.raw(), ctx, rays as *mut ffi::RTCRayHit16)
+                }
+                (8, false) => {
+                    ffi::rtcIntersect8(valid, self.raw(), ctx, rays as *mut ffi::RTCRayHit8)
+                }
+                (_, false) => {
+                    ffi::rtcIntersect4(valid, self.raw(), ctx, rays as *mut ffi::RTCRayHit4)
+                }
+                (16, true) => {
+                    ffi::rtcOccluded16(valid, self.raw(), ctx, rays as *mut ffi::RTCRay16)
+                }
+                (8, true) => ffi::rtcOccluded8(valid, self.raw(), ctx, rays as *mut ffi::RTCRay8),
+                (_, true) => ffi::rtcOccluded4(valid, self.raw(), ctx, rays as *mut ffi::RTCRay4),
+            }
+        }
+        let operation = match (N, occlusion) {
+            (16, false) => "rtcIntersect16",
+            (8, false) => "rtcIntersect8",
+            (_, false) => "rtcIntersect4",
+            (16, true) => "rtcOccluded16",
+            (8, true) => "rtcOccluded8",
+            (_, true) => "rtcOccluded4",
+        };
+        self.finish_trace(context, operation)
+    }
+
+    /// Traces an N-lane packet as N / M packets of M lanes. Lane ids stay the N-lane
+    /// indices, so payload lookup in filters is unchanged.
+    fn trace_split<const N: usize, const M: usize>(
+        &self,
+        packet: &mut RayPacket<N>,
         options: TraceOptions,
         occlusion: bool,
     ) -> Result<(), EmbreeError> {
         let mut first_error = Ok(());
         let mut part = RayPacket::<M>::new();
-        for start in (0..16).step_by(M) {
+        for start in (0..N).step_by(M) {
             if packet.valid[start..start + M].iter().all(|&v| v == 0) {
                 continue;
             }
             part.copy_lanes(0, packet, start, M);
-            let result = if occlusion {
-                self.occluded_packet(&mut part, options)
-            } else {
-                self.intersect_packet(&mut part, options)
-            };
+            let result = self.trace_native(&mut part, options, occlusion);
             packet.copy_lanes(start, &part, 0, M);
             if first_error.is_ok() {
                 first_error = result;
             }
         }
         first_error
+    }
+
+    /// Traces every valid lane as a single ray (`rtcIntersect1` / `rtcOccluded1`) for
+    /// devices without packet support, with the lane index as ray id.
+    fn trace_lanes_one_by_one<const N: usize>(
+        &self,
+        packet: &mut RayPacket<N>,
+        options: TraceOptions,
+        occlusion: bool,
+    ) -> Result<(), EmbreeError> {
+        let mut context = TraceContext::new(&options);
+        for lane in 0..N {
+            if packet.valid[lane] == 0 {
+                continue;
+            }
+            let mut ray_hit = packet.lane_ray_hit(lane);
+            self.trace_one(&mut ray_hit, &mut context, occlusion);
+            packet.store_lane(lane, &ray_hit, occlusion);
+        }
+        self.finish_trace(
+            context,
+            if occlusion {
+                "rtcOccluded1"
+            } else {
+                "rtcIntersect1"
+            },
+        )
+    }
+}
+
+impl<const N: usize> RayPacket<N> {
+    /// `lane` as a single ray in Embree's `RTCRayHit` layout, keeping its id and mask.
+    fn lane_ray_hit(&self, lane: usize) -> RayHit {
+        let mut ray_hit = RayHit::new(&self.ray(lane));
+        ray_hit.0.ray.time = self.f(TIME, lane);
+        ray_hit.0.ray.mask = self.rows[MASK][lane];
+        ray_hit.0.ray.id = self.rows[ID][lane];
+        ray_hit.0.ray.flags = self.rows[FLAGS][lane];
+        ray_hit
+    }
+
+    /// Writes a single-ray result back into `lane`: `tfar` only after an occlusion trace (as
+    /// packet traces do), `tfar` and the hit after an intersect trace that hit something.
+    fn store_lane(&mut self, lane: usize, ray_hit: &RayHit, occlusion: bool) {
+        self.set_f(TFAR, lane, ray_hit.0.ray.tfar);
+        let hit = &ray_hit.0.hit;
+        if occlusion || hit.geomID == INVALID_GEOMETRY_ID {
+            return;
+        }
+        self.set_f(NG_X, lane, hit.Ng_x);
+        self.set_f(NG_Y, lane, hit.Ng_y);
+        self.set_f(NG_Z, lane, hit.Ng_z);
+        self.set_f(U, lane, hit.u);
+        self.set_f(V, lane, hit.v);
+        self.rows[PRIM_ID][lane] = hit.primID;
+        self.rows[GEOM_ID][lane] = hit.geomID;
+        for (level, &id) in hit.instID.iter().enumerate() {
+            self.rows[INST_ID + level][lane] = id;
+        }
     }
 }
 
@@ -415,6 +504,77 @@ mod tests {
         assert!(p.hit(5).is_none());
         p.set_valid(5, false);
         assert!(!p.is_valid(5));
+    }
+
+    /// An error Embree reports while a trace runs (here provoked from inside a filter
+    /// callback, on the tracing thread) is returned by the trace call, on every path.
+    #[test]
+    fn an_embree_error_during_a_trace_is_returned() {
+        use crate::embree::{Device, FilterCandidate, RayHit, SceneBuilder};
+        use std::sync::Arc;
+        let device = Device::new().expect("device");
+        let mut builder = SceneBuilder::new(&device).expect("builder");
+        let quad = [
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ];
+        let id = builder
+            .add_triangle_mesh(&quad, &[[0, 1, 2], [0, 2, 3]])
+            .expect("mesh");
+        let inside = device.clone();
+        builder
+            .set_alpha_filter(
+                id,
+                Arc::new(move |_: &FilterCandidate| {
+                    // An unknown property id: Embree records RTC_ERROR_INVALID_ARGUMENT.
+                    inside.raw_property(9999);
+                    true
+                }),
+            )
+            .expect("filter");
+        let scene = builder.commit().expect("commit");
+        let ray = |lane: usize| {
+            let x = -0.9 + 0.1 * lane as f32;
+            Ray::new(Vec3::new(x, 0.3, 1.0), -Vec3::Z)
+        };
+        let is_invalid_argument = |result: Result<(), EmbreeError>, path: &str| match result {
+            Err(EmbreeError::Embree { code, message, .. }) => {
+                assert_eq!(code, "RTC_ERROR_INVALID_ARGUMENT", "{path}");
+                assert!(message.contains("property"), "{path}: {message}");
+            }
+            other => panic!("{path}: {other:?}"),
+        };
+        let mut packet = RayPacket::<16>::new();
+        (0..16).for_each(|lane| packet.set_ray(lane, &ray(lane)));
+        is_invalid_argument(
+            scene.intersect_tile(&mut packet, TraceOptions::coherent()),
+            "tile",
+        );
+        // The rays were traced all the same.
+        assert!((0..16).all(|lane| packet.hit(lane).is_some()));
+        is_invalid_argument(
+            scene.occluded_tile(&mut packet, TraceOptions::coherent()),
+            "occluded tile",
+        );
+        is_invalid_argument(
+            scene
+                .intersect1(&ray(0), TraceOptions::incoherent())
+                .map(|_| ()),
+            "single",
+        );
+        let mut stream: Vec<RayHit> = (0..16).map(|lane| RayHit::new(&ray(lane))).collect();
+        is_invalid_argument(
+            scene.intersect_stream(&mut stream, TraceOptions::incoherent()),
+            "stream",
+        );
+        is_invalid_argument(
+            scene.occluded_stream(&mut stream, TraceOptions::incoherent()),
+            "occluded stream",
+        );
+        // Nothing is left behind for the next call.
+        assert!(device.check("after").is_ok());
     }
 
     #[test]

@@ -4,11 +4,20 @@
 //! and returns a [`CommittedScene`], which has no mutating methods, is `Send + Sync` (Embree's
 //! trace calls are thread-safe on a committed scene) and is meant to be shared across rayon
 //! threads in an `Arc`. Both hold a [`Device`] clone, so the device outlives them.
+//!
+//! Scenes are built in Embree's robust mode (`RTC_SCENE_FLAG_ROBUST`) unless
+//! [`SceneBuilder::set_robust`] turns it off. Embree's default triangle test is not
+//! watertight: a ray aimed at the edge two triangles share can slip between them (12 pixels
+//! of a head-on, translated two-triangle quad; see `tests/watertight.rs`). Robust mode
+//! selects Embree's watertight triangle test and conservative BVH traversal, so camera,
+//! secondary and shadow rays hit one of the two triangles. What it costs in speed is
+//! measured in docs/benchmarks.md ("Watertight traversal").
 
 use std::ffi::c_void;
 
 use glam::Vec3;
 
+use super::context::TraceContext;
 use super::device::Device;
 use super::error::EmbreeError;
 use super::ffi;
@@ -25,6 +34,7 @@ pub struct SceneBuilder {
     pub(crate) device: Device,
     raw: ffi::RTCScene,
     geometries: Vec<PendingGeometry>,
+    robust: bool,
 }
 
 // SAFETY: the builder exclusively owns its Embree scene and geometries (never shared before
@@ -47,7 +57,7 @@ impl Drop for SceneBuilder {
 }
 
 impl SceneBuilder {
-    /// An empty scene on `device`.
+    /// An empty scene on `device`, in robust (watertight) mode.
     pub fn new(device: &Device) -> Result<SceneBuilder, EmbreeError> {
         // SAFETY: the device is live (the builder keeps a clone).
         let raw = unsafe { ffi::rtcNewScene(device.raw()) };
@@ -59,11 +69,29 @@ impl SceneBuilder {
                 message: String::from("Embree returned no scene"),
             });
         }
-        Ok(SceneBuilder {
+        let mut builder = SceneBuilder {
             device: device.clone(),
             raw,
             geometries: Vec::new(),
-        })
+            robust: false,
+        };
+        builder.set_robust(true)?;
+        Ok(builder)
+    }
+
+    /// Robust mode on (the default: watertight triangle tests, no ray slips between
+    /// triangles that share an edge) or off (Embree's faster, non-watertight default).
+    pub fn set_robust(&mut self, robust: bool) -> Result<(), EmbreeError> {
+        let flags = if robust {
+            ffi::RTC_SCENE_FLAG_ROBUST
+        } else {
+            ffi::RTC_SCENE_FLAG_NONE
+        };
+        // SAFETY: the scene is live and not yet committed.
+        unsafe { ffi::rtcSetSceneFlags(self.raw, flags) };
+        self.device.check("rtcSetSceneFlags")?;
+        self.robust = robust;
+        Ok(())
     }
 
     /// Number of geometries added so far (the next geometry id).
@@ -156,6 +184,7 @@ impl SceneBuilder {
             device: self.device.clone(),
             raw,
             records,
+            robust: self.robust,
         })
     }
 }
@@ -177,6 +206,7 @@ pub struct CommittedScene {
     /// Boxed so those addresses survive the move out of the builder.
     #[allow(clippy::vec_box)]
     records: Vec<Box<GeometryRecord>>,
+    robust: bool,
 }
 
 // SAFETY: Embree's intersect/occluded calls and rtcGetSceneBounds are thread-safe on a
@@ -199,6 +229,8 @@ impl std::fmt::Debug for CommittedScene {
         f.debug_struct("CommittedScene")
             .field("geometries", &self.records.len())
             .field("packet_width", &self.packet_width())
+            .field("stream_supported", &self.stream_supported())
+            .field("robust", &self.robust)
             .finish()
     }
 }
@@ -213,10 +245,20 @@ impl CommittedScene {
         &self.device
     }
 
-    /// The widest packet the device traverses natively (16, 8, 4, or 1);
-    /// [`CommittedScene::intersect_tile`] dispatches on it.
+    /// The widest packet traces use (16, 8, 4, or 1 for single rays only; see
+    /// [`Device::packet_width`]); packet traces dispatch on it.
     pub fn packet_width(&self) -> usize {
         self.device.packet_width()
+    }
+
+    /// Whether traces use Embree's ray streams; without them, streams are traced ray by ray.
+    pub fn stream_supported(&self) -> bool {
+        self.device.stream_supported()
+    }
+
+    /// Whether the scene was built in robust (watertight) mode.
+    pub fn is_robust(&self) -> bool {
+        self.robust
     }
 
     /// Number of geometries; ids run from 0 to `geometry_count() - 1`.
@@ -229,6 +271,19 @@ impl CommittedScene {
         self.records
             .get(geom_id as usize)
             .is_some_and(|r| r.filter.is_some())
+    }
+
+    /// Ends one trace call: an error Embree reported on this thread during the call (read
+    /// with `rtcGetDeviceError`, so a failed traversal is never taken for misses) comes
+    /// first, then a panic of a filter callback.
+    pub(crate) fn finish_trace(
+        &self,
+        context: TraceContext,
+        operation: &'static str,
+    ) -> Result<(), EmbreeError> {
+        let embree = self.device.check(operation);
+        let filters = context.finish();
+        embree.and(filters)
     }
 
     /// World-space bounds of everything in the scene (`rtcGetSceneBounds`).

@@ -19,6 +19,9 @@
 //! runs ranged from packets +9% to streams +4%). Never pass `Coherence::Coherent` for
 //! incoherent streams: Embree then sorts them into packets, 3-4x slower.
 //!
+//! On a device without stream support ([`CommittedScene::stream_supported`] false), streams
+//! are traced ray by ray with `rtcIntersect1` / `rtcOccluded1`, same ids and payloads.
+//!
 //! Stream rays get their index in the slice as ray id, so filter callbacks see it as
 //! `FilterCandidate::lane` and look up the stream's payload with it.
 
@@ -33,10 +36,8 @@ impl CommittedScene {
     pub fn intersect1(&self, ray: &Ray, options: TraceOptions) -> Result<Option<Hit>, EmbreeError> {
         let mut ray_hit = RayHit::new(ray);
         let mut context = TraceContext::new(&options);
-        // SAFETY: the scene is committed; `ray_hit` is a properly aligned RTCRayHit and the
-        // context is live for the call.
-        unsafe { ffi::rtcIntersect1(self.raw(), context.as_raw(), &mut ray_hit.0) };
-        context.finish()?;
+        self.trace_one(&mut ray_hit, &mut context, false);
+        self.finish_trace(context, "rtcIntersect1")?;
         Ok(ray_hit.hit())
     }
 
@@ -44,13 +45,33 @@ impl CommittedScene {
     pub fn occluded1(&self, ray: &Ray, options: TraceOptions) -> Result<bool, EmbreeError> {
         let mut ray_hit = RayHit::new(ray);
         let mut context = TraceContext::new(&options);
-        // SAFETY: as in `intersect1`; RTCRay is the first member of RTCRayHit.
-        unsafe { ffi::rtcOccluded1(self.raw(), context.as_raw(), &mut ray_hit.0.ray) };
-        context.finish()?;
+        self.trace_one(&mut ray_hit, &mut context, true);
+        self.finish_trace(context, "rtcOccluded1")?;
         Ok(ray_hit.is_occluded())
     }
 
-    /// Closest hits for a stream of rays (`rtcIntersect1M`); results are in each `RayHit`.
+    /// One `rtcIntersect1` / `rtcOccluded1` call; the caller reads the device's error state
+    /// and the filters' panics afterwards ([`CommittedScene::finish_trace`]).
+    pub(super) fn trace_one(
+        &self,
+        ray_hit: &mut RayHit,
+        context: &mut TraceContext,
+        occlusion: bool,
+    ) {
+        let ctx = context.as_raw();
+        // SAFETY: the scene is committed; `ray_hit` is a properly aligned RTCRayHit (RTCRay
+        // is its first member, for rtcOccluded1) and the context is live for the call.
+        unsafe {
+            if occlusion {
+                ffi::rtcOccluded1(self.raw(), ctx, &mut ray_hit.0.ray);
+            } else {
+                ffi::rtcIntersect1(self.raw(), ctx, &mut ray_hit.0);
+            }
+        }
+    }
+
+    /// Closest hits for a stream of rays (`rtcIntersect1M`, or one `rtcIntersect1` per ray on
+    /// a device without stream support); results are in each `RayHit`.
     pub fn intersect_stream(
         &self,
         rays: &mut [RayHit],
@@ -59,7 +80,8 @@ impl CommittedScene {
         self.trace_stream(rays, options, false)
     }
 
-    /// Occlusion for a stream of rays (`rtcOccluded1M`); see [`RayHit::is_occluded`].
+    /// Occlusion for a stream of rays (`rtcOccluded1M`, or one `rtcOccluded1` per ray on a
+    /// device without stream support); see [`RayHit::is_occluded`].
     pub fn occluded_stream(
         &self,
         rays: &mut [RayHit],
@@ -77,6 +99,7 @@ impl CommittedScene {
         // Ray ids are u32, so (absurdly) long streams are traced in chunks, each with the
         // matching part of the payload.
         const CHUNK: usize = u32::MAX as usize;
+        let streams = self.stream_supported();
         let mut first_error = Ok(());
         for (chunk_index, chunk) in rays.chunks_mut(CHUNK).enumerate() {
             let payload = options
@@ -86,27 +109,44 @@ impl CommittedScene {
             for (i, r) in chunk.iter_mut().enumerate() {
                 r.0.ray.id = i as u32;
             }
-            let ctx = context.as_raw();
-            // SAFETY: `RayHit` is repr(transparent) over RTCRayHit, so `chunk` is `len`
-            // consecutive, 16-byte aligned RTCRayHits with stride size_of::<RTCRayHit>();
-            // RTCRay is their first member (for rtcOccluded1M). The scene is committed and the
-            // context outlives the call; Embree writes only within the slice.
-            unsafe {
-                let first = chunk.as_mut_ptr() as *mut ffi::RTCRayHit;
-                let stride = std::mem::size_of::<ffi::RTCRayHit>();
-                if occlusion {
-                    ffi::rtcOccluded1M(
-                        self.raw(),
-                        ctx,
-                        first as *mut ffi::RTCRay,
-                        chunk.len() as u32,
-                        stride,
-                    );
-                } else {
-                    ffi::rtcIntersect1M(self.raw(), ctx, first, chunk.len() as u32, stride);
+            let operation = if streams {
+                let ctx = context.as_raw();
+                // SAFETY: `RayHit` is repr(transparent) over RTCRayHit, so `chunk` is `len`
+                // consecutive, 16-byte aligned RTCRayHits with stride
+                // size_of::<RTCRayHit>(); RTCRay is their first member (for
+                // rtcOccluded1M). The scene is committed and the context outlives the call;
+                // Embree writes only within the slice.
+                unsafe {
+                    let first = chunk.as_mut_ptr() as *mut ffi::RTCRayHit;
+                    let stride = std::mem::size_of::<ffi::RTCRayHit>();
+                    if occlusion {
+                        ffi::rtcOccluded1M(
+                            self.raw(),
+                            ctx,
+                            first as *mut ffi::RTCRay,
+                            chunk.len() as u32,
+                            stride,
+                        );
+                    } else {
+                        ffi::rtcIntersect1M(self.raw(), ctx, first, chunk.len() as u32, stride);
+                    }
                 }
-            }
-            let result = context.finish();
+                if occlusion {
+                    "rtcOccluded1M"
+                } else {
+                    "rtcIntersect1M"
+                }
+            } else {
+                for ray_hit in chunk.iter_mut() {
+                    self.trace_one(ray_hit, &mut context, occlusion);
+                }
+                if occlusion {
+                    "rtcOccluded1"
+                } else {
+                    "rtcIntersect1"
+                }
+            };
+            let result = self.finish_trace(context, operation);
             if first_error.is_ok() {
                 first_error = result;
             }

@@ -9,9 +9,9 @@ use crate::camera::Camera;
 use crate::footprint::LodStrategy;
 use crate::integrator::AovSelection;
 use crate::render::effects::EffectSet;
-use crate::render::prepared::{MaterialTable, SurfaceLookup};
-use crate::render::stats::WorkCounters;
-use crate::render::tracer::Tracer;
+use crate::render::prepared::{MaterialTable, PrepareError, SurfaceLookup};
+use crate::render::stats::{EffectReason, WorkCounters};
+use crate::render::tracer::{AlphaTests, Tracer, TracerSettings};
 use crate::scene::SceneDescription;
 use crate::texture::{FilterOptions, Texture, TileSet};
 
@@ -43,7 +43,13 @@ pub struct RenderContext {
     pub camera: Camera,
     /// Unit viewing direction, for camera-space depth.
     pub camera_forward: Vec3,
+    /// The effects this render switches on: the scene's analysis, or a forced superset
+    /// (`--all-effects`, [`RenderContext::force_effects`]).
     pub effects: EffectSet,
+    /// The effects the scene needs, as [`EffectSet::analyse`] found them.
+    pub needed_effects: EffectSet,
+    /// Why each effect of [`Self::effects`] is on, as the statistics report it.
+    pub effect_reasons: Vec<EffectReason>,
     pub options: RenderOptions,
     /// Filter options per texture: the render's filter with each texture's own wrap modes.
     pub texture_filters: Vec<FilterOptions>,
@@ -54,20 +60,92 @@ pub struct RenderContext {
     pub external_textures: Option<Arc<dyn crate::render::ExternalTextures>>,
 }
 
+/// Why [`RenderContext::force_effects`] refused or failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ForceEffectsError {
+    /// The forced set lacks effects the scene needs (it holds them).
+    #[error("the forced effects lack {} that the scene needs", .0.names().join(", "))]
+    MissingNeeded(EffectSet),
+    /// Rebuilding the Embree scene for the new alpha tests failed.
+    #[error(transparent)]
+    Rebuild(#[from] PrepareError),
+}
+
 impl RenderContext {
     /// Render with `effects` instead of the set [`EffectSet::analyse`] gave, e.g. with
     /// unneeded effects switched on to measure what they cost. Refused unless `effects`
     /// includes every effect the scene needs (an unneeded effect never changes the image; a
-    /// missing needed one would): the error holds the needed effects `effects` lacks.
-    pub fn force_effects(&mut self, effects: EffectSet) -> Result<(), EffectSet> {
-        let (needed, _) = EffectSet::analyse(&self.scene, self.options.lod);
-        if effects.includes(&needed) {
-            self.effects = effects;
-            Ok(())
-        } else {
-            Err(needed.without(effects))
+    /// missing needed one would). When the alpha tests change (see
+    /// [`AlphaTests::for_effects`]), the Embree scene is rebuilt with the new filters, so a
+    /// forced alpha cut-out costs what it would in a renderer that runs it.
+    pub fn force_effects(&mut self, effects: EffectSet) -> Result<(), ForceEffectsError> {
+        let needed = self.needed_effects;
+        if !effects.includes(&needed) {
+            return Err(ForceEffectsError::MissingNeeded(needed.without(effects)));
         }
+        let alpha_tests = AlphaTests::for_effects(&effects, &needed);
+        if alpha_tests != self.tracer.settings().alpha_tests {
+            self.rebuild_tracer(TracerSettings {
+                alpha_tests,
+                ..self.tracer.settings()
+            })?;
+        }
+        self.effect_reasons = forced_reasons(effects, needed, &self.effect_reasons_of_needed());
+        self.effects = effects;
+        Ok(())
     }
+
+    /// Switches Embree's robust (watertight) mode on or off by rebuilding the Embree scene;
+    /// off only to measure what watertight traversal costs (`conetrace bench render`).
+    pub fn set_robust_traversal(&mut self, robust: bool) -> Result<(), PrepareError> {
+        if self.tracer.settings().robust != robust {
+            self.rebuild_tracer(TracerSettings {
+                robust,
+                ..self.tracer.settings()
+            })?;
+        }
+        Ok(())
+    }
+
+    fn rebuild_tracer(&mut self, settings: TracerSettings) -> Result<(), PrepareError> {
+        let (tracer, geometries) =
+            Tracer::build_with(&self.scene, &self.textures, &self.options, settings)?;
+        // The same meshes are added in the same order whatever the filters, so the surface
+        // lookup built for the first tracer stays valid.
+        if self.surfaces.geometries != geometries {
+            return Err(PrepareError::Invalid {
+                source_label: self.scene.source.clone(),
+                message: "the rebuilt Embree scene has different geometry ids".to_string(),
+            });
+        }
+        self.tracer = tracer;
+        Ok(())
+    }
+
+    /// The analysis' reasons for the needed effects.
+    fn effect_reasons_of_needed(&self) -> Vec<EffectReason> {
+        EffectSet::analyse(&self.scene, self.options.lod).1
+    }
+}
+
+/// The reasons reported for a forced effect set: the analysis' reason for each needed
+/// effect, "forced" for each one switched on beyond the scene's needs.
+pub fn forced_reasons(
+    effects: EffectSet,
+    needed: EffectSet,
+    needed_reasons: &[EffectReason],
+) -> Vec<EffectReason> {
+    let forced = effects.without(needed);
+    let mut reasons: Vec<EffectReason> = needed_reasons
+        .iter()
+        .filter(|r| effects.names().contains(&r.effect.as_str()))
+        .cloned()
+        .collect();
+    reasons.extend(forced.names().into_iter().map(|name| EffectReason {
+        effect: name.to_string(),
+        because: "forced on (general path), not needed by the scene".to_string(),
+    }));
+    reasons
 }
 
 /// What one worker accumulates while rendering tiles.

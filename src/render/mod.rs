@@ -25,7 +25,7 @@ use crate::film::{Film, FilmTile, Layer};
 use crate::integrator::{AovSelection, Integrator, TileImage, TileRect};
 use crate::scene::SceneDescription;
 
-pub use context::{RenderContext, RenderOptions, WorkerState};
+pub use context::{ForceEffectsError, RenderContext, RenderOptions, WorkerState};
 pub use effects::EffectSet;
 pub use external_textures::ExternalTextures;
 pub use prepared::PrepareError;
@@ -65,14 +65,24 @@ pub fn prepare_with_textures(
             message: "the scene has no camera".to_string(),
         });
     };
-    let (tracer, geometries) = tracer::Tracer::build(&scene, &textures, &options)?;
+    let (needed_effects, needed_reasons) = EffectSet::analyse(&scene, options.lod);
+    let (effects, effect_reasons) = if options.all_effects {
+        let all = EffectSet::all();
+        (
+            all,
+            context::forced_reasons(all, needed_effects, &needed_reasons),
+        )
+    } else {
+        (needed_effects, needed_reasons)
+    };
+    let settings = tracer::TracerSettings {
+        alpha_tests: tracer::AlphaTests::for_effects(&effects, &needed_effects),
+        robust: true,
+        threads: rayon::current_num_threads(),
+    };
+    let (tracer, geometries) = tracer::Tracer::build_with(&scene, &textures, &options, settings)?;
     let camera = crate::camera::Camera::new(&camera_desc, options.width, options.height);
     let camera_forward = (camera_desc.target - camera_desc.eye).normalize_or(glam::Vec3::NEG_Z);
-    let effects = if options.all_effects {
-        EffectSet::all()
-    } else {
-        EffectSet::analyse(&scene, options.lod).0
-    };
     let environment_mean = prepared::environment_mean(&scene.environment, &textures);
     let texture_filters = prepared::texture_filters(&scene, &options.filter);
     Ok(RenderContext {
@@ -84,6 +94,8 @@ pub fn prepare_with_textures(
         camera,
         camera_forward,
         effects,
+        needed_effects,
+        effect_reasons,
         options,
         environment_mean,
         texture_filters,
@@ -142,12 +154,28 @@ impl Default for RenderControl<'_> {
     }
 }
 
-/// Render `context` with `integrator` into a new film.
+/// A render that could not be trusted.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RenderError {
+    /// Embree reported an error during ray traversal, or an alpha-test filter panicked: rays
+    /// may have been taken for misses, so no image is returned. The render stopped handing
+    /// out tiles once the failure was seen.
+    #[error("{scene}: ray traversal failed: {source}")]
+    Traversal {
+        scene: String,
+        source: crate::embree::EmbreeError,
+    },
+}
+
+/// Render `context` with `integrator` into a new film; `Err` if any ray traversal failed
+/// (see [`RenderError`]).
 pub fn render(
     context: &RenderContext,
     integrator: &dyn Integrator,
     control: &RenderControl,
-) -> RenderResult {
+) -> Result<RenderResult, RenderError> {
+    // A failure left over from an earlier render of this context is not this render's.
+    let _ = context.tracer.take_failure();
     let options = &context.options;
     let tiles = work_tiles(options.width, options.height);
     let mut film = Film::new(options.width, options.height, &film_layers(options.aovs));
@@ -183,7 +211,9 @@ pub fn render(
                 {
                     return None;
                 }
-                if control.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                if control.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+                    || context.tracer.failed()
+                {
                     return None;
                 }
                 let mut image = TileImage::new(*tile, options.aovs);
@@ -214,6 +244,12 @@ pub fn render(
         )
         .collect();
     let seconds = start.elapsed().as_secs_f64();
+    if let Some(source) = context.tracer.take_failure() {
+        return Err(RenderError::Traversal {
+            scene: context.scene.source.clone(),
+            source,
+        });
+    }
 
     let mut finished_tiles = vec![false; tiles.len()];
     for (index, (tile, image)) in tiles.iter().zip(&results).enumerate() {
@@ -239,20 +275,8 @@ pub fn render(
             })
             .collect(),
     });
-    let (_, reasons) = effects::EffectSet::analyse(&context.scene, options.lod);
-    let effects = if options.all_effects {
-        context
-            .effects
-            .names()
-            .into_iter()
-            .map(|name| stats::EffectReason {
-                effect: name.to_string(),
-                because: "--all-effects".to_string(),
-            })
-            .collect()
-    } else {
-        reasons
-    };
+    // The effects this render ran with, forced or analysed, as prepared (no re-analysis).
+    let effects = context.effect_reasons.clone();
     let stats = RenderStats {
         scene: context.scene.source.clone(),
         width: options.width,
@@ -285,11 +309,11 @@ pub fn render(
             })
             .collect(),
     };
-    RenderResult {
+    Ok(RenderResult {
         film,
         stats,
         finished_tiles,
-    }
+    })
 }
 
 /// Copy an integrator's tile into the film, layer by layer.

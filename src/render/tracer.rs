@@ -4,6 +4,15 @@
 //! rays, a batch of shadow rays); this file cuts them into packets of the device's native
 //! width and copies hits back. Camera rays of a 4x4 pixel block sit in consecutive slots,
 //! so a 16-wide packet is exactly one block.
+//!
+//! A batch whose traversal failed (an error Embree reported, or an alpha filter that
+//! panicked) must never pass for misses: the tracer keeps the first such failure, raises
+//! its failure flag (the render driver stops handing out tiles when it sees it) and the
+//! render ends with that error ([`Tracer::take_failure`]).
+//!
+//! Alpha-test filters are installed as the render's effect set says ([`AlphaTests`]): none
+//! when the scene has no cut-out, on cut-out meshes when it has, on every mesh for the
+//! general path.
 
 use glam::Vec3;
 
@@ -44,13 +53,15 @@ impl TraceHit {
 }
 
 use std::cell::{Cell, RefCell};
-use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 
 use crate::embree::{
-    CommittedScene, Device, FilterCandidate, Ray, RayHit, RayPacket, RayPayload, SceneBuilder,
-    TraceOptions,
+    CommittedScene, Device, EmbreeError, FilterCandidate, Ray, RayHit, RayPacket, RayPayload,
+    SceneBuilder, TraceOptions,
 };
 use crate::render::context::RenderOptions;
+use crate::render::effects::EffectSet;
 use crate::render::prepared::{GeometryRef, PrepareError};
 use crate::render::stats::WorkCounters;
 use crate::scene::SceneDescription;
@@ -61,27 +72,112 @@ thread_local! {
     static FILTER_CALLS: Cell<u64> = const { Cell::new(0) };
 }
 
+/// Which triangle meshes run an alpha test (an Embree filter callback) on candidate hits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AlphaTests {
+    /// No mesh: the scene has no alpha cut-out (the analysis left the effect off).
+    Off,
+    /// Meshes whose material has an alpha cut-off over an alpha texture (the effect is on
+    /// because the scene needs it).
+    CutoutMeshes,
+    /// Every triangle mesh: the general path of a renderer that does not analyse its scene.
+    /// Cut-out meshes filter their mask; every other mesh tests its constant alpha, which
+    /// keeps every hit, so the image is unchanged and the callbacks are pure cost.
+    EveryMesh,
+}
+
+impl AlphaTests {
+    /// The alpha tests a render with `effects` runs on a scene that needs `needed`.
+    pub fn for_effects(effects: &EffectSet, needed: &EffectSet) -> AlphaTests {
+        match (effects.alpha_cutout, needed.alpha_cutout) {
+            (false, _) => AlphaTests::Off,
+            (true, true) => AlphaTests::CutoutMeshes,
+            (true, false) => AlphaTests::EveryMesh,
+        }
+    }
+}
+
+/// How to build a [`Tracer`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TracerSettings {
+    pub alpha_tests: AlphaTests,
+    /// Embree's robust (watertight) mode; off only to measure what it costs.
+    pub robust: bool,
+    /// Threads Embree may use to build the BVH (its `threads=N` device option).
+    pub threads: usize,
+}
+
+impl TracerSettings {
+    /// The settings of a render of `scene` with `options`: alpha tests as the scene's
+    /// analysis (or `--all-effects`) says, robust traversal, as many BVH-build threads as
+    /// the current rayon pool has workers.
+    pub fn for_render(scene: &SceneDescription, options: &RenderOptions) -> TracerSettings {
+        let (needed, _) = EffectSet::analyse(scene, options.lod);
+        let effects = if options.all_effects {
+            EffectSet::all()
+        } else {
+            needed
+        };
+        TracerSettings {
+            alpha_tests: AlphaTests::for_effects(&effects, &needed),
+            robust: true,
+            threads: rayon::current_num_threads(),
+        }
+    }
+}
+
+/// The first traversal failure of a render, shared by every worker.
+#[derive(Default)]
+struct FailureSlot {
+    /// Raised with the first failure; the render driver polls it between tiles.
+    raised: AtomicBool,
+    first: Mutex<Option<EmbreeError>>,
+}
+
+impl FailureSlot {
+    fn record(&self, error: EmbreeError) {
+        let mut first = self.first.lock().unwrap_or_else(|p| p.into_inner());
+        if first.is_none() {
+            *first = Some(error);
+        }
+        self.raised.store(true, Ordering::Release);
+    }
+}
+
 /// The committed Embree scene and how to trace slices of rays through it.
 pub struct Tracer {
     scene: CommittedScene,
-    /// Kept alive for as long as the scene.
-    _device: Device,
+    settings: TracerSettings,
+    failure: FailureSlot,
 }
 
 impl Tracer {
     /// Build and commit the Embree scene of `scene`: one triangle geometry per mesh, one
-    /// sphere geometry for all spheres, alpha-cutout filters for cut-out materials.
+    /// sphere geometry for all spheres, alpha-test filters as [`TracerSettings::for_render`]
+    /// decides.
     pub fn build(
         scene: &Arc<SceneDescription>,
         textures: &[Arc<Texture>],
         options: &RenderOptions,
     ) -> Result<(Tracer, Vec<GeometryRef>), PrepareError> {
+        let settings = TracerSettings::for_render(scene, options);
+        Tracer::build_with(scene, textures, options, settings)
+    }
+
+    /// [`Tracer::build`] with explicit settings.
+    pub fn build_with(
+        scene: &Arc<SceneDescription>,
+        textures: &[Arc<Texture>],
+        options: &RenderOptions,
+        settings: TracerSettings,
+    ) -> Result<(Tracer, Vec<GeometryRef>), PrepareError> {
         let embree_error = |e: crate::embree::EmbreeError| PrepareError::Embree {
             source_label: scene.source.clone(),
             message: e.to_string(),
         };
-        let device = Device::new().map_err(embree_error)?;
+        let device = Device::with_threads(settings.threads).map_err(embree_error)?;
         let mut builder = SceneBuilder::new(&device).map_err(embree_error)?;
+        builder.set_robust(settings.robust).map_err(embree_error)?;
         let mut geometries = Vec::new();
         for (index, mesh) in scene.meshes.iter().enumerate() {
             let material = &scene.materials[mesh.material];
@@ -99,21 +195,29 @@ impl Tracer {
                 .map_err(embree_error)?;
             debug_assert_eq!(id as usize, geometries.len());
             geometries.push(GeometryRef::Mesh(index));
-            if let (Some(cutoff), Some(binding), true) = (
-                material.alpha_cutoff,
-                &material.alpha_texture,
-                textured_cutout,
-            ) {
-                let filter = alpha_filter(
-                    scene.clone(),
-                    index,
-                    textures[binding.texture].clone(),
-                    binding.transform,
-                    material.alpha,
-                    cutoff,
-                    crate::render::prepared::texture_filters(scene, &options.filter)
-                        [binding.texture],
-                );
+            let cutout = match (material.alpha_cutoff, &material.alpha_texture) {
+                (Some(cutoff), Some(binding)) if textured_cutout => Some((cutoff, binding)),
+                _ => None,
+            };
+            let filter = match (settings.alpha_tests, cutout) {
+                (AlphaTests::Off, _) | (AlphaTests::CutoutMeshes, None) => None,
+                (AlphaTests::CutoutMeshes | AlphaTests::EveryMesh, Some((cutoff, binding))) => {
+                    Some(alpha_filter(
+                        scene.clone(),
+                        index,
+                        textures[binding.texture].clone(),
+                        binding.transform,
+                        material.alpha,
+                        cutoff,
+                        crate::render::prepared::texture_filters(scene, &options.filter)
+                            [binding.texture],
+                    ))
+                }
+                (AlphaTests::EveryMesh, None) => {
+                    Some(constant_alpha_filter(material.alpha, material.alpha_cutoff))
+                }
+            };
+            if let Some(filter) = filter {
                 builder.set_alpha_filter(id, filter).map_err(embree_error)?;
             }
         }
@@ -127,13 +231,45 @@ impl Tracer {
         Ok((
             Tracer {
                 scene: committed,
-                _device: device,
+                settings,
+                failure: FailureSlot::default(),
             },
             geometries,
         ))
     }
 
-    /// Native packet width of the device (16, 8 or 4).
+    /// The settings this tracer was built with.
+    pub fn settings(&self) -> TracerSettings {
+        self.settings
+    }
+
+    /// The Embree device the scene lives on.
+    pub fn device(&self) -> &Device {
+        self.scene.device()
+    }
+
+    /// Whether a traversal failed since the last [`Tracer::take_failure`].
+    #[inline]
+    pub fn failed(&self) -> bool {
+        self.failure.raised.load(Ordering::Acquire)
+    }
+
+    /// The first traversal failure since the last call, clearing it.
+    pub fn take_failure(&self) -> Option<EmbreeError> {
+        let mut first = self.failure.first.lock().unwrap_or_else(|p| p.into_inner());
+        self.failure.raised.store(false, Ordering::Release);
+        first.take()
+    }
+
+    /// Keeps the first failure of a trace call; the rays' results stay as Embree left them.
+    #[inline]
+    fn note(&self, result: Result<(), EmbreeError>) {
+        if let Err(error) = result {
+            self.failure.record(error);
+        }
+    }
+
+    /// Packet width of the device (16, 8, 4, or 1 for single rays).
     pub fn packet_width(&self) -> usize {
         self.scene.packet_width()
     }
@@ -141,10 +277,12 @@ impl Tracer {
     /// Closest hits of `rays` into `hits` (resized to match).
     ///
     /// Coherent rays (camera rays, 16 consecutive slots per 4x4 pixel block) go through
-    /// 16-wide packets (split into 8- or 4-wide calls on devices without 16-wide support).
-    /// Incoherent rays (reflection, refraction, shadow walks) go through Embree ray streams
-    /// (`rtcIntersect1M`): measured level with 16-wide packets on closest hits and a few
-    /// percent ahead on occlusion (see `crate::embree::stream`), and they need no repacking.
+    /// 16-wide packets (split into 8- or 4-wide calls, or single rays, on devices without
+    /// 16-wide support). Incoherent rays (reflection, refraction, shadow walks) go through
+    /// Embree ray streams (`rtcIntersect1M`, single rays on devices without streams):
+    /// measured level with 16-wide packets on closest hits and a few percent ahead on
+    /// occlusion (see `crate::embree::stream`), and they need no repacking. A failed trace
+    /// is recorded (see the module doc); the hits Embree produced are kept.
     pub fn intersect(
         &self,
         rays: &[TraceRay],
@@ -161,11 +299,12 @@ impl Tracer {
                 let mut stream = stream.borrow_mut();
                 let (ray_hits, payload) = &mut *stream;
                 fill_stream(rays, ray_hits, payload);
-                // A failing alpha callback is reported by the Embree layer; the hits Embree
-                // produced are kept, which is the deterministic fallback.
-                let _ = self
-                    .scene
-                    .intersect_stream(ray_hits, TraceOptions::incoherent().with_payload(payload));
+                self.note(
+                    self.scene.intersect_stream(
+                        ray_hits,
+                        TraceOptions::incoherent().with_payload(payload),
+                    ),
+                );
                 for (out, ray_hit) in hits.iter_mut().zip(ray_hits.iter()) {
                     if let Some(hit) = ray_hit.hit() {
                         *out = trace_hit(&hit);
@@ -178,7 +317,7 @@ impl Tracer {
 
     /// The same closest-hit query as [`Tracer::intersect`], one `rtcIntersect1` call per ray
     /// (each with its own payload at index 0): the single-ray reference the packet path is
-    /// tested against. A ray whose alpha callback panicked is reported as a miss.
+    /// tested against. A failed trace is recorded as for [`Tracer::intersect`].
     pub fn intersect_one_by_one(
         &self,
         rays: &[TraceRay],
@@ -194,7 +333,11 @@ impl Tracer {
             let options = TraceOptions::incoherent().with_payload(&payload);
             match self.scene.intersect1(&embree_ray(ray), options) {
                 Ok(Some(hit)) => trace_hit(&hit),
-                Ok(None) | Err(_) => TraceHit::MISS,
+                Ok(None) => TraceHit::MISS,
+                Err(error) => {
+                    self.failure.record(error);
+                    TraceHit::MISS
+                }
             }
         }));
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
@@ -216,9 +359,10 @@ impl Tracer {
                     None => packet.set_valid(lane, false),
                 }
             }
-            let _ = self
-                .scene
-                .intersect_tile(&mut packet, TraceOptions::coherent().with_payload(&payload));
+            self.note(
+                self.scene
+                    .intersect_tile(&mut packet, TraceOptions::coherent().with_payload(&payload)),
+            );
             let out = &mut hits[chunk_index * 16..];
             for (lane, slot) in out.iter_mut().enumerate().take(chunk.len()) {
                 if let Some(hit) = packet.hit(lane) {
@@ -241,9 +385,10 @@ impl Tracer {
             let mut stream = stream.borrow_mut();
             let (ray_hits, payload) = &mut *stream;
             fill_stream(rays, ray_hits, payload);
-            let _ = self
-                .scene
-                .occluded_stream(ray_hits, TraceOptions::incoherent().with_payload(payload));
+            self.note(
+                self.scene
+                    .occluded_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
+            );
             blocked.extend(ray_hits.iter().map(|r| r.is_occluded()));
         });
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
@@ -349,6 +494,15 @@ fn alpha_filter(
         let blend = ((texels_covered - 1.0) / 3.0).clamp(0.0, 1.0);
         let threshold = cutoff + (ray_threshold(candidate) - cutoff) * blend;
         alpha >= threshold
+    })
+}
+
+/// The alpha test of a mesh without a textured cut-out, as the general path runs it on
+/// every candidate hit: its constant alpha against its cut-off (no cut-off keeps every hit).
+fn constant_alpha_filter(alpha: f32, cutoff: Option<f32>) -> crate::embree::AlphaFilter {
+    Arc::new(move |_: &FilterCandidate| {
+        FILTER_CALLS.with(|c| c.set(c.get() + 1));
+        cutoff.is_none_or(|cutoff| alpha >= cutoff)
     })
 }
 

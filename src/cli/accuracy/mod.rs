@@ -289,7 +289,8 @@ fn measure_scene(
     let truth_method = methods::ground_truth(args.ground_truth_spp);
     let mut truth_options = options_for(&setup.base, &truth_method);
     truth_options.count_tiles = true;
-    let truth = render::render(&prepare(truth_options)?, &Whitted, &control);
+    let truth = render::render(&prepare(truth_options)?, &Whitted, &control)
+        .map_err(crate::cli::render_failed)?;
     say(format!(
         "ground truth ({} spp) in {:.2} s",
         truth_method.spp, truth.stats.seconds
@@ -300,7 +301,8 @@ fn measure_scene(
     // (texcolor.A = 1 at one sample per pixel).
     let mut mask_options = options_for(&setup.base, &methods::ground_truth(1));
     mask_options.aovs.texture_footprint = true;
-    let mask_render = render::render(&prepare(mask_options)?, &Whitted, &control);
+    let mask_render = render::render(&prepare(mask_options)?, &Whitted, &control)
+        .map_err(crate::cli::render_failed)?;
     let mask: Vec<bool> = mask_render
         .film
         .channel("texcolor.A")
@@ -317,14 +319,15 @@ fn measure_scene(
     }
     let mut first: Vec<RenderResult> = Vec::with_capacity(compared.len());
     for context in &mut contexts {
-        first.push(render::render(context, &Whitted, &control));
+        first.push(render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?);
         context.options.count_tiles = false;
     }
     let runs = args.runs;
     let mut times = vec![Vec::with_capacity(runs); compared.len()];
     for run in 0..runs {
         for (index, context) in contexts.iter().enumerate() {
-            let result = render::render(context, &Whitted, &control);
+            let result =
+                render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?;
             times[index].push(result.stats.seconds);
         }
         say(format!("timed run {}/{runs} done", run + 1));
