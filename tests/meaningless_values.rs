@@ -326,3 +326,19 @@ fn gltf_lights_outside_the_specification_are_refused_naming_the_light() {
         );
     }
 }
+
+#[test]
+fn gltf_ior_zero_is_rendered_with_a_note() {
+    // KHR_materials_ior admits exactly 0 (legacy "reflect at every angle").
+    let dir = temp_dir();
+    let material = r#""extensions": {"KHR_materials_ior": {"ior": 0}}"#;
+    write(dir.path(), "m.gltf", &gltf_with(material, GOOD_LIGHT));
+    let out = run_in(dir.path(), &["render", "m.gltf", "-o", "out.exr"]);
+    let printed =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{printed}");
+    assert!(
+        printed.contains("ior 0, rendered with ior 1.5"),
+        "{printed}"
+    );
+}

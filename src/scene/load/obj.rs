@@ -8,6 +8,11 @@
 //! (reflectivity = the largest `Ks` component, 1 when `Ks` is absent), `illum 4/6/7` glass.
 //! OBJ texture coordinates have v pointing up; they are stored as `t = 1 - v`
 //! (OpenImageIO convention, t down).
+//!
+//! Before `tobj` parses anything, the OBJ and MTL lines are decoded leniently
+//! (`obj_text`), checked where `tobj` cannot say where a problem lies (face references,
+//! colours, names) and rewritten one for one into the form `tobj` accepts, so every error
+//! names the file and line it comes from.
 
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
