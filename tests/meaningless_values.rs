@@ -163,8 +163,8 @@ fn toml_values_are_refused_at_their_line_and_column() {
 #[test]
 fn negative_environment_texture_intensity_is_refused() {
     let dir = temp_dir();
-    // Any readable file: textures are only located while loading.
-    write(dir.path(), "sky.png", "not decoded");
+    let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textures/sky.png");
+    std::fs::copy(&sky, dir.path().join("sky.png")).expect("assets/textures/sky.png");
     let text = SCENE.replace(
         "[environment]\ncolor = [0.1, 0.1, 0.1]",
         "[[texture]]\nname = 'sky'\nfile = 'sky.png'\n\n[environment]\ntexture = 'sky'\nintensity = -2",
