@@ -609,7 +609,7 @@ impl Loader<'_> {
         match m.ior() {
             // KHR_materials_ior admits 0 for legacy materials (a Fresnel term of 1 at every
             // angle), which the dielectric model here cannot express.
-            Some(ior) if ior == 0.0 => self.part.notes.push(format!(
+            Some(0.0) => self.part.notes.push(format!(
                 "{}: material '{}' has KHR_materials_ior ior 0, rendered with ior 1.5",
                 self.label, material.name
             )),
@@ -856,7 +856,7 @@ fn check_material_ranges(m: &gltf::Material) -> Result<(), String> {
         }
     }
     if let Some(cutoff) = m.alpha_cutoff() {
-        if !(cutoff >= 0.0) {
+        if cutoff < 0.0 {
             return Err(format!("{what}: alphaCutoff {cutoff} must be >= 0"));
         }
     }
@@ -875,7 +875,7 @@ fn check_material_ranges(m: &gltf::Material) -> Result<(), String> {
             ));
         }
         let distance = volume.attenuation_distance();
-        if !(distance > 0.0) {
+        if distance <= 0.0 {
             return Err(format!(
                 "{what}: KHR_materials_volume.attenuationDistance {distance} must be > 0"
             ));
@@ -899,11 +899,11 @@ fn check_light_ranges(light: &gltf::khr_lights_punctual::Light) -> Result<(), St
         return Err(format!("{what}: color {color:?} must lie in [0, 1]"));
     }
     let intensity = light.intensity();
-    if !(intensity >= 0.0) {
+    if intensity < 0.0 {
         return Err(format!("{what}: intensity {intensity} must be >= 0"));
     }
     if let Some(range) = light.range() {
-        if !(range > 0.0) {
+        if range <= 0.0 {
             return Err(format!("{what}: range {range} must be > 0"));
         }
     }

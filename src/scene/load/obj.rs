@@ -409,10 +409,8 @@ fn prepare_mtl(
                     *line = format!("{keyword} {0} {0} {0}", words[0]);
                 }
             }
-            "Ns" => {
-                if rest.parse::<f32>().is_ok_and(|x| x < 0.0) {
-                    return Err(at(number, format!("Ns {rest} is negative")));
-                }
+            "Ns" if rest.parse::<f32>().is_ok_and(|x| x < 0.0) => {
+                return Err(at(number, format!("Ns {rest} is negative")));
             }
             "Tr" => {
                 let readable = rest

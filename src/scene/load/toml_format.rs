@@ -327,14 +327,14 @@ fn color(
 ) -> Result<Vec3, SceneError> {
     let c = v3(*value.get_ref());
     match range {
-        ColorRange::Unit if !(c.min_element() >= 0.0 && c.max_element() <= 1.0) => Err(loc.at(
+        ColorRange::Unit if c.min_element() < 0.0 || c.max_element() > 1.0 => Err(loc.at(
             value,
             format!(
                 "{key} = [{}, {}, {}]: components must lie in [0, 1]",
                 c.x, c.y, c.z
             ),
         )),
-        ColorRange::NonNegative if !(c.min_element() >= 0.0) => Err(loc.at(
+        ColorRange::NonNegative if c.min_element() < 0.0 => Err(loc.at(
             value,
             format!(
                 "{key} = [{}, {}, {}]: components must be >= 0",
