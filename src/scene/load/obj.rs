@@ -730,6 +730,47 @@ mod tests {
     }
 
     #[test]
+    fn relative_and_forward_face_references_are_accepted() {
+        // Negative numbers count back from the last vertex read; a face may also refer to a
+        // vertex written after it (as `tobj` allows).
+        let dir = tempfile::tempdir().unwrap();
+        write(
+            dir.path(),
+            "r.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nf 1 3 4\nv 1 1 0\n",
+        );
+        let part = load_obj(&Files::disk(dir.path()), &dir.path().join("r.obj")).unwrap();
+        let triangles: usize = part.meshes.iter().map(|m| m.triangles.len()).sum();
+        assert_eq!(triangles, 2);
+        assert_eq!(
+            check_face("-4 1 2", &[3, 0, 0], &[4, 0, 0]).unwrap_err(),
+            "face refers to vertex -4, but the file has 4 vertices"
+        );
+        // Texture-coordinate numbers are ignored when the file has none.
+        assert!(check_face("1/9 2/9 3/9", &[3, 0, 0], &[3, 0, 0]).is_ok());
+    }
+
+    #[test]
+    fn unknown_material_names_get_the_default_material_and_a_note() {
+        let dir = tempfile::tempdir().unwrap();
+        write(
+            dir.path(),
+            "quad.obj",
+            &QUAD.replace("usemtl red", "usemtl blue"),
+        );
+        write(dir.path(), "quad.mtl", "newmtl red\nKd 1 0 0\n");
+        let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap();
+        assert_eq!(part.materials[part.meshes[0].material].name, "default");
+        assert!(
+            part.notes
+                .iter()
+                .any(|n| n.contains("line 11: usemtl 'blue' names no material")),
+            "{:?}",
+            part.notes
+        );
+    }
+
+    #[test]
     fn empty_and_malformed_files_are_errors() {
         let dir = tempfile::tempdir().unwrap();
         write(dir.path(), "empty.obj", "");
