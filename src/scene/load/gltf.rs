@@ -580,6 +580,7 @@ impl Loader<'_> {
         if let Some(&i) = self.materials.get(&m.index()) {
             return Ok(i);
         }
+        check_material_ranges(m)?;
         let pbr = m.pbr_metallic_roughness();
         let factor = pbr.base_color_factor();
         let mut material = Material {
@@ -605,8 +606,15 @@ impl Loader<'_> {
         if let Some(t) = m.transmission() {
             material.transmission = t.transmission_factor();
         }
-        if let Some(ior) = m.ior() {
-            material.ior = ior;
+        match m.ior() {
+            // KHR_materials_ior admits 0 for legacy materials (a Fresnel term of 1 at every
+            // angle), which the dielectric model here cannot express.
+            Some(0.0) => self.part.notes.push(format!(
+                "{}: material '{}' has KHR_materials_ior ior 0, rendered with ior 1.5",
+                self.label, material.name
+            )),
+            Some(ior) => material.ior = ior,
+            None => {}
         }
         if let Some(volume) = m.volume() {
             material.attenuation_color = Vec3::from(volume.attenuation_color());
@@ -797,11 +805,117 @@ fn convert_camera(camera: &gltf::Camera, world: &Affine3A) -> Result<CameraDesc,
     })
 }
 
+/// How a material is named in messages: `material 'name' (materials[i])`.
+fn material_label(m: &gltf::Material) -> String {
+    let index = m.index().map_or_else(
+        || "the default material".to_owned(),
+        |i| format!("materials[{i}]"),
+    );
+    match m.name() {
+        Some(name) => format!("material '{name}' ({index})"),
+        None => format!("material {index}"),
+    }
+}
+
+/// Refuses factors outside the ranges the glTF 2.0 schema and its material extensions give
+/// them: `baseColorFactor`, `emissiveFactor`, `metallicFactor`, `roughnessFactor`,
+/// `transmissionFactor` and `attenuationColor` in [0, 1], `alphaCutoff` >= 0, `ior` >= 1
+/// (or exactly 0, see the caller), `attenuationDistance` > 0.
+fn check_material_ranges(m: &gltf::Material) -> Result<(), String> {
+    let what = material_label(m);
+    let unit = |x: f32| (0.0..=1.0).contains(&x);
+    let pbr = m.pbr_metallic_roughness();
+    let vectors: [(&str, &[f32]); 2] = [
+        (
+            "pbrMetallicRoughness.baseColorFactor",
+            &pbr.base_color_factor(),
+        ),
+        ("emissiveFactor", &m.emissive_factor()),
+    ];
+    for (key, values) in vectors {
+        if !values.iter().all(|&x| unit(x)) {
+            return Err(format!("{what}: {key} {values:?} must lie in [0, 1]"));
+        }
+    }
+    let mut scalars = vec![
+        ("pbrMetallicRoughness.metallicFactor", pbr.metallic_factor()),
+        (
+            "pbrMetallicRoughness.roughnessFactor",
+            pbr.roughness_factor(),
+        ),
+    ];
+    if let Some(t) = m.transmission() {
+        scalars.push((
+            "KHR_materials_transmission.transmissionFactor",
+            t.transmission_factor(),
+        ));
+    }
+    for (key, value) in scalars {
+        if !unit(value) {
+            return Err(format!("{what}: {key} {value} must lie in [0, 1]"));
+        }
+    }
+    if let Some(cutoff) = m.alpha_cutoff() {
+        if cutoff < 0.0 {
+            return Err(format!("{what}: alphaCutoff {cutoff} must be >= 0"));
+        }
+    }
+    if let Some(ior) = m.ior() {
+        if !(ior >= 1.0 || ior == 0.0) {
+            return Err(format!(
+                "{what}: KHR_materials_ior.ior {ior} must be >= 1 (or exactly 0)"
+            ));
+        }
+    }
+    if let Some(volume) = m.volume() {
+        let color = volume.attenuation_color();
+        if !color.iter().all(|&x| unit(x)) {
+            return Err(format!(
+                "{what}: KHR_materials_volume.attenuationColor {color:?} must lie in [0, 1]"
+            ));
+        }
+        let distance = volume.attenuation_distance();
+        if distance <= 0.0 {
+            return Err(format!(
+                "{what}: KHR_materials_volume.attenuationDistance {distance} must be > 0"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses `KHR_lights_punctual` values outside the extension's ranges: `color` components
+/// in [0, 1], `intensity` >= 0, `range` > 0.
+fn check_light_ranges(light: &gltf::khr_lights_punctual::Light) -> Result<(), String> {
+    let what = match light.name() {
+        Some(name) => format!(
+            "light '{name}' (KHR_lights_punctual.lights[{}])",
+            light.index()
+        ),
+        None => format!("light KHR_lights_punctual.lights[{}]", light.index()),
+    };
+    let color = light.color();
+    if !color.iter().all(|x| (0.0..=1.0).contains(x)) {
+        return Err(format!("{what}: color {color:?} must lie in [0, 1]"));
+    }
+    let intensity = light.intensity();
+    if intensity < 0.0 {
+        return Err(format!("{what}: intensity {intensity} must be >= 0"));
+    }
+    if let Some(range) = light.range() {
+        if range <= 0.0 {
+            return Err(format!("{what}: range {range} must be > 0"));
+        }
+    }
+    Ok(())
+}
+
 /// `KHR_lights_punctual`: lights shine down their node's -Z; spot cone angles are radians.
 fn convert_light(
     light: &gltf::khr_lights_punctual::Light,
     world: &Affine3A,
 ) -> Result<Light, String> {
+    check_light_ranges(light)?;
     let position = world.transform_point3(Vec3::ZERO);
     let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
     let color = Vec3::from(light.color());

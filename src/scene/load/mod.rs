@@ -32,6 +32,7 @@ mod framing;
 mod gltf;
 mod merge;
 mod obj;
+mod obj_text;
 mod toml_format;
 mod uri;
 mod validate;

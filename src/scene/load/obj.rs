@@ -8,14 +8,20 @@
 //! (reflectivity = the largest `Ks` component, 1 when `Ks` is absent), `illum 4/6/7` glass.
 //! OBJ texture coordinates have v pointing up; they are stored as `t = 1 - v`
 //! (OpenImageIO convention, t down).
+//!
+//! Before `tobj` parses anything, the OBJ and MTL lines are decoded leniently
+//! (`obj_text`), checked where `tobj` cannot say where a problem lies (face references,
+//! colours, names) and rewritten one for one into the form `tobj` accepts, so every error
+//! names the file and line it comes from.
 
-use std::io::Cursor;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use glam::{Affine2, Vec2, Vec3};
 
 use super::error::SceneError;
 use super::files::Files;
+use super::obj_text::{decode_lines, excerpt, LineCountingReader};
 use crate::scene::{
     ColorSpace, Material, SceneDescription, TextureBinding, TextureDesc, TriangleMesh, WrapMode,
 };
@@ -27,36 +33,42 @@ pub(crate) fn load_obj(files: &Files, path: &Path) -> Result<SceneDescription, S
     let bytes = files.read(path)?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let local = files.with_base(dir);
+    let mut part = SceneDescription {
+        source: label.clone(),
+        ..Default::default()
+    };
+    let prepared = prepare_obj(decode_lines(&bytes), &local, &label, &mut part.notes)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, materials) =
-        tobj::load_obj_buf(&mut Cursor::new(bytes), &options, |mtl: &Path| {
-            let mtl_path = local.resolve(&mtl.to_string_lossy().replace('\\', "/"));
-            let data = local
-                .read(&mtl_path)
-                .map_err(|_| tobj::LoadError::OpenFileFailed)?;
-            tobj::load_mtl_buf(&mut Cursor::new(data))
-        })
-        .map_err(|e| SceneError::invalid(&label, format!("OBJ parse error: {e}")))?;
-
-    let mut part = SceneDescription {
-        source: label.clone(),
-        ..Default::default()
-    };
-    match materials {
-        Ok(list) => {
-            for m in &list {
-                let material = convert_material(m, &local, &mut part.textures, &label)?;
-                part.materials.push(material);
-            }
+    let text = prepared.lines.join("\n");
+    let mut reader = LineCountingReader::new(&text);
+    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl: &Path| {
+        match prepared.libraries.get(&*mtl.to_string_lossy()) {
+            Some(Some(library)) => library.parsed.clone(),
+            // Unreadable: already recorded in the notes.
+            Some(None) | None => Err(tobj::LoadError::OpenFileFailed),
         }
-        Err(e) => part.notes.push(format!(
-            "{label}: material library not loaded ({e}): using a default material"
-        )),
+    })
+    .map_err(|e| {
+        let line = reader.line();
+        let written = prepared
+            .lines
+            .get(line.wrapping_sub(1))
+            .map_or("", String::as_str);
+        SceneError::invalid(
+            &label,
+            format!("line {line}: {e} ('{}')", excerpt(written, 60)),
+        )
+    })?;
+
+    // Without any readable library `tobj` reports the open failure, already noted.
+    for (m, origin) in materials.unwrap_or_default().iter().zip(&prepared.origins) {
+        let material = convert_material(m, origin, &local, &mut part.textures)?;
+        part.materials.push(material);
     }
 
     let mut default_material = None;
@@ -79,6 +91,343 @@ pub(crate) fn load_obj(files: &Files, path: &Path) -> Result<SceneDescription, S
         return Err(SceneError::invalid(&label, "no triangles in the OBJ file"));
     }
     Ok(part)
+}
+
+/// An OBJ file's lines made ready for `tobj`, with its MTL libraries already read.
+struct PreparedObj {
+    /// The file's lines, one for one (so `tobj`'s line is the file's line), with `usemtl` and
+    /// `mtllib` statements written the one way `tobj` reads them, vertex colours dropped and
+    /// `usemtl` without a name turned into a name no library defines.
+    lines: Vec<String>,
+    /// Each `mtllib` file name as written, with its library (`None`: unreadable, noted).
+    libraries: HashMap<String, Option<Library>>,
+    /// Where each material `tobj` will return was written, in `tobj`'s order: the libraries'
+    /// materials, one `mtllib` statement after the other.
+    origins: Vec<MaterialOrigin>,
+}
+
+/// One MTL library, parsed.
+struct Library {
+    /// What `tobj` made of it (always `Ok`: a library it refuses is an error).
+    parsed: tobj::MTLLoadResult,
+    /// The names its materials can be used by.
+    names: HashSet<String>,
+    origins: Vec<MaterialOrigin>,
+}
+
+/// Where a material was written: its MTL file, its `newmtl` line and the line of each of its
+/// statements (by keyword), for messages.
+#[derive(Clone)]
+struct MaterialOrigin {
+    file: String,
+    newmtl_line: usize,
+    statement_lines: HashMap<String, usize>,
+}
+
+impl MaterialOrigin {
+    /// The line of `keyword` in this material (its `newmtl` line if absent).
+    fn line_of(&self, keyword: &str) -> usize {
+        self.statement_lines
+            .get(keyword)
+            .copied()
+            .unwrap_or(self.newmtl_line)
+    }
+}
+
+/// The first word of `line` and the rest of it, trimmed.
+fn split_keyword(line: &str) -> (&str, &str) {
+    let line = line.trim();
+    match line.find(char::is_whitespace) {
+        Some(i) => (&line[..i], line[i..].trim()),
+        None => (line, ""),
+    }
+}
+
+/// Checks and rewrites the OBJ lines (see [`PreparedObj`]) and reads the MTL libraries.
+/// Face indices are checked here, where the line is known: `tobj` checks them only when it
+/// assembles a mesh, lines later.
+fn prepare_obj(
+    mut lines: Vec<String>,
+    files: &Files,
+    label: &str,
+    notes: &mut Vec<String>,
+) -> Result<PreparedObj, SceneError> {
+    let at = |number: usize, message: String| {
+        SceneError::invalid(label, format!("line {number}: {message}"))
+    };
+    // Totals first: `tobj` accepts faces that refer to vertices written after them.
+    let mut totals = [0usize; 3];
+    for line in &lines {
+        match split_keyword(line).0 {
+            "v" => totals[0] += 1,
+            "vt" => totals[1] += 1,
+            "vn" => totals[2] += 1,
+            _ => {}
+        }
+    }
+    let mut so_far = [0usize; 3];
+    let mut libraries: HashMap<String, Option<Library>> = HashMap::new();
+    let mut origins = Vec::new();
+    let mut unnamed_usemtl = Vec::new();
+    let mut unknown_noted: Vec<String> = Vec::new();
+    for (index, line) in lines.iter_mut().enumerate() {
+        let number = index + 1;
+        let (keyword, rest) = split_keyword(line);
+        match keyword {
+            "v" => {
+                so_far[0] += 1;
+                // `v x y z r g b`: the colours are not used, and `tobj` refuses a file where
+                // only some vertices have them.
+                let words: Vec<&str> = rest.split_whitespace().collect();
+                if words.len() == 6 {
+                    *line = format!("v {} {} {}", words[0], words[1], words[2]);
+                }
+            }
+            "vt" => so_far[1] += 1,
+            "vn" => so_far[2] += 1,
+            "f" => check_face(rest, &so_far, &totals).map_err(|m| at(number, m))?,
+            "mtllib" => {
+                let name = rest.to_owned();
+                if !libraries.contains_key(&name) {
+                    let library = load_library(files, &name, label, number, notes)?;
+                    libraries.insert(name.clone(), library);
+                }
+                if let Some(Some(library)) = libraries.get(&name) {
+                    origins.extend(library.origins.iter().cloned());
+                }
+                *line = format!("mtllib {name}");
+            }
+            "usemtl" => {
+                if rest.is_empty() {
+                    if unnamed_usemtl.is_empty() {
+                        notes.push(format!(
+                            "{label}: line {number}: usemtl without a material name: the default material is used"
+                        ));
+                    }
+                    unnamed_usemtl.push(index);
+                } else {
+                    let known = libraries
+                        .values()
+                        .flatten()
+                        .any(|library| library.names.contains(rest));
+                    // A library that could not be read has its own note already.
+                    let all_read = libraries.values().all(Option::is_some);
+                    if !known && all_read && !unknown_noted.iter().any(|n| n == rest) {
+                        notes.push(format!(
+                            "{label}: line {number}: usemtl '{rest}' names no material of the libraries read so far: the default material is used"
+                        ));
+                        unknown_noted.push(rest.to_owned());
+                    }
+                    *line = format!("usemtl {rest}");
+                }
+            }
+            _ => {}
+        }
+    }
+    if !unnamed_usemtl.is_empty() {
+        // `tobj` refuses `usemtl` without a name; any name no library defines gives the same
+        // result, the default material.
+        let mut name = String::from("(unnamed)");
+        while libraries
+            .values()
+            .flatten()
+            .any(|library| library.names.contains(&name))
+        {
+            name.push('\'');
+        }
+        for index in unnamed_usemtl {
+            lines[index] = format!("usemtl {name}");
+        }
+    }
+    Ok(PreparedObj {
+        lines,
+        libraries,
+        origins,
+    })
+}
+
+/// Checks one face's vertex references (`v`, `v/vt`, `v//vn`, `v/vt/vn`; negative numbers
+/// count back from the last vertex read) against the file's vertex, texture-coordinate and
+/// normal counts. Texture coordinates and normals are checked only when the file has any, as
+/// `tobj` ignores them otherwise.
+fn check_face(rest: &str, so_far: &[usize; 3], totals: &[usize; 3]) -> Result<(), String> {
+    const KINDS: [(&str, &str); 3] = [
+        ("vertex", "vertices"),
+        ("texture coordinate", "texture coordinates"),
+        ("normal", "normals"),
+    ];
+    if rest.is_empty() {
+        return Err("face without vertices".into());
+    }
+    for corner in rest.split_whitespace() {
+        for (slot, reference) in corner.split('/').enumerate().take(3) {
+            if reference.is_empty() {
+                if slot == 0 {
+                    return Err(format!("face corner '{corner}' has no vertex number"));
+                }
+                continue;
+            }
+            if slot > 0 && totals[slot] == 0 {
+                continue;
+            }
+            // Unparsable numbers are left to `tobj`, which reports the line.
+            let Ok(n) = reference.parse::<i64>() else {
+                continue;
+            };
+            let resolved = if n < 0 {
+                so_far[slot] as i64 + n
+            } else {
+                n - 1
+            };
+            if n == 0 || resolved < 0 || resolved >= totals[slot] as i64 {
+                let (one, many) = KINDS[slot];
+                return Err(format!(
+                    "face refers to {one} {n}, but the file has {} {many}",
+                    totals[slot]
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reads, checks and parses the MTL library `name` of an `mtllib` statement at `obj_line`.
+/// An unreadable library is a note (`None`): the faces fall back to the default material. A
+/// malformed one is an error naming its line.
+fn load_library(
+    files: &Files,
+    name: &str,
+    obj_label: &str,
+    obj_line: usize,
+    notes: &mut Vec<String>,
+) -> Result<Option<Library>, SceneError> {
+    let path = files.resolve(&name.replace('\\', "/"));
+    let bytes = match files.read(&path) {
+        Ok(bytes) => bytes,
+        Err(e) => {
+            let reason = match e {
+                SceneError::Unreadable { reason, .. } => reason,
+                other => other.to_string(),
+            };
+            notes.push(format!(
+                "{obj_label}: line {obj_line}: material library '{name}' not loaded ({reason}): its materials are replaced by a default material"
+            ));
+            return Ok(None);
+        }
+    };
+    let label = path.display().to_string();
+    let (lines, origins) = prepare_mtl(decode_lines(&bytes), &label, notes)?;
+    let text = lines.join("\n");
+    let mut reader = LineCountingReader::new(&text);
+    let parsed = tobj::load_mtl_buf(&mut reader).map_err(|e| {
+        let line = reader.line();
+        let written = lines.get(line.wrapping_sub(1)).map_or("", String::as_str);
+        SceneError::invalid(
+            &label,
+            format!("line {line}: {e} ('{}')", excerpt(written, 60)),
+        )
+    })?;
+    let names = parsed.1.keys().cloned().collect();
+    Ok(Some(Library {
+        parsed: Ok(parsed),
+        names,
+        origins,
+    }))
+}
+
+/// Checks and rewrites MTL lines, one for one, before `tobj` reads them:
+/// - a material with an empty `newmtl` name is blanked out (its faces get the default
+///   material, with a note); `tobj` would refuse the whole library;
+/// - `Ka`/`Kd`/`Ks`/`Ke` with one number mean grey (the MTL format's `r` alone stands for
+///   `r r r`): written out as three, since `tobj` needs three;
+/// - colours with two numbers or none, negative `Kd`/`Ks`/`Ke` components and unreadable `Tr`
+///   values are errors at their line.
+///
+/// Returns the lines and where each material `tobj` will return was written.
+fn prepare_mtl(
+    mut lines: Vec<String>,
+    label: &str,
+    notes: &mut Vec<String>,
+) -> Result<(Vec<String>, Vec<MaterialOrigin>), SceneError> {
+    let at = |number: usize, message: String| {
+        SceneError::invalid(label, format!("line {number}: {message}"))
+    };
+    let mut origins: Vec<MaterialOrigin> = Vec::new();
+    let mut skipping = false;
+    for (index, line) in lines.iter_mut().enumerate() {
+        let number = index + 1;
+        let (keyword, rest) = split_keyword(line);
+        let (keyword, rest) = (keyword.to_owned(), rest.to_owned());
+        let (keyword, rest) = (keyword.as_str(), rest.as_str());
+        if keyword == "newmtl" {
+            skipping = rest.is_empty();
+            if skipping {
+                notes.push(format!(
+                    "{label}: line {number}: material without a name ignored: faces using it get the default material"
+                ));
+                line.clear();
+            } else {
+                origins.push(MaterialOrigin {
+                    file: label.to_owned(),
+                    newmtl_line: number,
+                    statement_lines: HashMap::new(),
+                });
+            }
+            continue;
+        }
+        if skipping {
+            line.clear();
+            continue;
+        }
+        match keyword {
+            "Ka" | "Kd" | "Ks" | "Ke" => {
+                let words: Vec<&str> = rest.split_whitespace().collect();
+                if words.is_empty() || words.len() == 2 {
+                    return Err(at(
+                        number,
+                        format!("'{}' needs 1 or 3 numbers", excerpt(line, 60)),
+                    ));
+                }
+                let values: Vec<f32> = words
+                    .iter()
+                    .take(3)
+                    .filter_map(|w| w.parse::<f32>().ok())
+                    .collect();
+                if keyword != "Ka" && values.iter().any(|&x| x < 0.0) {
+                    return Err(at(
+                        number,
+                        format!("'{}': a colour component is negative", excerpt(line, 60)),
+                    ));
+                }
+                if keyword == "Ks" && values.iter().any(|&x| x > 1.0) {
+                    return Err(at(
+                        number,
+                        format!("'{}': a specular weight lies above 1", excerpt(line, 60)),
+                    ));
+                }
+                if words.len() == 1 {
+                    *line = format!("{keyword} {0} {0} {0}", words[0]);
+                }
+            }
+            "Ns" if rest.parse::<f32>().is_ok_and(|x| x < 0.0) => {
+                return Err(at(number, format!("Ns {rest} is negative")));
+            }
+            "Tr" => {
+                let readable = rest
+                    .split_whitespace()
+                    .next()
+                    .is_some_and(|v| v.parse::<f32>().is_ok());
+                if !readable {
+                    return Err(at(number, format!("bad Tr value '{}'", excerpt(rest, 60))));
+                }
+            }
+            _ => {}
+        }
+        if let Some(origin) = origins.last_mut() {
+            origin.statement_lines.insert(keyword.to_owned(), number);
+        }
+    }
+    Ok((lines, origins))
 }
 
 /// One `tobj` model as a triangle mesh, or `None` when it has no triangles.
@@ -181,12 +530,19 @@ fn repair_zero_normals(
     count
 }
 
+/// One parsed MTL material as a conetrace material; `origin` locates its messages.
 fn convert_material(
     m: &tobj::Material,
+    origin: &MaterialOrigin,
     files: &Files,
     textures: &mut Vec<TextureDesc>,
-    label: &str,
 ) -> Result<Material, SceneError> {
+    let at = |keyword: &str, message: String| {
+        SceneError::invalid(
+            &origin.file,
+            format!("line {}: {message}", origin.line_of(keyword)),
+        )
+    };
     let mut material = Material {
         name: m.name.clone(),
         ..Material::default()
@@ -211,9 +567,7 @@ fn convert_material(
             .split_whitespace()
             .next()
             .and_then(|v| v.parse::<f32>().ok())
-            .ok_or_else(|| {
-                SceneError::invalid(label, format!("material '{}': bad Tr value '{tr}'", m.name))
-            })?,
+            .ok_or_else(|| at("Tr", format!("bad Tr value '{tr}'")))?,
         (None, None) => 0.0,
     };
     material.transmission = transparency.clamp(0.0, 1.0);
@@ -226,14 +580,16 @@ fn convert_material(
         _ => {}
     }
     if let Some(file) = &m.diffuse_texture {
-        let index = add_texture(files, textures, file, ColorSpace::Srgb, label)?;
+        let index =
+            add_texture(files, textures, file, ColorSpace::Srgb).map_err(|e| at("map_Kd", e))?;
         material.base_color_texture = Some(TextureBinding {
             texture: index,
             transform: Affine2::IDENTITY,
         });
     }
     if let Some(file) = &m.dissolve_texture {
-        let index = add_texture(files, textures, file, ColorSpace::Linear, label)?;
+        let index =
+            add_texture(files, textures, file, ColorSpace::Linear).map_err(|e| at("map_d", e))?;
         material.alpha_texture = Some(TextureBinding {
             texture: index,
             transform: Affine2::IDENTITY,
@@ -251,8 +607,7 @@ fn add_texture(
     textures: &mut Vec<TextureDesc>,
     statement: &str,
     color_space: ColorSpace,
-    context: &str,
-) -> Result<usize, SceneError> {
+) -> Result<usize, String> {
     let name = statement
         .split_whitespace()
         .last()
@@ -266,7 +621,7 @@ fn add_texture(
     }
     let source = files
         .texture_source(&files.resolve(&name))
-        .map_err(|e| SceneError::invalid(context, format!("texture '{name}': {e}")))?;
+        .map_err(|e| format!("texture '{name}': {e}"))?;
     textures.push(TextureDesc {
         name,
         source,
@@ -372,6 +727,47 @@ mod tests {
         let mut normals = vec![Vec3::ZERO; 3];
         repair_zero_normals(&[Vec3::ZERO; 3], &[[0, 1, 2]], &mut normals);
         assert!(normals.is_empty());
+    }
+
+    #[test]
+    fn relative_and_forward_face_references_are_accepted() {
+        // Negative numbers count back from the last vertex read; a face may also refer to a
+        // vertex written after it (as `tobj` allows).
+        let dir = tempfile::tempdir().unwrap();
+        write(
+            dir.path(),
+            "r.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nf 1 3 4\nv 1 1 0\n",
+        );
+        let part = load_obj(&Files::disk(dir.path()), &dir.path().join("r.obj")).unwrap();
+        let triangles: usize = part.meshes.iter().map(|m| m.triangles.len()).sum();
+        assert_eq!(triangles, 2);
+        assert_eq!(
+            check_face("-4 1 2", &[3, 0, 0], &[4, 0, 0]).unwrap_err(),
+            "face refers to vertex -4, but the file has 4 vertices"
+        );
+        // Texture-coordinate numbers are ignored when the file has none.
+        assert!(check_face("1/9 2/9 3/9", &[3, 0, 0], &[3, 0, 0]).is_ok());
+    }
+
+    #[test]
+    fn unknown_material_names_get_the_default_material_and_a_note() {
+        let dir = tempfile::tempdir().unwrap();
+        write(
+            dir.path(),
+            "quad.obj",
+            &QUAD.replace("usemtl red", "usemtl blue"),
+        );
+        write(dir.path(), "quad.mtl", "newmtl red\nKd 1 0 0\n");
+        let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap();
+        assert_eq!(part.materials[part.meshes[0].material].name, "default");
+        assert!(
+            part.notes
+                .iter()
+                .any(|n| n.contains("line 11: usemtl 'blue' names no material")),
+            "{:?}",
+            part.notes
+        );
     }
 
     #[test]

@@ -173,8 +173,8 @@ struct RawLight {
     kind: LightType,
     position: Option<V3>,
     direction: Option<V3>,
-    color: Option<V3>,
-    intensity: Option<Num>,
+    color: Option<Spanned<V3>>,
+    intensity: Option<Spanned<Num>>,
     inner_angle: Option<Num>,
     outer_angle: Option<Num>,
 }
@@ -182,9 +182,9 @@ struct RawLight {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawEnvironment {
-    color: Option<V3>,
+    color: Option<Spanned<V3>>,
     texture: Option<Spanned<String>>,
-    intensity: Option<Num>,
+    intensity: Option<Spanned<Num>>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -229,7 +229,7 @@ struct RawTexture {
 #[serde(deny_unknown_fields)]
 struct RawMaterial {
     name: Spanned<String>,
-    base_color: Option<V3>,
+    base_color: Option<Spanned<V3>>,
     base_color_texture: Option<Spanned<String>>,
     texture_scale: Option<[Num; 2]>,
     texture_offset: Option<[Num; 2]>,
@@ -239,9 +239,9 @@ struct RawMaterial {
     mirror: Option<Spanned<Num>>,
     transmission: Option<Spanned<Num>>,
     ior: Option<Spanned<Num>>,
-    attenuation_color: Option<V3>,
+    attenuation_color: Option<Spanned<V3>>,
     attenuation_distance: Option<Spanned<Num>>,
-    emission: Option<V3>,
+    emission: Option<Spanned<V3>>,
     alpha: Option<Spanned<Num>>,
     alpha_texture: Option<Spanned<String>>,
     alpha_cutoff: Option<Spanned<Num>>,
@@ -306,6 +306,53 @@ fn unit_weight(
         *slot = x;
     }
     Ok(())
+}
+
+/// What a colour's components may be.
+#[derive(Clone, Copy)]
+enum ColorRange {
+    /// Reflectances and transmittances: a surface or medium cannot give back more light than
+    /// it receives, nor less than none.
+    Unit,
+    /// Radiances and light colours: any brightness, but never negative.
+    NonNegative,
+}
+
+/// A colour checked against `range`, the error pointing at the value.
+fn color(
+    loc: &Located,
+    value: &Spanned<V3>,
+    key: &str,
+    range: ColorRange,
+) -> Result<Vec3, SceneError> {
+    let c = v3(*value.get_ref());
+    match range {
+        ColorRange::Unit if c.min_element() < 0.0 || c.max_element() > 1.0 => Err(loc.at(
+            value,
+            format!(
+                "{key} = [{}, {}, {}]: components must lie in [0, 1]",
+                c.x, c.y, c.z
+            ),
+        )),
+        ColorRange::NonNegative if c.min_element() < 0.0 => Err(loc.at(
+            value,
+            format!(
+                "{key} = [{}, {}, {}]: components must be >= 0",
+                c.x, c.y, c.z
+            ),
+        )),
+        _ => Ok(c),
+    }
+}
+
+/// A number that must be >= 0 (an intensity), the error pointing at the value.
+fn non_negative(loc: &Located, value: &Spanned<Num>, key: &str) -> Result<f32, SceneError> {
+    let x = value.get_ref().0;
+    if x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(loc.at(value, format!("{key} = {x} must be >= 0")))
+    }
 }
 
 fn unknown_name(
@@ -381,8 +428,8 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             name: name.clone(),
             ..Material::default()
         };
-        if let Some(c) = m.base_color {
-            material.base_color = v3(c);
+        if let Some(c) = &m.base_color {
+            material.base_color = color(loc, c, "base_color", ColorRange::Unit)?;
         }
         let transform = texture_transform(m);
         if let Some(t) = &m.base_color_texture {
@@ -412,8 +459,8 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             }
             material.ior = ior.get_ref().0;
         }
-        if let Some(c) = m.attenuation_color {
-            material.attenuation_color = v3(c);
+        if let Some(c) = &m.attenuation_color {
+            material.attenuation_color = color(loc, c, "attenuation_color", ColorRange::Unit)?;
         }
         if let Some(d) = &m.attenuation_distance {
             if d.get_ref().0 <= 0.0 {
@@ -421,8 +468,8 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             }
             material.attenuation_distance = d.get_ref().0;
         }
-        if let Some(e) = m.emission {
-            material.emission = v3(e);
+        if let Some(e) = &m.emission {
+            material.emission = color(loc, e, "emission", ColorRange::NonNegative)?;
         }
         if let Some(t) = &m.alpha_texture {
             let index = texture(t)?;
@@ -631,8 +678,14 @@ fn camera_desc(c: &Spanned<RawCamera>, loc: &Located) -> Result<CameraDesc, Scen
 
 fn light_desc(l: &Spanned<RawLight>, loc: &Located) -> Result<Light, SceneError> {
     let raw = l.get_ref();
-    let color = raw.color.map_or(Vec3::ONE, v3);
-    let intensity = raw.intensity.map_or(1.0, |i| i.0);
+    let color = match &raw.color {
+        Some(c) => color(loc, c, "color", ColorRange::NonNegative)?,
+        None => Vec3::ONE,
+    };
+    let intensity = match &raw.intensity {
+        Some(i) => non_negative(loc, i, "intensity")?,
+        None => 1.0,
+    };
     let name = match raw.kind {
         LightType::Point => "point",
         LightType::Directional => "directional",
@@ -721,7 +774,12 @@ fn environment(
     let raw = e.get_ref();
     match (&raw.color, &raw.texture) {
         (Some(_), Some(_)) => Err(loc.at(e, "environment takes either color or texture, not both")),
-        (Some(c), None) => Ok(Environment::Color(v3(*c))),
+        (Some(c), None) => Ok(Environment::Color(color(
+            loc,
+            c,
+            "color",
+            ColorRange::NonNegative,
+        )?)),
         (None, Some(name)) => {
             let texture = textures
                 .get(name.get_ref())
@@ -729,7 +787,10 @@ fn environment(
                 .ok_or_else(|| unknown_name(loc, name, "texture", textures))?;
             Ok(Environment::LatLong {
                 texture,
-                intensity: raw.intensity.map_or(1.0, |i| i.0),
+                intensity: match &raw.intensity {
+                    Some(i) => non_negative(loc, i, "intensity")?,
+                    None => 1.0,
+                },
             })
         }
         (None, None) => Ok(Environment::Color(Vec3::ZERO)),

@@ -1,6 +1,9 @@
 //! Checks a finished [`SceneDescription`] for values the renderer cannot use: non-finite
 //! numbers anywhere, zero image size, non-positive sphere radius or index of refraction,
-//! out-of-range material/texture/vertex indices, degenerate cameras.
+//! physically meaningless values (negative light intensities, negative colour components,
+//! weights outside [0, 1]), out-of-range material/texture/vertex indices, degenerate cameras.
+//! The loaders refuse these values first where they can say where they were written (TOML
+//! line and column, MTL line, glTF material or light); this is the last line of defence.
 //!
 //! Every loader runs this last, so the renderer may assume a valid description.
 
@@ -27,6 +30,26 @@ fn finite(x: f32, what: &str) -> Result<(), String> {
         Ok(())
     } else {
         Err(format!("{what} is not finite ({x})"))
+    }
+}
+
+/// Light colours, emission and the environment: any brightness, but never negative.
+fn non_negative3(v: Vec3, what: &str) -> Result<(), String> {
+    finite3(v, what)?;
+    if v.min_element() >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{what} {v} has a negative component"))
+    }
+}
+
+/// Intensities: never negative.
+fn non_negative(x: f32, what: &str) -> Result<(), String> {
+    finite(x, what)?;
+    if x >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{what} {x} is negative"))
     }
 }
 
@@ -95,8 +118,8 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
                 intensity,
             } => {
                 finite3(position, &what)?;
-                finite3(color, &what)?;
-                finite(intensity, &what)?;
+                non_negative3(color, &format!("{what} color"))?;
+                non_negative(intensity, &format!("{what} intensity"))?;
             }
             Light::Directional {
                 direction,
@@ -104,8 +127,8 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
                 intensity,
             } => {
                 finite3(direction, &what)?;
-                finite3(color, &what)?;
-                finite(intensity, &what)?;
+                non_negative3(color, &format!("{what} color"))?;
+                non_negative(intensity, &format!("{what} intensity"))?;
                 if direction.length_squared() == 0.0 {
                     return Err(format!("{what}: direction is zero"));
                 }
@@ -120,8 +143,8 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
             } => {
                 finite3(position, &what)?;
                 finite3(direction, &what)?;
-                finite3(color, &what)?;
-                finite(intensity, &what)?;
+                non_negative3(color, &format!("{what} color"))?;
+                non_negative(intensity, &format!("{what} intensity"))?;
                 if direction.length_squared() == 0.0 {
                     return Err(format!("{what}: direction is zero"));
                 }
@@ -138,9 +161,9 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
         }
     }
     match scene.environment {
-        Environment::Color(c) => finite3(c, "environment color")?,
+        Environment::Color(c) => non_negative3(c, "environment color")?,
         Environment::LatLong { texture, intensity } => {
-            finite(intensity, "environment intensity")?;
+            non_negative(intensity, "environment intensity")?;
             if texture >= scene.textures.len() {
                 return Err(format!("environment texture index {texture} out of range"));
             }
@@ -225,9 +248,9 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
 
 fn check_material(m: &Material, texture_count: usize) -> Result<(), String> {
     let what = format!("material '{}'", m.name);
-    finite3(m.base_color, &what)?;
-    finite3(m.attenuation_color, &what)?;
-    finite3(m.emission, &what)?;
+    non_negative3(m.base_color, &format!("{what} base_color"))?;
+    non_negative3(m.attenuation_color, &format!("{what} attenuation_color"))?;
+    non_negative3(m.emission, &format!("{what} emission"))?;
     for (name, value) in [
         ("specular", m.specular),
         ("shininess", m.shininess),
@@ -322,6 +345,22 @@ mod tests {
         let mut s = base();
         s.materials[0].ior = 0.0;
         assert!(validate(&s).unwrap_err().to_string().contains("ior"));
+        let mut s = base();
+        s.materials[0].emission = Vec3::new(1.0, -0.5, 1.0);
+        assert!(validate(&s)
+            .unwrap_err()
+            .to_string()
+            .contains("emission [1, -0.5, 1] has a negative component"));
+        let mut s = base();
+        s.lights.push(Light::Point {
+            position: Vec3::Y,
+            color: Vec3::ONE,
+            intensity: -3.0,
+        });
+        assert!(validate(&s)
+            .unwrap_err()
+            .to_string()
+            .contains("light 0 intensity -3 is negative"));
         let mut s = base();
         s.meshes.push(TriangleMesh {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(f32::NAN, 0.0, 0.0)],

@@ -1,0 +1,265 @@
+//! OBJ and MTL files as real exporters write them (Debian's `assimp-testmodels`): Latin-1
+//! material names, names with spaces, an MTL material without a name. Each renders with its
+//! materials, and malformed OBJ/MTL files are refused with the line that is wrong. The
+//! assimp models must be installed (package `assimp-testmodels`): without them these tests
+//! fail.
+
+mod common;
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use common::*;
+use conetrace::scene::load::load_scene;
+
+const OBJ_MODELS: &str = "/usr/share/assimp/models/OBJ";
+
+/// The path of an assimp OBJ model; panics (fails the test) when the package is missing.
+fn assimp_model(name: &str) -> PathBuf {
+    let path = Path::new(OBJ_MODELS).join(name);
+    assert!(
+        path.is_file(),
+        "{} is missing: install the package assimp-testmodels",
+        path.display()
+    );
+    path
+}
+
+/// Renders `file` at 48x48 in a fresh directory; asserts exit 0 and returns what it printed
+/// (the summary with its notes) and the distinct albedo colours of the image (rounded to 1/1000).
+fn render_albedos(file: &Path) -> (String, BTreeSet<[i32; 3]>) {
+    let dir = temp_dir();
+    let out = conetrace()
+        .args([
+            "render".as_ref(),
+            file.as_os_str(),
+            "-o".as_ref(),
+            "out.exr".as_ref(),
+            "--width".as_ref(),
+            "48".as_ref(),
+            "--height".as_ref(),
+            "48".as_ref(),
+        ])
+        .current_dir(dir.path())
+        .output()
+        .expect("the conetrace binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(0), "{}: {stderr}", file.display());
+    // The summary and its notes go to standard output.
+    let summary = String::from_utf8_lossy(&out.stdout).into_owned() + &stderr;
+    let image = read_exr(&dir.path().join("out.exr"));
+    let (r, g, b) = (
+        image.channel("albedo.R"),
+        image.channel("albedo.G"),
+        image.channel("albedo.B"),
+    );
+    let round = |x: f32| (x * 1000.0).round() as i32;
+    let colours = (0..r.len())
+        .map(|i| [round(r[i]), round(g[i]), round(b[i])])
+        .collect();
+    (summary, colours)
+}
+
+#[test]
+fn latin1_material_names_keep_their_materials() {
+    let path = assimp_model("regr01.obj");
+    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    // `usemtl Terraind\xE6k` (Latin-1 byte E6) finds `newmtl Terraind\xE6k` and its Kd.
+    let terrain = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "Terraind\u{e6}k")
+        .unwrap_or_else(|| {
+            let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+            panic!("no material 'Terraind\u{e6}k' among {names:?}")
+        });
+    assert_eq!(
+        scene.materials[terrain].base_color,
+        glam::Vec3::new(0.4, 0.3, 0.3)
+    );
+    assert!(scene.meshes.iter().any(|m| m.material == terrain));
+    assert!(
+        scene.materials.iter().all(|m| m.name != "default"),
+        "a face fell back to the default material"
+    );
+    let (summary, albedos) = render_albedos(&path);
+    assert!(!summary.contains("not loaded"), "{summary}");
+    // Several of the library's diffuse colours are seen, not the default grey.
+    let library_colours = [
+        [200, 200, 200], // Base, Sill
+        [800, 600, 400], // Door
+        [900, 900, 700], // Floor
+        [500, 700, 400], // Site
+        [500, 0, 0],     // Wall-out
+        [800, 700, 500], // Wall-inner
+        [400, 300, 300], // Ridging, Terraind\xE6k
+        [900, 900, 600], // Roof
+        [800, 500, 200], // Rafter
+    ];
+    let seen: Vec<_> = library_colours
+        .iter()
+        .filter(|c| albedos.contains(*c))
+        .collect();
+    assert!(
+        seen.len() >= 2,
+        "albedos {albedos:?} show only {seen:?} of the MTL colours"
+    );
+    assert!(!albedos.contains(&[800, 800, 800]), "default grey seen");
+}
+
+#[test]
+fn material_names_with_spaces_and_latin1_libraries_load() {
+    // box_spaces.mtl holds a Latin-1 name too: before, the whole library was dropped.
+    let path = assimp_model("box_mat_with_spaces.obj");
+    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+    assert!(names.contains(&"Terraind\u{e6}k"), "{names:?}");
+    let used: BTreeSet<&str> = scene
+        .meshes
+        .iter()
+        .map(|m| scene.materials[m.material].name.as_str())
+        .collect();
+    assert_eq!(
+        used,
+        BTreeSet::from(["Material name with many, many spaces"]),
+        "{names:?}"
+    );
+    let (summary, albedos) = render_albedos(&path);
+    assert!(!summary.contains("not loaded"), "{summary}");
+    assert!(albedos.contains(&[200, 200, 200]), "{albedos:?}");
+    assert!(!albedos.contains(&[800, 800, 800]), "{albedos:?}");
+}
+
+#[test]
+fn an_empty_material_name_gets_the_default_material_and_a_note() {
+    let path = assimp_model("empty_mat.obj");
+    let (summary, albedos) = render_albedos(&path);
+    assert!(
+        summary.contains("empty_mat.mtl: line 3: material without a name"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("empty_mat.obj: line 233: usemtl without a material name"),
+        "{summary}"
+    );
+    assert!(albedos.contains(&[800, 800, 800]), "{albedos:?}");
+}
+
+/// Renders `file` in `dir` and asserts the failure contract: exit 2, one line containing
+/// every part of `expected`, no output.
+fn assert_refused(dir: &Path, file: &str, expected: &[&str]) {
+    let out = run_in(dir, &["render", file, "-o", "out.exr", "--quiet"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{file}: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{file}: {stderr:?}");
+    for part in expected {
+        assert!(
+            lines[0].contains(part),
+            "{file}: '{}' lacks '{part}'",
+            lines[0]
+        );
+    }
+    assert!(!dir.join("out.exr").exists() && !dir.join("out.png").exists());
+}
+
+const TRIANGLE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+
+#[test]
+fn malformed_obj_lines_are_named() {
+    let cases = [
+        // (OBJ text, what the message must contain)
+        (
+            format!("{TRIANGLE}v 1 x 0\nf 1 2 3\n"),
+            "m.obj: line 4: position parse error",
+        ),
+        (
+            format!("{TRIANGLE}vn 0 1\nf 1 2 3\n"),
+            "m.obj: line 4: normal parse error",
+        ),
+        (
+            format!("{TRIANGLE}f 1 2 a\n"),
+            "m.obj: line 4: face parse error",
+        ),
+        (
+            format!("{TRIANGLE}f 1 2 3\n\nf 1 2 7\n"),
+            "m.obj: line 6: face refers to vertex 7, but the file has 3 vertices",
+        ),
+        (
+            format!("{TRIANGLE}f 1 2 -4\n"),
+            "m.obj: line 4: face refers to vertex -4",
+        ),
+        (
+            format!("{TRIANGLE}vt 0 0\nf 1/2 2/1 3/1\n"),
+            "m.obj: line 5: face refers to texture coordinate 2",
+        ),
+        (
+            format!("{TRIANGLE}f\nf 1 2 3\n"),
+            "m.obj: line 4: face without vertices",
+        ),
+        (
+            format!("{TRIANGLE}f 1 0 2\n"),
+            "m.obj: line 4: face refers to vertex 0",
+        ),
+    ];
+    for (text, expected) in cases {
+        let dir = temp_dir();
+        write(dir.path(), "m.obj", &text);
+        assert_refused(dir.path(), "m.obj", &[expected]);
+    }
+}
+
+#[test]
+fn malformed_mtl_lines_are_named() {
+    let obj = format!("mtllib m.mtl\n{TRIANGLE}usemtl a\nf 1 2 3\n");
+    let cases = [
+        (
+            "newmtl a\nKd 1 0\n",
+            "m.mtl: line 2: 'Kd 1 0' needs 1 or 3 numbers",
+        ),
+        (
+            "newmtl a\n\nKd 1 x 0\n",
+            "m.mtl: line 3: material parse error",
+        ),
+        ("newmtl a\nNs many\n", "m.mtl: line 2: material parse error"),
+        (
+            "newmtl a\nillum high\n",
+            "m.mtl: line 2: material parse error",
+        ),
+        (
+            "newmtl a\nKe 1 -1 1\n",
+            "m.mtl: line 2: 'Ke 1 -1 1': a colour component is negative",
+        ),
+        (
+            "newmtl a\nKs 2 2 2\n",
+            "m.mtl: line 2: 'Ks 2 2 2': a specular weight lies above 1",
+        ),
+        ("newmtl a\nTr half\n", "m.mtl: line 2: bad Tr value 'half'"),
+        (
+            "# textures\nnewmtl a\nKd 1 1 1\nmap_Kd missing.png\n",
+            "m.mtl: line 4: texture 'missing.png'",
+        ),
+    ];
+    for (mtl, expected) in cases {
+        let dir = temp_dir();
+        write(dir.path(), "m.obj", &obj);
+        write(dir.path(), "m.mtl", mtl);
+        assert_refused(dir.path(), "m.obj", &[expected]);
+    }
+}
+
+#[test]
+fn one_number_colours_mean_grey() {
+    // The MTL format lets `Kd r` stand for `Kd r r r`; `tobj` alone panics on it.
+    let dir = temp_dir();
+    write(
+        dir.path(),
+        "m.obj",
+        &format!("mtllib m.mtl\n{TRIANGLE}usemtl a\nf 1 2 3\n"),
+    );
+    write(dir.path(), "m.mtl", "newmtl a\nKd 0.25\nKs 0\n");
+    let scene = load_scene(&dir.path().join("m.obj")).unwrap_or_else(|e| panic!("{e}"));
+    let a = scene.materials.iter().find(|m| m.name == "a").unwrap();
+    assert_eq!(a.base_color, glam::Vec3::splat(0.25));
+    assert_eq!(a.specular, 0.0);
+}
