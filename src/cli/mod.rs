@@ -83,7 +83,11 @@ pub enum BenchCommand {
 /// A render whose ray traversal failed: an internal failure (exit status 1) with the
 /// failure's message, never an image of misses.
 pub fn render_failed(error: crate::render::RenderError) -> CommandError {
-    CommandError::internal(error.to_string())
+    match error {
+        // Not the program's fault: the input asks for more than the machine has.
+        crate::render::RenderError::OutOfMemory { .. } => CommandError::bad_input(error.to_string()),
+        crate::render::RenderError::Traversal { .. } => CommandError::internal(error.to_string()),
+    }
 }
 
 /// The worker threads of a command: `threads` of them (all cores when `None`), each with

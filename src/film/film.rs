@@ -137,6 +137,29 @@ impl Film {
         }
     }
 
+    /// Like [`Film::new`], but a film too large to allocate is an error, not an abort.
+    pub fn try_new(width: u32, height: u32, layers: &[Layer]) -> Result<Film, String> {
+        let layout = FilmLayout::new(layers);
+        let len = (layout.channel_count() as u64)
+            .checked_mul(u64::from(width) * u64::from(height))
+            .and_then(|n| usize::try_from(n).ok())
+            .ok_or_else(|| format!("a {width}x{height} film does not fit in memory"))?;
+        let mut planes = Vec::new();
+        planes.try_reserve_exact(len).map_err(|_| {
+            format!(
+                "cannot allocate the {width}x{height} film ({} bytes)",
+                len as u64 * 4
+            )
+        })?;
+        planes.resize(len, 0.0);
+        Ok(Film {
+            width,
+            height,
+            layout,
+            planes,
+        })
+    }
+
     #[inline]
     pub fn width(&self) -> u32 {
         self.width
@@ -384,6 +407,16 @@ mod tests {
 
     fn pattern(x: u32, y: u32, c: usize) -> f32 {
         (x * 1000 + y) as f32 + c as f32 * 0.25
+    }
+
+    #[test]
+    fn a_film_too_large_to_allocate_is_an_error() {
+        // More bytes than an address space holds: refused without touching memory.
+        let message = Film::try_new(u32::MAX, u32::MAX, &Layer::ALL).err();
+        let message = message.expect("a film larger than the address space was allocated");
+        assert!(message.contains("4294967295x4294967295"), "{message}");
+        let small = Film::try_new(3, 2, &[Layer::Color]).unwrap();
+        assert_eq!(small.channel("R").unwrap().len(), 6);
     }
 
     #[test]

@@ -165,6 +165,9 @@ pub enum RenderError {
         scene: String,
         source: crate::embree::EmbreeError,
     },
+    /// The film's memory could not be allocated.
+    #[error("{scene}: {message}")]
+    OutOfMemory { scene: String, message: String },
 }
 
 /// Render `context` with `integrator` into a new film; `Err` if any ray traversal failed
@@ -178,7 +181,11 @@ pub fn render(
     let _ = context.tracer.take_failure();
     let options = &context.options;
     let tiles = work_tiles(options.width, options.height);
-    let mut film = Film::new(options.width, options.height, &film_layers(options.aovs));
+    let mut film = Film::try_new(options.width, options.height, &film_layers(options.aovs))
+        .map_err(|message| RenderError::OutOfMemory {
+            scene: context.scene.source.clone(),
+            message,
+        })?;
     let finished_count = AtomicUsize::new(0);
     let totals = Mutex::new(WorkerState::default());
     let count_tiles = options.count_tiles;
