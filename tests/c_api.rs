@@ -151,6 +151,15 @@ fn c_example_renders_an_exr_with_the_expected_channels() {
     assert!(out.contains("rendered 96x54"), "{out}");
     let (film, attributes) = read_exr(&exr).expect("the example wrote a readable EXR");
     assert_eq!((film.width(), film.height()), (96, 54));
+    // The standard camera matrices (4x4 floats) are in the header, as `render` writes them.
+    let bytes = std::fs::read(&exr).unwrap();
+    for attribute in [&b"worldToCamera\0m44f\0"[..], &b"worldToNDC\0m44f\0"[..]] {
+        assert!(
+            bytes.windows(attribute.len()).any(|w| w == attribute),
+            "{} missing",
+            String::from_utf8_lossy(attribute)
+        );
+    }
     let names = film.channel_names();
     for expected in [
         "R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z", "albedo.R", "albedo.G", "albedo.B", "uv.U",

@@ -967,6 +967,7 @@ fn a_render_whose_alpha_filter_panics_fails_with_the_message() {
                 depth.len()
             );
         }
+        Err(other) => panic!("expected a traversal failure, got {other}"),
     }
     // The context renders again (the failure is the render's, not the context's) and fails
     // the same way.

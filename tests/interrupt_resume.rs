@@ -342,8 +342,15 @@ fn resume_names_what_changed_and_accepts_the_same_scene_by_another_path() {
     std::fs::write(&texture_file, &bytes).unwrap();
     let (status, stderr) = resume_with("scenes/default.toml");
     assert_eq!(status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("texture") && stderr.contains("changed"), "{stderr}");
-    std::fs::copy(assets.join(texture_file.file_name().unwrap()), &texture_file).unwrap();
+    assert!(
+        stderr.contains("texture") && stderr.contains("changed"),
+        "{stderr}"
+    );
+    std::fs::copy(
+        assets.join(texture_file.file_name().unwrap()),
+        &texture_file,
+    )
+    .unwrap();
 
     // The unchanged scene given by its absolute path is the same scene.
     let (status, stderr) = resume_with(scene.to_str().unwrap());

@@ -24,12 +24,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const PYTHON: &str = "/usr/bin/python3";
-const SETUP_HINT: &str =
-    "run `bash scripts/setup.sh` (installs python3-openimageio and openimageio-tools)";
-const FILTERS: [&str; 4] = ["closest", "bilinear", "trilinear", "aniso"];
-const WRAPS: [&str; 4] = ["periodic", "clamp", "black", "mirror"];
-const MAX_ANISO: f64 = 16.0;
+#[path = "oiio/lookup_support.rs"]
+mod lookup_support;
+use lookup_support::*;
 
 /// Largest share of the queries the rounding-boundary detector may flag (35 of 223, 16 %,
 /// with today's query sets: the exact aspect ratios 2, 3, 4, 8 and 16 sit on boundaries).
@@ -40,79 +37,6 @@ const MAX_BOUNDARY_MISMATCHES: usize = 4;
 /// Largest exempted difference: a probe count one off (n vs n + 1 probes, n >= 2) moves an
 /// average of values in [0, 1] by at most 1 / (n + 1) <= 1/3.
 const MAX_BOUNDARY_DIFF: f64 = 1.0 / 3.0;
-
-/// Directory of this file (works in the final crate and in a crate that includes
-/// this file by absolute path).
-fn tests_dir() -> PathBuf {
-    let f = Path::new(file!());
-    let abs = if f.is_absolute() {
-        f.to_path_buf()
-    } else {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join(f)
-    };
-    abs.parent().expect("test file has a parent").to_path_buf()
-}
-
-fn script(name: &str) -> PathBuf {
-    tests_dir().join("oiio").join(name)
-}
-
-fn require_oiio() {
-    let ok = Command::new(PYTHON)
-        .args(["-c", "import OpenImageIO, numpy"])
-        .status()
-        .map(|s| s.success())
-        .unwrap_or(false);
-    assert!(
-        ok,
-        "{PYTHON} cannot import OpenImageIO (and numpy): {SETUP_HINT}"
-    );
-    let maketx = Command::new("maketx").arg("--help").output();
-    assert!(maketx.is_ok(), "maketx not found: {SETUP_HINT}");
-}
-
-fn run(cmd: &mut Command) -> String {
-    let out = cmd
-        .output()
-        .unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
-    assert!(
-        out.status.success(),
-        "{cmd:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-/// Small deterministic generator (64-bit LCG), so the test data never changes.
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
-
-/// High-frequency RGBA content: per-texel noise, one-texel stripes, a checker.
-fn texels(w: u32, h: u32, seed: u64) -> Vec<[f32; 4]> {
-    let mut rng = Lcg(seed);
-    (0..w * h)
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            [
-                rng.next() as f32,
-                (x % 2) as f32 * 0.8 + 0.1,
-                ((x / 3 + y / 2) % 2) as f32,
-                0.25 + 0.75 * rng.next() as f32,
-            ]
-        })
-        .collect()
-}
 
 struct Case {
     name: &'static str,
@@ -159,144 +83,6 @@ fn write_texture(dir: &Path, case: &Case) -> (PathBuf, PathBuf) {
         .arg(&dst)
         .args(["--filter", "box"]));
     (src, dst)
-}
-
-/// A few hundred queries: magnification, isotropic minification over all levels,
-/// anisotropy 2..64 at several angles, footprints across the wrap boundary, zero
-/// derivatives.
-fn queries(w: u32, h: u32, seed: u64) -> Vec<[f64; 6]> {
-    let mut rng = Lcg(seed);
-    let texel = 1.0 / w.min(h) as f64;
-    let mut q = Vec::new();
-    let rot = |major: f64, minor: f64, angle: f64| {
-        let (s, c) = angle.sin_cos();
-        [major * c, major * s, -minor * s, minor * c]
-    };
-    let mut push = |rng: &mut Lcg, d: [f64; 4], near_edge: bool| {
-        let (s, t) = if near_edge {
-            let side = |rng: &mut Lcg| {
-                if rng.next() < 0.5 {
-                    rng.range(-0.02, 0.02)
-                } else {
-                    rng.range(0.98, 1.02)
-                }
-            };
-            (side(rng), side(rng))
-        } else {
-            (rng.range(0.0, 1.0), rng.range(0.0, 1.0))
-        };
-        q.push([s, t, d[0], d[1], d[2], d[3]]);
-    };
-    // Zero derivatives.
-    for _ in 0..10 {
-        push(&mut rng, [0.0; 4], false);
-    }
-    // Magnification.
-    for _ in 0..40 {
-        let m = rng.range(0.05, 0.95) * texel;
-        let a = rng.range(0.0, std::f64::consts::PI);
-        let squash = rng.range(0.3, 1.0);
-        push(&mut rng, rot(m, m * squash, a), false);
-    }
-    // Isotropic minification across every level (and beyond the coarsest).
-    let levels = (w.max(h) as f64).log2().ceil() as i32 + 1;
-    for k in 0..=levels {
-        for _ in 0..8 {
-            let m = texel * 2f64.powf(k as f64 + rng.range(-0.5, 0.5));
-            let a = rng.range(0.0, std::f64::consts::PI);
-            push(&mut rng, rot(m, m, a), false);
-        }
-    }
-    // Anisotropy 2..64 at several angles.
-    for ratio in [2.0, 3.0, 4.0, 8.0, 16.0, 32.0, 64.0] {
-        for deg in [0.0, 15.0, 30.0, 45.0, 60.0, 90.0, 135.0] {
-            let minor = texel * 2f64.powf(rng.range(-1.0, 3.0));
-            push(
-                &mut rng,
-                rot(minor * ratio, minor, f64::to_radians(deg)),
-                false,
-            );
-        }
-    }
-    // Footprints crossing the wrap boundary.
-    for _ in 0..60 {
-        let minor = texel * 2f64.powf(rng.range(-1.0, 4.0));
-        let ratio = rng.range(1.0, 20.0);
-        let a = rng.range(0.0, std::f64::consts::PI);
-        push(&mut rng, rot(minor * ratio, minor, a), true);
-    }
-    q
-}
-
-fn write_queries(path: &Path, q: &[[f64; 6]]) {
-    let mut text = String::from("s,t,dsdx,dtdx,dsdy,dtdy\n");
-    for r in q {
-        // f32 values printed exactly, so both sides read the same bits.
-        let f: Vec<String> = r.iter().map(|v| format!("{}", *v as f32)).collect();
-        text.push_str(&f.join(","));
-        text.push('\n');
-    }
-    std::fs::write(path, text).expect("write queries");
-}
-
-fn parse_rgba(text: &str, what: &str) -> Vec<[f64; 4]> {
-    let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("r,g,b,a"), "{what}: bad header");
-    lines
-        .filter(|l| !l.is_empty())
-        .map(|l| {
-            let v: Vec<f64> = l
-                .split(',')
-                .map(|x| {
-                    x.parse()
-                        .unwrap_or_else(|_| panic!("{what}: bad number {x}"))
-                })
-                .collect();
-            [v[0], v[1], v[2], v[3]]
-        })
-        .collect()
-}
-
-/// True when an f32 computation of OIIO's discontinuous steps (probe count,
-/// magnification aspect rule) could land on the other side than an f64 one.
-fn on_rounding_boundary(q: &[f64; 6], w: u32, h: u32) -> bool {
-    let [_, _, dsdx, dtdx, dsdy, dtdy] = q.map(|v| v as f32 as f64);
-    let a = dtdx * dtdx + dtdy * dtdy;
-    let b = -2.0 * (dsdx * dtdx + dsdy * dtdy);
-    let c = dsdx * dsdx + dsdy * dsdy;
-    if a + c < 1e-14 {
-        return false; // zero derivatives: point sample
-    }
-    let root = (a - c).hypot(b);
-    let major = ((a + c + root) * 0.5).max(0.0).sqrt();
-    let minor = ((a + c - root) * 0.5).max(0.0).sqrt();
-    let raw = if minor > 0.0 { major / minor } else { 1e6 };
-    // n = max(1, int(2 aspect - 1)) with aspect = min(raw, limit) can flip when
-    // 2 aspect - 1 is within rounding of a whole number >= 2 (counts below 2 cannot
-    // flip), including raw ~ limit; a raw aspect clearly above the limit is exact.
-    let flips = |raw: f64| {
-        if raw > MAX_ANISO * (1.0 + 1e-4) {
-            return false;
-        }
-        let x = 2.0 * raw.min(MAX_ANISO) - 1.0;
-        x > 1.5 && (x - x.round()).abs() < 1e-4 * x
-    };
-    let mut boundary = flips(raw);
-    // Magnification: aspect recomputed from the major axis when minor < half a texel.
-    let r = w.max(h) as f64;
-    let (maj_c, min_c) = if raw > MAX_ANISO {
-        let m = (major + minor * MAX_ANISO) * 0.5;
-        (m, m / MAX_ANISO)
-    } else {
-        (major, minor)
-    };
-    if min_c * w.min(h) as f64 <= 1.0 {
-        boundary |= (min_c * r - 0.5).abs() < 1e-5;
-        if min_c * r < 0.5 {
-            boundary |= flips(maj_c * r * 2.0);
-        }
-    }
-    boundary
 }
 
 fn crosscheck(case: Case) {
@@ -392,27 +178,6 @@ fn crosscheck(case: Case) {
         failures.len(),
         failures[..failures.len().min(20)].join("\n")
     );
-}
-
-/// Levels as written by `oiio_levels.py`.
-fn read_level_dump(path: &Path) -> Vec<(u32, u32, Vec<f32>)> {
-    let bytes = std::fs::read(path).expect("level dump");
-    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().expect("4 bytes"));
-    let n = u32_at(0) as usize;
-    let mut off = 4;
-    let mut levels = Vec::new();
-    for _ in 0..n {
-        let (w, h) = (u32_at(off), u32_at(off + 4));
-        off += 8;
-        let count = (w * h * 4) as usize;
-        let vals = bytes[off..off + 4 * count]
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
-            .collect();
-        off += 4 * count;
-        levels.push((w, h, vals));
-    }
-    levels
 }
 
 fn compare_levels(case: Case) {

@@ -70,22 +70,6 @@ impl Case {
     }
 }
 
-/// High-frequency content: per-texel noise, one-texel stripes, a checker, noisy alpha.
-fn texels(w: u32, h: u32, seed: u64) -> Vec<[f32; 4]> {
-    let mut rng = Lcg(seed);
-    (0..w * h)
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            [
-                rng.next() as f32,
-                (x % 2) as f32 * 0.8 + 0.1,
-                ((x / 3 + y / 2) % 2) as f32,
-                0.25 + 0.75 * rng.next() as f32,
-            ]
-        })
-        .collect()
-}
-
 /// Writes the source image, runs maketx, returns the `.tx` path.
 fn make_tx(dir: &Path, case: &Case) -> PathBuf {
     let (w, h) = (case.width, case.height);

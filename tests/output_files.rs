@@ -44,7 +44,10 @@ fn bad_output_paths_are_refused_before_any_work_and_nothing_is_written() {
         (&["-o", "out.jpg"], "out.jpg"),
         (&["-o", "same.exr", "--png", "same.exr"], "same.exr"),
         (&["-o", "a.exr", "--stats", "a.png"], "a.png"),
-        (&["-o", "a.exr", "--stats", "blocker/stats.json"], "blocker/stats.json"),
+        (
+            &["-o", "a.exr", "--stats", "blocker/stats.json"],
+            "blocker/stats.json",
+        ),
         (&["-o", "a.exr", "--png", "x.png", "--no-png"], "--no-png"),
     ];
     for (args, named) in cases {
@@ -85,7 +88,9 @@ fn the_exr_png_and_stats_of_two_concurrent_runs_are_never_mixed() {
         }
         // The PNG is the EXR's colour, tone-mapped: both come from the same run.
         let (film, _) = read_film(&dir.path().join("shared.exr")).unwrap();
-        let png = image::open(dir.path().join("shared.png")).unwrap().to_rgb8();
+        let png = image::open(dir.path().join("shared.png"))
+            .unwrap()
+            .to_rgb8();
         let mut rgba = [0.0f32; 4];
         let mut mismatched = 0;
         for (x, y, pixel) in png.enumerate_pixels() {
@@ -95,7 +100,10 @@ fn the_exr_png_and_stats_of_two_concurrent_runs_are_never_mixed() {
                 mismatched += 1;
             }
         }
-        assert_eq!(mismatched, 0, "round {round}: PNG pixels not from the EXR's run");
+        assert_eq!(
+            mismatched, 0,
+            "round {round}: PNG pixels not from the EXR's run"
+        );
         let stats: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.path().join("shared.json")).unwrap())
                 .unwrap();
@@ -105,7 +113,10 @@ fn the_exr_png_and_stats_of_two_concurrent_runs_are_never_mixed() {
         let at = find(&header, marker.as_bytes()).expect("the EXR records its spp");
         let value_at = at + marker.len() + 4;
         let header_spp = (header[value_at] - b'0') as u64;
-        assert_eq!(spp, header_spp, "round {round}: statistics and EXR from different runs");
+        assert_eq!(
+            spp, header_spp,
+            "round {round}: statistics and EXR from different runs"
+        );
     }
 }
 
@@ -125,9 +136,15 @@ fn identical_renders_give_identical_bytes_with_standard_camera_matrices() {
     assert!(a == b, "two identical renders wrote different bytes");
     // Standard OpenEXR camera attributes, as 4x4 float matrices ("m44f").
     for attribute in ["worldToCamera\0m44f\0", "worldToNDC\0m44f\0"] {
-        assert!(find(&a, attribute.as_bytes()).is_some(), "{attribute:?} missing");
+        assert!(
+            find(&a, attribute.as_bytes()).is_some(),
+            "{attribute:?} missing"
+        );
     }
-    assert!(find(&a, b"conetrace.settings").is_none(), "Debug-formatted settings remain");
+    assert!(
+        find(&a, b"conetrace.settings").is_none(),
+        "Debug-formatted settings remain"
+    );
     assert!(find(&a, b"conetrace.option.filter\0string\0").is_some());
 }
 
@@ -149,7 +166,10 @@ fn a_symlinked_output_stays_a_link_and_keeps_its_permissions() {
     assert!(link.file_type().is_symlink());
     let real = std::fs::metadata(dir.path().join("store/real.exr")).unwrap();
     assert_eq!(real.permissions().mode() & 0o777, 0o604);
-    assert!(real.len() > 100, "the link's target was not replaced by the render");
+    assert!(
+        real.len() > 100,
+        "the link's target was not replaced by the render"
+    );
 }
 
 #[test]
@@ -165,7 +185,10 @@ fn the_command_line_explains_itself() {
         "clamp, reinhard",
         "--resume",
     ] {
-        assert!(help.contains(expected), "render --help lacks {expected:?}:\n{help}");
+        assert!(
+            help.contains(expected),
+            "render --help lacks {expected:?}:\n{help}"
+        );
     }
     let texture_help = run_in(dir.path(), &["sample-texture", "--help"]);
     let texture_help = String::from_utf8_lossy(&texture_help.stdout).into_owned();
@@ -184,7 +207,11 @@ fn the_command_line_explains_itself() {
     assert_eq!(bench.status.code(), Some(2), "{}", stderr(&bench));
     assert!(stderr(&bench).contains("-o"), "{}", stderr(&bench));
 
-    write(dir.path(), "q.csv", "s,t,dsdx,dtdx,dsdy,dtdy\n0.5,0.5,0,0,0,0\n");
+    write(
+        dir.path(),
+        "q.csv",
+        "s,t,dsdx,dtdx,dsdy,dtdy\n0.5,0.5,0,0,0,0\n",
+    );
     let texture = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textures/checker.png");
     let zero = run_in(
         dir.path(),

@@ -148,7 +148,10 @@ mod tests {
             let eye = times(camera.eye(), &m);
             assert!(eye[..3].iter().all(|c| c.abs() < 1e-5), "{eye:?}");
             let ahead = times(camera.eye() + camera.forward() * 2.0, &m);
-            assert!((ahead[2] + 2.0).abs() < 1e-5 && ahead[0].abs() < 1e-5, "{ahead:?}");
+            assert!(
+                (ahead[2] + 2.0).abs() < 1e-5 && ahead[0].abs() < 1e-5,
+                "{ahead:?}"
+            );
         }
     }
 }

@@ -58,6 +58,9 @@ pub(crate) struct ImageObject {
     pub finished_tiles: u32,
     pub tonemap: ToneMap,
     pub exposure: f32,
+    /// The camera's standard OpenEXR matrices (see `camera::matrices`), when it had one.
+    pub world_to_camera: Option<[[f32; 4]; 4]>,
+    pub world_to_ndc: Option<[[f32; 4]; 4]>,
 }
 
 /// Everything a handle can name.

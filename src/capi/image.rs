@@ -178,6 +178,8 @@ pub unsafe extern "C" fn ct_image_write_exr(image: CtImage, path: *const c_char)
             software: Some(format!("conetrace {}", env!("CARGO_PKG_VERSION"))),
             incomplete: !object.complete,
             finished_tiles: Some(object.finished_tiles),
+            world_to_camera: object.world_to_camera,
+            world_to_ndc: object.world_to_ndc,
             ..ExrAttributes::default()
         };
         film::write_exr(&object.film, &path, &attributes)

@@ -248,6 +248,10 @@ pub unsafe extern "C" fn ct_render(
         let object = handles::scene(scene)?;
         let scene = object.scene.clone();
         let render_options = render_options(&c_options, &scene)?;
+        // The camera's matrices go into the image's EXR header.
+        let camera = scene.camera.as_ref().map(|desc| {
+            crate::camera::Camera::new(desc, render_options.width, render_options.height)
+        });
 
         let cancel = Arc::new(AtomicBool::new(false));
         let textures = c_options.texture_callback.map(|callback| {
@@ -350,6 +354,8 @@ pub unsafe extern "C" fn ct_render(
             finished_tiles: result.finished_tiles.iter().filter(|&&f| f).count() as u32,
             tonemap: scene.settings.tonemap,
             exposure: scene.settings.exposure,
+            world_to_camera: camera.map(|c| c.world_to_camera_matrix()),
+            world_to_ndc: camera.map(|c| c.world_to_ndc_matrix()),
         };
         let handle = CtImage {
             id: handles::insert(Object::Image(Arc::new(image))),

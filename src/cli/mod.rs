@@ -85,7 +85,9 @@ pub enum BenchCommand {
 pub fn render_failed(error: crate::render::RenderError) -> CommandError {
     match error {
         // Not the program's fault: the input asks for more than the machine has.
-        crate::render::RenderError::OutOfMemory { .. } => CommandError::bad_input(error.to_string()),
+        crate::render::RenderError::OutOfMemory { .. } => {
+            CommandError::bad_input(error.to_string())
+        }
         crate::render::RenderError::Traversal { .. } => CommandError::internal(error.to_string()),
     }
 }

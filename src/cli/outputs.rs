@@ -81,9 +81,8 @@ fn identity(path: &Path) -> PathBuf {
 /// Checks that a file can be created at `path` (what `what` calls it in messages): its
 /// nearest existing ancestor directory accepts a new file, and `path` is not a directory.
 fn check_writable(path: &Path, what: &str) -> Result<(), CommandError> {
-    let fail = |problem: String| {
-        CommandError::bad_input(format!("{}: {what}: {problem}", path.display()))
-    };
+    let fail =
+        |problem: String| CommandError::bad_input(format!("{}: {what}: {problem}", path.display()));
     let target = resolve_symlinks(path);
     if target.file_name().is_none() {
         return Err(fail("not a file name".into()));
@@ -112,7 +111,11 @@ fn check_writable(path: &Path, what: &str) -> Result<(), CommandError> {
     }
     // Permission bits do not tell (root, ACLs, read-only mounts): try it.
     let probe = dir.join(format!(".conetrace-probe-{}", std::process::id()));
-    match fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+    match fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
         Ok(_) => {
             let _ = fs::remove_file(&probe);
             Ok(())
@@ -153,7 +156,11 @@ impl OutputPlan {
         let png = if args.no_png {
             None
         } else {
-            Some(args.png.clone().unwrap_or_else(|| exr.with_extension("png")))
+            Some(
+                args.png
+                    .clone()
+                    .unwrap_or_else(|| exr.with_extension("png")),
+            )
         };
         if let Some(png) = &png {
             if !has_extension(png, "png") {
@@ -172,6 +179,30 @@ impl OutputPlan {
         };
         plan.check()?;
         Ok(plan)
+    }
+
+    /// Refuses outputs that would overwrite one of the render's inputs (the scene file, a
+    /// texture): the render would destroy what it reads.
+    pub fn check_inputs<'a>(
+        &self,
+        inputs: impl IntoIterator<Item = &'a Path>,
+    ) -> Result<(), CommandError> {
+        let outputs: Vec<(&str, &Path, PathBuf)> = self
+            .named()
+            .into_iter()
+            .map(|(option, path)| (option, path, identity(path)))
+            .collect();
+        for input in inputs {
+            let input_identity = identity(input);
+            if let Some((option, path, _)) = outputs.iter().find(|o| o.2 == input_identity) {
+                return Err(CommandError::bad_input(format!(
+                    "{}: {option} would overwrite {}, an input of the render",
+                    path.display(),
+                    input.display()
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// Every output with its option name.
@@ -227,8 +258,14 @@ mod tests {
 
     #[test]
     fn partial_files_sit_beside_their_outputs() {
-        assert_eq!(partial_path(Path::new("a/keep.exr")), PathBuf::from("a/keep.partial.exr"));
-        assert_eq!(partial_path(Path::new("s.json")), PathBuf::from("s.partial.json"));
+        assert_eq!(
+            partial_path(Path::new("a/keep.exr")),
+            PathBuf::from("a/keep.partial.exr")
+        );
+        assert_eq!(
+            partial_path(Path::new("s.json")),
+            PathBuf::from("s.partial.json")
+        );
     }
 
     #[test]
@@ -239,18 +276,34 @@ mod tests {
         assert!(message(&["-o", &at("out.png")]).contains(".exr"));
         assert!(message(&["-o", &at("out.jpg")]).contains(".exr"));
         assert!(message(&["-o", &at("a.exr"), "--png", &at("a.jpg")]).contains(".png"));
-        let same = message(&["-o", &at("a.exr"), "--png", &at("b.png"), "--stats", &at("b.png")]);
+        let same = message(&[
+            "-o",
+            &at("a.exr"),
+            "--png",
+            &at("b.png"),
+            "--stats",
+            &at("b.png"),
+        ]);
         assert!(same.contains("same file"), "{same}");
         // The same file reached through another spelling of its directory.
         let other_spelling = format!("{}/./sub/../a.png", dir.path().display());
-        let same = message(&["-o", &at("a.exr"), "--png", &other_spelling, "--stats", &at("a.png")]);
+        let same = message(&[
+            "-o",
+            &at("a.exr"),
+            "--png",
+            &other_spelling,
+            "--stats",
+            &at("a.png"),
+        ]);
         assert!(same.contains("same file"), "{same}");
         std::fs::write(dir.path().join("blocker"), b"x").unwrap();
         let blocked = message(&["-o", &at("blocker/out.exr")]);
         assert!(blocked.contains("not a directory"), "{blocked}");
         std::fs::create_dir(dir.path().join("taken.png")).unwrap();
         assert!(message(&["-o", &at("taken.exr")]).contains("is a directory"));
-        assert!(message(&["-o", &at("a.exr"), "--png", &at("a.png"), "--no-png"]).contains("--no-png"));
+        assert!(
+            message(&["-o", &at("a.exr"), "--png", &at("a.png"), "--no-png"]).contains("--no-png")
+        );
         // Nothing was created by any of the checks.
         let mut names: Vec<String> = std::fs::read_dir(dir.path())
             .unwrap()
@@ -261,12 +314,38 @@ mod tests {
     }
 
     #[test]
+    fn outputs_may_not_overwrite_inputs() {
+        let dir = tempfile::tempdir().unwrap();
+        let texture = dir.path().join("wood.png");
+        std::fs::write(&texture, b"texture bytes").unwrap();
+        let exr = dir.path().join("out.exr");
+        let plan = plan(&[
+            "-o",
+            exr.to_str().unwrap(),
+            "--png",
+            texture.to_str().unwrap(),
+        ])
+        .unwrap();
+        let message = plan.check_inputs([texture.as_path()]).unwrap_err().message;
+        assert!(
+            message.contains("--png") && message.contains("wood.png"),
+            "{message}"
+        );
+        assert!(plan
+            .check_inputs([dir.path().join("other.png").as_path()])
+            .is_ok());
+    }
+
+    #[test]
     fn ordinary_outputs_are_accepted() {
         let dir = tempfile::tempdir().unwrap();
         let exr = dir.path().join("new/dir/keep.EXR");
         let plan = plan(&["-o", exr.to_str().unwrap(), "--stats", "s.json"]).unwrap();
         assert_eq!(plan.png, Some(exr.with_extension("png")));
-        assert_eq!(plan.partial_exr, dir.path().join("new/dir/keep.partial.EXR"));
+        assert_eq!(
+            plan.partial_exr,
+            dir.path().join("new/dir/keep.partial.EXR")
+        );
         assert_eq!(plan.partial_stats, Some(PathBuf::from("s.partial.json")));
     }
 }

@@ -233,6 +233,11 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         load: started.elapsed().as_secs_f64(),
         ..PhaseSeconds::default()
     };
+    let texture_files = scene.textures.iter().filter_map(|t| match &t.source {
+        crate::scene::TextureSource::File(path) => Some(path.as_path()),
+        crate::scene::TextureSource::Encoded { .. } => None,
+    });
+    outputs.check_inputs(args.scene.as_deref().into_iter().chain(texture_files))?;
     let options = options(args, &scene)?;
     let tonemap = tonemap(args, &scene)?;
     let exposure = scene.settings.exposure;
@@ -253,6 +258,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
             &outputs.partial_exr,
             &signature,
             &scene,
+            &options,
             tiles.len(),
         )?)
     } else {
@@ -325,7 +331,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         encode_tiles(&result.finished_tiles),
     );
     for (name, value) in signature.attributes() {
-        attributes.strings.insert(name.to_string(), value.to_string());
+        attributes
+            .strings
+            .insert(name.to_string(), value.to_string());
     }
     let stats_json = |stats: &crate::render::RenderStats| {
         serde_json::to_string_pretty(stats)
@@ -366,12 +374,13 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     if let Some(stats_path) = &outputs.stats {
         stage_text(&mut set, stats_path, &stats_json(&result.stats)?).map_err(written)?;
     }
-    set.commit().map_err(written)?;
-    // The render is complete: its partial files are superseded.
-    let _ = std::fs::remove_file(&outputs.partial_exr);
+    // The render is complete: its partial files are superseded, and removed in the same
+    // locked commit, so the outputs and the partial files change together.
+    set.remove_on_commit(&outputs.partial_exr);
     if let Some(partial_stats) = &outputs.partial_stats {
-        let _ = std::fs::remove_file(partial_stats);
+        set.remove_on_commit(partial_stats);
     }
+    set.commit().map_err(written)?;
 
     let mut line = result.stats.summary_line();
     line.push_str(&format!("; wrote {}", outputs.exr.display()));
@@ -430,7 +439,7 @@ fn progress_bar(quiet: bool, tiles: usize) -> indicatif::ProgressBar {
         indicatif::ProgressStyle::with_template(
             "{elapsed_precise} [{bar:40}] {pos}/{len} tiles, {per_sec}, ETA {eta}",
         )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar
 }

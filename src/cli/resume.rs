@@ -112,9 +112,8 @@ impl ContentDigest {
 }
 
 fn digest_file(path: &Path) -> Result<String, CommandError> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        CommandError::bad_input(format!("{}: cannot read: {e}", path.display()))
-    })?;
+    let bytes = std::fs::read(path)
+        .map_err(|e| CommandError::bad_input(format!("{}: cannot read: {e}", path.display())))?;
     Ok(ContentDigest::new().bytes(&bytes).hex())
 }
 
@@ -208,7 +207,11 @@ impl RenderSignature {
 
     /// Compares with a stored signature: `None` when they agree, else a description of the
     /// first item that differs (for a message such as "--resume: <it>").
-    pub fn difference(&self, stored: &BTreeMap<String, String>, scene: &SceneDescription) -> Option<String> {
+    pub fn difference(
+        &self,
+        stored: &BTreeMap<String, String>,
+        scene: &SceneDescription,
+    ) -> Option<String> {
         for (name, now) in &self.items {
             let Some(before) = stored.get(name) else {
                 return Some(format!("the partial render has no {name} attribute"));
@@ -259,6 +262,7 @@ pub fn read_resume_state(
     partial_path: &Path,
     signature: &RenderSignature,
     scene: &SceneDescription,
+    options: &RenderOptions,
     tile_count: usize,
 ) -> Result<(film::Film, Vec<bool>), CommandError> {
     let label = partial_path.display();
@@ -275,7 +279,26 @@ pub fn read_resume_state(
         )));
     }
     if let Some(what) = signature.difference(&attributes.strings, scene) {
-        return Err(CommandError::bad_input(format!("{label}: --resume: {what}")));
+        return Err(CommandError::bad_input(format!(
+            "{label}: --resume: {what}"
+        )));
+    }
+    // The header may agree while the pixels do not (an edited or foreign file): the finished
+    // tiles are copied from this film, so it must have the render's size and layers.
+    if (earlier.width(), earlier.height()) != (options.width, options.height) {
+        return Err(CommandError::bad_input(format!(
+            "{label}: --resume: the partial image is {}x{}, the render {}x{}",
+            earlier.width(),
+            earlier.height(),
+            options.width,
+            options.height
+        )));
+    }
+    let expected = crate::render::film_layers(options.aovs);
+    if let Some(missing) = expected.iter().find(|layer| !earlier.has(**layer)) {
+        return Err(CommandError::bad_input(format!(
+            "{label}: --resume: the partial image lacks the {missing:?} channels"
+        )));
     }
     let finished = attributes
         .strings
@@ -319,8 +342,8 @@ mod tests {
     fn each_change_is_named() {
         use clap::Parser;
         let scene = crate::scene::load::default_scene();
-        let cli = crate::cli::Cli::try_parse_from(["conetrace", "render", "--width", "64"])
-            .unwrap();
+        let cli =
+            crate::cli::Cli::try_parse_from(["conetrace", "render", "--width", "64"]).unwrap();
         let crate::cli::Command::Render(args) = cli.command else {
             unreachable!("parsed a render command")
         };
@@ -328,13 +351,20 @@ mod tests {
         let base = RenderSignature::new(&scene, None, &options).unwrap();
         assert_eq!(base.difference(&stored(&base), &scene), None);
 
-        let more_samples = crate::render::RenderOptions { spp: 16, ..options.clone() };
+        let more_samples = crate::render::RenderOptions {
+            spp: 16,
+            ..options.clone()
+        };
         let now = RenderSignature::new(&scene, None, &more_samples).unwrap();
         let what = now.difference(&stored(&base), &scene).unwrap();
         assert!(what.contains("--spp") && what.contains("16"), "{what}");
 
         let mut brighter = scene.clone();
-        match brighter.lights.first_mut().expect("the default scene has a light") {
+        match brighter
+            .lights
+            .first_mut()
+            .expect("the default scene has a light")
+        {
             crate::scene::Light::Point { intensity, .. }
             | crate::scene::Light::Directional { intensity, .. }
             | crate::scene::Light::Spot { intensity, .. } => *intensity *= 2.0,

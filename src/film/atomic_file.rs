@@ -5,7 +5,8 @@
 //! (`.<name>.tmp-<pid>-<n>`), is flushed and fsynced, and only then renamed over the target
 //! (a rename within one directory is atomic on POSIX file systems). An [`OutputSet`] stages
 //! several files (a render's EXR, PNG and statistics) and renames them all only when every
-//! one was written: a failure leaves none of them behind and every earlier file untouched.
+//! one was written: a failure leaves none of them behind and every earlier file untouched
+//! (a rename that fails midway puts back the files already replaced, from hard-link backups).
 //!
 //! Committing holds an exclusive `flock` on each target directory while it renames, so two
 //! processes writing the same outputs replace them one set after the other: the EXR, PNG and
@@ -40,6 +41,8 @@ struct StagedFile {
 #[derive(Default)]
 pub struct OutputSet {
     staged: Vec<StagedFile>,
+    /// Files removed when the set commits.
+    superseded: Vec<PathBuf>,
 }
 
 impl Drop for OutputSet {
@@ -142,11 +145,20 @@ impl OutputSet {
         result
     }
 
+    /// Removes `path` (if it exists) when the set commits successfully, under the same lock
+    /// as the replacements: e.g. a partial render the committed outputs supersede.
+    pub fn remove_on_commit(&mut self, path: &Path) {
+        self.superseded.push(path.to_path_buf());
+    }
+
     /// Replaces every target with its staged file, under an exclusive lock of each target
-    /// directory so that concurrent sets do not interleave. If a rename fails, the files
-    /// not yet renamed are removed and the error names the user's path.
+    /// directory so that concurrent sets do not interleave. Each existing target is first
+    /// hard-linked to a backup name; if a rename fails, the targets already replaced get
+    /// their old contents back (or are removed if they did not exist), so the set is
+    /// replaced whole or not at all, and the error names the user's path.
     pub fn commit(mut self) -> Result<(), OutputError> {
         let mut dirs: Vec<PathBuf> = self.staged.iter().map(|f| parent_dir(&f.target)).collect();
+        dirs.extend(self.superseded.iter().map(|p| parent_dir(p)));
         dirs.sort();
         dirs.dedup();
         // Locks are taken in sorted order, so two sets never wait for each other in a cycle.
@@ -161,6 +173,15 @@ impl OutputSet {
             })
             .collect();
         let staged = std::mem::take(&mut self.staged);
+        // Backups of the targets that exist (hard links: no data is copied). A file system
+        // without hard links gets no backup, and a failed rename then cannot be undone.
+        let backups: Vec<Option<PathBuf>> = staged
+            .iter()
+            .map(|file| {
+                let backup = PathBuf::from(format!("{}.bak", file.temp.display()));
+                fs::hard_link(&file.target, &backup).ok().map(|_| backup)
+            })
+            .collect();
         let mut result = Ok(());
         for (index, file) in staged.iter().enumerate() {
             if let Err(e) = fs::rename(&file.temp, &file.target) {
@@ -168,7 +189,26 @@ impl OutputSet {
                 for rest in &staged[index..] {
                     let _ = fs::remove_file(&rest.temp);
                 }
+                // Undo the replacements already made.
+                for (done, backup) in staged[..index].iter().zip(&backups) {
+                    match backup {
+                        Some(backup) => {
+                            let _ = fs::rename(backup, &done.target);
+                        }
+                        None => {
+                            let _ = fs::remove_file(&done.target);
+                        }
+                    }
+                }
                 break;
+            }
+        }
+        for backup in backups.iter().flatten() {
+            let _ = fs::remove_file(backup);
+        }
+        if result.is_ok() {
+            for path in &self.superseded {
+                let _ = fs::remove_file(path);
             }
         }
         // Persist the renames; not every platform can sync a directory, so best effort.
@@ -299,6 +339,34 @@ mod tests {
     }
 
     #[test]
+    fn a_failed_rename_restores_the_files_already_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.png"));
+        fs::write(&a, b"old a").unwrap();
+        let mut set = OutputSet::default();
+        set.stage(&a, bytes(b"new a")).unwrap();
+        set.stage(&b, bytes(b"new b")).unwrap();
+        // The second target becomes a non-empty directory after staging: its rename fails.
+        fs::create_dir(&b).unwrap();
+        fs::write(b.join("inside"), b"x").unwrap();
+        let superseded = dir.path().join("a.partial.exr");
+        fs::write(&superseded, b"partial").unwrap();
+        set.remove_on_commit(&superseded);
+        assert!(set.commit().is_err());
+        assert_eq!(fs::read(&a).unwrap(), b"old a");
+        assert!(
+            superseded.exists(),
+            "a failed commit removed the partial file"
+        );
+        let mut names: Vec<String> = fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.exr", "a.partial.exr", "b.png"]);
+    }
+
+    #[test]
     fn a_symlinked_output_stays_a_link_and_its_target_is_replaced() {
         let dir = tempfile::tempdir().unwrap();
         let real = dir.path().join("real/out.exr");
@@ -307,7 +375,10 @@ mod tests {
         let link = dir.path().join("link.exr");
         std::os::unix::fs::symlink("real/out.exr", &link).unwrap();
         write_atomically(&link, bytes(b"new")).unwrap();
-        assert!(fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert!(fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
         assert_eq!(fs::read(&real).unwrap(), b"new");
     }
 

@@ -33,9 +33,9 @@ fn string_end(data: &[u8], at: usize) -> Result<usize, String> {
         .ok_or_else(|| "OpenEXR header ends inside an attribute name".to_string())
 }
 
-/// Sorts the header attributes of the single-part OpenEXR file in `data` by name, in place.
-/// `data` must hold at least the whole header.
-pub fn sort_header_attributes(data: &mut [u8]) -> Result<(), String> {
+/// Sorts the header attributes of the single-part OpenEXR file in `data` by name, in place,
+/// and returns where the header ends. `data` must hold at least the whole header.
+pub fn sort_header_attributes(data: &mut [u8]) -> Result<usize, String> {
     if data.len() < 9 || data[..4] != MAGIC {
         return Err("not an OpenEXR file".into());
     }
@@ -48,7 +48,7 @@ pub fn sort_header_attributes(data: &mut [u8]) -> Result<(), String> {
     let mut attributes = Vec::new();
     loop {
         if at >= data.len() {
-            return Err("OpenEXR header is truncated".into());
+            return Err(TRUNCATED.into());
         }
         if data[at] == 0 {
             break;
@@ -59,12 +59,12 @@ pub fn sort_header_attributes(data: &mut [u8]) -> Result<(), String> {
         let size_bytes: [u8; 4] = data
             .get(size_at..size_at + 4)
             .and_then(|s| s.try_into().ok())
-            .ok_or("OpenEXR header is truncated")?;
+            .ok_or(TRUNCATED)?;
         let size = usize::try_from(i32::from_le_bytes(size_bytes))
             .map_err(|_| "OpenEXR attribute has a negative size")?;
         let end = size_at + 4 + size;
         if end > data.len() {
-            return Err("OpenEXR header is truncated".into());
+            return Err(TRUNCATED.into());
         }
         attributes.push((at, name_end, end));
         at = end;
@@ -84,22 +84,35 @@ pub fn sort_header_attributes(data: &mut [u8]) -> Result<(), String> {
         out += attribute.bytes.len();
     }
     debug_assert_eq!(out, at);
-    Ok(())
+    Ok(at + 1)
 }
 
-/// [`sort_header_attributes`] on a file just written (readable and writable).
+/// The message [`sort_header_attributes`] gives when `data` ends inside the header.
+const TRUNCATED: &str = "OpenEXR header is truncated";
+
+/// [`sort_header_attributes`] on a file just written (readable and writable): reads as much
+/// of the file's start as the header needs and writes back only the header.
 pub fn sort_header_attributes_in_file(file: &mut File) -> Result<(), String> {
     let io = |e: std::io::Error| format!("cannot reorder the OpenEXR header: {e}");
-    let length = file.metadata().map_err(io)?.len().min(MAX_HEADER_BYTES);
-    let mut data = vec![0u8; length as usize];
-    file.seek(SeekFrom::Start(0)).map_err(io)?;
-    file.read_exact(&mut data).map_err(io)?;
-    sort_header_attributes(&mut data)?;
-    // Only the header region changed; write back what was read.
-    file.seek(SeekFrom::Start(0)).map_err(io)?;
-    file.write_all(&data).map_err(io)?;
-    file.seek(SeekFrom::End(0)).map_err(io)?;
-    Ok(())
+    let file_length = file.metadata().map_err(io)?.len();
+    let mut length = (64u64 << 10).min(file_length);
+    loop {
+        let mut data = vec![0u8; length as usize];
+        file.seek(SeekFrom::Start(0)).map_err(io)?;
+        file.read_exact(&mut data).map_err(io)?;
+        match sort_header_attributes(&mut data) {
+            Ok(header_end) => {
+                file.seek(SeekFrom::Start(0)).map_err(io)?;
+                file.write_all(&data[..header_end]).map_err(io)?;
+                file.seek(SeekFrom::End(0)).map_err(io)?;
+                return Ok(());
+            }
+            Err(message) if message == TRUNCATED && length < file_length.min(MAX_HEADER_BYTES) => {
+                length = (length * 4).min(file_length).min(MAX_HEADER_BYTES);
+            }
+            Err(message) => return Err(message),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -122,8 +122,7 @@ pub fn stage_exr(
         );
     }
     layer_attributes.world_to_camera = attributes.world_to_camera.as_ref().map(flat_matrix);
-    layer_attributes.world_to_normalized_device =
-        attributes.world_to_ndc.as_ref().map(flat_matrix);
+    layer_attributes.world_to_normalized_device = attributes.world_to_ndc.as_ref().map(flat_matrix);
     let other = &mut layer_attributes.other;
     for (name, value) in &attributes.strings {
         // A NUL would end the name early in the header and corrupt the file.

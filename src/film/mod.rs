@@ -39,10 +39,10 @@ pub mod exr_output;
 pub mod film;
 pub mod png_output;
 
+pub use atomic_file::OutputSet;
 pub use channels::Layer;
 pub use error::OutputError;
 pub use exr_input::read_exr;
-pub use atomic_file::OutputSet;
 pub use exr_output::{stage_exr, write_exr, ExrAttributes};
 pub use film::{Film, FilmLayout, FilmTile, TileRect};
 pub use png_output::{display_value, linear_to_srgb, stage_png, tonemap_to_srgb8, write_png};

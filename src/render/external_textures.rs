@@ -66,7 +66,12 @@ pub fn prepare_with_external(
 ) -> Result<RenderContext, PrepareError> {
     let textures = textures_read_by_the_renderer(&scene, options.aovs.lod)?;
     let mut context = crate::render::prepare_with_textures(scene, options, textures)?;
-    context.environment_mean = environment_mean(&context.scene.environment, external.as_ref());
+    let wrap = match context.scene.environment {
+        Environment::LatLong { texture, .. } => context.texture_filters[texture],
+        Environment::Color(_) => FilterOptions::default(),
+    };
+    context.environment_mean =
+        environment_mean(&context.scene.environment, external.as_ref(), &wrap);
     context.external_textures = Some(external);
     Ok(context)
 }
@@ -110,26 +115,107 @@ fn textures_read_by_the_renderer(
         .collect()
 }
 
-/// Average radiance of the environment as `external` sees it: the same whole-map trilinear
-/// lookup as [`prepared::environment_mean`] (a footprint of one full period in s and t reads
-/// the coarsest level, the mean of the map).
-pub fn environment_mean(environment: &Environment, external: &dyn ExternalTextures) -> Vec3 {
+/// Latitude bands and longitude columns the environment's mean is gathered in through an
+/// external texture system.
+const ENVIRONMENT_MEAN_BANDS: usize = 256;
+const ENVIRONMENT_MEAN_COLUMNS: usize = 512;
+
+/// Average radiance of the environment as `external` sees it, weighted by solid angle like
+/// [`prepared::environment_mean`]: the map is read on a grid of
+/// [`ENVIRONMENT_MEAN_BANDS`] x [`ENVIRONMENT_MEAN_COLUMNS`] trilinear lookups, each with a
+/// footprint of its grid cell (a filter that widens an elongated footprint to its longer side
+/// would blur whole bands together), and each band weighted by its share of the sphere,
+/// `(cos theta0 - cos theta1) / 2`. `wrap` is the texture's own filter options (its wrap
+/// modes; a lat-long map clamps in t).
+pub fn environment_mean(
+    environment: &Environment,
+    external: &dyn ExternalTextures,
+    wrap: &FilterOptions,
+) -> Vec3 {
     match environment {
         Environment::Color(c) => *c,
         Environment::LatLong { texture, intensity } => {
-            let query = TextureQuery {
-                s: 0.5,
-                t: 0.5,
-                dsdx: 1.0,
-                dtdx: 0.0,
-                dsdy: 0.0,
-                dtdy: 1.0,
-            };
             let options = FilterOptions {
                 filter: FilterMode::Trilinear,
-                ..FilterOptions::default()
+                ..*wrap
             };
-            sample_external(external, *texture, &query, &options).truncate() * *intensity
+            let bands = ENVIRONMENT_MEAN_BANDS;
+            let polar_angle = |band: usize| std::f64::consts::PI * band as f64 / bands as f64;
+            let mut mean = [0.0f64; 3];
+            let columns = ENVIRONMENT_MEAN_COLUMNS;
+            for band in 0..bands {
+                let share = (polar_angle(band).cos() - polar_angle(band + 1).cos()) / 2.0;
+                let weight = share / columns as f64;
+                for column in 0..columns {
+                    let query = TextureQuery {
+                        s: ((column as f64 + 0.5) / columns as f64) as f32,
+                        t: ((band as f64 + 0.5) / bands as f64) as f32,
+                        dsdx: 1.0 / columns as f32,
+                        dtdx: 0.0,
+                        dsdy: 0.0,
+                        dtdy: 1.0 / bands as f32,
+                    };
+                    let value = sample_external(external, *texture, &query, &options);
+                    for (sum, v) in mean.iter_mut().zip(value.to_array()) {
+                        *sum += weight * f64::from(v);
+                    }
+                }
+            }
+            Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32) * *intensity
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::texture::WrapMode;
+
+    /// An external system that filters with the library's own textures.
+    struct Builtin(Vec<Arc<Texture>>);
+
+    impl ExternalTextures for Builtin {
+        fn sample(
+            &self,
+            texture_index: usize,
+            query: &TextureQuery,
+            options: &FilterOptions,
+        ) -> Result<Vec4, String> {
+            Ok(self.0[texture_index].sample(query, options))
+        }
+    }
+
+    #[test]
+    fn the_mean_through_a_callback_is_weighted_by_solid_angle_too() {
+        // Dim everywhere, a bright band of rows near the +Y pole (t near 0).
+        let (w, h) = (64u32, 32u32);
+        let texels = (0..h)
+            .flat_map(|y| (0..w).map(move |_| y))
+            .map(|y| {
+                if (2..4).contains(&y) {
+                    [10.0, 0.5, 4.0, 1.0]
+                } else {
+                    [0.1, 0.2, 0.3, 1.0]
+                }
+            })
+            .collect();
+        let texture = Arc::new(Texture::from_rgba_f32(w, h, texels).unwrap());
+        let environment = Environment::LatLong {
+            texture: 0,
+            intensity: 1.0,
+        };
+        let builtin = prepared::environment_mean(&environment, &[texture.clone()]);
+        let wrap = FilterOptions {
+            wrap_t: WrapMode::Clamp,
+            ..FilterOptions::default()
+        };
+        let external = environment_mean(&environment, &Builtin(vec![texture]), &wrap);
+        // The unweighted mean of the map would put the red channel at 1.44.
+        for (e, b) in external.to_array().into_iter().zip(builtin.to_array()) {
+            assert!(
+                (e - b).abs() <= 0.02 * b,
+                "callback {external} vs built-in {builtin}"
+            );
         }
     }
 }

@@ -186,8 +186,14 @@ mod tests {
             textures: vec![("sky.png".into(), 1 << 20)],
         };
         let message = check(&estimate, Some(8 << 30), "scene.toml").unwrap_err();
-        assert!(message.contains("616.0 GiB") && message.contains("8.0 GiB"), "{message}");
-        assert!(message.contains("--max-memory") && message.contains("sky.png"), "{message}");
+        assert!(
+            message.contains("616.0 GiB") && message.contains("8.0 GiB"),
+            "{message}"
+        );
+        assert!(
+            message.contains("--max-memory") && message.contains("sky.png"),
+            "{message}"
+        );
         assert!(check(&estimate, Some(1 << 40), "scene.toml").is_ok());
     }
 }

@@ -64,6 +64,21 @@ pub const fn gamma(n: u32) -> f32 {
 /// pass `tests/spawn_points.rs` four times over.
 pub const INTERSECTOR_SLACK: u32 = 4;
 
+/// The error bound of a point computed with `roundings` roundings from values of
+/// `magnitude` (per coordinate), widened for the intersector.
+///
+/// The intersector's own arithmetic is not per coordinate: a triangle test works with
+/// `vertex - origin` and cross products that mix the coordinates, so its rounding scales with
+/// the largest magnitude involved in every direction. A point on the plane `y = 0` has an
+/// exact y (error 0), yet a ray leaving it one float above (a denormal, which Embree's
+/// flush-to-zero mode reads as 0) still meets the plane. So the slack is isotropic:
+/// `gamma(INTERSECTOR_SLACK)` of the largest magnitude, added to every coordinate.
+#[inline]
+fn with_intersector_slack(magnitude: Vec3, roundings: u32) -> Vec3 {
+    magnitude * gamma(roundings + INTERSECTOR_SLACK)
+        + Vec3::splat(magnitude.max_element() * gamma(INTERSECTOR_SLACK))
+}
+
 /// A point on a surface with a bound on the rounding error of each of its coordinates: the
 /// exact surface point it stands for lies within `position +- error` (componentwise).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -90,7 +105,7 @@ impl SpawnPoint {
         let magnitude = a.abs() + b.abs() + c.abs();
         SpawnPoint {
             position,
-            error: magnitude * gamma(7 + INTERSECTOR_SLACK),
+            error: with_intersector_slack(magnitude, 7),
         }
     }
 
@@ -110,7 +125,7 @@ impl SpawnPoint {
         (
             SpawnPoint {
                 position,
-                error: magnitude * gamma(7 + INTERSECTOR_SLACK),
+                error: with_intersector_slack(magnitude, 7),
             },
             normal,
         )
@@ -224,6 +239,25 @@ fn away(x: f32, sign: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_point_on_an_axis_plane_leaves_by_a_normal_float() {
+        // Every vertex has y = 0 exactly, so the interpolated y is exact; the intersector's
+        // rounding is not, and scales with the other coordinates.
+        let p = [
+            Vec3::new(-5.0, 0.0, -5.0),
+            Vec3::new(5.0, 0.0, 5.0),
+            Vec3::new(5.0, 0.0, -5.0),
+        ];
+        let spawn = SpawnPoint::on_triangle(p, 0.3, 0.2);
+        let origin = spawn.offset_origin(Vec3::Y);
+        assert!(
+            origin.y >= 5.0 * gamma(INTERSECTOR_SLACK),
+            "origin {origin}: a denormal offset is flushed to zero by the intersector"
+        );
+        let (sphere, normal) = SpawnPoint::on_sphere(Vec3::ZERO, 1.0, Vec3::new(0.0, 2.0, 0.0));
+        assert!(sphere.offset_origin(normal).y > 1.0 + 0.5 * gamma(INTERSECTOR_SLACK));
+    }
     use glam::DVec3;
     use proptest::prelude::*;
 

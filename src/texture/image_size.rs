@@ -34,8 +34,8 @@ fn image_size<R: Read + Seek + std::io::BufRead>(
         let size = header.layer_size;
         Ok((size.0 as u32, size.1 as u32))
     } else if magic.starts_with(b"II*\0") || magic.starts_with(b"MM\0*") {
-        let mut decoder = tiff::decoder::Decoder::new(reader)
-            .map_err(|e| bad(format!("TIFF header: {e}")))?;
+        let mut decoder =
+            tiff::decoder::Decoder::new(reader).map_err(|e| bad(format!("TIFF header: {e}")))?;
         decoder
             .dimensions()
             .map_err(|e| bad(format!("TIFF header: {e}")))
@@ -96,10 +96,13 @@ mod tests {
 
     #[test]
     fn decoded_bytes_bound_the_real_pyramid() {
-        let texture = crate::texture::Texture::from_rgba_f32(37, 21, vec![[0.5; 4]; 37 * 21])
-            .unwrap();
+        let texture =
+            crate::texture::Texture::from_rgba_f32(37, 21, vec![[0.5; 4]; 37 * 21]).unwrap();
         let estimate = decoded_texture_bytes(37, 21);
         let real = texture.memory_bytes() as u64;
-        assert!(estimate >= real && estimate <= real * 11 / 10, "{estimate} vs {real}");
+        assert!(
+            estimate >= real && estimate <= real * 11 / 10,
+            "{estimate} vs {real}"
+        );
     }
 }

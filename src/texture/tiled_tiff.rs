@@ -209,7 +209,10 @@ fn read_separate_planes(
                 let mut chunk = decoder.read_chunk(index).map_err(|e| e.to_string())?;
                 let image = match &mut image {
                     Some(image) => image,
-                    None => image.insert(zeroed_like(&chunk, w * h * channels)?),
+                    None => image.insert(zeroed_like(
+                        &chunk,
+                        w.saturating_mul(h).saturating_mul(channels),
+                    )?),
                 };
                 let (x0, y0) = ((cx * chunk_w) as usize, (cy * chunk_h) as usize);
                 let data_w = (w - x0).min(chunk_w as usize);
@@ -241,6 +244,19 @@ fn read_separate_planes(
 
 /// A zeroed buffer of `len` samples of the same type as `chunk`.
 fn zeroed_like(chunk: &DecodingResult, len: usize) -> Result<DecodingResult, String> {
+    // The size comes from the file's header (width x height x samples per pixel, up to 65535
+    // samples): bounded like a whole-level read, so a crafted file is refused, not an abort.
+    let bytes = (len as u64).saturating_mul(match chunk {
+        DecodingResult::U8(_) => 1,
+        DecodingResult::U16(_) | DecodingResult::F16(_) => 2,
+        DecodingResult::U32(_) | DecodingResult::F32(_) => 4,
+        _ => 8,
+    });
+    if bytes > MAX_LEVEL_BYTES {
+        return Err(format!(
+            "a level of {bytes} bytes exceeds the limit of {MAX_LEVEL_BYTES} bytes"
+        ));
+    }
     Ok(match chunk {
         DecodingResult::U8(_) => DecodingResult::U8(vec![0; len]),
         DecodingResult::U16(_) => DecodingResult::U16(vec![0; len]),

@@ -73,6 +73,22 @@ impl Lcg {
     }
 }
 
+/// High-frequency RGBA content: per-texel noise, one-texel stripes, a checker, noisy alpha.
+pub fn texels(w: u32, h: u32, seed: u64) -> Vec<[f32; 4]> {
+    let mut rng = Lcg(seed);
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            [
+                rng.next() as f32,
+                (x % 2) as f32 * 0.8 + 0.1,
+                ((x / 3 + y / 2) % 2) as f32,
+                0.25 + 0.75 * rng.next() as f32,
+            ]
+        })
+        .collect()
+}
+
 /// A few hundred queries: magnification, isotropic minification over all levels,
 /// anisotropy 2..64 at several angles, footprints across the wrap boundary, zero
 /// derivatives.
