@@ -13,6 +13,35 @@ fn concave_scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/fp_concave.toml")
 }
 
+/// Runs `conetrace accuracy SCENE` at `width` x `height` against a 256-sample ground truth,
+/// one timing run, into `out`; asserts it succeeded.
+fn run_accuracy(dir: &Path, scene: &str, out: &Path, width: &str, height: &str) {
+    let result = run_in(
+        dir,
+        &[
+            "accuracy",
+            scene,
+            "--out",
+            out.to_str().unwrap(),
+            "--width",
+            width,
+            "--height",
+            height,
+            "--ground-truth-spp",
+            "256",
+            "--runs",
+            "1",
+            "--quiet",
+        ],
+    );
+    assert_eq!(
+        result.status.code(),
+        Some(0),
+        "stderr: {}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+}
+
 /// The CSV as (header, rows of cells).
 fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     let text = std::fs::read_to_string(path).expect("the CSV exists");
@@ -34,30 +63,7 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
     let dir = temp_dir();
     let out = dir.path().join("acc");
     let scene = concave_scene();
-    let result = run_in(
-        dir.path(),
-        &[
-            "accuracy",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--width",
-            "48",
-            "--height",
-            "27",
-            "--ground-truth-spp",
-            "256",
-            "--runs",
-            "1",
-            "--quiet",
-        ],
-    );
-    assert_eq!(
-        result.status.code(),
-        Some(0),
-        "stderr: {}",
-        String::from_utf8_lossy(&result.stderr)
-    );
+    run_accuracy(dir.path(), scene.to_str().unwrap(), &out, "48", "27");
 
     let (header, rows) = read_csv(&out.join("fp_concave.csv"));
     let column = |name: &str| {
@@ -281,30 +287,7 @@ fn bad_input_is_rejected_before_anything_is_written() {
 fn differential_aniso_at_one_sample_beats_four_sample_supersampling_on_the_default_scene() {
     let dir = temp_dir();
     let out = dir.path().join("acc");
-    let result = run_in(
-        dir.path(),
-        &[
-            "accuracy",
-            "default",
-            "--out",
-            out.to_str().unwrap(),
-            "--width",
-            "160",
-            "--height",
-            "90",
-            "--ground-truth-spp",
-            "256",
-            "--runs",
-            "1",
-            "--quiet",
-        ],
-    );
-    assert_eq!(
-        result.status.code(),
-        Some(0),
-        "stderr: {}",
-        String::from_utf8_lossy(&result.stderr)
-    );
+    run_accuracy(dir.path(), "default", &out, "160", "90");
     let (header, rows) = read_csv(&out.join("default.csv"));
     let column = |name: &str| {
         header

@@ -2,43 +2,18 @@
 //! streams agree hit for hit; tfar limits, occlusion, validity masks, spheres, alpha filters
 //! (including a panicking one), Embree errors and the denormal bits.
 
+mod common;
+
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
+use common::Rng;
 use conetrace::embree::{
     enable_flush_denormals, flush_denormals_enabled, CommittedScene, Device, EmbreeError,
     FilterCandidate, Hit, Ray, RayHit, RayPacket, RayPayload, SceneBuilder, TraceOptions,
     INVALID_GEOMETRY_ID,
 };
 use glam::Vec3;
-
-/// Small deterministic generator (xorshift64*), so the test needs no extra crate.
-struct Rng(u64);
-
-impl Rng {
-    fn next_f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let bits = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40;
-        bits as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next_f32()
-    }
-    fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
-        Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-    }
-    fn direction(&mut self) -> Vec3 {
-        loop {
-            let v = self.vec(-1.0, 1.0);
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
-}
 
 /// Random triangles in [-10, 10]^3 (geometry 0) and a few spheres (geometry 1).
 fn random_scene(device: &Device, triangles: usize) -> CommittedScene {

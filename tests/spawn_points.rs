@@ -5,45 +5,22 @@
 //! Triangles and spheres of sizes 1e-4 to 1e6, up to 1e4 of their sizes (at most 1e6) from
 //! the origin, leaving directions from grazing (|d . n| = 1e-4) to normal.
 
+mod common;
+
+use common::Rng;
 use conetrace::embree::{Device, Ray, SceneBuilder, TraceOptions};
 use conetrace::shading::SpawnPoint;
 use glam::Vec3;
 
-/// Small deterministic generator (xorshift64*).
-struct Rng(u64);
-
-impl Rng {
-    fn next_f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let bits = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40;
-        bits as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next_f32()
-    }
-    fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
-        Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-    }
-    fn unit(&mut self) -> Vec3 {
-        loop {
-            let v = self.vec(-1.0, 1.0);
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
-    /// A size 10^k for k uniform in [-4, 6].
-    fn scale(&mut self) -> f32 {
-        10f32.powf(self.range(-4.0, 6.0))
-    }
+/// A size 10^k for k uniform in [-4, 6].
+fn random_scale(rng: &mut Rng) -> f32 {
+    10f32.powf(rng.range(-4.0, 6.0))
 }
 
 /// A unit direction on the side of `n` with `d . n` close to `cosine` (> 0).
 fn leaving(rng: &mut Rng, n: Vec3, cosine: f32) -> Vec3 {
-    let tangent = (rng.unit() - n * rng.unit().dot(n)).normalize_or(n.any_orthonormal_vector());
+    let tangent =
+        (rng.direction() - n * rng.direction().dot(n)).normalize_or(n.any_orthonormal_vector());
     let tangent = (tangent - n * tangent.dot(n)).normalize();
     (n * cosine + tangent * (1.0 - cosine * cosine).max(0.0).sqrt()).normalize()
 }
@@ -57,9 +34,9 @@ fn rays_leaving_a_triangle_do_not_meet_it() {
     let mut failures = Vec::new();
     let mut tested = 0;
     for case in 0..1500 {
-        let scale = rng.scale();
+        let scale = random_scale(&mut rng);
         let away = (scale * 10f32.powf(rng.range(0.0, 4.0))).min(1e6);
-        let center = rng.unit() * away;
+        let center = rng.direction() * away;
         let p = [
             center + rng.vec(-1.0, 1.0) * scale,
             center + rng.vec(-1.0, 1.0) * scale,
@@ -126,13 +103,13 @@ fn rays_leaving_a_sphere_do_not_meet_it_where_they_start() {
     let mut failures = Vec::new();
     let mut tested = 0;
     for case in 0..1500 {
-        let radius = rng.scale();
+        let radius = random_scale(&mut rng);
         let away = (radius * 10f32.powf(rng.range(0.0, 4.0))).min(1e6);
-        let center = rng.unit() * away;
+        let center = rng.direction() * away;
         let mut builder = SceneBuilder::new(&device).expect("scene builder");
         builder.add_spheres(&[(center, radius)]).expect("sphere");
         let scene = builder.commit().expect("commit");
-        let (spawn, n) = SpawnPoint::on_sphere(center, radius, center + rng.unit() * radius);
+        let (spawn, n) = SpawnPoint::on_sphere(center, radius, center + rng.direction() * radius);
         for cosine in COSINES {
             // Outward: nothing to meet on a convex surface.
             let direction = leaving(&mut rng, n, cosine);

@@ -21,7 +21,7 @@ use std::time::Instant;
 use clap::Args;
 
 use crate::cli::outputs::OutputPlan;
-use crate::cli::resume::{read_resume_state, RenderSignature};
+use crate::cli::resume::{encoded_texture_digest, read_resume_state, RenderSignature};
 use crate::cli::{CommandError, EXIT_INTERRUPTED};
 use crate::film::{self, ExrAttributes, OutputSet};
 use crate::footprint::LodStrategy;
@@ -251,8 +251,13 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     let pool = crate::cli::worker_pool(args.threads)?;
 
+    let decoding = Instant::now();
+    let (textures, texture_digests) = decode_textures(&scene, args.quiet)?;
+    phases.textures = decoding.elapsed().as_secs_f64();
+
     let tiles = render::work_tiles(options.width, options.height);
-    let signature = RenderSignature::new(&scene, args.scene.as_deref(), &options)?;
+    let signature =
+        RenderSignature::new(&scene, args.scene.as_deref(), &options, &texture_digests)?;
     let earlier = if args.resume {
         Some(read_resume_state(
             &outputs.partial_exr,
@@ -271,9 +276,6 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     let scene = Arc::new(scene);
     let (mut result, camera) = pool.install(|| -> Result<_, CommandError> {
-        let decoding = Instant::now();
-        let textures = decode_textures(&scene, args.quiet)?;
-        phases.textures = decoding.elapsed().as_secs_f64();
         let preparing = Instant::now();
         let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
@@ -391,11 +393,13 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     Ok(())
 }
 
-/// Decodes the scene's textures one by one, showing which one while large files load.
+/// Decodes the scene's textures one by one, showing which one while large files load, and
+/// returns each with the digest of its encoded bytes (for the render's signature), so every
+/// texture file is read once.
 fn decode_textures(
     scene: &SceneDescription,
     quiet: bool,
-) -> Result<Vec<Arc<crate::texture::Texture>>, CommandError> {
+) -> Result<(Vec<Arc<crate::texture::Texture>>, Vec<String>), CommandError> {
     let bar = if quiet || scene.textures.is_empty() {
         indicatif::ProgressBar::hidden()
     } else {
@@ -410,15 +414,28 @@ fn decode_textures(
         bar
     };
     let mut textures = Vec::with_capacity(scene.textures.len());
+    let mut digests = Vec::with_capacity(scene.textures.len());
     for desc in &scene.textures {
-        bar.set_message(desc.source.label());
-        let texture = crate::render::prepared::decode_texture(desc)
+        let label = desc.source.label();
+        bar.set_message(label.clone());
+        let file_bytes;
+        let bytes: &[u8] = match &desc.source {
+            crate::scene::TextureSource::File(path) => {
+                file_bytes = std::fs::read(path).map_err(|e| {
+                    CommandError::bad_input(format!("{label}: cannot read file: {e}"))
+                })?;
+                &file_bytes
+            }
+            crate::scene::TextureSource::Encoded { bytes, .. } => bytes,
+        };
+        digests.push(encoded_texture_digest(bytes));
+        let texture = crate::texture::Texture::from_encoded(bytes, &label, desc.color_space)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
         textures.push(Arc::new(texture));
         bar.inc(1);
     }
     bar.finish_and_clear();
-    Ok(textures)
+    Ok((textures, digests))
 }
 
 /// Stages a text file (the statistics) into `set`.

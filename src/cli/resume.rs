@@ -27,7 +27,7 @@ use sha2::{Digest, Sha256};
 use crate::cli::CommandError;
 use crate::film;
 use crate::render::RenderOptions;
-use crate::scene::{SceneDescription, TextureSource};
+use crate::scene::SceneDescription;
 
 /// Header attribute listing the finished work tiles (see [`encode_tiles`]).
 pub const TILES_DONE_ATTRIBUTE: &str = "conetrace.tiles_done";
@@ -114,16 +114,25 @@ impl ContentDigest {
 fn digest_file(path: &Path) -> Result<String, CommandError> {
     let bytes = std::fs::read(path)
         .map_err(|e| CommandError::bad_input(format!("{}: cannot read: {e}", path.display())))?;
-    Ok(ContentDigest::new().bytes(&bytes).hex())
+    Ok(encoded_texture_digest(&bytes))
+}
+
+/// The digest of a texture's encoded bytes (its file, or its embedded data), one of the
+/// inputs of [`RenderSignature::new`]. Taken from the bytes the texture is decoded from, so
+/// a render reads each texture file once.
+pub fn encoded_texture_digest(bytes: &[u8]) -> String {
+    ContentDigest::new().bytes(bytes).hex()
 }
 
 impl RenderSignature {
     /// The signature of rendering `scene` (loaded from `scene_file`, `None` for the built-in
-    /// scene) with `options`.
+    /// scene) with `options`; `texture_digests` holds [`encoded_texture_digest`] of each of
+    /// the scene's textures, in order.
     pub fn new(
         scene: &SceneDescription,
         scene_file: Option<&Path>,
         options: &RenderOptions,
+        texture_digests: &[String],
     ) -> Result<RenderSignature, CommandError> {
         let mut items = Vec::new();
         let mut option = |name: &str, value: String| {
@@ -175,17 +184,10 @@ impl RenderSignature {
         }
         geometry.text(&scene.spheres);
         input("geometry", &geometry);
-        for (index, texture) in scene.textures.iter().enumerate() {
+        for (index, (texture, encoded)) in scene.textures.iter().zip(texture_digests).enumerate() {
             let mut digest = ContentDigest::new();
             digest.text(&(texture.color_space, texture.wrap_s, texture.wrap_t));
-            match &texture.source {
-                TextureSource::File(path) => {
-                    digest.bytes(digest_file(path)?.as_bytes());
-                }
-                TextureSource::Encoded { bytes, .. } => {
-                    digest.bytes(bytes);
-                }
-            }
+            digest.bytes(encoded.as_bytes());
             input(&format!("texture.{index}"), &digest);
         }
         let scene_file_digest = match scene_file {
@@ -315,6 +317,7 @@ pub fn read_resume_state(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::TextureSource;
 
     #[test]
     fn tile_lists_round_trip_through_their_text() {
@@ -348,14 +351,22 @@ mod tests {
             unreachable!("parsed a render command")
         };
         let options = crate::cli::render_cmd::options(&args, &scene).unwrap();
-        let base = RenderSignature::new(&scene, None, &options).unwrap();
+        let digests: Vec<String> = scene
+            .textures
+            .iter()
+            .map(|t| match &t.source {
+                TextureSource::File(path) => encoded_texture_digest(&std::fs::read(path).unwrap()),
+                TextureSource::Encoded { bytes, .. } => encoded_texture_digest(bytes),
+            })
+            .collect();
+        let base = RenderSignature::new(&scene, None, &options, &digests).unwrap();
         assert_eq!(base.difference(&stored(&base), &scene), None);
 
         let more_samples = crate::render::RenderOptions {
             spp: 16,
             ..options.clone()
         };
-        let now = RenderSignature::new(&scene, None, &more_samples).unwrap();
+        let now = RenderSignature::new(&scene, None, &more_samples, &digests).unwrap();
         let what = now.difference(&stored(&base), &scene).unwrap();
         assert!(what.contains("--spp") && what.contains("16"), "{what}");
 
@@ -369,13 +380,13 @@ mod tests {
             | crate::scene::Light::Directional { intensity, .. }
             | crate::scene::Light::Spot { intensity, .. } => *intensity *= 2.0,
         }
-        let now = RenderSignature::new(&brighter, None, &options).unwrap();
+        let now = RenderSignature::new(&brighter, None, &options, &digests).unwrap();
         let what = now.difference(&stored(&base), &scene).unwrap();
         assert!(what.contains("lights"), "{what}");
 
         let mut moved = scene.clone();
         moved.meshes[0].positions[0].x += 1e-3;
-        let now = RenderSignature::new(&moved, None, &options).unwrap();
+        let now = RenderSignature::new(&moved, None, &options, &digests).unwrap();
         let what = now.difference(&stored(&base), &scene).unwrap();
         assert!(what.contains("geometry"), "{what}");
     }

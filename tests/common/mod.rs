@@ -153,3 +153,33 @@ pub fn read_exr(path: &Path) -> ExrImage {
         channels,
     }
 }
+
+/// Small deterministic generator (xorshift64*), so tests need no extra crate and their data
+/// never changes.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_f32(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let bits = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40;
+        bits as f32 / (1u64 << 24) as f32
+    }
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.next_f32()
+    }
+    pub fn vec(&mut self, lo: f32, hi: f32) -> glam::Vec3 {
+        glam::Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+    }
+    /// A unit vector, uniform over directions (rejection from the unit ball).
+    pub fn direction(&mut self) -> glam::Vec3 {
+        loop {
+            let v = self.vec(-1.0, 1.0);
+            let l = v.length();
+            if l > 0.1 && l <= 1.0 {
+                return v / l;
+            }
+        }
+    }
+}
