@@ -1,0 +1,25 @@
+#!/bin/sh
+# Renders the reference images that tests/whitted_images.rs compares against: every shipped
+# scene (assets/scenes/**/*.toml and the built-in default scene) with the Whitted integrator,
+# 64x36, one sample per pixel, every AOV, once with the scene's own effects and once with
+# every effect forced on (the general path). The options must match tests/whitted_images.rs.
+#
+# Usage: tests/data/whitted_images/regenerate.sh [path/to/conetrace]
+# Run it from the repository root with the binary of the code whose images are the
+# reference (e.g. a build of the commit before a refactoring), then commit the EXRs.
+set -eu
+bin=${1:-target/debug/conetrace}
+out=tests/data/whitted_images
+render() {
+    name=$1
+    shift
+    "$bin" render "$@" --width 64 --height 36 --spp 1 --aov all --no-png --quiet \
+        --threads 2 --output "$out/$name.exr"
+    "$bin" render "$@" --width 64 --height 36 --spp 1 --aov all --no-png --quiet \
+        --threads 2 --all-effects --output "$out/$name.all_effects.exr"
+}
+render builtin_default
+for scene in $(find assets/scenes -name '*.toml' | sort); do
+    name=$(echo "${scene#assets/scenes/}" | sed 's/\.toml$//; s#/#_#g')
+    render "$name" "$scene"
+done
