@@ -12,8 +12,8 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use conetrace::film::AovSelection;
 use conetrace::footprint::LodStrategy;
-use conetrace::integrator::tile_image::AovSelection;
 use conetrace::render::tracer::{TraceHit, TraceRay};
 use conetrace::render::{RenderContext, RenderOptions, WorkCounters};
 use conetrace::texture::{FilterMode, FilterOptions};

@@ -22,9 +22,10 @@ mod common;
 use std::path::Path;
 use std::sync::Arc;
 
+use conetrace::film::AovSelection;
 use conetrace::film::Film;
 use conetrace::footprint::LodStrategy;
-use conetrace::integrator::{AovSelection, Whitted};
+use conetrace::integrator::Whitted;
 use conetrace::render::{self, RenderContext, RenderControl, RenderOptions};
 use conetrace::scene::load::load_toml_str;
 use conetrace::scene::FresnelMode;

@@ -226,8 +226,8 @@ fn shipped_scenes() -> Vec<std::path::PathBuf> {
 
 /// Prepare `path` at 48x32 with the scene's own depth and the renderer's default filtering.
 fn prepare_small(path: &std::path::Path) -> conetrace::render::RenderContext {
+    use conetrace::film::AovSelection;
     use conetrace::footprint::LodStrategy;
-    use conetrace::integrator::AovSelection;
     use conetrace::render::RenderOptions;
     use conetrace::texture::FilterOptions;
     let scene = conetrace::scene::load::load_scene(path).unwrap();

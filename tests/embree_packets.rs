@@ -895,7 +895,7 @@ fn render_options() -> conetrace::render::RenderOptions {
         lod: conetrace::footprint::LodStrategy::Cone,
         filter: conetrace::texture::FilterOptions::default(),
         fresnel: conetrace::scene::FresnelMode::Exact,
-        aovs: conetrace::integrator::AovSelection {
+        aovs: conetrace::film::AovSelection {
             surface: true,
             ..Default::default()
         },

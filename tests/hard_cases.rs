@@ -6,9 +6,10 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use conetrace::film::AovSelection;
 use conetrace::film::Film;
 use conetrace::footprint::{ConeEnvelope, LodStrategy, RayCone};
-use conetrace::integrator::{AovSelection, Whitted};
+use conetrace::integrator::Whitted;
 use conetrace::render::{self, RenderControl, RenderOptions};
 use conetrace::scene::load::load_toml_str;
 use conetrace::scene::FresnelMode;

@@ -28,9 +28,10 @@ mod common;
 use std::path::Path;
 use std::sync::Arc;
 
+use conetrace::film::AovSelection;
 use conetrace::film::Film;
 use conetrace::footprint::LodStrategy;
-use conetrace::integrator::{AovSelection, Whitted};
+use conetrace::integrator::Whitted;
 use conetrace::render::{self, RenderControl, RenderOptions};
 use conetrace::scene::load::load_toml_str;
 use conetrace::scene::FresnelMode;

@@ -9,8 +9,8 @@ mod common;
 use std::sync::Arc;
 
 use common::*;
+use conetrace::film::AovSelection;
 use conetrace::footprint::LodStrategy;
-use conetrace::integrator::AovSelection;
 use conetrace::render::stats::WorkCounters;
 use conetrace::render::tracer::{TraceHit, TraceRay, Tracer};
 use conetrace::render::RenderOptions;

@@ -5,8 +5,9 @@ use std::ffi::{c_void, CString};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
+use crate::film::AovSelection;
 use crate::footprint::LodStrategy;
-use crate::integrator::{AovSelection, Whitted};
+use crate::integrator::Whitted;
 use crate::render::{self, RenderControl, RenderOptions};
 use crate::texture::{FilterMode, FilterOptions, WrapMode};
 

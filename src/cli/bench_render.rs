@@ -20,7 +20,8 @@ use rayon::prelude::*;
 
 use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
-use crate::integrator::{block_order, TileRect, Whitted};
+use crate::film::{block_order, TileRect};
+use crate::integrator::Whitted;
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::{self, RenderContext, RenderControl, RenderOptions};

@@ -27,6 +27,9 @@
 //! [`read_exr`] reads a film back. Every file is written atomically ([`atomic_file`]): a
 //! failed write never damages an existing file.
 //!
+//! An integrator fills a [`TileImage`] per work tile with colour and the AOVs an
+//! [`AovSelection`] asks for; the render copies it into the film.
+//!
 //! The film does not know about cameras, sampling or shading: it stores what it is given.
 
 pub mod atomic_file;
@@ -38,6 +41,7 @@ pub mod exr_output;
 #[allow(clippy::module_inception)]
 pub mod film;
 pub mod png_output;
+pub mod tile_image;
 
 pub use atomic_file::OutputSet;
 pub use channels::Layer;
@@ -46,3 +50,4 @@ pub use exr_input::read_exr;
 pub use exr_output::{stage_exr, write_exr, ExrAttributes};
 pub use film::{Film, FilmLayout, FilmTile, TileRect};
 pub use png_output::{display_value, linear_to_srgb, stage_png, tonemap_to_srgb8, write_png};
+pub use tile_image::{block_order, AovSelection, TileImage};

@@ -1,6 +1,7 @@
-//! The pixels of one tile as an integrator produces them: colour, alpha and the AOVs.
+//! The pixels of one tile as an integrator produces them: colour, alpha and the AOVs the
+//! render asked for, before the render copies them into the [`Film`](super::Film).
 
-pub use crate::film::TileRect;
+use super::TileRect;
 
 /// The pixels of `tile` (offsets inside it) ordered so that each run of 16 is one 4x4 block:
 /// the order camera rays are generated in, so a 16-wide packet is one block.

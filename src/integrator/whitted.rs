@@ -21,14 +21,15 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::film::{block_order, TileImage, TileRect};
 use crate::footprint::Footprint;
 use crate::hit::SurfaceHit;
-use crate::integrator::{block_order, Integrator, TileImage, TileRect};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{binding_query, environment_radiance, SurfaceDetail};
 use crate::render::sampling;
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
+use crate::render::Integrator;
 use crate::scene::Material;
 use crate::shading::{self, DielectricBoundary, SpawnPoint};
 
@@ -75,9 +76,10 @@ struct ShadowRay {
     pixel: u32,
 }
 
-/// Reused buffers of one tile's waves.
+/// Whitted's per-thread state: the buffers of a tile's waves, reused for every tile a
+/// worker renders.
 #[derive(Default)]
-struct Waves {
+pub struct Waves {
     current: Vec<PathRay>,
     next: Vec<PathRay>,
     trace_rays: Vec<TraceRay>,
@@ -101,16 +103,22 @@ struct ShadowWalk {
 }
 
 impl Integrator for Whitted {
+    type ThreadState = Waves;
+
+    fn thread_state(&self, _context: &RenderContext) -> Waves {
+        Waves::default()
+    }
+
     fn render_tile(
         &self,
         context: &RenderContext,
         tile: TileRect,
         image: &mut TileImage,
         worker: &mut WorkerState,
+        waves: &mut Waves,
     ) {
         let options = &context.options;
         let spp = options.spp.max(1);
-        let mut waves = Waves::default();
         let image_width = options.width;
         for sample in 0..spp {
             generate_camera_rays(context, tile, sample, image_width, &mut waves.current);
@@ -118,9 +126,9 @@ impl Integrator for Whitted {
                 .counters
                 .count_rays(RayKind::Camera, waves.current.len() as u64);
             while !waves.current.is_empty() {
-                trace_wave(context, &mut waves, worker);
-                shade_wave(context, &mut waves, image, worker);
-                trace_shadows(context, &mut waves, image, worker);
+                trace_wave(context, waves, worker);
+                shade_wave(context, waves, image, worker);
+                trace_shadows(context, waves, image, worker);
                 std::mem::swap(&mut waves.current, &mut waves.next);
                 waves.next.clear();
             }

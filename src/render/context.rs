@@ -6,8 +6,8 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use crate::camera::Camera;
+use crate::film::AovSelection;
 use crate::footprint::LodStrategy;
-use crate::integrator::AovSelection;
 use crate::render::effects::EffectSet;
 use crate::render::prepared::{MaterialTable, PrepareError, SurfaceLookup};
 use crate::render::stats::{EffectReason, WorkCounters};
@@ -148,7 +148,8 @@ pub fn forced_reasons(
     reasons
 }
 
-/// What one worker accumulates while rendering tiles.
+/// What one worker accumulates while rendering tiles, whatever the integrator: the
+/// render merges these into its statistics.
 #[derive(Default)]
 pub struct WorkerState {
     pub counters: WorkCounters,

@@ -2,13 +2,14 @@
 //!
 //! Data flow: [`SceneDescription`] -> [`prepare`] (decode textures, build and commit the
 //! Embree scene, analyse effects) -> tiles rendered in parallel by an
-//! [`Integrator`](crate::integrator::Integrator) on rayon workers (each with the
+//! [`Integrator`] (e.g. [`crate::integrator::Whitted`]) on rayon workers (each with the
 //! flush-to-zero/denormals-are-zero bits Embree asks for) -> a [`RenderResult`] holding
 //! the film and the statistics. Writing files is the caller's business (`crate::film`).
 
 pub mod context;
 pub mod effects;
 pub mod external_textures;
+pub mod integrator;
 pub mod memory;
 pub mod prepared;
 pub mod sampling;
@@ -21,13 +22,13 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::film::{Film, FilmTile, Layer};
-use crate::integrator::{AovSelection, Integrator, TileImage, TileRect};
+use crate::film::{AovSelection, Film, FilmTile, Layer, TileImage, TileRect};
 use crate::scene::SceneDescription;
 
 pub use context::{ForceEffectsError, RenderContext, RenderOptions, WorkerState};
 pub use effects::EffectSet;
 pub use external_textures::ExternalTextures;
+pub use integrator::Integrator;
 pub use prepared::PrepareError;
 pub use stats::{RenderStats, TileUsage, WorkCounters};
 
@@ -172,9 +173,9 @@ pub enum RenderError {
 
 /// Render `context` with `integrator` into a new film; `Err` if any ray traversal failed
 /// (see [`RenderError`]).
-pub fn render(
+pub fn render<I: Integrator>(
     context: &RenderContext,
-    integrator: &dyn Integrator,
+    integrator: &I,
     control: &RenderControl,
 ) -> Result<RenderResult, RenderError> {
     // A failure left over from an earlier render of this context is not this render's.
@@ -209,9 +210,9 @@ pub fn render(
         .map_init(
             || {
                 crate::embree::enable_flush_denormals();
-                new_worker()
+                (new_worker(), integrator.thread_state(context))
             },
-            |worker, (index, tile)| {
+            |(worker, state), (index, tile)| {
                 if control
                     .skip
                     .is_some_and(|skip| skip.get(index) == Some(&true))
@@ -224,7 +225,7 @@ pub fn render(
                     return None;
                 }
                 let mut image = TileImage::new(*tile, options.aovs);
-                integrator.render_tile(context, *tile, &mut image, worker);
+                integrator.render_tile(context, *tile, &mut image, worker, state);
                 // Hand this tile's work to the total so nothing is lost when a worker's
                 // state is dropped.
                 {

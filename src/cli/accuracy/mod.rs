@@ -43,8 +43,9 @@ use clap::{Args, FromArgMatches};
 
 use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
+use crate::film::AovSelection;
 use crate::film::Film;
-use crate::integrator::{AovSelection, Whitted};
+use crate::integrator::Whitted;
 use crate::render::{self, RenderControl, RenderOptions, RenderResult};
 use crate::scene::{SceneDescription, ToneMap};
 use crate::texture::{FilterOptions, Texture};

@@ -1,0 +1,31 @@
+//! The interface between the render loop and a light-transport algorithm.
+//!
+//! The render loop ([`crate::render::render`]) hands work tiles to rayon workers; each worker
+//! keeps a [`WorkerState`] (the counters and texture-tile records the render reports) and
+//! one [`Integrator::ThreadState`] of the integrator's own (its reusable buffers, later its
+//! sampler state), created once per worker and reused for every tile it renders. The
+//! integrators themselves live in [`crate::integrator`]; this module knows none of them.
+
+use crate::film::{TileImage, TileRect};
+use crate::render::context::{RenderContext, WorkerState};
+
+/// A light-transport algorithm that renders one tile at a time, from any thread.
+pub trait Integrator: Sync {
+    /// What one worker thread keeps between the tiles it renders (reused buffers, sampler
+    /// state); never shared between threads.
+    type ThreadState: Send;
+
+    /// A fresh per-thread state for rendering `context`.
+    fn thread_state(&self, context: &RenderContext) -> Self::ThreadState;
+
+    /// Render `tile` into `image` (already sized for it and zeroed), counting work in
+    /// `worker` and reusing `state`.
+    fn render_tile(
+        &self,
+        context: &RenderContext,
+        tile: TileRect,
+        image: &mut TileImage,
+        worker: &mut WorkerState,
+        state: &mut Self::ThreadState,
+    );
+}
