@@ -1,0 +1,107 @@
+//! Light at a hit: the environment seen by rays that leave the scene, and the shadow rays
+//! that carry each punctual light's direct contribution to the opaque part of a surface.
+
+use glam::Vec3;
+
+use super::{add_radiance, PathRay, Waves};
+use crate::film::TileImage;
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::prepared::environment_radiance;
+use crate::scene::Material;
+use crate::shading::{self, SpawnPoint};
+
+/// A shadow ray and the radiance it delivers if unoccluded.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ShadowRay {
+    pub(super) origin: Vec3,
+    pub(super) direction: Vec3,
+    /// Where the ray stops (`shading::shadow_ray_end`).
+    pub(super) tfar: f32,
+    /// The point light's position (`None` for directional lights): continuations past
+    /// transmissive occluders measure their far end from it.
+    pub(super) light: Option<Vec3>,
+    pub(super) contribution: Vec3,
+    pub(super) pixel: u32,
+}
+
+pub(super) fn shade_miss(
+    context: &RenderContext,
+    ray: &PathRay,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    let effects = &context.effects;
+    let gradients = if effects.footprints {
+        let g = ray.footprint.environment_gradients(ray.direction);
+        [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
+    } else {
+        [0.0; 4]
+    };
+    if matches!(
+        context.scene.environment,
+        crate::scene::Environment::LatLong { .. }
+    ) {
+        worker.counters.texture_lookups += 1;
+    }
+    let radiance = environment_radiance(
+        &context.scene.environment,
+        &context.textures,
+        ray.direction,
+        gradients,
+        &context.texture_filters,
+        context.external_textures.as_deref(),
+    );
+    add_radiance(image, ray.pixel, ray.throughput * radiance);
+}
+
+/// Queue one shadow ray per light that lights the opaque part (weight `opaque`) of a hit
+/// seen along `ray`, carrying what the light delivers if nothing blocks it. `ng` and `ns` are
+/// the geometric and shading normals on the incident side.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn queue_shadow_rays(
+    context: &RenderContext,
+    ray: &PathRay,
+    material: &Material,
+    albedo: Vec3,
+    opaque: f32,
+    spawn: SpawnPoint,
+    ng: Vec3,
+    ns: Vec3,
+    waves: &mut Waves,
+) {
+    let wo = -ray.direction;
+    let origin = spawn.offset_origin(ng);
+    for light in &context.scene.lights {
+        // Direction and distance from the shadow ray's own origin, so its far end
+        // is measured from where it starts.
+        let sample = shading::light_sample(light, origin);
+        let wi = sample.direction_to_light;
+        if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 {
+            continue;
+        }
+        let f = shading::eval_surface(albedo, material.specular, material.shininess, ns, wo, wi);
+        let contribution = ray.throughput * opaque * f * sample.radiance_scale;
+        if contribution.max_element() <= 0.0 {
+            continue;
+        }
+        let light_position = shading::light_position(light);
+        waves.shadows.push(ShadowRay {
+            origin,
+            direction: wi,
+            tfar: shadow_tfar(sample.distance, light_position),
+            light: light_position,
+            contribution,
+            pixel: ray.pixel,
+        });
+    }
+}
+
+/// Shadow rays stop short of a point light robustly (`shading::shadow_ray_end`); towards a
+/// directional light (no position) they are unbounded.
+#[inline]
+pub(super) fn shadow_tfar(distance: f32, light: Option<Vec3>) -> f32 {
+    match light {
+        Some(position) => shading::shadow_ray_end(distance, position),
+        None => f32::INFINITY,
+    }
+}

@@ -1,0 +1,172 @@
+//! Shading a hit: what the camera hit writes to the AOVs, absorption on the way in, the
+//! material's albedo under the ray's footprint, emission and ambient light, and which
+//! secondary rays the material spawns (direct light in `lights`, mirror and dielectric rays
+//! in `spawn` and `dielectric`).
+
+use glam::Vec3;
+
+use super::dielectric::scatter_dielectric;
+use super::lights::queue_shadow_rays;
+use super::spawn::Spawner;
+use super::{add_radiance, PathRay, Waves};
+use crate::film::TileImage;
+use crate::hit::SurfaceHit;
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::prepared::{binding_query, SurfaceDetail};
+use crate::render::stats::RayKind;
+use crate::render::tracer::TraceHit;
+use crate::scene::Material;
+use crate::shading;
+
+/// Texture coordinates are needed for textured materials and for the camera hit's AOVs.
+#[inline]
+pub(super) fn surface_detail(
+    context: &RenderContext,
+    ray: &PathRay,
+    hit: &TraceHit,
+) -> SurfaceDetail {
+    let aov = ray.kind == RayKind::Camera && ray.first_sample && context.options.aovs.surface;
+    if aov || context.surfaces.is_textured(hit) {
+        SurfaceDetail::Texturing
+    } else {
+        SurfaceDetail::Geometry
+    }
+}
+
+/// Shade the hit of `ray` at `surface`: its AOVs, emission and ambient light, the shadow
+/// rays of its direct light, and the secondary rays of the next wave.
+pub(super) fn shade_hit(
+    context: &RenderContext,
+    mut ray: PathRay,
+    surface: &SurfaceHit,
+    image: &mut TileImage,
+    waves: &mut Waves,
+    worker: &mut WorkerState,
+) {
+    let effects = &context.effects;
+    let options = &context.options;
+    let material: &Material = &context.scene.materials[surface.material as usize];
+    let pixel = ray.pixel as usize;
+
+    if ray.kind == RayKind::Camera {
+        if ray.first_sample && !image.depth.is_empty() {
+            image.depth[pixel] = surface.t * ray.direction.dot(context.camera_forward);
+            image.normal[pixel] = surface.shading_normal.to_array();
+            image.uv[pixel] = surface.st.to_array();
+        }
+    }
+
+    // Beer's law over the distance travelled inside the medium (seed 004).
+    if effects.absorption && ray.sigma != Vec3::ZERO {
+        ray.throughput *= shading::transmittance(ray.sigma, surface.t);
+        worker.counters.absorption_evaluations += 1;
+    }
+    if effects.footprints {
+        ray.footprint.transfer(ray.direction, surface);
+        worker.counters.footprint_updates += 1;
+    }
+
+    let albedo = surface_albedo(context, &ray, material, surface, image, worker);
+    if ray.kind == RayKind::Camera && ray.first_sample && !image.albedo.is_empty() {
+        image.albedo[pixel] = albedo.to_array();
+    }
+
+    let front = ray.direction.dot(surface.geometric_normal) < 0.0;
+    let (ng, ns) = if front {
+        (surface.geometric_normal, surface.shading_normal)
+    } else {
+        (-surface.geometric_normal, -surface.shading_normal)
+    };
+    let mut radiance = material.emission;
+    let spawn = surface.spawn_point();
+
+    // Local illumination of the opaque part: direct light with shadow rays, plus ambient
+    // environment light.
+    let opaque = (1.0 - material.mirror) * (1.0 - material.transmission);
+    if opaque > 0.0 {
+        if effects.shadows {
+            queue_shadow_rays(
+                context, &ray, material, albedo, opaque, spawn, ng, ns, waves,
+            );
+        }
+        if effects.environment {
+            radiance += opaque * albedo * context.environment_mean;
+        }
+    }
+    add_radiance(image, ray.pixel, ray.throughput * radiance);
+
+    let can_spawn = ray.depth < options.max_depth;
+    if !can_spawn {
+        return;
+    }
+    let spawner = Spawner {
+        parent: &ray,
+        spawn,
+        min_throughput: options.min_throughput,
+    };
+    if effects.mirror_reflection && material.mirror > 0.0 {
+        spawner.spawn_reflection(context, surface, ns, ng, material.mirror, waves, worker);
+    }
+
+    if effects.refraction && material.transmission > 0.0 {
+        scatter_dielectric(
+            context, &ray, surface, material, ns, ng, &spawner, waves, worker,
+        );
+    }
+}
+
+/// The material's albedo at the hit: base colour times its texture, filtered by the ray's
+/// footprint. Fills the first-lookup AOVs of the pixel.
+pub(super) fn surface_albedo(
+    context: &RenderContext,
+    ray: &PathRay,
+    material: &Material,
+    surface: &SurfaceHit,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) -> Vec3 {
+    let Some(binding) = &material.base_color_texture else {
+        return material.base_color;
+    };
+    let options = &context.options;
+    let filter = &context.texture_filters[binding.texture];
+    let gradients = if context.effects.footprints {
+        let g = ray
+            .footprint
+            .texture_gradients(ray.direction, surface, options.filter.max_aniso);
+        [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
+    } else {
+        [0.0; 4]
+    };
+    let query = binding_query(&binding.transform, surface.st, gradients);
+    let texture = &context.textures[binding.texture];
+    worker.counters.texture_lookups += 1;
+    let texel = match (
+        &context.external_textures,
+        worker.tiles.get_mut(binding.texture),
+    ) {
+        (Some(external), _) => crate::render::external_textures::sample_external(
+            external.as_ref(),
+            binding.texture,
+            &query,
+            filter,
+        ),
+        (None, Some(tiles)) => texture.sample_recording(&query, filter, tiles),
+        (None, None) => texture.sample(&query, filter),
+    };
+    let pixel = ray.pixel as usize;
+    if ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel] {
+        image.lookup_done[pixel] = true;
+        if !image.tex.is_empty() {
+            image.tex[pixel] = [
+                query.s, query.t, query.dsdx, query.dtdx, query.dsdy, query.dtdy,
+            ];
+            image.texcolor[pixel] = [texel.x, texel.y, texel.z, 1.0];
+        }
+        if !image.lod.is_empty() {
+            image.lod[pixel] = texture.lod(&query, filter);
+            image.footprint[pixel] = ray.footprint.width();
+        }
+    }
+    material.base_color * texel.truncate()
+}
