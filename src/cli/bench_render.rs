@@ -112,7 +112,7 @@ pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) 
                     let origin = SpawnPoint::along_ray(ray.origin, ray.direction, hit.t)
                         .offset_origin(-ray.direction);
                     for light in lights {
-                        let sample = shading::light_sample(light, origin);
+                        let sample = shading::sample_li(light, origin);
                         let tfar = shading::shadow_ray_end(
                             sample.distance,
                             shading::light_position(light).unwrap_or(Vec3::ZERO),

@@ -13,6 +13,7 @@ use crate::render::prepared::{MaterialTable, PrepareError, SurfaceLookup};
 use crate::render::stats::{EffectReason, WorkCounters};
 use crate::render::tracer::{AlphaTests, Tracer, TracerSettings};
 use crate::scene::SceneDescription;
+use crate::shading::SceneLights;
 use crate::texture::{FilterOptions, Texture, TileSet};
 
 /// How to render: size, sampling, recursion and filtering choices.
@@ -53,8 +54,9 @@ pub struct RenderContext {
     pub options: RenderOptions,
     /// Filter options per texture: the render's filter with each texture's own wrap modes.
     pub texture_filters: Vec<FilterOptions>,
-    /// Mean environment radiance: the ambient light of diffuse surfaces.
-    pub environment_mean: Vec3,
+    /// The lights integrators sample: the environment (with its mean radiance) and the
+    /// choice among the scene's lights.
+    pub lights: SceneLights,
     /// When set, base-colour and environment lookups go to this texture system instead of
     /// [`Self::textures`] (see [`crate::render::external_textures`]).
     pub external_textures: Option<Arc<dyn crate::render::ExternalTextures>>,

@@ -23,6 +23,7 @@ use glam::{Vec3, Vec4};
 use crate::render::prepared::{self, PrepareError};
 use crate::render::{RenderContext, RenderOptions};
 use crate::scene::{Environment, SceneDescription};
+use crate::shading::SceneLights;
 use crate::texture::{FilterMode, FilterOptions, Texture, TextureQuery};
 
 /// A texture system that serves lookups for a prepared scene.
@@ -70,8 +71,8 @@ pub fn prepare_with_external(
         Environment::LatLong { texture, .. } => context.texture_filters[texture],
         Environment::Color(_) => FilterOptions::default(),
     };
-    context.environment_mean =
-        environment_mean(&context.scene.environment, external.as_ref(), &wrap);
+    let mean = environment_mean(&context.scene.environment, external.as_ref(), &wrap);
+    context.lights = SceneLights::new(&context.scene.lights, mean, context.lights.scene_radius);
     context.external_textures = Some(external);
     Ok(context)
 }

@@ -86,9 +86,14 @@ pub fn prepare_with_textures(
     let camera_forward = (camera_desc.target - camera_desc.eye).normalize_or(glam::Vec3::NEG_Z);
     let environment_mean = prepared::environment_mean(&scene.environment, &textures);
     let texture_filters = prepared::texture_filters(&scene, &options.filter);
+    let surfaces = prepared::SurfaceLookup::new(scene.clone(), geometries);
+    let scene_radius = surfaces
+        .bounds
+        .map_or(0.0, |(lower, upper)| 0.5 * (upper - lower).length());
+    let lights = crate::shading::SceneLights::new(&scene.lights, environment_mean, scene_radius);
     Ok(RenderContext {
         materials: prepared::MaterialTable::new(&scene.materials),
-        surfaces: prepared::SurfaceLookup::new(scene.clone(), geometries),
+        surfaces,
         scene,
         tracer,
         textures,
@@ -98,7 +103,7 @@ pub fn prepare_with_textures(
         needed_effects,
         effect_reasons,
         options,
-        environment_mean,
+        lights,
         texture_filters,
         external_textures: None,
     })

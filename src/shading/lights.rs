@@ -6,6 +6,11 @@
 //! distance (`I / r^2`); a directional light delivers constant irradiance from infinitely far
 //! away; a spot light is additionally scaled by a smoothstep from its outer to its inner cone
 //! angle (the `crate::scene::Light::Spot` contract).
+//!
+//! For integrators these are delta lights (pbrt-v4, section 12.1): [`sample_li`] returns the
+//! one direction each light arrives from, with probability 1, and [`pdf_li`] is zero for any
+//! direction a BSDF sample might pick. The environment ([`super::EnvironmentLight`]) and
+//! the choice of one light per sample ([`super::LightSelection`]) live beside them.
 
 use glam::Vec3;
 
@@ -24,6 +29,8 @@ pub struct LightSample {
     /// falloff), `color * intensity` for directional lights. Zero when the light cannot
     /// reach the point (degenerate position or direction, outside the spot cone).
     pub radiance_scale: Vec3,
+    /// Probability of this direction: 1, as punctual lights are delta lights.
+    pub pdf: f32,
 }
 
 impl LightSample {
@@ -55,9 +62,10 @@ pub fn spot_falloff(cos_angle: f32, inner_angle: f32, outer_angle: f32) -> f32 {
     smoothstep(outer.cos(), inner.cos(), cos_angle)
 }
 
-/// Direction, distance and irradiance scale of `light` as seen from the point `p`.
+/// Direction, distance and irradiance scale of `light` as seen from the point `p`: the one
+/// direction the light arrives from (a delta light, `pdf` 1).
 #[inline]
-pub fn light_sample(light: &Light, p: Vec3) -> LightSample {
+pub fn sample_li(light: &Light, p: Vec3) -> LightSample {
     match light {
         Light::Point {
             position,
@@ -82,6 +90,7 @@ pub fn light_sample(light: &Light, p: Vec3) -> LightSample {
                 } else {
                     *color * *intensity
                 },
+                pdf: 1.0,
             }
         }
         Light::Spot {
@@ -106,6 +115,19 @@ pub fn light_sample(light: &Light, p: Vec3) -> LightSample {
     }
 }
 
+/// Density with which [`sample_li`] picks the direction `wi` from `p`: zero, as a punctual
+/// light occupies no solid angle (a BSDF-sampled ray never hits it).
+#[inline]
+pub fn pdf_li(_light: &Light, _p: Vec3, _wi: Vec3) -> f32 {
+    0.0
+}
+
+/// True for lights that [`sample_li`] reaches in a single direction: all punctual lights.
+#[inline]
+pub fn is_delta_light(_light: &Light) -> bool {
+    true
+}
+
 /// Where a point or spot light sits (`None` for a directional light, which is infinitely
 /// far away): the end shadow rays stop short of.
 #[inline]
@@ -128,12 +150,14 @@ fn point_sample(position: Vec3, p: Vec3, intensity_rgb: Vec3) -> LightSample {
             direction_to_light: Vec3::Z,
             distance: 0.0,
             radiance_scale: Vec3::ZERO,
+            pdf: 1.0,
         };
     }
     LightSample {
         direction_to_light: to_light / distance,
         distance,
         radiance_scale: intensity_rgb / distance2,
+        pdf: 1.0,
     }
 }
 
@@ -148,7 +172,7 @@ mod tests {
             color: Vec3::new(1.0, 0.5, 0.25),
             intensity: 32.0,
         };
-        let s = light_sample(&light, Vec3::ZERO);
+        let s = sample_li(&light, Vec3::ZERO);
         assert!((s.direction_to_light - Vec3::Y).length() < 1e-7);
         assert_eq!(s.distance, 4.0);
         assert!(
@@ -157,7 +181,7 @@ mod tests {
                 .max_element()
                 < 1e-6
         );
-        let far = light_sample(&light, Vec3::new(0.0, -4.0, 0.0));
+        let far = sample_li(&light, Vec3::new(0.0, -4.0, 0.0));
         assert!(
             (far.radiance_scale * 4.0 - s.radiance_scale)
                 .abs()
@@ -173,7 +197,7 @@ mod tests {
             color: Vec3::ONE,
             intensity: 3.0,
         };
-        let s = light_sample(&light, Vec3::new(100.0, -5.0, 7.0));
+        let s = sample_li(&light, Vec3::new(100.0, -5.0, 7.0));
         assert!((s.direction_to_light - Vec3::Y).length() < 1e-7);
         assert_eq!(s.distance, f32::INFINITY);
         assert_eq!(s.radiance_scale, Vec3::splat(3.0));
@@ -193,7 +217,7 @@ mod tests {
         };
         let at_angle = |deg: f32| {
             let a = deg.to_radians();
-            light_sample(&light, Vec3::new(a.tan(), 0.0, 0.0))
+            sample_li(&light, Vec3::new(a.tan(), 0.0, 0.0))
                 .radiance_scale
                 .x
                 * (1.0 / a.cos()).powi(2)
@@ -206,7 +230,7 @@ mod tests {
         assert_eq!(at_angle(31.0), 0.0);
         // Behind the light.
         assert_eq!(
-            light_sample(&light, Vec3::new(0.0, 2.0, 0.0)).radiance_scale,
+            sample_li(&light, Vec3::new(0.0, 2.0, 0.0)).radiance_scale,
             Vec3::ZERO
         );
     }
@@ -218,13 +242,26 @@ mod tests {
     }
 
     #[test]
+    fn punctual_lights_are_delta_lights() {
+        let light = Light::Point {
+            position: Vec3::new(1.0, 2.0, 3.0),
+            color: Vec3::ONE,
+            intensity: 5.0,
+        };
+        let s = sample_li(&light, Vec3::ZERO);
+        assert_eq!(s.pdf, 1.0);
+        assert!(is_delta_light(&light));
+        assert_eq!(pdf_li(&light, Vec3::ZERO, s.direction_to_light), 0.0);
+    }
+
+    #[test]
     fn degenerate_lights_contribute_nothing() {
         let light = Light::Point {
             position: Vec3::ONE,
             color: Vec3::ONE,
             intensity: 1.0,
         };
-        let s = light_sample(&light, Vec3::ONE);
+        let s = sample_li(&light, Vec3::ONE);
         assert!(s.is_black());
         assert!(s.direction_to_light.is_finite());
         let light = Light::Directional {
@@ -232,6 +269,6 @@ mod tests {
             color: Vec3::ONE,
             intensity: 1.0,
         };
-        assert!(light_sample(&light, Vec3::ZERO).is_black());
+        assert!(sample_li(&light, Vec3::ZERO).is_black());
     }
 }

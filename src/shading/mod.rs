@@ -1,4 +1,5 @@
-//! Shading math for the Whitted integrator: pure functions, no scene traversal.
+//! Shading: the BSDFs of materials and the lights, for every integrator; pure functions and
+//! plain data, no scene traversal.
 //!
 //! What lives here (each file implements one concept and cites its seed equations):
 //! - [`reflection`]: mirror directions (seed 001, "Reflection Direction").
@@ -8,9 +9,16 @@
 //!   refracted ray (exact unpolarised Fresnel equations, and Schlick's approximation with
 //!   total internal reflection as in seed 004, "Fresnel").
 //! - [`beer`]: absorption inside a transmissive medium (seed 004, "Beer's Law").
-//! - [`brdf`]: the local illumination model of a hit (Lambert plus normalised Blinn-Phong).
+//! - [`bsdf`]: the BSDF interface (`eval`, `sample`, `pdf`, delta lobes flagged) and
+//!   cosine-weighted hemisphere sampling.
+//! - [`brdf`]: the opaque lobe of a hit (Lambert plus normalised Blinn-Phong).
+//! - [`mirror`] and [`dielectric`]: the smooth mirror and the smooth dielectric boundary
+//!   (exact or Schlick Fresnel, total internal reflection), both delta lobes.
+//! - [`material_bsdf`]: a scene material's lobes with their weights, as one BSDF.
 //! - [`lights`]: direction, distance and irradiance scale towards each punctual light, for
-//!   shadow rays (seed 001, "Shadow Rays").
+//!   shadow rays (seed 001, "Shadow Rays"); punctual lights are delta lights.
+//! - [`environment_light`]: the environment as a light (mean radiance, direction sampling).
+//! - [`light_selection`]: the scene's lights and the choice of one by power.
 //! - [`ray_offset`]: spawn points, hit points with a bound on their rounding error, and
 //!   ray origins moved just past that bound off the surface they start on (seed 001,
 //!   "self intersection"), at any scene scale and camera distance.
@@ -21,16 +29,28 @@
 
 pub mod beer;
 pub mod brdf;
+pub mod bsdf;
+pub mod dielectric;
+pub mod environment_light;
 pub mod fresnel;
+pub mod light_selection;
 pub mod lights;
+pub mod material_bsdf;
+pub mod mirror;
 pub mod ray_offset;
 pub mod reflection;
 pub mod refraction;
 
 pub use beer::{sigma_from_attenuation, transmittance};
-pub use brdf::eval_surface;
+pub use brdf::OpaqueBsdf;
+pub use bsdf::{Bsdf, BsdfSample, Lobe};
+pub use dielectric::{DielectricSplit, SmoothDielectric};
+pub use environment_light::{EnvironmentLight, EnvironmentSample};
 pub use fresnel::{fresnel, fresnel_dielectric, fresnel_schlick, DielectricBoundary};
-pub use lights::{light_position, light_sample, LightSample};
+pub use light_selection::{LightSelection, SceneLights};
+pub use lights::{is_delta_light, light_position, pdf_li, sample_li, LightSample};
+pub use material_bsdf::MaterialBsdf;
+pub use mirror::SmoothMirror;
 pub use ray_offset::{entry_distance, shadow_ray_end, SpawnPoint};
-pub use reflection::reflect;
+pub use reflection::{reflect, reflect_above};
 pub use refraction::refract;

@@ -14,6 +14,20 @@ pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * d.dot(n) * n
 }
 
+/// The mirror direction of the incident `d` about the shading normal `ns`, unless that
+/// would leave below the geometric surface (a shading normal tilted far from the geometric
+/// one at a silhouette); then the mirror direction about the geometric normal `ng`. Both
+/// normals face the incident side.
+#[inline]
+pub fn reflect_above(d: Vec3, ns: Vec3, ng: Vec3) -> Vec3 {
+    let r = reflect(d, ns);
+    if r.dot(ng) > 0.0 {
+        r
+    } else {
+        reflect(d, ng)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -40,6 +54,22 @@ mod tests {
             a.dot(n) * d.dot(n) < 0.0,
             "reflected ray leaves on the incident side"
         );
+    }
+
+    #[test]
+    fn reflection_about_a_tilted_shading_normal_stays_above_the_surface() {
+        let ng = Vec3::Z;
+        // A grazing ray and a shading normal tilted towards it: the shading mirror direction
+        // would go below the surface.
+        let d = Vec3::new(0.99, 0.0, -0.141).normalize();
+        let ns = Vec3::new(0.5, 0.0, 0.866).normalize();
+        assert!(reflect(d, ns).dot(ng) <= 0.0);
+        let r = reflect_above(d, ns, ng);
+        assert!(r.dot(ng) > 0.0);
+        assert_eq!(r, reflect(d, ng));
+        // An untilted normal keeps the shading mirror direction.
+        let d = Vec3::new(0.6, 0.0, -0.8);
+        assert_eq!(reflect_above(d, ng, ng), reflect(d, ng));
     }
 
     #[test]

@@ -7,8 +7,7 @@ use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::environment_radiance;
-use crate::scene::Material;
-use crate::shading::{self, SpawnPoint};
+use crate::shading::{self, Bsdf, OpaqueBsdf, SpawnPoint};
 
 /// A shadow ray and the radiance it delivers if unoccluded.
 #[derive(Clone, Copy, Debug)]
@@ -54,32 +53,32 @@ pub(super) fn shade_miss(
     add_radiance(image, ray.pixel, ray.throughput * radiance);
 }
 
-/// Queue one shadow ray per light that lights the opaque part (weight `opaque`) of a hit
-/// seen along `ray`, carrying what the light delivers if nothing blocks it. `ng` and `ns` are
-/// the geometric and shading normals on the incident side.
+/// Queue one shadow ray per light that lights the opaque lobe `bsdf` (weight `opaque`) of a
+/// hit seen along `ray`, carrying what the light delivers if nothing blocks it. `ng` is the
+/// geometric normal on the incident side, as the lobe's shading normal is.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn queue_shadow_rays(
     context: &RenderContext,
     ray: &PathRay,
-    material: &Material,
-    albedo: Vec3,
+    bsdf: &OpaqueBsdf,
     opaque: f32,
     spawn: SpawnPoint,
     ng: Vec3,
-    ns: Vec3,
     waves: &mut Waves,
 ) {
+    let ns = bsdf.n;
     let wo = -ray.direction;
     let origin = spawn.offset_origin(ng);
     for light in &context.scene.lights {
         // Direction and distance from the shadow ray's own origin, so its far end
         // is measured from where it starts.
-        let sample = shading::light_sample(light, origin);
+        let sample = shading::sample_li(light, origin);
         let wi = sample.direction_to_light;
         if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 {
             continue;
         }
-        let f = shading::eval_surface(albedo, material.specular, material.shininess, ns, wo, wi);
+        // The opaque lobe times the cosine at the surface (seed 001's local illumination).
+        let f = bsdf.eval(wo, wi) * ns.dot(wi);
         let contribution = ray.throughput * opaque * f * sample.radiance_scale;
         if contribution.max_element() <= 0.0 {
             continue;

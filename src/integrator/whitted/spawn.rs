@@ -8,7 +8,7 @@ use crate::footprint::Footprint;
 use crate::hit::SurfaceHit;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
-use crate::shading::{self, SpawnPoint};
+use crate::shading::SpawnPoint;
 
 /// Spawns the secondary rays of one hit.
 pub(super) struct Spawner<'a> {
@@ -52,22 +52,21 @@ impl Spawner<'_> {
         });
     }
 
-    /// Queue the mirror reflection of the parent ray (about the shading normal `ns`, kept
-    /// above the geometric normal `ng`, both on the incident side) with weight `weight`, its
+    /// Queue the mirror reflection `reflected` of the parent ray (leaving on the side of the
+    /// geometric normal `ng`, which faces the incident ray) with weight `weight`, its
     /// footprint reflected too.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn spawn_reflection(
         &self,
         context: &RenderContext,
         surface: &SurfaceHit,
-        ns: Vec3,
+        reflected: Vec3,
         ng: Vec3,
         weight: f32,
         waves: &mut Waves,
         worker: &mut WorkerState,
     ) {
         let ray = self.parent;
-        let reflected = reflect_above(ray.direction, ns, ng);
         let footprint =
             footprint_reflect(context.effects.footprints, ray, surface, reflected, worker);
         self.spawn(
@@ -80,17 +79,6 @@ impl Spawner<'_> {
             footprint,
             ray.sigma,
         );
-    }
-}
-
-/// Mirror direction about the shading normal, kept above the geometric surface.
-#[inline]
-pub(super) fn reflect_above(direction: Vec3, ns: Vec3, ng: Vec3) -> Vec3 {
-    let r = shading::reflect(direction, ns);
-    if r.dot(ng) > 0.0 {
-        r
-    } else {
-        shading::reflect(direction, ng)
     }
 }
 

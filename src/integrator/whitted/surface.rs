@@ -16,7 +16,7 @@ use crate::render::prepared::{binding_query, SurfaceDetail};
 use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
 use crate::scene::Material;
-use crate::shading;
+use crate::shading::{self, MaterialBsdf};
 
 /// Texture coordinates are needed for textured materials and for the camera hit's AOVs.
 #[inline]
@@ -71,26 +71,30 @@ pub(super) fn shade_hit(
         image.albedo[pixel] = albedo.to_array();
     }
 
-    let front = ray.direction.dot(surface.geometric_normal) < 0.0;
-    let (ng, ns) = if front {
-        (surface.geometric_normal, surface.shading_normal)
-    } else {
-        (-surface.geometric_normal, -surface.shading_normal)
-    };
     let mut radiance = material.emission;
     let spawn = surface.spawn_point();
+    // The index-matched case (the `fresnel` effect is off when every medium has ior 1)
+    // reflects nothing but total internal reflection.
+    let bsdf = MaterialBsdf::new(
+        material,
+        albedo,
+        ray.direction,
+        surface.geometric_normal,
+        surface.shading_normal,
+        effects.fresnel.then_some(options.fresnel),
+    );
 
     // Local illumination of the opaque part: direct light with shadow rays, plus ambient
     // environment light.
-    let opaque = (1.0 - material.mirror) * (1.0 - material.transmission);
+    // The geometric normal on the incident side: rays leaving on that side start above it.
+    let ng = bsdf.mirror.ng;
+    let opaque = bsdf.opaque_weight;
     if opaque > 0.0 {
         if effects.shadows {
-            queue_shadow_rays(
-                context, &ray, material, albedo, opaque, spawn, ng, ns, waves,
-            );
+            queue_shadow_rays(context, &ray, &bsdf.opaque, opaque, spawn, ng, waves);
         }
         if effects.environment {
-            radiance += opaque * albedo * context.environment_mean;
+            radiance += opaque * albedo * context.lights.environment.mean_radiance;
         }
     }
     add_radiance(image, ray.pixel, ray.throughput * radiance);
@@ -104,13 +108,16 @@ pub(super) fn shade_hit(
         spawn,
         min_throughput: options.min_throughput,
     };
-    if effects.mirror_reflection && material.mirror > 0.0 {
-        spawner.spawn_reflection(context, surface, ns, ng, material.mirror, waves, worker);
+    if effects.mirror_reflection && bsdf.mirror_weight > 0.0 {
+        let reflected = bsdf.mirror.direction(-ray.direction);
+        let weight = bsdf.mirror_weight;
+        spawner.spawn_reflection(context, surface, reflected, ng, weight, waves, worker);
     }
 
-    if effects.refraction && material.transmission > 0.0 {
+    if effects.refraction && bsdf.dielectric_weight > 0.0 {
+        let dielectric = &bsdf.dielectric;
         scatter_dielectric(
-            context, &ray, surface, material, ns, ng, &spawner, waves, worker,
+            context, &ray, surface, material, dielectric, &spawner, waves, worker,
         );
     }
 }

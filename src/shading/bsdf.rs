@@ -1,0 +1,154 @@
+//! The BSDF interface every material lobe implements, for integrators that sample
+//! directions (a path tracer) as well as those that follow delta lobes deterministically
+//! (Whitted).
+//!
+//! Conventions (as in pbrt-v4, section 9.1): `wo` points from the surface towards where the
+//! light goes (the viewer), `wi` towards where it comes from; both are unit vectors in world
+//! space. [`Bsdf::eval`] is `f(wo, wi)` without the cosine; [`Bsdf::pdf`] the solid-angle
+//! density with which [`Bsdf::sample`] picks `wi`. Delta lobes (a smooth mirror, a smooth
+//! dielectric) scatter into single directions: `eval` and `pdf` are zero for them, and only
+//! `sample` finds those directions, flagging the sample with [`Lobe::is_delta`].
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3};
+
+/// Which kind of lobe produced a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lobe {
+    /// A lobe with a density over directions (diffuse, glossy highlight).
+    Smooth,
+    /// A perfect mirror direction (delta).
+    DeltaReflection,
+    /// A refracted direction through a smooth boundary (delta).
+    DeltaTransmission,
+}
+
+impl Lobe {
+    /// True for lobes that scatter into a single direction (no density).
+    #[inline]
+    pub fn is_delta(self) -> bool {
+        self != Lobe::Smooth
+    }
+}
+
+/// A direction drawn from a BSDF.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    /// Unit direction the light comes from.
+    pub wi: Vec3,
+    /// What the sample multiplies the path throughput by: `f(wo, wi) |n . wi| / pdf` for a
+    /// smooth lobe; for a delta lobe, the energy it carries divided by the probability of
+    /// choosing it.
+    pub weight: Vec3,
+    /// Solid-angle density of `wi` for a smooth lobe; the discrete probability of the
+    /// chosen lobe for a delta one.
+    pub pdf: f32,
+    pub lobe: Lobe,
+}
+
+/// A material's scattering at one shading point.
+pub trait Bsdf {
+    /// `f(wo, wi)`, without the cosine; zero for delta lobes.
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3;
+    /// Draws `wi` for `wo` from the uniform numbers `u_lobe` (which lobe) and `u` (where in
+    /// it); `None` when nothing scatters (e.g. `wo` below an opaque surface).
+    fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample>;
+    /// Solid-angle density of [`Bsdf::sample`] choosing `wi`; zero for delta lobes.
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32;
+    /// True when the BSDF has delta lobes, whose directions only `sample` finds.
+    fn has_delta(&self) -> bool;
+}
+
+/// Two unit vectors completing the unit `n` to an orthonormal basis, without a division by
+/// a small number (Duff et al. 2017, "Building an Orthonormal Basis, Revisited", listing 3).
+#[inline]
+pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// A cosine-distributed direction about the unit `n` (density `(n . w) / pi`), by
+/// Malley's method: a uniform point on the unit disk (concentric mapping, Shirley and Chiu
+/// 1997) lifted onto the hemisphere (pbrt-v4, section A.5.3).
+#[inline]
+pub fn sample_cosine_hemisphere(n: Vec3, u: Vec2) -> Vec3 {
+    let d = concentric_disk(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    let (t, b) = orthonormal_basis(n);
+    (t * d.x + b * d.y + n * z).normalize()
+}
+
+/// Shirley and Chiu's concentric map from the unit square to the unit disk, which keeps
+/// strata compact.
+#[inline]
+fn concentric_disk(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o == Vec2::ZERO {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, PI / 4.0 * (o.y / o.x))
+    } else {
+        (o.y, PI / 2.0 - PI / 4.0 * (o.x / o.y))
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A small deterministic generator of uniform numbers in [0, 1) (xorshift64*).
+    pub(crate) struct Uniforms(pub u64);
+
+    impl Uniforms {
+        pub(crate) fn next(&mut self) -> f32 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            let bits = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40;
+            bits as f32 / (1u64 << 24) as f32
+        }
+        pub(crate) fn vec2(&mut self) -> Vec2 {
+            Vec2::new(self.next(), self.next())
+        }
+    }
+
+    #[test]
+    fn basis_is_orthonormal_for_any_normal() {
+        let mut u = Uniforms(7);
+        for _ in 0..1000 {
+            let n = Vec3::new(u.next() - 0.5, u.next() - 0.5, u.next() - 0.5).normalize();
+            let (t, b) = orthonormal_basis(n);
+            assert!((t.length() - 1.0).abs() < 1e-5 && (b.length() - 1.0).abs() < 1e-5);
+            assert!(t.dot(n).abs() < 1e-5 && b.dot(n).abs() < 1e-5 && t.dot(b).abs() < 1e-5);
+        }
+        let (t, b) = orthonormal_basis(-Vec3::Z);
+        assert!(t.is_finite() && b.is_finite());
+    }
+
+    #[test]
+    fn cosine_samples_have_the_cosine_moments() {
+        // E[cos] = 2/3 and E[cos^2] = 1/2 under the density cos / pi.
+        let n = Vec3::new(0.3, -0.5, 0.8).normalize();
+        let mut u = Uniforms(11);
+        let count = 200_000;
+        let (mut m1, mut m2) = (0.0f64, 0.0f64);
+        for _ in 0..count {
+            let w = sample_cosine_hemisphere(n, u.vec2());
+            let c = w.dot(n) as f64;
+            assert!(c >= -1e-6 && (w.length() - 1.0).abs() < 1e-5);
+            m1 += c;
+            m2 += c * c;
+        }
+        let (m1, m2) = (m1 / count as f64, m2 / count as f64);
+        assert!((m1 - 2.0 / 3.0).abs() < 3e-3, "E[cos] = {m1}");
+        assert!((m2 - 0.5).abs() < 3e-3, "E[cos^2] = {m2}");
+    }
+}

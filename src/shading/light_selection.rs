@@ -1,0 +1,194 @@
+//! Which light to sample: the scene's lights (punctual lights and the environment) and a
+//! choice of one of them per sample, with probability proportional to an estimate of its
+//! power (pbrt-v4's power light sampler, section 12.6.2).
+//!
+//! Powers are compared by luminance (Rec. 709 weights): a point light's is `4 pi I`, a spot
+//! light's `2 pi (1 - cos theta) I` with the mean of its inner and outer angles, a
+//! directional light's `pi r^2 E` and the environment's `4 pi^2 r^2 L_mean` over a disk or
+//! sphere of the scene's bounding radius `r`. A light with no power is never chosen.
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+
+use super::environment_light::EnvironmentLight;
+use crate::scene::Light;
+
+/// Luminance of a linear Rec. 709 colour.
+#[inline]
+fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// Chooses one of `n` items with fixed probabilities, from one uniform number.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LightSelection {
+    /// Running sums of the normalised probabilities (the last is 1); empty when nothing can
+    /// be chosen.
+    cdf: Vec<f32>,
+}
+
+impl LightSelection {
+    /// Probabilities proportional to `weights` (negative and non-finite ones count as 0).
+    pub fn from_weights(weights: &[f32]) -> LightSelection {
+        let clean = |w: f32| if w.is_finite() && w > 0.0 { w } else { 0.0 };
+        let total: f32 = weights.iter().map(|&w| clean(w)).sum();
+        if total <= 0.0 {
+            return LightSelection { cdf: Vec::new() };
+        }
+        let mut sum = 0.0;
+        let mut cdf: Vec<f32> = weights
+            .iter()
+            .map(|&w| {
+                sum += clean(w) / total;
+                sum
+            })
+            .collect();
+        // Rounding may leave the sum short of 1: the last item with a weight closes it, so an
+        // item without one keeps probability 0.
+        if let Some(last) = weights.iter().rposition(|&w| clean(w) > 0.0) {
+            for c in &mut cdf[last..] {
+                *c = 1.0;
+            }
+        }
+        LightSelection { cdf }
+    }
+
+    /// Probability of choosing item `index`.
+    pub fn pmf(&self, index: usize) -> f32 {
+        match index {
+            _ if index >= self.cdf.len() => 0.0,
+            0 => self.cdf[0],
+            _ => self.cdf[index] - self.cdf[index - 1],
+        }
+    }
+
+    /// The item the uniform number `u` in [0, 1) chooses, with its probability; `None`
+    /// when no item can be chosen.
+    pub fn select(&self, u: f32) -> Option<(usize, f32)> {
+        let index = self.cdf.partition_point(|&c| c <= u);
+        // Rounding can put u at or past the last sum: take the last item with a weight.
+        let index = if index < self.cdf.len() {
+            index
+        } else {
+            (0..self.cdf.len()).rev().find(|&i| self.pmf(i) > 0.0)?
+        };
+        Some((index, self.pmf(index)))
+    }
+}
+
+/// The lights an integrator samples: the scene's punctual lights (indices `0..n`, in the
+/// scene's order), then the environment (index `n`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneLights {
+    pub environment: EnvironmentLight,
+    /// One choice among the punctual lights and the environment, by power.
+    pub selection: LightSelection,
+    /// Radius of the scene's bounding sphere, over which lights at infinity deliver power.
+    pub scene_radius: f32,
+}
+
+impl SceneLights {
+    /// The lights of a scene with punctual `lights`, an environment of mean radiance
+    /// `environment_mean` and geometry within a sphere of `scene_radius`.
+    pub fn new(lights: &[Light], environment_mean: Vec3, scene_radius: f32) -> SceneLights {
+        let environment = EnvironmentLight {
+            mean_radiance: environment_mean,
+        };
+        let r2 = scene_radius * scene_radius;
+        let mut powers: Vec<f32> = lights.iter().map(|l| light_power(l, r2)).collect();
+        powers.push(4.0 * PI * PI * r2 * luminance(environment_mean));
+        SceneLights {
+            environment,
+            selection: LightSelection::from_weights(&powers),
+            scene_radius,
+        }
+    }
+}
+
+/// The power estimate of one punctual light (see the module docs).
+fn light_power(light: &Light, r2: f32) -> f32 {
+    match light {
+        Light::Point {
+            color, intensity, ..
+        } => 4.0 * PI * intensity * luminance(*color),
+        Light::Spot {
+            color,
+            intensity,
+            inner_angle,
+            outer_angle,
+            ..
+        } => {
+            let half_angle = 0.5 * (inner_angle + outer_angle);
+            2.0 * PI * (1.0 - half_angle.cos()) * intensity * luminance(*color)
+        }
+        Light::Directional {
+            color, intensity, ..
+        } => PI * r2 * intensity * luminance(*color),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shading::bsdf::tests::Uniforms;
+
+    #[test]
+    fn selection_frequencies_match_the_probabilities() {
+        let selection = LightSelection::from_weights(&[1.0, 0.0, 3.0, 4.0]);
+        let total: f32 = (0..4).map(|i| selection.pmf(i)).sum();
+        assert!((total - 1.0).abs() < 1e-6);
+        assert_eq!(selection.pmf(1), 0.0);
+        let mut u = Uniforms(31);
+        let mut counts = [0usize; 4];
+        let count = 80_000;
+        for _ in 0..count {
+            let (i, p) = selection.select(u.next()).expect("weights");
+            assert_eq!(p, selection.pmf(i));
+            counts[i] += 1;
+        }
+        assert_eq!(counts[1], 0, "a light without power was chosen");
+        for (i, expected) in [(0, 0.125), (2, 0.375), (3, 0.5)] {
+            let share = counts[i] as f32 / count as f32;
+            assert!((share - expected).abs() < 0.01, "{i}: {share}");
+        }
+        // The edges of [0, 1) choose lights with power.
+        assert_eq!(selection.select(0.0).map(|s| s.0), Some(0));
+        assert_eq!(selection.select(1.0).map(|s| s.0), Some(3));
+    }
+
+    #[test]
+    fn nothing_to_choose_without_power() {
+        let selection = LightSelection::from_weights(&[0.0, -1.0, f32::NAN]);
+        assert_eq!(selection.select(0.5), None);
+        assert_eq!(selection.pmf(0), 0.0);
+    }
+
+    #[test]
+    fn scene_lights_weigh_lights_by_power() {
+        let lights = [
+            Light::Point {
+                position: Vec3::ZERO,
+                color: Vec3::ONE,
+                intensity: 10.0,
+            },
+            Light::Directional {
+                direction: -Vec3::Y,
+                color: Vec3::ONE,
+                intensity: 1.0,
+            },
+        ];
+        let scene = SceneLights::new(&lights, Vec3::ZERO, 2.0);
+        // 40 pi against 4 pi: the point light is chosen ten times as often.
+        let ratio = scene.selection.pmf(0) / scene.selection.pmf(1);
+        assert!((ratio - 10.0).abs() < 1e-4, "{ratio}");
+        assert_eq!(
+            scene.selection.pmf(2),
+            0.0,
+            "a black environment is never chosen"
+        );
+        let lit = SceneLights::new(&lights, Vec3::splat(0.5), 2.0);
+        assert!(lit.selection.pmf(2) > 0.0);
+        assert_eq!(lit.environment.mean_radiance, Vec3::splat(0.5));
+    }
+}
