@@ -4,7 +4,8 @@
 //! keeps a [`WorkerState`] (the counters and texture-tile records the render reports) and
 //! one [`Integrator::ThreadState`] of the integrator's own (its reusable buffers, later its
 //! sampler state), created once per worker and reused for every tile it renders. The
-//! integrators themselves live in [`crate::integrator`]; this module knows none of them.
+//! integrators themselves live in `crate::integrator`, which depends on this stage; this
+//! module knows none of them.
 
 use crate::film::{TileImage, TileRect};
 use crate::render::context::{RenderContext, WorkerState};

@@ -2,7 +2,7 @@
 //!
 //! Data flow: [`SceneDescription`] -> [`prepare`] (decode textures, build and commit the
 //! Embree scene, analyse effects) -> tiles rendered in parallel by an
-//! [`Integrator`] (e.g. [`crate::integrator::Whitted`]) on rayon workers (each with the
+//! [`Integrator`] (e.g. Whitted's, from `crate::integrator`) on rayon workers (each with the
 //! flush-to-zero/denormals-are-zero bits Embree asks for) -> a [`RenderResult`] holding
 //! the film and the statistics. Writing files is the caller's business (`crate::film`).
 
