@@ -110,7 +110,7 @@ pub struct RenderArgs {
     pub resume: bool,
 }
 
-pub use crate::cli::resume::{decode_tiles, encode_tiles, TILES_DONE_ATTRIBUTE};
+use crate::cli::resume::{encode_tiles, TILES_DONE_ATTRIBUTE};
 
 /// `--lod`'s values, listed in `--help` and in errors.
 pub fn lod_parser() -> impl clap::builder::TypedValueParser<Value = LodStrategy> {
