@@ -1,10 +1,10 @@
 //! The C API (`src/capi`, `include/conetrace.h`): the committed header matches cbindgen's
 //! output; the C and C++ examples compile against `libconetrace.so` and run, and the C
 //! example also links statically against `libconetrace.a` with `conetrace.pc`'s flags; and
-//! the entry
-//! points reject bad input (NULL pointers, null/dangling/wrong-kind handles, unparsable
-//! scenes, wrong `struct_size`, a failing texture callback) with a status and a message,
-//! while a render cancelled from the progress callback leaves a valid partial image.
+//! the entry points reject bad input (NULL pointers, null/dangling/wrong-kind handles,
+//! unparsable scenes, wrong `struct_size`, a failing texture callback) with a status and a
+//! message, while a render cancelled from the progress callback leaves a valid partial
+//! image.
 //!
 //! Missing `cc`, `g++`, `pkg-config` or OpenImageIO's headers fail the tests with a message
 //! naming `bash scripts/setup.sh`.
