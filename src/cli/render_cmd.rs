@@ -208,7 +208,7 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
             texture_footprint: extra(AovName::Footprint),
             lod: extra(AovName::Lod),
         },
-        count_tiles: args.stats.is_some(),
+        count_texture_tiles: args.stats.is_some(),
         all_effects: args.all_effects,
     })
 }

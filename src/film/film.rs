@@ -75,14 +75,14 @@ impl FilmLayout {
 
 /// A pixel rectangle of the film: columns `x0 .. x0 + width`, rows `y0 .. y0 + height`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct TileRect {
+pub struct PixelRect {
     pub x0: u32,
     pub y0: u32,
     pub width: u32,
     pub height: u32,
 }
 
-impl TileRect {
+impl PixelRect {
     /// Number of pixels covered.
     #[inline]
     pub fn area(&self) -> usize {
@@ -102,10 +102,10 @@ impl TileRect {
     }
 
     /// The part of this rectangle inside a `width` x `height` image.
-    pub fn clipped(&self, width: u32, height: u32) -> TileRect {
+    pub fn clipped(&self, width: u32, height: u32) -> PixelRect {
         let x0 = self.x0.min(width);
         let y0 = self.y0.min(height);
-        TileRect {
+        PixelRect {
             x0,
             y0,
             width: self.width.min(width - x0),
@@ -256,7 +256,7 @@ impl Film {
     }
 
     /// An empty (zero) tile covering `rect` (clipped to the film) with this film's layout.
-    pub fn new_tile(&self, rect: TileRect) -> FilmTile {
+    pub fn new_tile(&self, rect: PixelRect) -> FilmTile {
         let mut tile = FilmTile::default();
         tile.reset(self.layout, rect.clipped(self.width, self.height));
         tile
@@ -298,7 +298,7 @@ impl Film {
 
     /// Copies the pixels of `rect` from `other` (e.g. a film read back for `--resume`) for
     /// every layer both films hold. Does nothing when the sizes differ.
-    pub fn copy_region_from(&mut self, other: &Film, rect: TileRect) {
+    pub fn copy_region_from(&mut self, other: &Film, rect: PixelRect) {
         if other.width != self.width || other.height != self.height {
             return;
         }
@@ -328,7 +328,7 @@ impl Film {
 /// A rectangle of the film filled by one worker, merged with [`Film::merge_tile`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FilmTile {
-    rect: TileRect,
+    rect: PixelRect,
     layout: FilmLayout,
     /// Planar like the film: `layout.channel_count()` planes of `rect.area()` values.
     data: Vec<f32>,
@@ -336,14 +336,14 @@ pub struct FilmTile {
 
 impl FilmTile {
     /// A zero tile covering `rect` with `layout` (from [`Film::layout`]).
-    pub fn new(layout: FilmLayout, rect: TileRect) -> FilmTile {
+    pub fn new(layout: FilmLayout, rect: PixelRect) -> FilmTile {
         let mut tile = FilmTile::default();
         tile.reset(layout, rect);
         tile
     }
 
     /// Re-targets this tile to `rect` and zeroes it, reusing its buffer.
-    pub fn reset(&mut self, layout: FilmLayout, rect: TileRect) {
+    pub fn reset(&mut self, layout: FilmLayout, rect: PixelRect) {
         self.rect = rect;
         self.layout = layout;
         self.data.clear();
@@ -352,7 +352,7 @@ impl FilmTile {
 
     /// The rectangle covered, in image coordinates.
     #[inline]
-    pub fn rect(&self) -> TileRect {
+    pub fn rect(&self) -> PixelRect {
         self.rect
     }
 
@@ -502,7 +502,7 @@ mod tests {
         let layout = FilmLayout::new(&[Layer::Color, Layer::Depth]);
         let mut tile = FilmTile::new(
             layout,
-            TileRect {
+            PixelRect {
                 x0: 3,
                 y0: 3,
                 width: 4,
@@ -531,7 +531,7 @@ mod tests {
         let mut resumed = Film::new(4, 4, &[Layer::Depth, Layer::Color]);
         resumed.copy_region_from(
             &done,
-            TileRect {
+            PixelRect {
                 x0: 2,
                 y0: 0,
                 width: 2,

@@ -8,7 +8,7 @@
 pub mod tile_image;
 pub mod whitted;
 
-pub use tile_image::{block_order, AovSelection, TileImage, TileRect};
+pub use tile_image::{block_order, AovSelection, PixelRect, TileImage};
 pub use whitted::Whitted;
 
 use crate::render::context::RenderContext;
@@ -20,7 +20,7 @@ pub trait Integrator: Sync {
     fn render_tile(
         &self,
         context: &RenderContext,
-        tile: TileRect,
+        tile: PixelRect,
         image: &mut TileImage,
         worker: &mut WorkerState,
     );

@@ -23,7 +23,7 @@ use glam::{Vec2, Vec3};
 
 use crate::footprint::Footprint;
 use crate::hit::SurfaceHit;
-use crate::integrator::{block_order, Integrator, TileImage, TileRect};
+use crate::integrator::{block_order, Integrator, PixelRect, TileImage};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{binding_query, environment_radiance, SurfaceDetail};
 use crate::render::sampling;
@@ -104,7 +104,7 @@ impl Integrator for Whitted {
     fn render_tile(
         &self,
         context: &RenderContext,
-        tile: TileRect,
+        tile: PixelRect,
         image: &mut TileImage,
         worker: &mut WorkerState,
     ) {
@@ -140,7 +140,7 @@ impl Integrator for Whitted {
 /// Camera rays of one sample for a tile, ordered so that each run of 16 is a 4x4 block.
 fn generate_camera_rays(
     context: &RenderContext,
-    tile: TileRect,
+    tile: PixelRect,
     sample: u32,
     image_width: u32,
     out: &mut Vec<PathRay>,
@@ -571,7 +571,7 @@ fn surface_albedo(
     worker.counters.texture_lookups += 1;
     let texel = match (
         &context.external_textures,
-        worker.tiles.get_mut(binding.texture),
+        worker.texture_tiles.get_mut(binding.texture),
     ) {
         (Some(external), _) => crate::render::external_textures::sample_external(
             external.as_ref(),

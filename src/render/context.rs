@@ -13,7 +13,7 @@ use crate::render::prepared::{MaterialTable, PrepareError, SurfaceLookup};
 use crate::render::stats::{EffectReason, WorkCounters};
 use crate::render::tracer::{AlphaTests, Tracer, TracerSettings};
 use crate::scene::SceneDescription;
-use crate::texture::{FilterOptions, Texture, TileSet};
+use crate::texture::{FilterOptions, Texture, TextureTileSet};
 
 /// How to render: size, sampling, recursion and filtering choices.
 #[derive(Clone, Debug, PartialEq)]
@@ -28,7 +28,7 @@ pub struct RenderOptions {
     pub fresnel: crate::scene::FresnelMode,
     pub aovs: AovSelection,
     /// Record the 64x64 texture tiles every lookup touches (for `--stats`).
-    pub count_tiles: bool,
+    pub count_texture_tiles: bool,
     /// Force every effect on (the general path), for benchmarks.
     pub all_effects: bool,
 }
@@ -152,6 +152,6 @@ pub fn forced_reasons(
 #[derive(Default)]
 pub struct WorkerState {
     pub counters: WorkCounters,
-    /// One tile record per texture, when tiles are counted.
-    pub tiles: Vec<TileSet>,
+    /// One record of touched 64x64 texture tiles per texture, when they are counted.
+    pub texture_tiles: Vec<TextureTileSet>,
 }

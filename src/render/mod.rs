@@ -22,17 +22,21 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::film::{Film, FilmTile, Layer};
-use crate::integrator::{AovSelection, Integrator, TileImage, TileRect};
+use crate::integrator::{AovSelection, Integrator, PixelRect, TileImage};
 use crate::scene::SceneDescription;
 
 pub use context::{ForceEffectsError, RenderContext, RenderOptions, WorkerState};
 pub use effects::EffectSet;
 pub use external_textures::ExternalTextures;
 pub use prepared::PrepareError;
-pub use stats::{RenderStats, TileUsage, WorkCounters};
+pub use stats::{RenderStats, TextureTileUsage, WorkCounters};
 
 /// Side of the square work tiles handed to workers (a multiple of the 4x4 packet block).
-pub const TILE_SIZE: u32 = 16;
+///
+/// A *work tile* is a rectangle of image pixels rendered by one worker; [`work_tiles`] is
+/// the one enumeration of them. It is unrelated to the 64x64-texel *texture tiles* of
+/// [`crate::texture::TextureTileSet`], a texture cache's unit.
+pub const WORK_TILE_SIZE: u32 = 16;
 
 /// A finished (or interrupted) render.
 pub struct RenderResult {
@@ -118,16 +122,18 @@ pub fn film_layers(aovs: AovSelection) -> Vec<Layer> {
     layers
 }
 
-/// The work tiles of an image, in row-major order.
-pub fn work_tiles(width: u32, height: u32) -> Vec<TileRect> {
+/// The work tiles of an image, in row-major order: every render, `--resume`'s list of
+/// finished tiles and the benchmarks use this one enumeration, so a tile's index means the
+/// same rectangle everywhere.
+pub fn work_tiles(width: u32, height: u32) -> Vec<PixelRect> {
     let mut tiles = Vec::new();
-    for y0 in (0..height).step_by(TILE_SIZE as usize) {
-        for x0 in (0..width).step_by(TILE_SIZE as usize) {
-            tiles.push(TileRect {
+    for y0 in (0..height).step_by(WORK_TILE_SIZE as usize) {
+        for x0 in (0..width).step_by(WORK_TILE_SIZE as usize) {
+            tiles.push(PixelRect {
                 x0,
                 y0,
-                width: TILE_SIZE.min(width - x0),
-                height: TILE_SIZE.min(height - y0),
+                width: WORK_TILE_SIZE.min(width - x0),
+                height: WORK_TILE_SIZE.min(height - y0),
             });
         }
     }
@@ -188,16 +194,16 @@ pub fn render(
         })?;
     let finished_count = AtomicUsize::new(0);
     let totals = Mutex::new(WorkerState::default());
-    let count_tiles = options.count_tiles;
+    let count_texture_tiles = options.count_texture_tiles;
     let start = Instant::now();
     let texture_count = context.textures.len();
     let new_worker = || WorkerState {
         counters: WorkCounters::default(),
-        tiles: if count_tiles {
+        texture_tiles: if count_texture_tiles {
             context
                 .textures
                 .iter()
-                .map(|_| crate::texture::TileSet::new())
+                .map(|_| crate::texture::TextureTileSet::new())
                 .collect()
         } else {
             Vec::new()
@@ -231,12 +237,15 @@ pub fn render(
                     let mut total = totals.lock().unwrap_or_else(|e| e.into_inner());
                     total.counters.add(&worker.counters);
                     worker.counters = WorkCounters::default();
-                    if count_tiles {
-                        let parts = std::mem::replace(&mut worker.tiles, new_worker().tiles);
-                        if total.tiles.is_empty() {
-                            total.tiles = parts;
+                    if count_texture_tiles {
+                        let parts = std::mem::replace(
+                            &mut worker.texture_tiles,
+                            new_worker().texture_tiles,
+                        );
+                        if total.texture_tiles.is_empty() {
+                            total.texture_tiles = parts;
                         } else {
-                            for (sum, part) in total.tiles.iter_mut().zip(parts) {
+                            for (sum, part) in total.texture_tiles.iter_mut().zip(parts) {
                                 sum.merge(part);
                             }
                         }
@@ -267,14 +276,14 @@ pub fn render(
     }
     let total = totals.into_inner().unwrap_or_else(|e| e.into_inner());
     let counters = total.counters;
-    let texture_tiles = count_tiles.then(|| TileUsage {
-        total: total.tiles.iter().map(|t| t.count()).sum(),
+    let texture_tiles = count_texture_tiles.then(|| TextureTileUsage {
+        total: total.texture_tiles.iter().map(|t| t.count()).sum(),
         per_texture: (0..texture_count)
             .map(|i| {
                 (
                     context.scene.textures[i].name.clone(),
                     total
-                        .tiles
+                        .texture_tiles
                         .get(i)
                         .map(|t| t.count_per_level())
                         .unwrap_or_default(),
@@ -324,7 +333,7 @@ pub fn render(
 }
 
 /// Copy an integrator's tile into the film, layer by layer.
-fn copy_tile_to_film(image: &TileImage, rect: TileRect, film: &mut Film) {
+fn copy_tile_to_film(image: &TileImage, rect: PixelRect, film: &mut Film) {
     let mut tile: FilmTile = film.new_tile(rect);
     for y in 0..rect.height {
         for x in 0..rect.width {

@@ -64,7 +64,7 @@ impl WorkCounters {
 /// Texture tiles (64x64 texels) touched per texture and mip level over a whole render:
 /// the metric of seed 000's figures 4-7.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
-pub struct TileUsage {
+pub struct TextureTileUsage {
     pub total: u64,
     /// One entry per texture, in scene order: `(name, tiles per mip level)`.
     pub per_texture: Vec<(String, Vec<u64>)>,
@@ -85,7 +85,7 @@ pub struct RenderStats {
     pub mrays_per_second: f64,
     /// Decoded texture memory (all mip levels), bytes.
     pub texture_memory_bytes: u64,
-    pub texture_tiles: Option<TileUsage>,
+    pub texture_tiles: Option<TextureTileUsage>,
     /// Effects the scene needs, each with the reason.
     pub effects: Vec<EffectReason>,
     pub notes: Vec<String>,
