@@ -8,6 +8,7 @@
 //! rectangle with [`FilmTile::reset`] (no allocation per tile).
 
 use super::channels::Layer;
+use super::regions::FilmBand;
 
 const ABSENT: u8 = u8::MAX;
 
@@ -253,6 +254,36 @@ impl Film {
             *o = self.planes[(first + i) * n + pixel];
         }
         true
+    }
+
+    /// The film cut into bands of `band_height` whole rows (the last one shorter when the
+    /// height is not a multiple), top to bottom, each writable on its own; cut them further
+    /// with [`FilmBand::split_columns`]. An empty film has no bands.
+    pub fn bands_mut(&mut self, band_height: u32) -> Vec<FilmBand<'_>> {
+        let n = self.pixel_count();
+        if n == 0 {
+            return Vec::new();
+        }
+        let band_height = band_height.max(1);
+        let band_values = self.width as usize * band_height as usize;
+        let mut bands: Vec<FilmBand<'_>> = (0..self.height.div_ceil(band_height))
+            .map(|b| {
+                let y0 = b * band_height;
+                FilmBand {
+                    y0,
+                    width: self.width,
+                    height: band_height.min(self.height - y0),
+                    layout: self.layout,
+                    planes: Vec::with_capacity(self.layout.channel_count()),
+                }
+            })
+            .collect();
+        for plane in self.planes.chunks_mut(n) {
+            for (band, part) in bands.iter_mut().zip(plane.chunks_mut(band_values)) {
+                band.planes.push(part);
+            }
+        }
+        bands
     }
 
     /// An empty (zero) tile covering `rect` (clipped to the film) with this film's layout.

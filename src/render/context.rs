@@ -155,3 +155,19 @@ pub struct WorkerState {
     /// One record of touched 64x64 texture tiles per texture, when they are counted.
     pub texture_tiles: Vec<TextureTileSet>,
 }
+
+impl WorkerState {
+    /// Adds `other`'s work to this one: counters are summed, texture tiles united. Both are
+    /// independent of the order workers are merged in, so the totals do not depend on the
+    /// thread count.
+    pub fn merge(&mut self, other: WorkerState) {
+        self.counters.add(&other.counters);
+        if self.texture_tiles.is_empty() {
+            self.texture_tiles = other.texture_tiles;
+        } else {
+            for (sum, part) in self.texture_tiles.iter_mut().zip(other.texture_tiles) {
+                sum.merge(part);
+            }
+        }
+    }
+}

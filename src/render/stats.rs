@@ -1,7 +1,8 @@
 //! Counters of the work a render did, merged from every worker, printed and written as JSON.
 //!
-//! Each worker fills its own [`WorkCounters`] for a tile and adds it into the shared total
-//! once per tile, so counting costs nothing on the hot path beyond an integer increment.
+//! Each worker fills its own [`WorkCounters`] over all the tiles it renders; the workers'
+//! counters are summed once at the end of the render (no shared total, no lock), so
+//! counting costs nothing on the hot path beyond an integer increment.
 
 use serde::Serialize;
 
