@@ -4,7 +4,9 @@
 //! The modules follow the data flow: [`scene`] (description and loaders) -> [`embree`] (the
 //! one safe layer over Embree) -> [`camera`] rays with [`footprint`]s -> packets through
 //! [`render::tracer`] -> [`hit`]s -> [`shading`] in an [`integrator`] (with [`texture`]
-//! filtering) -> [`film`] -> EXR/PNG. [`cli`] is the command line.
+//! filtering) -> [`film`] -> EXR/PNG. The command line (`src/cli`) belongs to the
+//! `conetrace` binary, not to this library: `libconetrace.so`/`.a`, which C programs link,
+//! carry none of its dependencies (clap, indicatif, ctrlc, plotters, nv-flip).
 //!
 //! Every `unsafe` block lives in [`embree`] (the FFI to Embree) and [`capi`] (the C
 //! interface); the rest of the crate is denied unsafe code by the compiler.
@@ -14,7 +16,6 @@
 pub mod camera;
 #[allow(unsafe_code)]
 pub mod capi;
-pub mod cli;
 #[allow(unsafe_code)]
 pub mod embree;
 pub mod film;

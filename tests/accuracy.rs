@@ -7,7 +7,6 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::*;
-use conetrace::cli::accuracy::{crop, plot};
 
 fn concave_scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/fp_concave.toml")
@@ -164,18 +163,21 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
     assert!((fastest - 1.0).abs() < 1e-3, "{fastest}");
 
     // The images decode and have the layout's sizes.
+    // The layout of src/cli/accuracy (plot.rs, crop.rs): a 1100x460 plot; crop panels of a
+    // quarter of the shorter side (48x27: 8 pixels, the minimum) enlarged by an integer
+    // factor to at least 176 pixels, five per row, 4-pixel gaps, 34-pixel labels.
     let plot_image = image::open(out.join("fp_concave_error_vs_time.png")).expect("plot decodes");
-    assert_eq!((plot_image.width(), plot_image.height()), plot::PLOT_SIZE);
+    assert_eq!((plot_image.width(), plot_image.height()), (1100, 460));
     let crop_image = image::open(out.join("fp_concave_crop.png")).expect("crop decodes");
-    let side = crop::window_side(48, 27);
-    let panel = side * crop::PANEL_TARGET.div_ceil(side);
-    let cells = 14; // overview, ground truth, twelve methods
-    let columns = crop::COLUMNS;
+    let (panel_target, columns, gap, label_height) = (176u32, 5u32, 4u32, 34u32);
+    let side = 8u32;
+    let panel = side * panel_target.div_ceil(side);
+    let cells = 14u32; // overview, ground truth, twelve methods
     assert_eq!(
         (crop_image.width(), crop_image.height()),
         (
-            columns * (panel + crop::GAP) + crop::GAP,
-            (cells as u32).div_ceil(columns) * (panel + crop::LABEL_HEIGHT + crop::GAP) + crop::GAP
+            columns * (panel + gap) + gap,
+            cells.div_ceil(columns) * (panel + label_height + gap) + gap
         )
     );
     let markdown = std::fs::read_to_string(out.join("fp_concave.md")).unwrap();

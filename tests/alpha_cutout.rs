@@ -96,7 +96,7 @@ fn prepare(scene: &Path, size: u32) -> RenderContext {
         },
         fresnel: Default::default(),
         aovs: AovSelection::default(),
-        count_tiles: false,
+        count_texture_tiles: false,
         all_effects: false,
     };
     conetrace::render::prepare(Arc::new(description), options).expect("scene prepares")

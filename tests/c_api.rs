@@ -1,8 +1,10 @@
 //! The C API (`src/capi`, `include/conetrace.h`): the committed header matches cbindgen's
-//! output; the C and C++ examples compile against `libconetrace.so` and run; and the entry
-//! points reject bad input (NULL pointers, null/dangling/wrong-kind handles, unparsable
-//! scenes, wrong `struct_size`, a failing texture callback) with a status and a message,
-//! while a render cancelled from the progress callback leaves a valid partial image.
+//! output; the C and C++ examples compile against `libconetrace.so` and run, and the C
+//! example also links statically against `libconetrace.a` with `conetrace.pc`'s flags; and
+//! the entry points reject bad input (NULL pointers, null/dangling/wrong-kind handles,
+//! unparsable scenes, wrong `struct_size`, a failing texture callback) with a status and a
+//! message, while a render cancelled from the progress callback leaves a valid partial
+//! image.
 //!
 //! Missing `cc`, `g++`, `pkg-config` or OpenImageIO's headers fail the tests with a message
 //! naming `bash scripts/setup.sh`.
@@ -81,11 +83,17 @@ fn run(cmd: &mut Command) -> String {
 
 /// A conetrace.pc for this build tree, generated from conetrace.pc.in into `dir`.
 fn write_pkg_config(dir: &Path) {
+    write_pkg_config_for(dir, &library_dir());
+}
+
+/// A conetrace.pc generated from conetrace.pc.in into `dir`, with `libdir` as its library
+/// directory.
+fn write_pkg_config_for(dir: &Path, libdir: &Path) {
     let template =
         std::fs::read_to_string(manifest_dir().join("conetrace.pc.in")).expect("conetrace.pc.in");
     let text = template
         .replace("@PREFIX@", &manifest_dir().display().to_string())
-        .replace("@LIBDIR@", &library_dir().display().to_string())
+        .replace("@LIBDIR@", &libdir.display().to_string())
         .replace(
             "@INCLUDEDIR@",
             &manifest_dir().join("include").display().to_string(),
@@ -170,6 +178,46 @@ fn c_example_renders_an_exr_with_the_expected_channels() {
             "no {expected} in {names:?}"
         );
     }
+    assert!(!attributes.incomplete);
+    let red = film.channel("R").unwrap();
+    assert!(red.iter().any(|&v| v > 0.05), "the image is black");
+}
+
+/// A C program links `libconetrace.a` with exactly the flags `conetrace.pc` documents for a
+/// static link (`pkg-config --static --libs`): the archive must not need a library the file
+/// does not name (e.g. libstdc++ for C++ code of a command-line dependency).
+#[test]
+fn c_example_links_statically_with_the_documented_flags() {
+    let dir = common::temp_dir();
+    // A library directory holding only the archive, so `-lconetrace` can only mean it.
+    let libdir = dir.path().join("lib");
+    std::fs::create_dir(&libdir).unwrap();
+    std::fs::copy(
+        library_dir().join("libconetrace.a"),
+        libdir.join("libconetrace.a"),
+    )
+    .expect("copy libconetrace.a");
+    write_pkg_config_for(dir.path(), &libdir);
+    let out = run(Command::new("pkg-config")
+        .args(["--static", "--cflags", "--libs", "conetrace"])
+        .env("PKG_CONFIG_PATH", dir.path()));
+    let flags: Vec<&str> = out.split_whitespace().collect();
+    let exe = dir.path().join("render_static");
+    run(Command::new("cc")
+        .args(["-std=c99", "-Wall", "-Wextra", "-Werror"])
+        .arg(manifest_dir().join("examples/c/render.c"))
+        .args(&flags)
+        .arg("-o")
+        .arg(&exe));
+    // The program does not load libconetrace.so: the archive was linked in.
+    let dynamic = run(Command::new("ldd").arg(&exe));
+    assert!(!dynamic.contains("libconetrace"), "{dynamic}");
+    let exr = dir.path().join("static.exr");
+    let out = run(Command::new(&exe).arg(&exr).args(["64", "36"]));
+    assert!(out.contains("rendered 64x36"), "{out}");
+    assert!(out.contains("channels: R G B A"), "{out}");
+    let (film, attributes) = read_exr(&exr).expect("the example wrote a readable EXR");
+    assert_eq!((film.width(), film.height()), (64, 36));
     assert!(!attributes.incomplete);
     let red = film.channel("R").unwrap();
     assert!(red.iter().any(|&v| v > 0.05), "the image is black");

@@ -50,7 +50,7 @@ fn options() -> RenderOptions {
             surface: true,
             ..AovSelection::default()
         },
-        count_tiles: false,
+        count_texture_tiles: false,
         all_effects: false,
     }
 }

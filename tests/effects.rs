@@ -245,7 +245,7 @@ fn prepare_small(path: &std::path::Path) -> conetrace::render::RenderContext {
             texture_footprint: true,
             lod: true,
         },
-        count_tiles: false,
+        count_texture_tiles: false,
         all_effects: false,
     };
     conetrace::render::prepare(std::sync::Arc::new(scene), options).unwrap()

@@ -899,7 +899,7 @@ fn render_options() -> conetrace::render::RenderOptions {
             surface: true,
             ..Default::default()
         },
-        count_tiles: false,
+        count_texture_tiles: false,
         all_effects: false,
     }
 }

@@ -49,7 +49,7 @@ fn options(lod: LodStrategy, filter: FilterMode) -> RenderOptions {
             texture_footprint: true,
             lod: true,
         },
-        count_tiles: false,
+        count_texture_tiles: false,
         all_effects: false,
     }
 }

@@ -18,11 +18,32 @@ use std::thread::sleep;
 use std::time::Duration;
 
 use common::*;
-use conetrace::cli::render_cmd::{decode_tiles, TILES_DONE_ATTRIBUTE};
 use conetrace::film::{read_exr, Film, Layer};
 use conetrace::render::work_tiles;
 use nix::sys::signal::{kill, Signal};
 use nix::unistd::Pid;
+
+/// The header attribute of a partial render that lists its finished work tiles.
+const TILES_DONE_ATTRIBUTE: &str = "conetrace.tiles_done";
+
+/// Reads `conetrace.tiles_done` as the binary documents it (src/cli/resume.rs): one
+/// hexadecimal digit per four work tiles in row-major order, tile `4k + b` finished when bit
+/// `b` of digit `k` is set. `None` when the text does not describe `count` tiles.
+fn decode_tiles(text: &str, count: usize) -> Option<Vec<bool>> {
+    if text.len() != count.div_ceil(4) {
+        return None;
+    }
+    let digits: Option<Vec<u32>> = text.chars().map(|c| c.to_digit(16)).collect();
+    let finished: Vec<bool> = digits?
+        .iter()
+        .flat_map(|&digit| (0..4).map(move |bit| digit & (1 << bit) != 0))
+        .collect();
+    // Bits past the last tile must be clear.
+    if finished[count..].iter().any(|&done| done) {
+        return None;
+    }
+    Some(finished[..count].to_vec())
+}
 
 const WIDTH: u32 = 96;
 const HEIGHT: u32 = 64;

@@ -128,7 +128,7 @@ fn options() -> RenderOptions {
         filter: FilterOptions::default(),
         fresnel: FresnelMode::Exact,
         aovs: AovSelection::default(),
-        count_tiles: false,
+        count_texture_tiles: false,
         all_effects: false,
     }
 }

@@ -432,7 +432,7 @@ fn render_options(
             texture_footprint: c.aovs & CT_AOV_FOOTPRINT != 0,
             lod: c.aovs & CT_AOV_LOD != 0,
         },
-        count_tiles: false,
+        count_texture_tiles: false,
         all_effects: false,
     })
 }

@@ -265,7 +265,7 @@ fn bench_scene(
     let render_args = render_args(path, args)?;
     let scene = render_cmd::load(&render_args)?;
     let mut options = render_cmd::options(&render_args, &scene)?;
-    options.count_tiles = false;
+    options.count_texture_tiles = false;
     options.all_effects = false;
     let label = path.display().to_string();
     let mut context = render::prepare(Arc::new(scene), options.clone())

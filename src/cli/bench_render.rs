@@ -20,8 +20,8 @@ use rayon::prelude::*;
 
 use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
-use crate::film::{block_order, TileRect};
-use crate::integrator::Whitted;
+use conetrace::film::{block_order, PixelRect};
+use conetrace::integrator::Whitted;
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::{self, RenderContext, RenderControl, RenderOptions};
@@ -38,7 +38,7 @@ pub struct BenchRenderArgs {
 
 /// The pixel-centre camera rays of `tile`, each run of 16 one 4x4 block (as the integrator
 /// orders them).
-fn camera_rays_of_tile(context: &RenderContext, tile: TileRect, rays: &mut Vec<TraceRay>) {
+fn camera_rays_of_tile(context: &RenderContext, tile: PixelRect, rays: &mut Vec<TraceRay>) {
     rays.clear();
     for (x, y) in block_order(tile) {
         let px = (tile.x0 + x) as f32 + 0.5;
@@ -241,7 +241,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
     refuse_output_options(&args.render)?;
     let scene = render_cmd::load(&args.render)?;
     let mut options = render_cmd::options(&args.render, &scene)?;
-    options.count_tiles = false;
+    options.count_texture_tiles = false;
     let repeat = args.repeat.max(1);
     let pool = crate::cli::worker_pool(args.render.threads)?;
     let scene = Arc::new(scene);

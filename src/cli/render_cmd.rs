@@ -111,7 +111,7 @@ pub struct RenderArgs {
     pub resume: bool,
 }
 
-pub use crate::cli::resume::{decode_tiles, encode_tiles, TILES_DONE_ATTRIBUTE};
+use crate::cli::resume::{encode_tiles, TILES_DONE_ATTRIBUTE};
 
 /// `--lod`'s values, listed in `--help` and in errors.
 pub fn lod_parser() -> impl clap::builder::TypedValueParser<Value = LodStrategy> {
@@ -209,7 +209,7 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
             texture_footprint: extra(AovName::Footprint),
             lod: extra(AovName::Lod),
         },
-        count_tiles: args.stats.is_some(),
+        count_texture_tiles: args.stats.is_some(),
         all_effects: args.all_effects,
     })
 }

@@ -8,6 +8,7 @@
 //! rectangle with [`FilmTile::reset`] (no allocation per tile).
 
 use super::channels::Layer;
+use super::regions::FilmBand;
 
 const ABSENT: u8 = u8::MAX;
 
@@ -75,14 +76,14 @@ impl FilmLayout {
 
 /// A pixel rectangle of the film: columns `x0 .. x0 + width`, rows `y0 .. y0 + height`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct TileRect {
+pub struct PixelRect {
     pub x0: u32,
     pub y0: u32,
     pub width: u32,
     pub height: u32,
 }
 
-impl TileRect {
+impl PixelRect {
     /// Number of pixels covered.
     #[inline]
     pub fn area(&self) -> usize {
@@ -102,10 +103,10 @@ impl TileRect {
     }
 
     /// The part of this rectangle inside a `width` x `height` image.
-    pub fn clipped(&self, width: u32, height: u32) -> TileRect {
+    pub fn clipped(&self, width: u32, height: u32) -> PixelRect {
         let x0 = self.x0.min(width);
         let y0 = self.y0.min(height);
-        TileRect {
+        PixelRect {
             x0,
             y0,
             width: self.width.min(width - x0),
@@ -255,8 +256,38 @@ impl Film {
         true
     }
 
+    /// The film cut into bands of `band_height` whole rows (the last one shorter when the
+    /// height is not a multiple), top to bottom, each writable on its own; cut them further
+    /// with [`FilmBand::split_columns`]. An empty film has no bands.
+    pub fn bands_mut(&mut self, band_height: u32) -> Vec<FilmBand<'_>> {
+        let n = self.pixel_count();
+        if n == 0 {
+            return Vec::new();
+        }
+        let band_height = band_height.max(1);
+        let band_values = self.width as usize * band_height as usize;
+        let mut bands: Vec<FilmBand<'_>> = (0..self.height.div_ceil(band_height))
+            .map(|b| {
+                let y0 = b * band_height;
+                FilmBand {
+                    y0,
+                    width: self.width,
+                    height: band_height.min(self.height - y0),
+                    layout: self.layout,
+                    planes: Vec::with_capacity(self.layout.channel_count()),
+                }
+            })
+            .collect();
+        for plane in self.planes.chunks_mut(n) {
+            for (band, part) in bands.iter_mut().zip(plane.chunks_mut(band_values)) {
+                band.planes.push(part);
+            }
+        }
+        bands
+    }
+
     /// An empty (zero) tile covering `rect` (clipped to the film) with this film's layout.
-    pub fn new_tile(&self, rect: TileRect) -> FilmTile {
+    pub fn new_tile(&self, rect: PixelRect) -> FilmTile {
         let mut tile = FilmTile::default();
         tile.reset(self.layout, rect.clipped(self.width, self.height));
         tile
@@ -298,7 +329,7 @@ impl Film {
 
     /// Copies the pixels of `rect` from `other` (e.g. a film read back for `--resume`) for
     /// every layer both films hold. Does nothing when the sizes differ.
-    pub fn copy_region_from(&mut self, other: &Film, rect: TileRect) {
+    pub fn copy_region_from(&mut self, other: &Film, rect: PixelRect) {
         if other.width != self.width || other.height != self.height {
             return;
         }
@@ -328,7 +359,7 @@ impl Film {
 /// A rectangle of the film filled by one worker, merged with [`Film::merge_tile`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FilmTile {
-    rect: TileRect,
+    rect: PixelRect,
     layout: FilmLayout,
     /// Planar like the film: `layout.channel_count()` planes of `rect.area()` values.
     data: Vec<f32>,
@@ -336,14 +367,14 @@ pub struct FilmTile {
 
 impl FilmTile {
     /// A zero tile covering `rect` with `layout` (from [`Film::layout`]).
-    pub fn new(layout: FilmLayout, rect: TileRect) -> FilmTile {
+    pub fn new(layout: FilmLayout, rect: PixelRect) -> FilmTile {
         let mut tile = FilmTile::default();
         tile.reset(layout, rect);
         tile
     }
 
     /// Re-targets this tile to `rect` and zeroes it, reusing its buffer.
-    pub fn reset(&mut self, layout: FilmLayout, rect: TileRect) {
+    pub fn reset(&mut self, layout: FilmLayout, rect: PixelRect) {
         self.rect = rect;
         self.layout = layout;
         self.data.clear();
@@ -352,7 +383,7 @@ impl FilmTile {
 
     /// The rectangle covered, in image coordinates.
     #[inline]
-    pub fn rect(&self) -> TileRect {
+    pub fn rect(&self) -> PixelRect {
         self.rect
     }
 
@@ -502,7 +533,7 @@ mod tests {
         let layout = FilmLayout::new(&[Layer::Color, Layer::Depth]);
         let mut tile = FilmTile::new(
             layout,
-            TileRect {
+            PixelRect {
                 x0: 3,
                 y0: 3,
                 width: 4,
@@ -531,7 +562,7 @@ mod tests {
         let mut resumed = Film::new(4, 4, &[Layer::Depth, Layer::Color]);
         resumed.copy_region_from(
             &done,
-            TileRect {
+            PixelRect {
                 x0: 2,
                 y0: 0,
                 width: 2,

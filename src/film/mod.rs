@@ -2,23 +2,25 @@
 //!
 //! A [`Film`] holds one `f32` plane per channel, grouped into [`Layer`]s (colour, depth,
 //! normals, albedo, texture-coordinate and footprint diagnostics) with the conventional
-//! OpenEXR channel names (`R G B A`, `Z`, `N.X N.Y N.Z`, `albedo.R` ...). Render workers fill
-//! small [`FilmTile`]s independently and the film copies finished tiles in with
-//! [`Film::merge_tile`], so tiles can be rendered on many threads without sharing the film:
+//! OpenEXR channel names (`R G B A`, `Z`, `N.X N.Y N.Z`, `albedo.R` ...). Render workers
+//! write finished work tiles straight into the film, in parallel and without a lock: the
+//! film is cut into disjoint writable [`FilmRegion`]s ([`regions`]), one per work tile:
 //!
 //! ```ignore
-//! let film = Film::new(w, h, &[Layer::Color, Layer::Depth]);
-//! let (layout, rects) = (film.layout(), film.tiles(4));
-//! let film = Mutex::new(film);
-//! rects.par_iter().for_each_init(FilmTile::default, |tile, rect| {
-//!     tile.reset(layout, *rect); // reuses the tile's buffer: no allocation per tile
-//!     for (x, y) in rect.pixels() {
-//!         tile.set(Layer::Color, x, y, &[r, g, b, 1.0]);
+//! let mut film = Film::new(w, h, &[Layer::Color, Layer::Depth]);
+//! let regions: Vec<FilmRegion> = film
+//!     .bands_mut(WORK_TILE_SIZE)
+//!     .into_iter()
+//!     .flat_map(|band| band.split_columns(WORK_TILE_SIZE))
+//!     .collect(); // row-major, like `render::work_tiles(w, h)`
+//! regions.into_par_iter().for_each(|mut region| {
+//!     for (x, y) in region.rect().pixels() {
+//!         region.set(Layer::Color, x, y, &[r, g, b, 1.0]);
 //!     }
-//!     film.lock().unwrap().merge_tile(tile); // a few row copies under the lock
 //! });
 //! ```
-//! (`film.rs` has this as a test.)
+//! (`regions.rs` has this as a test.) A [`FilmTile`] is a small film of its own, copied in
+//! with [`Film::merge_tile`].
 //!
 //! Output: [`write_exr`] stores every channel as 32-bit float with custom header attributes
 //! (software, an "incomplete render" flag and finished-tile count for `--resume`, free-form
@@ -42,12 +44,14 @@ pub mod exr_output;
 pub mod film;
 pub mod png_output;
 pub mod tile_image;
+pub mod regions;
 
 pub use atomic_file::OutputSet;
 pub use channels::Layer;
 pub use error::OutputError;
 pub use exr_input::read_exr;
 pub use exr_output::{stage_exr, write_exr, ExrAttributes};
-pub use film::{Film, FilmLayout, FilmTile, TileRect};
+pub use film::{Film, FilmLayout, FilmTile, PixelRect};
 pub use png_output::{display_value, linear_to_srgb, stage_png, tonemap_to_srgb8, write_png};
 pub use tile_image::{block_order, AovSelection, TileImage};
+pub use regions::{FilmBand, FilmRegion};

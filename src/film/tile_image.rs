@@ -1,11 +1,11 @@
-//! The pixels of one tile as an integrator produces them: colour, alpha and the AOVs the
-//! render asked for, before the render copies them into the [`Film`](super::Film).
+//! The pixels of one work tile ([`crate::render::work_tiles`]) as an integrator produces
+//! them: colour, alpha and the AOVs the render asked for.
 
-use super::TileRect;
+use super::PixelRect;
 
 /// The pixels of `tile` (offsets inside it) ordered so that each run of 16 is one 4x4 block:
 /// the order camera rays are generated in, so a 16-wide packet is one block.
-pub fn block_order(tile: TileRect) -> impl Iterator<Item = (u32, u32)> {
+pub fn block_order(tile: PixelRect) -> impl Iterator<Item = (u32, u32)> {
     let blocks_x = tile.width.div_ceil(4);
     let blocks_y = tile.height.div_ceil(4);
     (0..blocks_y * blocks_x).flat_map(move |block| {
@@ -54,7 +54,7 @@ pub struct TileImage {
 
 impl TileImage {
     /// A zeroed image for `tile` with the selected AOVs.
-    pub fn new(tile: TileRect, aovs: AovSelection) -> TileImage {
+    pub fn new(tile: PixelRect, aovs: AovSelection) -> TileImage {
         let n = tile.area();
         let take = |on: bool| if on { n } else { 0 };
         TileImage {
@@ -79,7 +79,7 @@ mod tests {
 
     #[test]
     fn block_order_visits_every_pixel_once_in_4x4_blocks() {
-        let tile = TileRect {
+        let tile = PixelRect {
             x0: 32,
             y0: 16,
             width: 10,

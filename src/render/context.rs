@@ -14,7 +14,7 @@ use crate::render::stats::{EffectReason, WorkCounters};
 use crate::render::tracer::{AlphaTests, Tracer, TracerSettings};
 use crate::scene::SceneDescription;
 use crate::shading::SceneLights;
-use crate::texture::{FilterOptions, Texture, TileSet};
+use crate::texture::{FilterOptions, Texture, TextureTileSet};
 
 /// How to render: size, sampling, recursion and filtering choices.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,7 +29,7 @@ pub struct RenderOptions {
     pub fresnel: crate::scene::FresnelMode,
     pub aovs: AovSelection,
     /// Record the 64x64 texture tiles every lookup touches (for `--stats`).
-    pub count_tiles: bool,
+    pub count_texture_tiles: bool,
     /// Force every effect on (the general path), for benchmarks.
     pub all_effects: bool,
 }
@@ -155,6 +155,22 @@ pub fn forced_reasons(
 #[derive(Default)]
 pub struct WorkerState {
     pub counters: WorkCounters,
-    /// One tile record per texture, when tiles are counted.
-    pub tiles: Vec<TileSet>,
+    /// One record of touched 64x64 texture tiles per texture, when they are counted.
+    pub texture_tiles: Vec<TextureTileSet>,
+}
+
+impl WorkerState {
+    /// Adds `other`'s work to this one: counters are summed, texture tiles united. Both are
+    /// independent of the order workers are merged in, so the totals do not depend on the
+    /// thread count.
+    pub fn merge(&mut self, other: WorkerState) {
+        self.counters.add(&other.counters);
+        if self.texture_tiles.is_empty() {
+            self.texture_tiles = other.texture_tiles;
+        } else {
+            for (sum, part) in self.texture_tiles.iter_mut().zip(other.texture_tiles) {
+                sum.merge(part);
+            }
+        }
+    }
 }

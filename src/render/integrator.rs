@@ -7,7 +7,7 @@
 //! integrators themselves live in `crate::integrator`, which depends on this stage; this
 //! module knows none of them.
 
-use crate::film::{TileImage, TileRect};
+use crate::film::{TileImage, PixelRect};
 use crate::render::context::{RenderContext, WorkerState};
 
 /// A light-transport algorithm that renders one tile at a time, from any thread.
@@ -24,7 +24,7 @@ pub trait Integrator: Sync {
     fn render_tile(
         &self,
         context: &RenderContext,
-        tile: TileRect,
+        tile: PixelRect,
         image: &mut TileImage,
         worker: &mut WorkerState,
         state: &mut Self::ThreadState,

@@ -5,7 +5,8 @@
 //! render holds at its peak:
 //!
 //! - the film: one f32 plane per channel of the layers the options ask for;
-//! - the finished tiles awaiting their copy into the film (as large as the film);
+//! - the work tiles in flight: per worker thread, one tile's pixels and the slices of the
+//!   film band it writes into (finished tiles go straight into the film, so this is small);
 //! - the outputs: the EXR encoder's copy of every plane and the PNG's 8-bit pixels;
 //! - every texture decoded with its mip levels (from the file headers, nothing decoded).
 //!
@@ -77,9 +78,19 @@ pub fn estimate(
             Ok((texture.source.label(), decoded_texture_bytes(width, height)))
         })
         .collect::<Result<Vec<_>, _>>()?;
+    // Per worker: a tile's pixels (at most every channel of every pixel, plus a flag) and
+    // the film band it writes into cut into per-tile row slices (one slice per channel, row
+    // and tile column; see `film::regions`).
+    let tile = crate::render::WORK_TILE_SIZE as u64;
+    let tile_pixels = tile * tile * (channels * 4 + 1);
+    let band_slices = channels
+        * tile
+        * u64::from(options.width.div_ceil(crate::render::WORK_TILE_SIZE))
+        * std::mem::size_of::<&mut [f32]>() as u64;
+    let workers = rayon::current_num_threads() as u64;
     Ok(MemoryEstimate {
         film,
-        tiles: film,
+        tiles: workers * (tile_pixels + band_slices),
         outputs: film + pixels * 4,
         textures,
     })
@@ -175,6 +186,43 @@ mod tests {
         let text = "MemTotal:       24000000 kB\nMemAvailable:   20000000 kB\n";
         assert_eq!(parse_mem_available(text), Some(20_000_000 * 1024));
         assert_eq!(parse_mem_available("MemTotal: 1 kB\n"), None);
+    }
+
+    /// Finished tiles go straight into the film: the tiles in flight cost a sliver of the
+    /// film, not a second film.
+    #[test]
+    fn tiles_in_flight_are_small_beside_the_film() {
+        let options = RenderOptions {
+            width: 7680,
+            height: 4320,
+            spp: 1,
+            max_depth: 1,
+            min_throughput: 0.0,
+            lod: crate::footprint::LodStrategy::Cone,
+            filter: crate::texture::FilterOptions::default(),
+            fresnel: crate::scene::FresnelMode::default(),
+            aovs: crate::film::AovSelection {
+                surface: true,
+                texture_footprint: true,
+                lod: true,
+            },
+            count_texture_tiles: false,
+            all_effects: false,
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(64)
+            .build()
+            .unwrap();
+        let estimate = pool
+            .install(|| estimate(&SceneDescription::default(), &options))
+            .unwrap();
+        assert!(
+            estimate.tiles * 10 < estimate.film,
+            "tiles {} vs film {} bytes",
+            estimate.tiles,
+            estimate.film
+        );
+        assert!(estimate.tiles > 0);
     }
 
     #[test]

@@ -17,12 +17,12 @@ pub mod stats;
 pub mod tracer;
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::film::{AovSelection, Film, FilmTile, Layer, TileImage, TileRect};
+use crate::film::{AovSelection, Film, FilmRegion, Layer, PixelRect, TileImage};
 use crate::scene::SceneDescription;
 
 pub use context::{ForceEffectsError, RenderContext, RenderOptions, WorkerState};
@@ -30,10 +30,14 @@ pub use effects::EffectSet;
 pub use external_textures::ExternalTextures;
 pub use integrator::Integrator;
 pub use prepared::PrepareError;
-pub use stats::{RenderStats, TileUsage, WorkCounters};
+pub use stats::{RenderStats, TextureTileUsage, WorkCounters};
 
 /// Side of the square work tiles handed to workers (a multiple of the 4x4 packet block).
-pub const TILE_SIZE: u32 = 16;
+///
+/// A *work tile* is a rectangle of image pixels rendered by one worker; [`work_tiles`] is
+/// the one enumeration of them. It is unrelated to the 64x64-texel *texture tiles* of
+/// [`crate::texture::TextureTileSet`], a texture cache's unit.
+pub const WORK_TILE_SIZE: u32 = 16;
 
 /// A finished (or interrupted) render.
 pub struct RenderResult {
@@ -124,16 +128,18 @@ pub fn film_layers(aovs: AovSelection) -> Vec<Layer> {
     layers
 }
 
-/// The work tiles of an image, in row-major order.
-pub fn work_tiles(width: u32, height: u32) -> Vec<TileRect> {
+/// The work tiles of an image, in row-major order: every render, `--resume`'s list of
+/// finished tiles and the benchmarks use this one enumeration, so a tile's index means the
+/// same rectangle everywhere.
+pub fn work_tiles(width: u32, height: u32) -> Vec<PixelRect> {
     let mut tiles = Vec::new();
-    for y0 in (0..height).step_by(TILE_SIZE as usize) {
-        for x0 in (0..width).step_by(TILE_SIZE as usize) {
-            tiles.push(TileRect {
+    for y0 in (0..height).step_by(WORK_TILE_SIZE as usize) {
+        for x0 in (0..width).step_by(WORK_TILE_SIZE as usize) {
+            tiles.push(PixelRect {
                 x0,
                 y0,
-                width: TILE_SIZE.min(width - x0),
-                height: TILE_SIZE.min(height - y0),
+                width: WORK_TILE_SIZE.min(width - x0),
+                height: WORK_TILE_SIZE.min(height - y0),
             });
         }
     }
@@ -193,69 +199,71 @@ pub fn render<I: Integrator>(
             message,
         })?;
     let finished_count = AtomicUsize::new(0);
-    let totals = Mutex::new(WorkerState::default());
-    let count_tiles = options.count_tiles;
+    let count_texture_tiles = options.count_texture_tiles;
     let start = Instant::now();
     let texture_count = context.textures.len();
     let new_worker = || WorkerState {
         counters: WorkCounters::default(),
-        tiles: if count_tiles {
+        texture_tiles: if count_texture_tiles {
             context
                 .textures
                 .iter()
-                .map(|_| crate::texture::TileSet::new())
+                .map(|_| crate::texture::TextureTileSet::new())
                 .collect()
         } else {
             Vec::new()
         },
     };
-    let results: Vec<Option<TileImage>> = tiles
-        .par_iter()
+    let tiles_per_row = options.width.div_ceil(WORK_TILE_SIZE) as usize;
+    // Each worker writes its finished tiles straight into its own region of the film and
+    // keeps its counters to itself; the workers' states are merged once at the end. Bands
+    // are cut into regions only when a worker reaches them.
+    let (total, finished) = film
+        .bands_mut(WORK_TILE_SIZE)
+        .into_par_iter()
         .enumerate()
-        .map_init(
+        .flat_map(|(row, band)| {
+            band.split_columns(WORK_TILE_SIZE)
+                .into_par_iter()
+                .enumerate()
+                .map(move |(column, region)| (row * tiles_per_row + column, region))
+        })
+        .fold(
             || {
                 crate::embree::enable_flush_denormals();
-                (new_worker(), integrator.thread_state(context))
+                (new_worker(), integrator.thread_state(context), Vec::new())
             },
-            |(worker, state), (index, tile)| {
-                if control
+            |(mut worker, mut state, mut finished): (WorkerState, I::ThreadState, Vec<usize>),
+             (index, mut region)| {
+                let tile = tiles[index];
+                debug_assert_eq!(region.rect(), tile);
+                let skipped = control
                     .skip
-                    .is_some_and(|skip| skip.get(index) == Some(&true))
-                {
-                    return None;
-                }
-                if control.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
-                    || context.tracer.failed()
-                {
-                    return None;
-                }
-                let mut image = TileImage::new(*tile, options.aovs);
-                integrator.render_tile(context, *tile, &mut image, worker, state);
-                // Hand this tile's work to the total so nothing is lost when a worker's
-                // state is dropped.
-                {
-                    let mut total = totals.lock().unwrap_or_else(|e| e.into_inner());
-                    total.counters.add(&worker.counters);
-                    worker.counters = WorkCounters::default();
-                    if count_tiles {
-                        let parts = std::mem::replace(&mut worker.tiles, new_worker().tiles);
-                        if total.tiles.is_empty() {
-                            total.tiles = parts;
-                        } else {
-                            for (sum, part) in total.tiles.iter_mut().zip(parts) {
-                                sum.merge(part);
-                            }
-                        }
+                    .is_some_and(|skip| skip.get(index) == Some(&true));
+                let stopped = control.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+                    || context.tracer.failed();
+                if !skipped && !stopped {
+                    let mut image = TileImage::new(tile, options.aovs);
+                    integrator.render_tile(context, tile, &mut image, &mut worker, &mut state);
+                    copy_tile_to_film(&image, &mut region);
+                    finished.push(index);
+                    let done = finished_count.fetch_add(1, Ordering::Relaxed) + 1;
+                    if let Some(progress) = control.progress {
+                        progress(done, tiles.len());
                     }
                 }
-                let done = finished_count.fetch_add(1, Ordering::Relaxed) + 1;
-                if let Some(progress) = control.progress {
-                    progress(done, tiles.len());
-                }
-                Some(image)
+                (worker, state, finished)
             },
         )
-        .collect();
+        .map(|(worker, _, finished)| (worker, finished))
+        .reduce(
+            || (new_worker(), Vec::new()),
+            |(mut worker, mut finished), (other, other_finished)| {
+                worker.merge(other);
+                finished.extend(other_finished);
+                (worker, finished)
+            },
+        );
     let seconds = start.elapsed().as_secs_f64();
     if let Some(source) = context.tracer.take_failure() {
         return Err(RenderError::Traversal {
@@ -265,22 +273,18 @@ pub fn render<I: Integrator>(
     }
 
     let mut finished_tiles = vec![false; tiles.len()];
-    for (index, (tile, image)) in tiles.iter().zip(&results).enumerate() {
-        if let Some(image) = image {
-            copy_tile_to_film(image, *tile, &mut film);
-            finished_tiles[index] = true;
-        }
+    for index in finished {
+        finished_tiles[index] = true;
     }
-    let total = totals.into_inner().unwrap_or_else(|e| e.into_inner());
     let counters = total.counters;
-    let texture_tiles = count_tiles.then(|| TileUsage {
-        total: total.tiles.iter().map(|t| t.count()).sum(),
+    let texture_tiles = count_texture_tiles.then(|| TextureTileUsage {
+        total: total.texture_tiles.iter().map(|t| t.count()).sum(),
         per_texture: (0..texture_count)
             .map(|i| {
                 (
                     context.scene.textures[i].name.clone(),
                     total
-                        .tiles
+                        .texture_tiles
                         .get(i)
                         .map(|t| t.count_per_level())
                         .unwrap_or_default(),
@@ -329,31 +333,30 @@ pub fn render<I: Integrator>(
     })
 }
 
-/// Copy an integrator's tile into the film, layer by layer.
-fn copy_tile_to_film(image: &TileImage, rect: TileRect, film: &mut Film) {
-    let mut tile: FilmTile = film.new_tile(rect);
+/// Copy an integrator's tile into its region of the film, layer by layer.
+fn copy_tile_to_film(image: &TileImage, region: &mut FilmRegion) {
+    let rect = region.rect();
     for y in 0..rect.height {
         for x in 0..rect.width {
             let i = (y * rect.width + x) as usize;
             let (fx, fy) = (rect.x0 + x, rect.y0 + y);
             let c = image.color[i];
             let a = image.alpha[i];
-            tile.set(Layer::Color, fx, fy, &[c[0], c[1], c[2], a]);
+            region.set(Layer::Color, fx, fy, &[c[0], c[1], c[2], a]);
             if !image.depth.is_empty() {
-                tile.set(Layer::Depth, fx, fy, &[image.depth[i]]);
-                tile.set(Layer::Normal, fx, fy, &image.normal[i]);
-                tile.set(Layer::Albedo, fx, fy, &image.albedo[i]);
-                tile.set(Layer::Uv, fx, fy, &image.uv[i]);
+                region.set(Layer::Depth, fx, fy, &[image.depth[i]]);
+                region.set(Layer::Normal, fx, fy, &image.normal[i]);
+                region.set(Layer::Albedo, fx, fy, &image.albedo[i]);
+                region.set(Layer::Uv, fx, fy, &image.uv[i]);
             }
             if !image.tex.is_empty() {
-                tile.set(Layer::TexFootprint, fx, fy, &image.tex[i]);
-                tile.set(Layer::TexColor, fx, fy, &image.texcolor[i]);
+                region.set(Layer::TexFootprint, fx, fy, &image.tex[i]);
+                region.set(Layer::TexColor, fx, fy, &image.texcolor[i]);
             }
             if !image.lod.is_empty() {
-                tile.set(Layer::Lod, fx, fy, &[image.lod[i]]);
-                tile.set(Layer::Footprint, fx, fy, &[image.footprint[i]]);
+                region.set(Layer::Lod, fx, fy, &[image.lod[i]]);
+                region.set(Layer::Footprint, fx, fy, &[image.footprint[i]]);
             }
         }
     }
-    film.merge_tile(&tile);
 }

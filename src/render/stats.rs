@@ -1,7 +1,8 @@
 //! Counters of the work a render did, merged from every worker, printed and written as JSON.
 //!
-//! Each worker fills its own [`WorkCounters`] for a tile and adds it into the shared total
-//! once per tile, so counting costs nothing on the hot path beyond an integer increment.
+//! Each worker fills its own [`WorkCounters`] over all the tiles it renders; the workers'
+//! counters are summed once at the end of the render (no shared total, no lock), so
+//! counting costs nothing on the hot path beyond an integer increment.
 
 use serde::Serialize;
 
@@ -64,7 +65,7 @@ impl WorkCounters {
 /// Texture tiles (64x64 texels) touched per texture and mip level over a whole render:
 /// the metric of seed 000's figures 4-7.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
-pub struct TileUsage {
+pub struct TextureTileUsage {
     pub total: u64,
     /// One entry per texture, in scene order: `(name, tiles per mip level)`.
     pub per_texture: Vec<(String, Vec<u64>)>,
@@ -85,7 +86,7 @@ pub struct RenderStats {
     pub mrays_per_second: f64,
     /// Decoded texture memory (all mip levels), bytes.
     pub texture_memory_bytes: u64,
-    pub texture_tiles: Option<TileUsage>,
+    pub texture_tiles: Option<TextureTileUsage>,
     /// Effects the scene needs, each with the reason.
     pub effects: Vec<EffectReason>,
     pub notes: Vec<String>,

@@ -119,7 +119,7 @@ pub(crate) fn sample<O: TexelObserver>(
 #[cfg(test)]
 mod tests {
     use super::super::mip_pyramid::MipLevel;
-    use super::super::tiles::NoTiles;
+    use super::super::tiles::NoTextureTiles;
     use super::*;
 
     #[test]
@@ -175,7 +175,7 @@ mod tests {
                 &q,
                 16.0,
                 (WrapMode::Periodic, WrapMode::Mirror),
-                &mut NoTiles,
+                &mut NoTextureTiles,
             );
             assert!(
                 (v - Vec4::splat(0.7)).abs().max_element() < 1e-5,
@@ -209,8 +209,8 @@ mod tests {
             ..along_s
         };
         let wrap = (WrapMode::Periodic, WrapMode::Periodic);
-        let a = sample(&p, &along_s, 16.0, wrap, &mut NoTiles).x;
-        let b = sample(&p, &along_t, 16.0, wrap, &mut NoTiles).x;
+        let a = sample(&p, &along_s, 16.0, wrap, &mut NoTextureTiles).x;
+        let b = sample(&p, &along_t, 16.0, wrap, &mut NoTextureTiles).x;
         assert!((a - 0.5).abs() < 0.1, "{a}");
         assert!(b > 0.9, "{b}");
     }

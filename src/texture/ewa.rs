@@ -140,7 +140,7 @@ fn ewa_on_level<O: TexelObserver>(
 
 #[cfg(test)]
 mod tests {
-    use super::super::tiles::NoTiles;
+    use super::super::tiles::NoTextureTiles;
     use super::*;
 
     #[test]
@@ -161,7 +161,7 @@ mod tests {
                 &q,
                 16.0,
                 (WrapMode::Clamp, WrapMode::Periodic),
-                &mut NoTiles,
+                &mut NoTextureTiles,
             );
             assert!((v - Vec4::splat(0.3)).abs().max_element() < 1e-5);
         }

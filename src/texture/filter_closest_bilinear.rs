@@ -212,7 +212,7 @@ fn bilinear_periodic<O: TexelObserver>(
 
 #[cfg(test)]
 mod tests {
-    use super::super::tiles::NoTiles;
+    use super::super::tiles::NoTextureTiles;
     use super::*;
 
     fn ramp() -> MipLevel {
@@ -228,7 +228,7 @@ mod tests {
     #[test]
     fn bilinear_hits_texel_centres_and_interpolates_between() {
         let l = ramp();
-        let at = |s, t, w| bilinear(&l, 0, s, t, w, &mut NoTiles).x;
+        let at = |s, t, w| bilinear(&l, 0, s, t, w, &mut NoTextureTiles).x;
         assert_eq!(at(0.125, 0.25, P), 0.0);
         assert_eq!(at(0.375, 0.75, P), 11.0);
         assert!((at(0.25, 0.5, P) - 5.5).abs() < 1e-6);
@@ -239,7 +239,7 @@ mod tests {
         let black = (WrapMode::Black, WrapMode::Black);
         // Half of texel 0, half of black.
         assert!(at(0.0, 0.25, black).abs() < 1e-6);
-        assert!((bilinear(&l, 0, 0.0, 0.25, black, &mut NoTiles).w - 0.5).abs() < 1e-6);
+        assert!((bilinear(&l, 0, 0.0, 0.25, black, &mut NoTextureTiles).w - 0.5).abs() < 1e-6);
     }
 
     #[test]
@@ -249,7 +249,7 @@ mod tests {
         for k in 0..200 {
             let s = -1.3 + 0.0371 * k as f32;
             let t = 2.1 - 0.0243 * k as f32;
-            let v = bilinear(&l, 0, s, t, P, &mut NoTiles);
+            let v = bilinear(&l, 0, s, t, P, &mut NoTextureTiles);
             assert!((v - Vec4::ONE).abs().max_element() < 1e-6);
         }
     }
@@ -282,15 +282,15 @@ mod tests {
             let s = -0.2 + 1.4 * ((k * 37) % 2000) as f32 / 2000.0;
             let t = -0.2 + 1.4 * ((k * 91) % 2000) as f32 / 2000.0;
             for wrap in [P, (WrapMode::Black, WrapMode::Clamp)] {
-                let fast = bilinear(&l, 0, s, t, wrap, &mut NoTiles);
-                let slow = bilinear_wrapped(&l, 0, s, t, wrap, &mut NoTiles);
+                let fast = bilinear(&l, 0, s, t, wrap, &mut NoTextureTiles);
+                let slow = bilinear_wrapped(&l, 0, s, t, wrap, &mut NoTextureTiles);
                 assert_eq!(fast, slow, "s {s} t {t}");
             }
             // The integer periodic path against wrap_texel, also a period away.
             for shift in [-1.0f32, 0.0, 0.9] {
                 let (ss, ts) = (s + shift, t - shift);
-                let generic = bilinear_any_wrap(&l, 0, ss, ts, P, &mut NoTiles);
-                if let Some(v) = bilinear_periodic(&l, 0, ss, ts, &mut NoTiles) {
+                let generic = bilinear_any_wrap(&l, 0, ss, ts, P, &mut NoTextureTiles);
+                if let Some(v) = bilinear_periodic(&l, 0, ss, ts, &mut NoTextureTiles) {
                     assert_eq!(v, generic, "s {ss} t {ts}");
                     periodic += 1;
                 }
@@ -308,7 +308,7 @@ mod tests {
     #[test]
     fn closest_rounds_half_down() {
         let l = ramp();
-        let at = |s: f32| closest(&l, 0, s, 0.25, P, &mut NoTiles).x;
+        let at = |s: f32| closest(&l, 0, s, 0.25, P, &mut NoTextureTiles).x;
         assert_eq!(at(0.2), 0.0);
         assert_eq!(at(0.26), 1.0);
         // s * 4 = 1 exactly: fraction 0.5 stays on texel 0.

@@ -43,9 +43,9 @@ use glam::Vec4;
 
 pub use image_size::{decoded_texture_bytes, encoded_image_size, file_image_size};
 pub use mip_pyramid::{MipLevel, MipPyramid};
-pub use tiles::{TileSet, TILE_SIZE};
+pub use tiles::{TextureTileSet, TEXTURE_TILE_SIZE};
 
-use tiles::{NoTiles, TexelObserver, TileRecorder};
+use tiles::{NoTextureTiles, TexelObserver, TextureTileRecorder};
 
 /// How 8-bit RGB texels are decoded on load (alpha is always linear).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -273,7 +273,7 @@ impl Texture {
         &self.label
     }
 
-    /// Process-unique id; [`TileSet`] keys tiles by it.
+    /// Process-unique id; [`TextureTileSet`] keys tiles by it.
     pub fn id(&self) -> u64 {
         self.id
     }
@@ -293,7 +293,7 @@ impl Texture {
     /// Filtered RGBA at the query's footprint: the one texture-sampling entry point.
     #[inline]
     pub fn sample(&self, q: &TextureQuery, opts: &FilterOptions) -> Vec4 {
-        self.sample_observed(q, opts, &mut NoTiles)
+        self.sample_observed(q, opts, &mut NoTextureTiles)
     }
 
     /// Same result as [`Texture::sample`]; also records every 64x64-texel tile read.
@@ -301,9 +301,9 @@ impl Texture {
         &self,
         q: &TextureQuery,
         opts: &FilterOptions,
-        tiles: &mut TileSet,
+        tiles: &mut TextureTileSet,
     ) -> Vec4 {
-        let mut recorder = TileRecorder::new(self.id, tiles);
+        let mut recorder = TextureTileRecorder::new(self.id, tiles);
         self.sample_observed(q, opts, &mut recorder)
     }
 
@@ -394,7 +394,7 @@ mod tests {
     fn texture_is_shareable_across_threads() {
         fn assert_send_sync<T: Send + Sync>() {}
         assert_send_sync::<Texture>();
-        assert_send_sync::<TileSet>();
+        assert_send_sync::<TextureTileSet>();
     }
 
     #[test]
@@ -453,7 +453,7 @@ mod tests {
     #[test]
     fn recording_gives_the_same_result_and_counts_tiles() {
         let tex = checker(200, 130);
-        let mut tiles = TileSet::new();
+        let mut tiles = TextureTileSet::new();
         let opts = FilterOptions::default();
         let q = TextureQuery {
             s: 0.5,

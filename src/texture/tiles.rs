@@ -2,16 +2,17 @@
 //! tile-count metric of a demand-loaded texture cache).
 //!
 //! Filters read texels through a [`TexelObserver`] type parameter. The plain lookup
-//! passes [`NoTiles`], whose `touch` is empty and vanishes after monomorphisation, so
+//! passes [`NoTextureTiles`], whose `touch` is empty and vanishes after monomorphisation, so
 //! `Texture::sample` pays nothing for this; `sample_recording` passes a
-//! [`TileRecorder`]. A [`TileSet`] is kept per thread and keyed by
+//! [`TextureTileRecorder`]. A [`TextureTileSet`] is kept per thread and keyed by
 //! (texture id, level, tile x, tile y), so one set can hold tiles of many textures;
 //! merge the per-thread sets at the end of a render.
 
 use std::collections::HashSet;
 
-/// Edge length of a cache tile in texels (OpenImageIO's `maketx` default).
-pub const TILE_SIZE: u32 = 64;
+/// Edge length of a texture tile, a texture cache's unit, in texels (OpenImageIO's `maketx`
+/// default). Not to be confused with the render's 16x16-pixel work tiles.
+pub const TEXTURE_TILE_SIZE: u32 = 64;
 
 /// Something told about every texel a filter reads.
 pub(crate) trait TexelObserver {
@@ -20,23 +21,23 @@ pub(crate) trait TexelObserver {
 }
 
 /// The observer of plain lookups: does nothing.
-pub(crate) struct NoTiles;
+pub(crate) struct NoTextureTiles;
 
-impl TexelObserver for NoTiles {
+impl TexelObserver for NoTextureTiles {
     #[inline(always)]
     fn touch(&mut self, _level: usize, _x: usize, _y: usize) {}
 }
 
-/// The observer of recording lookups: adds the texel's tile to a [`TileSet`].
-pub(crate) struct TileRecorder<'a> {
+/// The observer of recording lookups: adds the texel's tile to a [`TextureTileSet`].
+pub(crate) struct TextureTileRecorder<'a> {
     texture_id: u64,
-    tiles: &'a mut TileSet,
+    tiles: &'a mut TextureTileSet,
     last: Option<(usize, usize, usize)>,
 }
 
-impl<'a> TileRecorder<'a> {
-    pub(crate) fn new(texture_id: u64, tiles: &'a mut TileSet) -> Self {
-        TileRecorder {
+impl<'a> TextureTileRecorder<'a> {
+    pub(crate) fn new(texture_id: u64, tiles: &'a mut TextureTileSet) -> Self {
+        TextureTileRecorder {
             texture_id,
             tiles,
             last: None,
@@ -44,10 +45,14 @@ impl<'a> TileRecorder<'a> {
     }
 }
 
-impl TexelObserver for TileRecorder<'_> {
+impl TexelObserver for TextureTileRecorder<'_> {
     #[inline]
     fn touch(&mut self, level: usize, x: usize, y: usize) {
-        let key = (level, x / TILE_SIZE as usize, y / TILE_SIZE as usize);
+        let key = (
+            level,
+            x / TEXTURE_TILE_SIZE as usize,
+            y / TEXTURE_TILE_SIZE as usize,
+        );
         // Neighbouring texels mostly share a tile: skip the hash for repeats.
         if self.last != Some(key) {
             self.last = Some(key);
@@ -58,11 +63,11 @@ impl TexelObserver for TileRecorder<'_> {
 
 /// A set of touched tiles over any number of textures (one per thread, then merged).
 #[derive(Clone, Debug, Default)]
-pub struct TileSet {
+pub struct TextureTileSet {
     tiles: HashSet<(u64, u32, u32, u32)>,
 }
 
-impl TileSet {
+impl TextureTileSet {
     /// An empty set.
     pub fn new() -> Self {
         Self::default()
@@ -75,7 +80,7 @@ impl TileSet {
     }
 
     /// Adds every tile of `other`.
-    pub fn merge(&mut self, other: TileSet) {
+    pub fn merge(&mut self, other: TextureTileSet) {
         if self.tiles.len() < other.tiles.len() {
             let mine = std::mem::replace(&mut self.tiles, other.tiles);
             self.tiles.extend(mine);
@@ -109,16 +114,16 @@ mod tests {
 
     #[test]
     fn records_distinct_tiles_per_texture_and_level() {
-        let mut a = TileSet::new();
+        let mut a = TextureTileSet::new();
         {
-            let mut r = TileRecorder::new(7, &mut a);
+            let mut r = TextureTileRecorder::new(7, &mut a);
             r.touch(0, 0, 0);
             r.touch(0, 63, 63); // same tile
             r.touch(0, 64, 0); // next tile
             r.touch(2, 1, 1);
         }
         assert_eq!(a.count(), 3);
-        let mut b = TileSet::new();
+        let mut b = TextureTileSet::new();
         b.record(8, 0, 0, 0); // other texture, same tile coordinates
         b.record(7, 0, 0, 0); // duplicate of a's
         a.merge(b);

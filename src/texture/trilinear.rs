@@ -46,7 +46,7 @@ pub(crate) fn sample<O: TexelObserver>(
 #[cfg(test)]
 mod tests {
     use super::super::mip_pyramid::MipLevel;
-    use super::super::tiles::NoTiles;
+    use super::super::tiles::NoTextureTiles;
     use super::*;
 
     #[test]
@@ -69,7 +69,7 @@ mod tests {
                 &p,
                 &q,
                 (WrapMode::Periodic, WrapMode::Periodic),
-                &mut NoTiles,
+                &mut NoTextureTiles,
             );
             assert!((v - Vec4::ONE).abs().max_element() < 1e-5);
         }

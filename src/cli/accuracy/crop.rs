@@ -9,7 +9,7 @@ use plotters::prelude::*;
 
 use super::font::FAMILY;
 use super::metrics::DisplayImage;
-use crate::film::TileRect;
+use crate::film::PixelRect;
 
 /// Height of the label strip above each panel, pixels.
 pub const LABEL_HEIGHT: u32 = 34;
@@ -28,7 +28,7 @@ pub fn window_side(width: u32, height: u32) -> u32 {
 
 /// The `side` x `side` window of a `width` x `height` error image with the largest sum
 /// (the first one in row-major order on ties).
-pub fn hardest_window(error: &[f64], width: u32, height: u32, side: u32) -> TileRect {
+pub fn hardest_window(error: &[f64], width: u32, height: u32, side: u32) -> PixelRect {
     let (w, h) = (width as usize, height as usize);
     let side = side.min(width).min(height) as usize;
     // sums[(y) * (w + 1) + x] = sum of error over rows < y and columns < x.
@@ -50,7 +50,7 @@ pub fn hardest_window(error: &[f64], width: u32, height: u32, side: u32) -> Tile
             }
         }
     }
-    TileRect {
+    PixelRect {
         x0: best.1 as u32,
         y0: best.2 as u32,
         width: side as u32,
@@ -70,7 +70,7 @@ pub struct Panel<'a> {
 
 /// The panel's pixels: the window enlarged by `scale` (nearest neighbour), or for the
 /// overview the whole image fitted into `size` with the window outlined in red.
-fn panel_pixels(image: &DisplayImage, window: TileRect, scale: u32, overview: bool) -> Vec<u8> {
+fn panel_pixels(image: &DisplayImage, window: PixelRect, scale: u32, overview: bool) -> Vec<u8> {
     let size = window.width * scale;
     let mut out = vec![255u8; (size * size * 3) as usize];
     let texel = |x: u32, y: u32| {
@@ -114,7 +114,7 @@ fn panel_pixels(image: &DisplayImage, window: TileRect, scale: u32, overview: bo
 /// `labels`). Returns `(width, height, rgb8)`.
 pub fn compose(
     panels: &[Panel],
-    window: TileRect,
+    window: PixelRect,
     labels: bool,
 ) -> Result<(u32, u32, Vec<u8>), String> {
     let scale = PANEL_TARGET.div_ceil(window.width.max(1)).max(1);

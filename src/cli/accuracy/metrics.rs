@@ -51,7 +51,8 @@ impl DisplayImage {
         })
     }
 
-    /// An image from display values (clamped to [0, 1]); for tests and synthetic inputs.
+    /// An image from display values (clamped to [0, 1]); for the unit tests.
+    #[cfg(test)]
     pub fn from_pixels(width: u32, height: u32, pixels: Vec<[f32; 3]>) -> DisplayImage {
         let srgb8 = pixels
             .iter()

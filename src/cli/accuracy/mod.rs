@@ -195,7 +195,7 @@ fn load_scene(
     let mut base = render_cmd::options(&render_args, &scene)?;
     base.spp = 1;
     base.aovs = AovSelection::default();
-    base.count_tiles = false;
+    base.count_texture_tiles = false;
     Ok(SceneSetup {
         name,
         tonemap: scene.settings.tonemap,
@@ -289,7 +289,7 @@ fn measure_scene(
     // The ground truth: one render, counting tiles.
     let truth_method = methods::ground_truth(args.ground_truth_spp);
     let mut truth_options = options_for(&setup.base, &truth_method);
-    truth_options.count_tiles = true;
+    truth_options.count_texture_tiles = true;
     let truth = render::render(&prepare(truth_options)?, &Whitted, &control)
         .map_err(crate::cli::render_failed)?;
     say(format!(
@@ -315,13 +315,13 @@ fn measure_scene(
     let mut contexts = Vec::with_capacity(compared.len());
     for method in &compared {
         let mut options = options_for(&setup.base, method);
-        options.count_tiles = true;
+        options.count_texture_tiles = true;
         contexts.push(prepare(options)?);
     }
     let mut first: Vec<RenderResult> = Vec::with_capacity(compared.len());
     for context in &mut contexts {
         first.push(render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?);
-        context.options.count_tiles = false;
+        context.options.count_texture_tiles = false;
     }
     let runs = args.runs;
     let mut times = vec![Vec::with_capacity(runs); compared.len()];

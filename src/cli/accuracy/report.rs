@@ -1,6 +1,6 @@
 //! The per-scene results of `conetrace accuracy` as data, CSV and a markdown table.
 
-use crate::film::TileRect;
+use crate::film::PixelRect;
 
 use super::methods::Method;
 use super::metrics::ErrorMetrics;
@@ -47,7 +47,7 @@ pub struct SceneReport {
     /// Pixels whose first camera path looked up a surface texture.
     pub textured_pixels: usize,
     /// The region shown in the crop image.
-    pub crop: TileRect,
+    pub crop: PixelRect,
     /// The ground truth row first, then the compared methods in order.
     pub rows: Vec<Row>,
 }
@@ -184,7 +184,7 @@ mod tests {
             runs: 1,
             threads: 1,
             textured_pixels: 0,
-            crop: TileRect::default(),
+            crop: PixelRect::default(),
             rows: vec![
                 row(64, None),
                 row(

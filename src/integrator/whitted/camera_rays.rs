@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3};
 
 use super::PathRay;
-use crate::film::{block_order, TileRect};
+use crate::film::{block_order, PixelRect};
 use crate::footprint::Footprint;
 use crate::render::context::RenderContext;
 use crate::render::sampling;
@@ -14,7 +14,7 @@ use crate::shading;
 /// Camera rays of one sample for a tile, ordered so that each run of 16 is a 4x4 block.
 pub(super) fn generate_camera_rays(
     context: &RenderContext,
-    tile: TileRect,
+    tile: PixelRect,
     sample: u32,
     image_width: u32,
     out: &mut Vec<PathRay>,

@@ -34,7 +34,7 @@ mod surface;
 
 use glam::Vec3;
 
-use crate::film::{TileImage, TileRect};
+use crate::film::{TileImage, PixelRect};
 use crate::footprint::Footprint;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
@@ -95,7 +95,7 @@ impl Integrator for Whitted {
     fn render_tile(
         &self,
         context: &RenderContext,
-        tile: TileRect,
+        tile: PixelRect,
         image: &mut TileImage,
         worker: &mut WorkerState,
         waves: &mut Waves,

@@ -150,7 +150,7 @@ pub(super) fn surface_albedo(
     worker.counters.texture_lookups += 1;
     let texel = match (
         &context.external_textures,
-        worker.tiles.get_mut(binding.texture),
+        worker.texture_tiles.get_mut(binding.texture),
     ) {
         (Some(external), _) => crate::render::external_textures::sample_external(
             external.as_ref(),

@@ -1,0 +1,179 @@
+//! Disjoint writable parts of a film, so render workers write finished work tiles straight
+//! into the image in parallel: no lock, no second whole-image buffer, no serial copy.
+//!
+//! The film's planes are cut with safe slice splitting: [`Film::bands_mut`] cuts every
+//! channel plane into bands of whole rows ([`FilmBand`]), and [`FilmBand::split_columns`]
+//! cuts a band's rows into column ranges ([`FilmRegion`]). Each region borrows only its own
+//! rows, so any number of threads can fill regions at once. The slices of a band are made
+//! when the band is split, so the bookkeeping alive at a time is a few rows' worth, not the
+//! image's.
+//!
+//! [`Film::bands_mut`]: super::Film::bands_mut
+
+use super::channels::Layer;
+use super::film::{FilmLayout, PixelRect};
+
+/// Rows `y0 .. y0 + height` of every channel plane of a film, writable on their own.
+pub struct FilmBand<'a> {
+    pub(super) y0: u32,
+    pub(super) width: u32,
+    pub(super) height: u32,
+    pub(super) layout: FilmLayout,
+    /// One slice of `width * height` values per channel, in channel order.
+    pub(super) planes: Vec<&'a mut [f32]>,
+}
+
+impl<'a> FilmBand<'a> {
+    /// The pixels covered, in image coordinates.
+    pub fn rect(&self) -> PixelRect {
+        PixelRect {
+            x0: 0,
+            y0: self.y0,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
+    /// The band cut into regions of `region_width` columns, left to right (the last one
+    /// narrower when the width is not a multiple).
+    pub fn split_columns(self, region_width: u32) -> Vec<FilmRegion<'a>> {
+        let region_width = region_width.max(1);
+        let count = self.width.div_ceil(region_width) as usize;
+        let mut regions: Vec<FilmRegion<'a>> = (0..count)
+            .map(|i| {
+                let x0 = i as u32 * region_width;
+                FilmRegion {
+                    rect: PixelRect {
+                        x0,
+                        y0: self.y0,
+                        width: region_width.min(self.width - x0),
+                        height: self.height,
+                    },
+                    layout: self.layout,
+                    rows: Vec::with_capacity(self.planes.len() * self.height as usize),
+                }
+            })
+            .collect();
+        // Rows are pushed channel by channel, top to bottom: row `r` of channel `c` of a
+        // region is `rows[c * height + r]`.
+        for plane in self.planes {
+            if self.width == 0 {
+                break;
+            }
+            for row in plane.chunks_mut(self.width as usize) {
+                for (region, part) in regions
+                    .iter_mut()
+                    .zip(row.chunks_mut(region_width as usize))
+                {
+                    region.rows.push(part);
+                }
+            }
+        }
+        regions
+    }
+}
+
+/// A rectangle of a film, writable on its own (see the module doc).
+pub struct FilmRegion<'a> {
+    rect: PixelRect,
+    layout: FilmLayout,
+    /// `layout.channel_count() * rect.height` rows of `rect.width` values, channel-major.
+    rows: Vec<&'a mut [f32]>,
+}
+
+impl FilmRegion<'_> {
+    /// The pixels covered, in image coordinates.
+    #[inline]
+    pub fn rect(&self) -> PixelRect {
+        self.rect
+    }
+
+    /// Writes one pixel of `layer` at image coordinates `(x, y)`; the rules of
+    /// [`super::Film::set`] (absent layers and pixels outside the region are ignored).
+    #[inline]
+    pub fn set(&mut self, layer: Layer, x: u32, y: u32, values: &[f32]) {
+        debug_assert_eq!(values.len(), layer.channel_count());
+        let Some(first) = self.layout.first_channel(layer) else {
+            return;
+        };
+        if !self.rect.contains(x, y) {
+            return;
+        }
+        let (row, column) = ((y - self.rect.y0) as usize, (x - self.rect.x0) as usize);
+        let height = self.rect.height as usize;
+        for (i, v) in values.iter().take(layer.channel_count()).enumerate() {
+            self.rows[(first + i) * height + row][column] = *v;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Film;
+    use super::*;
+    use rayon::prelude::*;
+
+    fn pattern(x: u32, y: u32, c: usize) -> f32 {
+        (x * 1000 + y) as f32 + c as f32 * 0.25
+    }
+
+    #[test]
+    fn regions_cover_the_work_tiles_and_parallel_writes_equal_serial_ones() {
+        let layers = [Layer::Color, Layer::Depth, Layer::TexFootprint];
+        let (w, h) = (37, 23);
+        let mut serial = Film::new(w, h, &layers);
+        for (x, y) in (PixelRect {
+            x0: 0,
+            y0: 0,
+            width: w,
+            height: h,
+        })
+        .pixels()
+        {
+            for layer in layers {
+                let values: Vec<f32> = (0..layer.channel_count())
+                    .map(|c| pattern(x, y, c))
+                    .collect();
+                serial.set(layer, x, y, &values);
+            }
+        }
+
+        let mut film = Film::new(w, h, &layers);
+        let tile = crate::render::WORK_TILE_SIZE;
+        let regions: Vec<FilmRegion> = film
+            .bands_mut(tile)
+            .into_iter()
+            .flat_map(|band| band.split_columns(tile))
+            .collect();
+        // Row-major like the renderer's one enumeration of work tiles.
+        let rects: Vec<PixelRect> = regions.iter().map(FilmRegion::rect).collect();
+        assert_eq!(rects, crate::render::work_tiles(w, h));
+        regions.into_par_iter().for_each(|mut region| {
+            let mut values = [0.0f32; 6];
+            for (x, y) in region.rect().pixels() {
+                for layer in layers {
+                    let n = layer.channel_count();
+                    for (c, v) in values.iter_mut().enumerate().take(n) {
+                        *v = pattern(x, y, c);
+                    }
+                    region.set(layer, x, y, &values[..n]);
+                }
+            }
+            // Outside the region and absent layers: ignored.
+            region.set(Layer::Depth, w + 5, 0, &[1.0]);
+            region.set(Layer::Uv, 0, 0, &[1.0, 1.0]);
+        });
+        assert_eq!(film, serial);
+    }
+
+    #[test]
+    fn an_empty_film_has_no_regions() {
+        let mut film = Film::new(0, 5, &[Layer::Color]);
+        let regions: Vec<FilmRegion> = film
+            .bands_mut(16)
+            .into_iter()
+            .flat_map(|band| band.split_columns(16))
+            .collect();
+        assert!(regions.is_empty());
+    }
+}
