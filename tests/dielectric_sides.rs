@@ -51,6 +51,7 @@ fn options() -> RenderOptions {
         },
         count_tiles: false,
         all_effects: false,
+        seed: 0,
     }
 }
 

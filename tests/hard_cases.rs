@@ -50,6 +50,7 @@ fn options(lod: LodStrategy, filter: FilterMode) -> RenderOptions {
         },
         count_tiles: false,
         all_effects: false,
+        seed: 0,
     }
 }
 

@@ -433,5 +433,6 @@ fn render_options(
         },
         count_tiles: false,
         all_effects: false,
+        seed: 0,
     })
 }

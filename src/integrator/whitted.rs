@@ -26,9 +26,9 @@ use crate::hit::SurfaceHit;
 use crate::integrator::{block_order, Integrator, TileImage, TileRect};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{binding_query, environment_radiance, SurfaceDetail};
-use crate::render::sampling;
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
+use crate::sampler::Sampler;
 use crate::scene::Material;
 use crate::shading::{self, DielectricBoundary, SpawnPoint};
 
@@ -150,12 +150,13 @@ fn generate_camera_rays(
     let lod = context.options.lod;
     let spp = context.options.spp.max(1);
     let dof = context.effects.depth_of_field;
+    let sampler = Sampler::new(context.options.seed);
     for (x, y) in block_order(tile) {
         let (px, py) = (tile.x0 + x, tile.y0 + y);
-        let pixel_id = py * image_width + px;
-        let offset = sampling::pixel_offset(pixel_id, sample, spp);
+        let camera_sample = sampler.pixel(py * image_width + px, sample).camera_sample(spp);
+        let offset = camera_sample.pixel_offset;
         let lens = if dof {
-            sampling::lens_sample(pixel_id, sample)
+            camera_sample.lens
         } else {
             Vec2::splat(0.5)
         };
@@ -165,7 +166,7 @@ fn generate_camera_rays(
             shading::entry_distance(origin, direction, bounds)
         });
         let footprint = if context.effects.footprints {
-            camera.initial_footprint(lod, fx, fy, origin, direction)
+            camera.sample_footprint(lod, fx, fy, origin, direction, spp)
         } else {
             Footprint::none()
         };

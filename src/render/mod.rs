@@ -11,7 +11,6 @@ pub mod effects;
 pub mod external_textures;
 pub mod memory;
 pub mod prepared;
-pub mod sampling;
 pub mod stats;
 pub mod tracer;
 
