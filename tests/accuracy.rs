@@ -90,8 +90,8 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
     ] {
         column(name);
     }
-    // The ground truth and the twelve compared methods.
-    assert_eq!(rows.len(), 13, "{rows:?}");
+    // The ground truth and the sixteen compared methods.
+    assert_eq!(rows.len(), 17, "{rows:?}");
     assert!(rows.iter().all(|r| r.len() == header.len()));
     let method = |r: &Vec<String>| {
         format!(
@@ -115,6 +115,10 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
         "mip0+bilinear 4",
         "mip0+bilinear 16",
         "mip0+bilinear 64",
+        "cone+aniso 4",
+        "cone+aniso 16",
+        "differential+ewa 4",
+        "differential+ewa 16",
     ];
     let methods: Vec<String> = rows.iter().map(method).collect();
     assert_eq!(methods, expected);
@@ -155,6 +159,16 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
             errors.windows(2).all(|w| w[1] < w[0]),
             "{name} does not fall with spp: {errors:?}"
         );
+        // So do the footprint-filtered rows: 1 -> 4 -> 16 samples, each filtering its
+        // share of the pixel.
+        for (one, four, sixteen) in [(5, 13, 14), (9, 15, 16)] {
+            let errors: Vec<f64> = [one, four, sixteen].map(|i| number(&rows[i], name)).to_vec();
+            assert!(
+                errors.windows(2).all(|w| w[1] < w[0]),
+                "{name} of {} does not fall with spp: {errors:?}",
+                method(&rows[one])
+            );
+        }
     }
     // The fastest row has relative time 1.
     let fastest = rows
@@ -169,7 +183,7 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
     let crop_image = image::open(out.join("fp_concave_crop.png")).expect("crop decodes");
     let side = crop::window_side(48, 27);
     let panel = side * crop::PANEL_TARGET.div_ceil(side);
-    let cells = 14; // overview, ground truth, twelve methods
+    let cells = 18; // overview, ground truth, sixteen methods
     let columns = crop::COLUMNS;
     assert_eq!(
         (crop_image.width(), crop_image.height()),
@@ -181,8 +195,8 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
     let markdown = std::fs::read_to_string(out.join("fp_concave.md")).unwrap();
     assert_eq!(
         markdown.lines().filter(|l| l.starts_with("| ")).count(),
-        14,
-        "header and 13 rows:\n{markdown}"
+        18,
+        "header and 17 rows:\n{markdown}"
     );
     let index = std::fs::read_to_string(out.join("README.md")).unwrap();
     assert!(
