@@ -83,7 +83,7 @@ pub fn ground_truth_seed(seed: u32) -> u32 {
     !seed
 }
 
-/// The reference every method is compared with: `mip0` + `bilinear` at `spp` stratified
+/// The reference every method is compared with: `mip0` + `bilinear` at `spp`
 /// samples per pixel.
 pub fn ground_truth(spp: u32) -> Method {
     Method {
