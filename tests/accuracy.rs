@@ -162,7 +162,9 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
         // So do the footprint-filtered rows: 1 -> 4 -> 16 samples, each filtering its
         // share of the pixel.
         for (one, four, sixteen) in [(5, 13, 14), (9, 15, 16)] {
-            let errors: Vec<f64> = [one, four, sixteen].map(|i| number(&rows[i], name)).to_vec();
+            let errors: Vec<f64> = [one, four, sixteen]
+                .map(|i| number(&rows[i], name))
+                .to_vec();
             assert!(
                 errors.windows(2).all(|w| w[1] < w[0]),
                 "{name} of {} does not fall with spp: {errors:?}",

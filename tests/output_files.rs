@@ -167,12 +167,23 @@ fn the_seed_decides_the_sample_positions() {
     }
     let pixels = |name: &str| read_exr(&dir.path().join(name)).channel("R").to_vec();
     let seven = pixels("seed7.exr");
-    assert!(seven == pixels("seed7_again.exr"), "the same seed gave different pixels");
+    assert!(
+        seven == pixels("seed7_again.exr"),
+        "the same seed gave different pixels"
+    );
     let differing = |other: &[f32]| seven.iter().zip(other).filter(|(a, b)| a != b).count();
     let eight = pixels("seed8.exr");
-    assert!(differing(&eight) > seven.len() / 20, "seed 8 changed {} pixels", differing(&eight));
+    assert!(
+        differing(&eight) > seven.len() / 20,
+        "seed 8 changed {} pixels",
+        differing(&eight)
+    );
     let default = pixels("default.exr");
-    assert!(differing(&default) > seven.len() / 20, "seed 0 changed {} pixels", differing(&default));
+    assert!(
+        differing(&default) > seven.len() / 20,
+        "seed 0 changed {} pixels",
+        differing(&default)
+    );
 }
 
 #[test]

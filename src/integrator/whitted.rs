@@ -153,7 +153,9 @@ fn generate_camera_rays(
     let sampler = Sampler::new(context.options.seed);
     for (x, y) in block_order(tile) {
         let (px, py) = (tile.x0 + x, tile.y0 + y);
-        let camera_sample = sampler.pixel(py * image_width + px, sample).camera_sample(spp);
+        let camera_sample = sampler
+            .pixel(py * image_width + px, sample)
+            .camera_sample(spp);
         let offset = camera_sample.pixel_offset;
         let lens = if dof {
             camera_sample.lens

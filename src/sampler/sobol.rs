@@ -65,8 +65,16 @@ mod tests {
         let first_0 = [0.0, 0.5, 0.25, 0.75, 0.125, 0.625, 0.375, 0.875];
         let first_1 = [0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875];
         for i in 0..8 {
-            assert_eq!(fraction(dimension_0(i)), first_0[i as usize], "dim 0, point {i}");
-            assert_eq!(fraction(dimension_1(i)), first_1[i as usize], "dim 1, point {i}");
+            assert_eq!(
+                fraction(dimension_0(i)),
+                first_0[i as usize],
+                "dim 0, point {i}"
+            );
+            assert_eq!(
+                fraction(dimension_1(i)),
+                first_1[i as usize],
+                "dim 1, point {i}"
+            );
         }
         let m: Vec<u32> = (1..=8)
             .map(|k| DIMENSION_1_DIRECTIONS[k - 1] >> (32 - k))

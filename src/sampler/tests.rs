@@ -16,7 +16,11 @@ fn correlation(a: &[f32], b: &[f32]) -> f64 {
     let n = a.len() as f64;
     let mean = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>() / n;
     let (ma, mb) = (mean(a), mean(b));
-    let cov: f64 = a.iter().zip(b).map(|(&x, &y)| (x as f64 - ma) * (y as f64 - mb)).sum();
+    let cov: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(&x, &y)| (x as f64 - ma) * (y as f64 - mb))
+        .sum();
     let var = |v: &[f32], m: f64| v.iter().map(|&x| (x as f64 - m).powi(2)).sum::<f64>();
     cov / (var(a, ma) * var(b, mb)).sqrt()
 }
@@ -30,8 +34,9 @@ fn the_first_power_of_two_samples_of_every_pair_form_a_net() {
         for pixel in [0u32, 1, 641, 921_599] {
             for pairs_before in [0u32, 1, 2, 7] {
                 for k in [1u32, 2, 4, 6] {
-                    let points: Vec<Vec2> =
-                        (0..1 << k).map(|i| pair(sampler, pixel, i, pairs_before)).collect();
+                    let points: Vec<Vec2> = (0..1 << k)
+                        .map(|i| pair(sampler, pixel, i, pairs_before))
+                        .collect();
                     for a in 0..=k {
                         let (nx, ny) = ((1u32 << a) as f32, (1u32 << (k - a)) as f32);
                         let mut cells = vec![0u32; 1 << k];
@@ -67,7 +72,10 @@ fn single_dimensions_are_stratified() {
                 assert!((0.0..1.0).contains(&v));
                 cells[(v * n as f32) as usize] += 1;
             }
-            assert!(cells.iter().all(|&c| c == 1), "{pixel} {dims_before}: {cells:?}");
+            assert!(
+                cells.iter().all(|&c| c == 1),
+                "{pixel} {dims_before}: {cells:?}"
+            );
         }
     }
 }
@@ -80,18 +88,25 @@ fn neighbouring_pixels_are_uncorrelated() {
     let width = 320u32;
     for index in [0u32, 1, 5, 16] {
         for pairs_before in [0u32, 3] {
-            let here: Vec<Vec2> = (0..8192).map(|p| pair(sampler, p, index, pairs_before)).collect();
-            let right: Vec<Vec2> =
-                (0..8192).map(|p| pair(sampler, p + 1, index, pairs_before)).collect();
-            let below: Vec<Vec2> =
-                (0..8192).map(|p| pair(sampler, p + width, index, pairs_before)).collect();
+            let here: Vec<Vec2> = (0..8192)
+                .map(|p| pair(sampler, p, index, pairs_before))
+                .collect();
+            let right: Vec<Vec2> = (0..8192)
+                .map(|p| pair(sampler, p + 1, index, pairs_before))
+                .collect();
+            let below: Vec<Vec2> = (0..8192)
+                .map(|p| pair(sampler, p + width, index, pairs_before))
+                .collect();
             for other in [&right, &below] {
                 for axis in 0..2 {
                     let a: Vec<f32> = here.iter().map(|v| v[axis]).collect();
                     let b: Vec<f32> = other.iter().map(|v| v[axis]).collect();
                     let r = correlation(&a, &b);
                     // 4 standard deviations of r for 8192 independent pairs.
-                    assert!(r.abs() < 4.0 / 8192f64.sqrt(), "index {index} axis {axis}: r {r}");
+                    assert!(
+                        r.abs() < 4.0 / 8192f64.sqrt(),
+                        "index {index} axis {axis}: r {r}"
+                    );
                 }
             }
         }
@@ -111,7 +126,8 @@ fn pairs_of_dimensions_are_uncorrelated() {
         }
     }
     let n = draws.len() as f64;
-    let column = |pair: usize, axis: usize| -> Vec<f32> { draws.iter().map(|d| d[pair][axis]).collect() };
+    let column =
+        |pair: usize, axis: usize| -> Vec<f32> { draws.iter().map(|d| d[pair][axis]).collect() };
     for (a, b) in [
         ((0, 0), (1, 0)),
         ((0, 1), (1, 1)),
@@ -125,17 +141,25 @@ fn pairs_of_dimensions_are_uncorrelated() {
     // Within one pixel the pairs are not the same point set in the same order either: the
     // 16 samples' quadrants in pair 0 and pair 1 agree in about a quarter of cases.
     let quadrant = |v: Vec2| (v.x >= 0.5) as u32 * 2 + (v.y >= 0.5) as u32;
-    let agree = draws.iter().filter(|d| quadrant(d[0]) == quadrant(d[1])).count() as f64;
+    let agree = draws
+        .iter()
+        .filter(|d| quadrant(d[0]) == quadrant(d[1]))
+        .count() as f64;
     assert!((agree / n - 0.25).abs() < 0.02, "{}", agree / n);
 }
 
 #[test]
 fn values_are_uniform() {
     let sampler = Sampler::new(5);
-    let values: Vec<f32> = (0..20_000u32).map(|p| sampler.pixel(p, 3).next_1d()).collect();
+    let values: Vec<f32> = (0..20_000u32)
+        .map(|p| sampler.pixel(p, 3).next_1d())
+        .collect();
     let mean = values.iter().map(|&v| v as f64).sum::<f64>() / values.len() as f64;
-    let variance =
-        values.iter().map(|&v| (v as f64 - mean).powi(2)).sum::<f64>() / values.len() as f64;
+    let variance = values
+        .iter()
+        .map(|&v| (v as f64 - mean).powi(2))
+        .sum::<f64>()
+        / values.len() as f64;
     assert!((mean - 0.5).abs() < 0.01, "mean {mean}");
     assert!((variance - 1.0 / 12.0).abs() < 0.003, "variance {variance}");
 }

@@ -18,6 +18,7 @@ test suite. Writes <results>/sampler_<W>x<H>.{csv,md}.
 
 import argparse
 import csv
+import json
 import os
 import subprocess
 import sys
@@ -38,7 +39,6 @@ def conetrace_render(binary, out_exr, spp, seed, threads):
     done = subprocess.run(command, capture_output=True, text=True)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed: {done.stderr.strip()}")
-    import json
     with open(stats) as f:
         seconds = float(json.load(f)["seconds"])
     return peers.rgb(peers.read_exr(out_exr)), seconds
@@ -72,7 +72,9 @@ def main():
     gt_exr = os.path.join(work, f"ground_truth_{args.gt_spp}spp_seed{args.gt_seed}.exr")
     if args.reuse_ground_truth and os.path.exists(gt_exr):
         truth = peers.rgb(peers.read_exr(gt_exr))
-        gt_note = "reused from an earlier run of the same command"
+        with open(gt_exr + ".json") as f:
+            gt_seconds = float(json.load(f)["seconds"])
+        gt_note = f"{gt_seconds:.1f} s render, reused from an earlier run of the same command"
     else:
         start = time.perf_counter()
         truth, gt_seconds = conetrace_render(args.conetrace, gt_exr, args.gt_spp, args.gt_seed,
@@ -155,7 +157,7 @@ def main():
         count = f"{spp}" if theirs["spp"] == spp else f"{spp} (Mitsuba {theirs['spp']})"
         lines.append(
             f"| {count} | {ours['rmse_all']:.5f} | {theirs['rmse_all']:.5f} | "
-            f"{ours['rmse_all'] / theirs['rmse_all']:.2f} | {ours['rmse_far']:.5f} | "
+            f"{ours['rmse_all'] / theirs['rmse_all']:.3f} | {ours['rmse_far']:.5f} | "
             f"{theirs['rmse_far']:.5f} | {independent['rmse_all']:.5f} |")
     lines += ["", "ratio = conetrace RMSE / Mitsuba multijitter RMSE (<= 1: ours is at most "
               "Mitsuba's).", "", "## All runs", "",
