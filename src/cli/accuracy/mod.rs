@@ -75,8 +75,8 @@ pub struct AccuracyArgs {
     /// Image height of every render.
     #[arg(long, default_value_t = 180)]
     pub height: u32,
-    /// Stratified samples per pixel of the ground truth (mip0 + bilinear). Smaller values
-    /// are accepted for quick checks; the checked-in results use 1024.
+    /// Samples per pixel of the ground truth (mip0 + bilinear, drawn with another seed).
+    /// Smaller values are accepted for quick checks; the checked-in results use 1024.
     #[arg(long, default_value_t = 1024)]
     pub ground_truth_spp: u32,
     /// Timed runs of every method (interleaved); each row reports their median.
