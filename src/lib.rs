@@ -23,6 +23,7 @@ pub mod footprint;
 pub mod hit;
 pub mod integrator;
 pub mod render;
+pub mod sampler;
 pub mod scene;
 pub mod shading;
 pub mod texture;

@@ -89,8 +89,8 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
     ] {
         column(name);
     }
-    // The ground truth and the twelve compared methods.
-    assert_eq!(rows.len(), 13, "{rows:?}");
+    // The ground truth and the sixteen compared methods.
+    assert_eq!(rows.len(), 17, "{rows:?}");
     assert!(rows.iter().all(|r| r.len() == header.len()));
     let method = |r: &Vec<String>| {
         format!(
@@ -114,6 +114,10 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
         "mip0+bilinear 4",
         "mip0+bilinear 16",
         "mip0+bilinear 64",
+        "cone+aniso 4",
+        "cone+aniso 16",
+        "differential+ewa 4",
+        "differential+ewa 16",
     ];
     let methods: Vec<String> = rows.iter().map(method).collect();
     assert_eq!(methods, expected);
@@ -154,6 +158,18 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
             errors.windows(2).all(|w| w[1] < w[0]),
             "{name} does not fall with spp: {errors:?}"
         );
+        // So do the footprint-filtered rows: 1 -> 4 -> 16 samples, each filtering its
+        // share of the pixel.
+        for (one, four, sixteen) in [(5, 13, 14), (9, 15, 16)] {
+            let errors: Vec<f64> = [one, four, sixteen]
+                .map(|i| number(&rows[i], name))
+                .to_vec();
+            assert!(
+                errors.windows(2).all(|w| w[1] < w[0]),
+                "{name} of {} does not fall with spp: {errors:?}",
+                method(&rows[one])
+            );
+        }
     }
     // The fastest row has relative time 1.
     let fastest = rows
@@ -172,7 +188,7 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
     let (panel_target, columns, gap, label_height) = (176u32, 5u32, 4u32, 34u32);
     let side = 8u32;
     let panel = side * panel_target.div_ceil(side);
-    let cells = 14u32; // overview, ground truth, twelve methods
+    let cells = 18u32; // overview, ground truth, sixteen methods
     assert_eq!(
         (crop_image.width(), crop_image.height()),
         (
@@ -183,8 +199,8 @@ fn a_tiny_run_writes_consistent_tables_and_images() {
     let markdown = std::fs::read_to_string(out.join("fp_concave.md")).unwrap();
     assert_eq!(
         markdown.lines().filter(|l| l.starts_with("| ")).count(),
-        14,
-        "header and 13 rows:\n{markdown}"
+        18,
+        "header and 17 rows:\n{markdown}"
     );
     let index = std::fs::read_to_string(out.join("README.md")).unwrap();
     assert!(

@@ -98,6 +98,7 @@ fn prepare(scene: &Path, size: u32) -> RenderContext {
         aovs: AovSelection::default(),
         count_texture_tiles: false,
         all_effects: false,
+        seed: 0,
     };
     conetrace::render::prepare(Arc::new(description), options).expect("scene prepares")
 }

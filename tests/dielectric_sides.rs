@@ -52,6 +52,7 @@ fn options() -> RenderOptions {
         },
         count_texture_tiles: false,
         all_effects: false,
+        seed: 0,
     }
 }
 

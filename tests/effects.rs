@@ -247,6 +247,7 @@ fn prepare_small(path: &std::path::Path) -> conetrace::render::RenderContext {
         },
         count_texture_tiles: false,
         all_effects: false,
+        seed: 0,
     };
     conetrace::render::prepare(std::sync::Arc::new(scene), options).unwrap()
 }

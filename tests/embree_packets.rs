@@ -901,6 +901,7 @@ fn render_options() -> conetrace::render::RenderOptions {
         },
         count_texture_tiles: false,
         all_effects: false,
+        seed: 0,
     }
 }
 

@@ -51,6 +51,7 @@ fn options(lod: LodStrategy, filter: FilterMode) -> RenderOptions {
         },
         count_texture_tiles: false,
         all_effects: false,
+        seed: 0,
     }
 }
 

@@ -149,6 +149,44 @@ fn identical_renders_give_identical_bytes_with_standard_camera_matrices() {
 }
 
 #[test]
+fn the_seed_decides_the_sample_positions() {
+    // Four samples per pixel of the built-in scene: the same --seed gives the same pixels,
+    // another seed (or the default, 0) other pixels.
+    let dir = temp_dir();
+    let runs: [(&str, &[&str]); 4] = [
+        ("seed7.exr", &["--seed", "7"]),
+        ("seed7_again.exr", &["--seed", "7"]),
+        ("seed8.exr", &["--seed", "8"]),
+        ("default.exr", &[]),
+    ];
+    for (name, seed) in runs {
+        let mut args = vec!["-o", name, "--no-png", "--spp", "4"];
+        args.extend_from_slice(seed);
+        let out = render(dir.path(), &args);
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+    }
+    let pixels = |name: &str| read_exr(&dir.path().join(name)).channel("R").to_vec();
+    let seven = pixels("seed7.exr");
+    assert!(
+        seven == pixels("seed7_again.exr"),
+        "the same seed gave different pixels"
+    );
+    let differing = |other: &[f32]| seven.iter().zip(other).filter(|(a, b)| a != b).count();
+    let eight = pixels("seed8.exr");
+    assert!(
+        differing(&eight) > seven.len() / 20,
+        "seed 8 changed {} pixels",
+        differing(&eight)
+    );
+    let default = pixels("default.exr");
+    assert!(
+        differing(&default) > seven.len() / 20,
+        "seed 0 changed {} pixels",
+        differing(&default)
+    );
+}
+
+#[test]
 fn a_symlinked_output_stays_a_link_and_keeps_its_permissions() {
     use std::os::unix::fs::PermissionsExt;
     let dir = temp_dir();

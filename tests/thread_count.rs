@@ -7,8 +7,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use conetrace::footprint::LodStrategy;
 use conetrace::film::AovSelection;
+use conetrace::footprint::LodStrategy;
 use conetrace::integrator::Whitted;
 use conetrace::render::{self, RenderControl, RenderOptions, RenderResult};
 use conetrace::texture::FilterOptions;
@@ -50,6 +50,7 @@ fn render_on(path: &Path, threads: usize) -> RenderResult {
             },
             count_texture_tiles: true,
             all_effects: false,
+            seed: 0,
         };
         let context = render::prepare(Arc::new(scene), options).expect("scene prepares");
         render::render(&context, &Whitted, &RenderControl::default()).expect("render succeeds")

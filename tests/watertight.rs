@@ -124,6 +124,7 @@ fn options() -> RenderOptions {
         aovs: AovSelection::default(),
         count_texture_tiles: false,
         all_effects: false,
+        seed: 0,
     }
 }
 

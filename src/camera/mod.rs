@@ -217,7 +217,21 @@ impl Camera {
         (fix(px, self.width), fix(py, self.height))
     }
 
-    /// The footprint the ray (`origin`, unit `dir`) through pixel (px, py) starts with.
+    /// The footprint the ray (`origin`, unit `dir`) through pixel (px, py) starts with when
+    /// it is its pixel's only sample: [`Camera::sample_footprint`] with one sample.
+    pub fn initial_footprint(
+        &self,
+        strategy: LodStrategy,
+        px: f32,
+        py: f32,
+        origin: Vec3,
+        dir: Vec3,
+    ) -> Footprint {
+        self.sample_footprint(strategy, px, py, origin, dir, 1)
+    }
+
+    /// The footprint the ray (`origin`, unit `dir`) through pixel (px, py) starts with, as
+    /// one of `samples_per_pixel` samples of its pixel.
     ///
     /// - `Distance`: zero width spreading at the pinhole angle (perspective cameras) or one
     ///   pixel wide without spread (orthographic).
@@ -228,19 +242,32 @@ impl Camera {
     ///   orthographic cameras.
     /// - `Differential`: seed 002, eq. 8 (pinhole), the same at a fixed lens point for a
     ///   thin lens (`origin` is that point), moving origins for orthographic.
-    pub fn initial_footprint(
+    ///
+    /// Every extent that one pixel sets (the pinhole spread, the orthographic and pixel-lens
+    /// widths, the differentials' per-pixel steps) is scaled by
+    /// [`sample_footprint_scale`]: N samples share the pixel, so each filters about 1/N of
+    /// its area. The lens aperture's cone is not a pixel extent and keeps its size.
+    pub fn sample_footprint(
         &self,
         strategy: LodStrategy,
         px: f32,
         py: f32,
         origin: Vec3,
         dir: Vec3,
+        samples_per_pixel: u32,
     ) -> Footprint {
+        let scale = sample_footprint_scale(samples_per_pixel);
         let d = unit_or(dir, self.forward);
         let (hu, hv) = (self.u.length(), self.v.length());
-        let pinhole = || RayCone::pinhole(d, self.w, hu, hv, self.width, self.height);
-        let ortho = || RayCone::orthographic(hu, hv, self.width, self.height);
-        let pixel_lens = || RayCone::thin_lens(self.pixel_size(), d, self.w);
+        let pinhole = || {
+            let cone = RayCone::pinhole(d, self.w, hu, hv, self.width, self.height);
+            RayCone::new(cone.width, cone.angle * scale)
+        };
+        let ortho = || {
+            let cone = RayCone::orthographic(hu, hv, self.width, self.height);
+            RayCone::new(cone.width * scale, cone.angle)
+        };
+        let pixel_lens = || RayCone::thin_lens(self.pixel_size() * scale, d, self.w);
         match strategy {
             LodStrategy::Mip0 => Footprint::Mip0,
             LodStrategy::Distance => Footprint::Distance(match self.model {
@@ -266,6 +293,7 @@ impl Camera {
             LodStrategy::Differential => {
                 let (px, py) = self.sanitize_pixel(px, py);
                 let (dx, dy) = self.rectangle_per_pixel();
+                let (dx, dy) = (dx * scale, dy * scale);
                 Footprint::Differential(match self.model {
                     CameraModel::Pinhole => {
                         RayDifferential::from_point(self.rectangle_point(px, py), dx, dy)
@@ -280,6 +308,16 @@ impl Camera {
             }
         }
     }
+}
+
+/// How much narrower than a whole pixel's a camera ray's footprint is when
+/// `samples_per_pixel` rays share the pixel: 1/sqrt(N), the side of the pixel's share of
+/// area, but at least 1/8 so that large counts still filter. pbrt-v4 (Pharr, Jakob &
+/// Humphreys, "Physically Based Rendering", 4th ed.) scales its camera rays' differentials by
+/// the same max(1/8, 1/sqrt(N)) before tracing them (`RayDifferential::ScaleDifferentials`).
+#[inline]
+pub fn sample_footprint_scale(samples_per_pixel: u32) -> f32 {
+    (1.0 / (samples_per_pixel.max(1) as f32).sqrt()).max(0.125)
 }
 
 #[cfg(test)]
@@ -361,5 +399,60 @@ mod tests {
             let f = cam.initial_footprint(strategy, 0.5, 0.5, o, d);
             assert!(f.width().is_finite());
         }
+    }
+
+    #[test]
+    fn footprints_shrink_with_the_sample_count() {
+        // The footprint's size 7 units along the ray (`width + spread * t`) at N samples per
+        // pixel, relative to N = 1: 1/sqrt(N), never below 1/8; N = 1 is the single-sample
+        // footprint exactly.
+        let size = |f: Footprint| {
+            let (width, spread) = f.cone_at_origin();
+            width + spread * 7.0
+        };
+        let perspective = Projection::Pinhole { vfov_degrees: 40.0 };
+        let orthographic = Projection::Orthographic { height: 4.0 };
+        let thin_lens = Projection::ThinLens {
+            vfov_degrees: 40.0,
+            aperture_radius: 0.2,
+            focus_distance: 5.0,
+        };
+        let cases = [
+            (perspective.clone(), LodStrategy::Distance),
+            (perspective.clone(), LodStrategy::Cone1),
+            (perspective.clone(), LodStrategy::Cone),
+            (perspective.clone(), LodStrategy::Differential),
+            (orthographic.clone(), LodStrategy::Distance),
+            (orthographic.clone(), LodStrategy::Cone1),
+            (orthographic.clone(), LodStrategy::Cone),
+            (orthographic.clone(), LodStrategy::Differential),
+            (thin_lens.clone(), LodStrategy::Distance),
+            (thin_lens.clone(), LodStrategy::Differential),
+        ];
+        for (projection, strategy) in cases {
+            let cam = Camera::new(&desc(projection.clone()), 160, 90);
+            let (o, d) = cam.generate_ray(37.25, 61.5, Vec2::new(0.3, 0.8));
+            let one = cam.sample_footprint(strategy, 37.25, 61.5, o, d, 1);
+            assert_eq!(one, cam.initial_footprint(strategy, 37.25, 61.5, o, d));
+            let whole = size(one);
+            assert!(whole > 0.0, "{projection:?} {strategy:?}");
+            for (spp, ratio) in [(4, 0.5), (16, 0.25), (64, 0.125), (1024, 0.125)] {
+                let part = size(cam.sample_footprint(strategy, 37.25, 61.5, o, d, spp));
+                assert!(
+                    (part / whole - ratio).abs() < 1e-4,
+                    "{projection:?} {strategy:?} at {spp} spp: {part} / {whole}"
+                );
+            }
+        }
+        // The lens aperture's cone is not a pixel's: a thin lens's Cone1 keeps its size.
+        let cam = Camera::new(&desc(thin_lens), 160, 90);
+        let (o, d) = cam.generate_ray(37.25, 61.5, Vec2::new(0.3, 0.8));
+        assert_eq!(
+            cam.sample_footprint(LodStrategy::Cone1, 37.25, 61.5, o, d, 16),
+            cam.initial_footprint(LodStrategy::Cone1, 37.25, 61.5, o, d)
+        );
+        assert_eq!(sample_footprint_scale(0), 1.0);
+        assert_eq!(sample_footprint_scale(1), 1.0);
+        assert_eq!(sample_footprint_scale(16), 0.25);
     }
 }

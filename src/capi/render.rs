@@ -434,5 +434,6 @@ fn render_options(
         },
         count_texture_tiles: false,
         all_effects: false,
+        seed: 0,
     })
 }

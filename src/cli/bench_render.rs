@@ -20,12 +20,12 @@ use rayon::prelude::*;
 
 use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
-use conetrace::film::{block_order, PixelRect};
-use conetrace::integrator::Whitted;
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::{self, RenderContext, RenderControl, RenderOptions};
 use crate::shading::{self, SpawnPoint};
+use conetrace::film::{block_order, PixelRect};
+use conetrace::integrator::Whitted;
 
 #[derive(Args, Debug)]
 pub struct BenchRenderArgs {

@@ -63,9 +63,14 @@ pub struct RenderArgs {
     /// Image height in pixels, 1 to 65536 [default: the scene's height, else 360].
     #[arg(long, allow_negative_numbers = true)]
     pub height: Option<u32>,
-    /// Samples per pixel (stratified; 1 = pixel centre) [default: the scene's, else 1].
+    /// Samples per pixel (Owen-scrambled Sobol; 1 = pixel centre) [default: the scene's,
+    /// else 1].
     #[arg(long, allow_negative_numbers = true)]
     pub spp: Option<u32>,
+    /// Seed of the sample positions, 0 to 4294967295; the same seed gives the same image
+    /// [default: the scene's, else 0].
+    #[arg(long)]
+    pub seed: Option<u32>,
     /// Maximum number of reflection/refraction bounces, 0 or more [default: the scene's,
     /// else 8].
     #[arg(long, allow_negative_numbers = true)]
@@ -211,6 +216,7 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
         },
         count_texture_tiles: args.stats.is_some(),
         all_effects: args.all_effects,
+        seed: args.seed.unwrap_or(scene.settings.seed),
     })
 }
 

@@ -141,6 +141,7 @@ impl RenderSignature {
         option("width", options.width.to_string());
         option("height", options.height.to_string());
         option("spp", options.spp.to_string());
+        option("seed", options.seed.to_string());
         option("max-depth", options.max_depth.to_string());
         option("min-throughput", options.min_throughput.to_string());
         option("lod", options.lod.name().to_string());
@@ -369,6 +370,14 @@ mod tests {
         let now = RenderSignature::new(&scene, None, &more_samples, &digests).unwrap();
         let what = now.difference(&stored(&base), &scene).unwrap();
         assert!(what.contains("--spp") && what.contains("16"), "{what}");
+
+        let other_seed = crate::render::RenderOptions {
+            seed: 5,
+            ..options.clone()
+        };
+        let now = RenderSignature::new(&scene, None, &other_seed, &digests).unwrap();
+        let what = now.difference(&stored(&base), &scene).unwrap();
+        assert!(what.contains("--seed") && what.contains('5'), "{what}");
 
         let mut brighter = scene.clone();
         match brighter

@@ -43,8 +43,8 @@ pub mod exr_output;
 #[allow(clippy::module_inception)]
 pub mod film;
 pub mod png_output;
-pub mod tile_image;
 pub mod regions;
+pub mod tile_image;
 
 pub use atomic_file::OutputSet;
 pub use channels::Layer;
@@ -53,5 +53,5 @@ pub use exr_input::read_exr;
 pub use exr_output::{stage_exr, write_exr, ExrAttributes};
 pub use film::{Film, FilmLayout, FilmTile, PixelRect};
 pub use png_output::{display_value, linear_to_srgb, stage_png, tonemap_to_srgb8, write_png};
-pub use tile_image::{block_order, AovSelection, TileImage};
 pub use regions::{FilmBand, FilmRegion};
+pub use tile_image::{block_order, AovSelection, TileImage};

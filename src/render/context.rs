@@ -32,6 +32,9 @@ pub struct RenderOptions {
     pub count_texture_tiles: bool,
     /// Force every effect on (the general path), for benchmarks.
     pub all_effects: bool,
+    /// The seed of every sample position (`crate::sampler::Sampler`): equal seeds give
+    /// bit-identical images.
+    pub seed: u32,
 }
 
 /// The shared, read-only state of one render.

@@ -7,7 +7,7 @@
 //! integrators themselves live in `crate::integrator`, which depends on this stage; this
 //! module knows none of them.
 
-use crate::film::{TileImage, PixelRect};
+use crate::film::{PixelRect, TileImage};
 use crate::render::context::{RenderContext, WorkerState};
 
 /// A light-transport algorithm that renders one tile at a time, from any thread.

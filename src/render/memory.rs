@@ -208,6 +208,7 @@ mod tests {
             },
             count_texture_tiles: false,
             all_effects: false,
+            seed: 0,
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(64)

@@ -12,7 +12,6 @@ pub mod external_textures;
 pub mod integrator;
 pub mod memory;
 pub mod prepared;
-pub mod sampling;
 pub mod stats;
 pub mod tracer;
 

@@ -254,6 +254,8 @@ pub struct RenderSettings {
     /// Exposure in stops applied to PNG output only.
     pub exposure: f32,
     pub fresnel: FresnelMode,
+    /// The sampler's seed (`--seed` overrides it).
+    pub seed: u32,
 }
 
 impl Default for RenderSettings {
@@ -267,6 +269,7 @@ impl Default for RenderSettings {
             tonemap: ToneMap::Clamp,
             exposure: 0.0,
             fresnel: FresnelMode::Exact,
+            seed: 0,
         }
     }
 }

@@ -3,6 +3,7 @@
 # run.py: writes bench/peers/results/mitsuba.{csv,md} and mitsuba_side_by_side.png.
 #
 #   bash bench/peers/mitsuba/run.sh [run.py options, e.g. --max-spp 1024]
+#   bash bench/peers/mitsuba/run.sh sampler [sampler.py options]   (samplers at equal N)
 #
 # Installs (only what is missing): Debian's libllvm19 (Mitsuba's llvm_ad_rgb variant JIT-
 # compiles with it), python3-venv, python3-openimageio and python3-numpy (reading EXRs),
@@ -50,4 +51,9 @@ if [ ! -f "$repo/bench/peers/scene/tiles.png" ] || [ ! -f "$repo/bench/peers/sce
     /usr/bin/python3 "$repo/bench/peers/scene/make_scene.py"
 fi
 
-exec "$venv/bin/python" "$here/run.py" --conetrace "$binary" --work "$cache/work" "$@"
+script="$here/run.py"
+if [ "${1:-}" = "sampler" ]; then
+    script="$here/sampler.py"
+    shift
+fi
+exec "$venv/bin/python" "$script" --conetrace "$binary" --work "$cache/work" "$@"

@@ -94,7 +94,8 @@ pub fn index_markdown(reports: &[SceneReport], args: &AccuracyArgs) -> String {
          truth's definition, the metrics and what the results show).\n\n\
          - Command: `{command}`\n\
          - Machine: {machine}; {threads} worker threads.\n\
-         - Size {w}x{h}; ground truth `mip0`+`bilinear` at {gt} stratified samples per pixel; \
+         - Size {w}x{h}; ground truth `mip0`+`bilinear` at {gt} samples per pixel (another \
+         seed than the rows'); \
          every other row's time is the median of {runs} timed runs, interleaved across methods \
          (the ground truth is rendered once).\n\
          - Texture pyramids: {pyramids}.\n\

@@ -2,9 +2,10 @@
 //! ground truth, and at what cost.
 //!
 //! Every scene (default: the built-in showcase and `assets/scenes/fp_*.toml`) is rendered
-//! with the twelve [`methods::compared_methods`] (nine strategy x filter pairs at one sample
-//! per pixel, `mip0` + `bilinear` at 4, 16 and 64 samples) and compared with a ground truth,
-//! `mip0` + `bilinear` with stratified supersampling at `--ground-truth-spp` (1024) samples:
+//! with the sixteen [`methods::compared_methods`] (nine strategy x filter pairs at one sample
+//! per pixel, `mip0` + `bilinear` at 4, 16 and 64 samples, two footprint filters at 4 and 16)
+//! and compared with a ground truth, `mip0` + `bilinear` supersampled at `--ground-truth-spp`
+//! (1024) samples with another seed ([`methods::ground_truth_seed`]):
 //! as the samples grow, the pixel value converges to the box-filtered integral of the
 //! unfiltered (bilinearly magnified) texture over the pixel, the image every filter
 //! approximates (docs/accuracy.md argues this).
@@ -16,7 +17,7 @@
 //!
 //! Timing: a first, untimed pass renders every method once with texture-tile counting on
 //! (it gives the image, the counters and the tiles touched, and warms the caches); then
-//! `--runs` timed passes render every method again, interleaved (method 1..12, then again),
+//! `--runs` timed passes render every method again, interleaved (method 1..16, then again),
 //! without counting; each row's time is the median of its timed renders. The ground truth is
 //! rendered once.
 //!
@@ -75,8 +76,8 @@ pub struct AccuracyArgs {
     /// Image height of every render.
     #[arg(long, default_value_t = 180)]
     pub height: u32,
-    /// Stratified samples per pixel of the ground truth (mip0 + bilinear). Smaller values
-    /// are accepted for quick checks; the checked-in results use 1024.
+    /// Samples per pixel of the ground truth (mip0 + bilinear, drawn with another seed).
+    /// Smaller values are accepted for quick checks; the checked-in results use 1024.
     #[arg(long, default_value_t = 1024)]
     pub ground_truth_spp: u32,
     /// Timed runs of every method (interleaved); each row reports their median.
@@ -290,6 +291,7 @@ fn measure_scene(
     let truth_method = methods::ground_truth(args.ground_truth_spp);
     let mut truth_options = options_for(&setup.base, &truth_method);
     truth_options.count_texture_tiles = true;
+    truth_options.seed = methods::ground_truth_seed(setup.base.seed);
     let truth = render::render(&prepare(truth_options)?, &Whitted, &control)
         .map_err(crate::cli::render_failed)?;
     say(format!(

@@ -32,9 +32,9 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     front
 }
 
-/// A colour per method index, distinct for the twelve methods.
+/// A colour per method index, distinct for the sixteen methods.
 fn method_colour(index: usize) -> RGBColor {
-    const COLOURS: [RGBColor; 12] = [
+    const COLOURS: [RGBColor; 16] = [
         RGBColor(120, 0, 120),
         RGBColor(230, 159, 0),
         RGBColor(86, 180, 233),
@@ -47,6 +47,10 @@ fn method_colour(index: usize) -> RGBColor {
         RGBColor(175, 175, 175),
         RGBColor(110, 110, 110),
         RGBColor(20, 20, 20),
+        RGBColor(0, 158, 115),
+        RGBColor(0, 90, 50),
+        RGBColor(150, 40, 40),
+        RGBColor(90, 10, 10),
     ];
     COLOURS[index % COLOURS.len()]
 }

@@ -7,8 +7,8 @@ use super::PathRay;
 use crate::film::{block_order, PixelRect};
 use crate::footprint::Footprint;
 use crate::render::context::RenderContext;
-use crate::render::sampling;
 use crate::render::stats::RayKind;
+use crate::sampler::Sampler;
 use crate::shading;
 
 /// Camera rays of one sample for a tile, ordered so that each run of 16 is a 4x4 block.
@@ -24,12 +24,15 @@ pub(super) fn generate_camera_rays(
     let lod = context.options.lod;
     let spp = context.options.spp.max(1);
     let dof = context.effects.depth_of_field;
+    let sampler = Sampler::new(context.options.seed);
     for (x, y) in block_order(tile) {
         let (px, py) = (tile.x0 + x, tile.y0 + y);
-        let pixel_id = py * image_width + px;
-        let offset = sampling::pixel_offset(pixel_id, sample, spp);
+        let camera_sample = sampler
+            .pixel(py * image_width + px, sample)
+            .camera_sample(spp);
+        let offset = camera_sample.pixel_offset;
         let lens = if dof {
-            sampling::lens_sample(pixel_id, sample)
+            camera_sample.lens
         } else {
             Vec2::splat(0.5)
         };
@@ -39,7 +42,7 @@ pub(super) fn generate_camera_rays(
             shading::entry_distance(origin, direction, bounds)
         });
         let footprint = if context.effects.footprints {
-            camera.initial_footprint(lod, fx, fy, origin, direction)
+            camera.sample_footprint(lod, fx, fy, origin, direction, spp)
         } else {
             Footprint::none()
         };

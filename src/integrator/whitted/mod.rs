@@ -34,7 +34,7 @@ mod surface;
 
 use glam::Vec3;
 
-use crate::film::{TileImage, PixelRect};
+use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;

@@ -119,6 +119,7 @@ struct RawRender {
     tonemap: Option<RawToneMap>,
     exposure: Option<Num>,
     fresnel: Option<RawFresnel>,
+    seed: Option<u32>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -619,6 +620,9 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
             RawFresnel::Schlick => FresnelMode::Schlick,
         };
     }
+    if let Some(seed) = r.seed {
+        s.seed = seed;
+    }
     Ok(s)
 }
 
@@ -820,6 +824,7 @@ mod tests {
 width = 320
 height = 200
 spp = 4
+seed = 17
 tonemap = "reinhard"
 fresnel = "schlick"
 exposure = 1.5
@@ -860,6 +865,7 @@ material = "glass"
         );
         assert_eq!(s.settings.tonemap, ToneMap::Reinhard);
         assert_eq!(s.settings.fresnel, FresnelMode::Schlick);
+        assert_eq!(s.settings.seed, 17);
         let cam = s.camera.unwrap();
         assert_eq!(
             cam.projection,

@@ -1,0 +1,155 @@
+//! Sample positions: Owen-scrambled Sobol points, drawn one dimension (or one pair of
+//! dimensions) at a time along a path.
+//!
+//! Every value is a pure function of (seed, pixel, sample index, dimension): a tile renders
+//! the same on any thread, a resumed render equals an uninterrupted one, and sample i of a
+//! pixel does not depend on which other samples of it are rendered (a render split by sample
+//! range and merged equals the whole). Nor does it depend on the sample count, so the first
+//! N samples of a 4N-sample render are exactly the N-sample render's.
+//!
+//! # The construction
+//!
+//! Each pair of dimensions (the pixel position, the lens position, and whatever an
+//! integrator draws after them) takes the first two Sobol dimensions ([`sobol`]), a
+//! (0,2)-sequence, padded the way Burley describes ("Practical Hash-based Owen Scrambling",
+//! JCGT 9(4), 2020, sections 4-5) and pbrt-v4's `PaddedSobolSampler` does:
+//! - the sample index is shuffled by a nested uniform scramble keyed by (seed, pixel,
+//!   dimension), which maps the first 2^k indices onto an aligned block of 2^k Sobol
+//!   points, so the first 2^k samples of every pixel are still a (0,k,2)-net;
+//! - both coordinates are then Owen-scrambled ([`scramble`]) with their own keys, which
+//!   makes every point uniform on [0, 1)^2 and the pixels and pairs of dimensions
+//!   statistically independent of one another.
+//!
+//! A single dimension takes the shuffled, scrambled van der Corput sequence (Sobol
+//! dimension 0), stratified in 1D the same way.
+//!
+//! So in every pixel, every 2D projection that a pair draws is stratified like a progressive
+//! multi-jittered (0,2) sequence (Christensen, Kensler & Kilpatrick 2018, "Progressive
+//! Multi-Jittered Sample Sequences", who found Owen-scrambled Sobol and pmj02 to converge
+//! alike in 2D): one point in every elementary interval of area 1/N for N a power of two,
+//! and still well spread between powers of two. The error of a smooth pixel integrand then
+//! falls like N^-1.5 instead of jitter's N^-1. Why this order and not pbrt-v4's
+//! ZSobol (Morton) order, which spreads one global sequence over neighbouring pixels:
+//! docs/benchmarks.md, "Sampler".
+//!
+//! # Dimensions
+//!
+//! [`PixelSampler::camera_sample`] always takes dimensions 0-1 (position in the pixel) and
+//! 2-3 (position on the lens), whether the camera uses the lens or not, so an integrator's
+//! own draws start at dimension 4 in every render and do not change when depth of field is
+//! switched on.
+
+mod scramble;
+mod sobol;
+
+use glam::Vec2;
+
+use scramble::{hash_u32, hash_words, nested_uniform_scramble, unit_float};
+
+/// The sampler of one render: the seed every sample position derives from (`--seed`,
+/// `[render] seed`). Equal seeds give bit-identical images.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Sampler {
+    seed: u32,
+}
+
+impl Sampler {
+    pub fn new(seed: u32) -> Sampler {
+        Sampler { seed }
+    }
+
+    pub fn seed(&self) -> u32 {
+        self.seed
+    }
+
+    /// The sampler of sample `index` of pixel `pixel` (any number that identifies the pixel
+    /// within the image, e.g. `y * width + x`), starting at dimension 0.
+    #[inline]
+    pub fn pixel(&self, pixel: u32, index: u32) -> PixelSampler {
+        PixelSampler {
+            pixel_key: hash_words(&[self.seed, pixel]),
+            index,
+            dimension: 0,
+        }
+    }
+}
+
+/// Where a camera ray starts: the position inside the pixel and on the lens, each in
+/// [0, 1)^2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraSample {
+    pub pixel_offset: Vec2,
+    pub lens: Vec2,
+}
+
+/// The sample values of one sample of one pixel, drawn in order: each call takes the next
+/// one or two dimensions. Small and `Copy`, so a path can carry it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelSampler {
+    /// The seed and the pixel, hashed together.
+    pixel_key: u32,
+    index: u32,
+    dimension: u32,
+}
+
+impl PixelSampler {
+    /// The sample index within the pixel.
+    pub fn index(&self) -> u32 {
+        self.index
+    }
+
+    /// The next dimension to be drawn.
+    pub fn dimension(&self) -> u32 {
+        self.dimension
+    }
+
+    /// Key of the draw starting at the current dimension, and the dimension moved on.
+    #[inline]
+    fn take(&mut self, count: u32) -> u32 {
+        let key = hash_words(&[self.pixel_key, self.dimension]);
+        self.dimension += count;
+        key
+    }
+
+    /// The next dimension: a value in [0, 1).
+    #[inline]
+    pub fn next_1d(&mut self) -> f32 {
+        let key = self.take(1);
+        let shuffled = nested_uniform_scramble(self.index, key);
+        unit_float(nested_uniform_scramble(
+            sobol::dimension_0(shuffled),
+            hash_u32(key ^ 0x5bd1_e995),
+        ))
+    }
+
+    /// The next two dimensions: a point in [0, 1)^2.
+    #[inline]
+    pub fn next_2d(&mut self) -> Vec2 {
+        let key = self.take(2);
+        let shuffled = nested_uniform_scramble(self.index, key);
+        let x = nested_uniform_scramble(sobol::dimension_0(shuffled), hash_u32(key ^ 0x5bd1_e995));
+        let y = nested_uniform_scramble(sobol::dimension_1(shuffled), hash_u32(key ^ 0x1b87_3593));
+        Vec2::new(unit_float(x), unit_float(y))
+    }
+
+    /// The camera's dimensions 0-3 (see the module's doc). With one sample per pixel the
+    /// sample sits at the pixel centre: a footprint-filtered ray then covers its pixel
+    /// symmetrically, and the single-sample image is the texture filtered around each pixel
+    /// centre, as OpenImageIO's lookups with the same footprint are.
+    #[inline]
+    pub fn camera_sample(&mut self, samples_per_pixel: u32) -> CameraSample {
+        let position = self.next_2d();
+        let lens = self.next_2d();
+        CameraSample {
+            pixel_offset: if samples_per_pixel <= 1 {
+                Vec2::splat(0.5)
+            } else {
+                position
+            },
+            lens,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,205 @@
+//! Properties of the sampler: stratification of every 2D projection and every dimension,
+//! independence across pixels and dimensions, determinism per seed.
+
+use super::*;
+
+/// Draws `pairs_before` 2D pairs and returns the next pair, for sample `index` of `pixel`.
+fn pair(sampler: Sampler, pixel: u32, index: u32, pairs_before: u32) -> Vec2 {
+    let mut s = sampler.pixel(pixel, index);
+    for _ in 0..pairs_before {
+        s.next_2d();
+    }
+    s.next_2d()
+}
+
+fn correlation(a: &[f32], b: &[f32]) -> f64 {
+    let n = a.len() as f64;
+    let mean = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>() / n;
+    let (ma, mb) = (mean(a), mean(b));
+    let cov: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(&x, &y)| (x as f64 - ma) * (y as f64 - mb))
+        .sum();
+    let var = |v: &[f32], m: f64| v.iter().map(|&x| (x as f64 - m).powi(2)).sum::<f64>();
+    cov / (var(a, ma) * var(b, mb)).sqrt()
+}
+
+#[test]
+fn the_first_power_of_two_samples_of_every_pair_form_a_net() {
+    // One point in every elementary interval 2^-a x 2^-(k-a) of area 2^-k: the (0,k,2)-net
+    // property, for every pixel, every pair of dimensions and every prefix 2^k.
+    for seed in [0u32, 9] {
+        let sampler = Sampler::new(seed);
+        for pixel in [0u32, 1, 641, 921_599] {
+            for pairs_before in [0u32, 1, 2, 7] {
+                for k in [1u32, 2, 4, 6] {
+                    let points: Vec<Vec2> = (0..1 << k)
+                        .map(|i| pair(sampler, pixel, i, pairs_before))
+                        .collect();
+                    for a in 0..=k {
+                        let (nx, ny) = ((1u32 << a) as f32, (1u32 << (k - a)) as f32);
+                        let mut cells = vec![0u32; 1 << k];
+                        for p in &points {
+                            assert!((0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y));
+                            let (cx, cy) = ((p.x * nx) as u32, (p.y * ny) as u32);
+                            cells[(cy * nx as u32 + cx) as usize] += 1;
+                        }
+                        assert!(
+                            cells.iter().all(|&c| c == 1),
+                            "seed {seed} pixel {pixel} pair {pairs_before} k {k} a {a}: {cells:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn single_dimensions_are_stratified() {
+    let sampler = Sampler::new(0);
+    for pixel in [3u32, 77] {
+        for dims_before in [0u32, 1, 5] {
+            let n = 64u32;
+            let mut cells = vec![0u32; n as usize];
+            for i in 0..n {
+                let mut s = sampler.pixel(pixel, i);
+                for _ in 0..dims_before {
+                    s.next_1d();
+                }
+                let v = s.next_1d();
+                assert!((0.0..1.0).contains(&v));
+                cells[(v * n as f32) as usize] += 1;
+            }
+            assert!(
+                cells.iter().all(|&c| c == 1),
+                "{pixel} {dims_before}: {cells:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn neighbouring_pixels_are_uncorrelated() {
+    // Same sample index and dimension in pixels p and p + 1 (and p + width): a sampler that
+    // reused one point set for all pixels would give correlation 1.
+    let sampler = Sampler::new(0);
+    let width = 320u32;
+    for index in [0u32, 1, 5, 16] {
+        for pairs_before in [0u32, 3] {
+            let here: Vec<Vec2> = (0..8192)
+                .map(|p| pair(sampler, p, index, pairs_before))
+                .collect();
+            let right: Vec<Vec2> = (0..8192)
+                .map(|p| pair(sampler, p + 1, index, pairs_before))
+                .collect();
+            let below: Vec<Vec2> = (0..8192)
+                .map(|p| pair(sampler, p + width, index, pairs_before))
+                .collect();
+            for other in [&right, &below] {
+                for axis in 0..2 {
+                    let a: Vec<f32> = here.iter().map(|v| v[axis]).collect();
+                    let b: Vec<f32> = other.iter().map(|v| v[axis]).collect();
+                    let r = correlation(&a, &b);
+                    // 4 standard deviations of r for 8192 independent pairs.
+                    assert!(
+                        r.abs() < 4.0 / 8192f64.sqrt(),
+                        "index {index} axis {axis}: r {r}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn pairs_of_dimensions_are_uncorrelated() {
+    // Over all samples of many pixels: the x (and y) of one pair against those of the next
+    // pairs, and the two coordinates of one pair against each other.
+    let sampler = Sampler::new(0);
+    let mut draws: Vec<[Vec2; 3]> = Vec::new();
+    for pixel in 0..1024u32 {
+        for index in 0..16u32 {
+            let mut s = sampler.pixel(pixel, index);
+            draws.push([s.next_2d(), s.next_2d(), s.next_2d()]);
+        }
+    }
+    let n = draws.len() as f64;
+    let column =
+        |pair: usize, axis: usize| -> Vec<f32> { draws.iter().map(|d| d[pair][axis]).collect() };
+    for (a, b) in [
+        ((0, 0), (1, 0)),
+        ((0, 1), (1, 1)),
+        ((0, 0), (2, 0)),
+        ((1, 0), (2, 1)),
+        ((0, 0), (0, 1)),
+    ] {
+        let r = correlation(&column(a.0, a.1), &column(b.0, b.1));
+        assert!(r.abs() < 4.0 / n.sqrt(), "{a:?} vs {b:?}: r {r}");
+    }
+    // Within one pixel the pairs are not the same point set in the same order either: the
+    // 16 samples' quadrants in pair 0 and pair 1 agree in about a quarter of cases.
+    let quadrant = |v: Vec2| (v.x >= 0.5) as u32 * 2 + (v.y >= 0.5) as u32;
+    let agree = draws
+        .iter()
+        .filter(|d| quadrant(d[0]) == quadrant(d[1]))
+        .count() as f64;
+    assert!((agree / n - 0.25).abs() < 0.02, "{}", agree / n);
+}
+
+#[test]
+fn values_are_uniform() {
+    let sampler = Sampler::new(5);
+    let values: Vec<f32> = (0..20_000u32)
+        .map(|p| sampler.pixel(p, 3).next_1d())
+        .collect();
+    let mean = values.iter().map(|&v| v as f64).sum::<f64>() / values.len() as f64;
+    let variance = values
+        .iter()
+        .map(|&v| (v as f64 - mean).powi(2))
+        .sum::<f64>()
+        / values.len() as f64;
+    assert!((mean - 0.5).abs() < 0.01, "mean {mean}");
+    assert!((variance - 1.0 / 12.0).abs() < 0.003, "variance {variance}");
+}
+
+#[test]
+fn the_seed_alone_decides_the_values() {
+    let draw = |seed: u32| {
+        let mut s = Sampler::new(seed).pixel(1234, 7);
+        [s.next_1d(), s.next_2d().x, s.next_2d().y, s.next_1d()]
+    };
+    assert_eq!(draw(0), draw(0));
+    assert_eq!(draw(41), draw(41));
+    let (a, b) = (draw(0), draw(1));
+    assert!(a.iter().zip(&b).all(|(x, y)| x != y), "{a:?} {b:?}");
+    assert_eq!(Sampler::default(), Sampler::new(0));
+}
+
+#[test]
+fn the_camera_takes_four_dimensions_and_one_sample_sits_at_the_centre() {
+    let sampler = Sampler::new(0);
+    let mut one = sampler.pixel(10, 0);
+    let single = one.camera_sample(1);
+    assert_eq!(single.pixel_offset, Vec2::splat(0.5));
+    assert_eq!(one.dimension(), 4);
+    let mut many = sampler.pixel(10, 0);
+    let first = many.camera_sample(16);
+    assert_eq!(many.dimension(), 4);
+    assert_ne!(first.pixel_offset, Vec2::splat(0.5));
+    // The lens sample does not depend on the sample count.
+    assert_eq!(first.lens, single.lens);
+}
+
+#[test]
+fn a_sample_does_not_depend_on_the_sample_count() {
+    // Sample i of a 16-sample render is sample i of a 64-sample render: a render of more
+    // samples, or of a range of samples, extends a smaller one.
+    let sampler = Sampler::new(3);
+    for index in 0..16 {
+        let a = sampler.pixel(99, index).camera_sample(16);
+        let b = sampler.pixel(99, index).camera_sample(64);
+        assert_eq!(a, b, "{index}");
+    }
+}
