@@ -82,3 +82,26 @@ fn bad_patch_files_are_refused_naming_the_patch_file() {
     assert_refused(dir.path(), "a.toml", &["nan.bpt: line 9:", "not finite"]);
     assert_refused(dir.path(), "b.toml", &["short.bpt:", "ends where"]);
 }
+
+/// A mirror patch is a reason for reflection rays: materials used only by patches count in
+/// the effect analysis, and the teapot renders with its patches hit.
+#[test]
+fn a_mirror_patch_turns_reflections_on_and_renders() {
+    let dir = temp_dir();
+    let surface = "[[material]]\nname = \"chrome\"\nmirror = 0.9\n\n\
+                   [[patch]]\nkind = \"hermite\"\nmaterial = \"chrome\"\ncontrol_points = [\
+                   [-3,-3,0],[-1,-3,0],[1,-3,0],[3,-3,0],[-3,-1,0],[-1,-1,1],[1,-1,1],[3,-1,0],\
+                   [-3,1,0],[-1,1,1],[1,1,1],[3,1,0],[-3,3,0],[-1,3,0],[1,3,0],[3,3,0]]\n";
+    write(dir.path(), "m.toml", &scene(surface));
+    let out = run_in(
+        dir.path(),
+        &["render", "m.toml", "-o", "o.exr", "--no-png", "--quiet", "--stats", "s.json"],
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
+    let reflection = stats["counters"]["reflection_rays"].as_u64().expect("a counter");
+    assert!(reflection > 0, "no reflection rays: {}", stats["counters"]);
+    let effects = stats["effects"].to_string();
+    assert!(effects.contains("mirror reflection"), "{effects}");
+}

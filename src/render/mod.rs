@@ -10,6 +10,7 @@ pub mod context;
 pub mod effects;
 pub mod external_textures;
 pub mod memory;
+pub mod patch_geometry;
 pub mod prepared;
 pub mod sampling;
 pub mod stats;

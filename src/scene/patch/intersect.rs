@@ -244,8 +244,10 @@ impl Search<'_> {
         }
         let size = (hi - lo).truncate().max_element().max(hi.z - lo.z);
         let flat = bilinear_deviation(&node.net) <= FLATNESS * size;
-        if depth >= MAX_DEPTH || (depth >= 1 && flat) || size <= self.tolerance {
-            self.newton(&node);
+        let leaf = depth >= MAX_DEPTH || size <= self.tolerance;
+        // A flat sub-patch is settled when Newton finds its root; otherwise (Newton led
+        // away, e.g. across a collapsed edge to the mirror-image parameters) it is split on.
+        if (leaf || (depth >= 1 && flat)) && (self.newton(&node) || leaf) {
             return;
         }
         let (left, right) = split_u(&node.net);
@@ -267,8 +269,10 @@ impl Search<'_> {
         }
     }
 
-    /// Newton iteration on the whole patch from the middle of `node`.
-    fn newton(&mut self, node: &Node) {
+    /// Newton iteration on the whole patch from the middle of `node`; keeps the root if it
+    /// is a hit nearer than the best so far. Returns whether the root lies in `node` (so
+    /// the sub-patch needs no further search).
+    fn newton(&mut self, node: &Node) -> bool {
         let mut u = 0.5 * (node.u0 + node.u1);
         let mut v = 0.5 * (node.v0 + node.v1);
         // The iterate may wander beyond its sub-patch (it is evaluated on the whole patch),
@@ -281,7 +285,7 @@ impl Search<'_> {
             let (a, b, c, d) = (p.dpdu.x, p.dpdv.x, p.dpdu.y, p.dpdv.y);
             let det = a * d - b * c;
             if !(det.abs() > 0.0) || !det.is_finite() {
-                return;
+                return false;
             }
             // [du dv] = -J^-1 f
             let du = -(d * f.x - b * f.y) / det;
@@ -294,7 +298,7 @@ impl Search<'_> {
                 || v < node.v0 - reach_v
                 || v > node.v1 + reach_v
             {
-                return;
+                return false;
             }
             if du.abs() < PARAMETER_TOLERANCE && dv.abs() < PARAMETER_TOLERANCE {
                 break;
@@ -302,19 +306,23 @@ impl Search<'_> {
         }
         let inside = |x: f64| (-PARAMETER_TOLERANCE..=1.0 + PARAMETER_TOLERANCE).contains(&x);
         if !(inside(u) && inside(v)) {
-            return;
+            return false;
         }
         let (u, v) = (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
         let p = evaluate(self.frame, u, v).position;
         let miss = p.x.hypot(p.y);
         if !(miss <= self.tolerance) {
-            return;
+            return false;
         }
         let t = p.z;
         if t > self.tnear && t < self.tbest && t.is_finite() {
             self.tbest = t;
             self.best = Some((t, u, v));
         }
+        let margin_u = 0.01 * (node.u1 - node.u0) + PARAMETER_TOLERANCE;
+        let margin_v = 0.01 * (node.v1 - node.v0) + PARAMETER_TOLERANCE;
+        (node.u0 - margin_u..=node.u1 + margin_u).contains(&u)
+            && (node.v0 - margin_v..=node.v1 + margin_v).contains(&v)
     }
 }
 
@@ -367,5 +375,36 @@ mod tests {
         let far = PatchRay { tfar: 1.5, ..r };
         assert!(patch.intersect(&far, false).is_none());
         assert!(patch.intersect(&r, true).is_some());
+    }
+}
+
+#[cfg(test)]
+mod collapsed_edge_tests {
+    use super::*;
+
+    /// The teapot's first lid patch (z up): its row v = 0 collapses onto the apex.
+    fn lid() -> PatchIntersector {
+        let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models/teapot.bpt")).unwrap();
+        let patches = crate::scene::patch::bpt::parse_bpt(&text).unwrap();
+        PatchIntersector::new(&patches[20])
+    }
+
+    #[test]
+    fn rays_beside_the_apex_hit_the_lid() {
+        let lid = lid();
+        for offset in [0.0, 1e-7, 1e-5, 1e-3, 1e-2, 0.1] {
+            for (dx, dy) in [(1.0, 0.0), (0.7, -0.7), (0.0, -1.0), (0.01, -0.99)] {
+                let r = PatchRay {
+                    origin: DVec3::new(dx * offset, dy * offset, 5.0),
+                    direction: DVec3::NEG_Z,
+                    tnear: 0.0,
+                    tfar: f64::INFINITY,
+                };
+                let hit = lid.intersect(&r, false);
+                eprintln!("offset {offset} ({dx}, {dy}): {hit:?}");
+                let hit = hit.expect("the lid is hit");
+                assert!(hit.normal.is_finite() && hit.normal.length() > 0.0);
+            }
+        }
     }
 }
