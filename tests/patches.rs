@@ -105,3 +105,47 @@ fn a_mirror_patch_turns_reflections_on_and_renders() {
     let effects = stats["effects"].to_string();
     assert!(effects.contains("mirror reflection"), "{effects}");
 }
+
+/// `--patch-mode tessellate` renders the teapot as triangles and says how many, and how
+/// long they took, in the statistics; a finer bound makes more of them.
+#[test]
+fn tessellation_is_reported_and_follows_the_error_bound() {
+    let dir = temp_dir();
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models/teapot.bpt");
+    let surface = format!(
+        "[[patch_file]]\nfile = \"{}\"\nrotate = [-90, 0, 0]\nscale = 0.5\n",
+        assets.display()
+    );
+    write(dir.path(), "t.toml", &scene(&surface));
+    let triangles = |error: &str| -> u64 {
+        let out = run_in(
+            dir.path(),
+            &[
+                "render", "t.toml", "-o", "o.exr", "--no-png", "--quiet", "--stats", "s.json",
+                "--patch-mode", "tessellate", "--tessellation-error", error,
+            ],
+        );
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap())
+                .unwrap();
+        let notes = stats["notes"].to_string();
+        let note = notes
+            .split('"')
+            .find(|n| n.contains("tessellated"))
+            .unwrap_or_else(|| panic!("no tessellation note in {notes}"));
+        assert!(note.contains(" s") && note.contains("32 curved patches"), "{note}");
+        let count = note.split(": ").nth(1).and_then(|r| r.split(' ').next()).unwrap();
+        count.parse().unwrap_or_else(|_| panic!("no triangle count in {note}"))
+    };
+    let coarse = triangles("0.01");
+    let fine = triangles("0.0001");
+    eprintln!("teapot: {coarse} triangles within 0.01, {fine} within 0.0001");
+    assert!(coarse > 32 * 2 && fine > 4 * coarse, "{coarse} vs {fine}");
+    let out = run_in(
+        dir.path(),
+        &["render", "t.toml", "-o", "o.exr", "--quiet", "--tessellation-error", "0"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--tessellation-error 0"));
+}

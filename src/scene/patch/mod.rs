@@ -19,6 +19,7 @@
 pub mod basis;
 pub mod bpt;
 pub mod intersect;
+pub mod tessellate;
 
 use glam::{DVec3, Vec2, Vec3};
 
