@@ -144,15 +144,16 @@ fn reflected_differentials_match_neighbouring_rays() {
     for (x0, y0) in [(0.0f32, 0.0f32), (0.3, -0.2), (-0.45, 0.4)] {
         let centre = m.surface(x0, y0);
         // A beam of parallel rays, one unit of x and y per unit of "pixel".
-        let differential = RayDifferential::new(Vec3::X, Vec3::Y, Vec3::ZERO, Vec3::ZERO)
-            .transfer(d, &centre);
+        let differential =
+            RayDifferential::new(Vec3::X, Vec3::Y, Vec3::ZERO, Vec3::ZERO).transfer(d, &centre);
         let reflected = reflect(d, centre.shading_normal);
         let after = differential.reflect(d, &centre, reflected);
         let h = 1e-3f32;
         for (axis, dddaxis) in [(Vec3::X, after.dddx), (Vec3::Y, after.dddy)] {
             let p = m.surface(x0 + axis.x * h, y0 + axis.y * h);
             let q = m.surface(x0 - axis.x * h, y0 - axis.y * h);
-            let finite = (reflect(d, p.geometric_normal) - reflect(d, q.geometric_normal)) / (2.0 * h);
+            let finite =
+                (reflect(d, p.geometric_normal) - reflect(d, q.geometric_normal)) / (2.0 * h);
             eprintln!("at ({x0}, {y0}) along {axis}: dD {dddaxis} vs rays {finite}");
             assert!(
                 (dddaxis - finite).length() < 1e-2 * finite.length().max(1e-3),

@@ -88,15 +88,24 @@ impl Traced {
     /// at t, a unit normal. Returns the distance between the two points.
     fn check_on_patch(&self, r: &TraceRay, hit: &TraceHit) -> f64 {
         let patch = self.patch(hit).expect("a patch hit");
-        assert!(hit.t.is_finite() && hit.u.is_finite() && hit.v.is_finite(), "{hit:?}");
-        assert!((0.0..=1.0).contains(&hit.u) && (0.0..=1.0).contains(&hit.v), "{hit:?}");
+        assert!(
+            hit.t.is_finite() && hit.u.is_finite() && hit.v.is_finite(),
+            "{hit:?}"
+        );
+        assert!(
+            (0.0..=1.0).contains(&hit.u) && (0.0..=1.0).contains(&hit.v),
+            "{hit:?}"
+        );
         let on_patch = patch.evaluate(f64::from(hit.u), f64::from(hit.v)).position;
         let on_ray = r.origin.as_dvec3() + r.direction.as_dvec3() * f64::from(hit.t);
         let surface = self
             .lookup
             .surface_hit(r.origin, r.direction, hit, SurfaceDetail::Texturing);
         let n = surface.geometric_normal;
-        assert!(n.is_finite() && (n.length() - 1.0).abs() < 1e-4, "normal {n} at {hit:?}");
+        assert!(
+            n.is_finite() && (n.length() - 1.0).abs() < 1e-4,
+            "normal {n} at {hit:?}"
+        );
         assert!(surface.position.is_finite() && surface.dpds.is_finite());
         (on_patch - on_ray).length()
     }
@@ -109,7 +118,11 @@ fn camera_rays() -> Vec<TraceRay> {
     for block in 0..64 {
         for k in 0..16 {
             let (x, y) = ((block % 8) * 4 + k % 4, (block / 8) * 4 + k / 4);
-            let target = Vec3::new(-2.0 + 4.0 * x as f32 / 31.0, 1.6 - 1.8 * y as f32 / 31.0, 0.0);
+            let target = Vec3::new(
+                -2.0 + 4.0 * x as f32 / 31.0,
+                1.6 - 1.8 * y as f32 / 31.0,
+                0.0,
+            );
             rays.push(ray(eye, target - eye));
         }
     }
@@ -132,7 +145,10 @@ fn packets_streams_and_single_rays_agree_and_hit_the_patch() {
             assert_eq!(packets[i].is_hit(), other.is_hit(), "ray {i}");
             if packets[i].is_hit() {
                 assert_eq!(packets[i].primitive, other.primitive, "ray {i}");
-                assert!((packets[i].t - other.t).abs() <= 1e-5 * packets[i].t, "ray {i}");
+                assert!(
+                    (packets[i].t - other.t).abs() <= 1e-5 * packets[i].t,
+                    "ray {i}"
+                );
             }
         }
         if packets[i].is_hit() {
@@ -140,7 +156,10 @@ fn packets_streams_and_single_rays_agree_and_hit_the_patch() {
             worst = worst.max(t.check_on_patch(r, &packets[i]));
         }
     }
-    eprintln!("{hits} of {} camera rays hit the teapot; worst point distance {worst:e}", rays.len());
+    eprintln!(
+        "{hits} of {} camera rays hit the teapot; worst point distance {worst:e}",
+        rays.len()
+    );
     assert!(hits > 200, "only {hits} hits");
     assert!(worst < 1e-5, "a hit is {worst} off its patch");
 }
@@ -152,7 +171,9 @@ fn the_silhouette_is_exact() {
     // with no tessellation's facets in between. The tangent point is a corner shared by
     // four patches.
     let t = traced(TEAPOT);
-    let xs: Vec<f32> = (0..2000).map(|i| 0.998 + 0.004 * i as f32 / 1999.0).collect();
+    let xs: Vec<f32> = (0..2000)
+        .map(|i| 0.998 + 0.004 * i as f32 / 1999.0)
+        .collect();
     let rays: Vec<TraceRay> = xs
         .iter()
         .map(|&z| ray(Vec3::new(5.0, 0.45, z), Vec3::NEG_X))
@@ -170,7 +191,10 @@ fn the_silhouette_is_exact() {
     }
     eprintln!("silhouette: last hit at z = {last_hit}, first miss at z = {first_miss}");
     assert!((last_hit - 1.0).abs() < 1e-5, "last hit at {last_hit}");
-    assert!((first_miss - 1.0).abs() < 1e-5, "first miss at {first_miss}");
+    assert!(
+        (first_miss - 1.0).abs() < 1e-5,
+        "first miss at {first_miss}"
+    );
     assert!(last_hit < first_miss);
 }
 
@@ -179,11 +203,18 @@ fn grazing_rays_meet_a_flat_patch_where_they_cross_it() {
     let text = "[[patch]]\ndegree = [1, 1]\ncontrol_points = [[-5, 0, -5], [5, 0, -5], [-5, 0, 5], [5, 0, 5]]\n";
     let t = traced(text);
     for slope in [1e-1f32, 1e-2, 1e-3, 1e-4] {
-        let r = ray(Vec3::new(-4.0, 4.0 * slope, 0.3), Vec3::new(1.0, -slope, 0.0));
+        let r = ray(
+            Vec3::new(-4.0, 4.0 * slope, 0.3),
+            Vec3::new(1.0, -slope, 0.0),
+        );
         let hit = t.trace(&[r], false)[0];
         assert!(hit.is_hit(), "slope {slope}: missed");
         let expected = 4.0 * (1.0 + slope * slope).sqrt();
-        assert!((hit.t - expected).abs() < 1e-4, "slope {slope}: t {} vs {expected}", hit.t);
+        assert!(
+            (hit.t - expected).abs() < 1e-4,
+            "slope {slope}: t {} vs {expected}",
+            hit.t
+        );
         assert!(t.check_on_patch(&r, &hit) < 1e-5);
     }
 }
@@ -210,7 +241,11 @@ fn collapsed_edges_at_the_lid_and_bottom_give_finite_hits() {
         let surface = t
             .lookup
             .surface_hit(r.origin, r.direction, hit, SurfaceDetail::Geometry);
-        assert!(surface.geometric_normal.y.abs() > 0.999, "{}", surface.geometric_normal);
+        assert!(
+            surface.geometric_normal.y.abs() > 0.999,
+            "{}",
+            surface.geometric_normal
+        );
     }
 }
 
@@ -248,7 +283,8 @@ fn rays_leaving_the_surface_do_not_meet_it_again_there() {
         let n = surface.geometric_normal;
         for side in [n, -n] {
             for cosine in [1e-4f32, 1e-3, 1e-2, 0.1, 0.5, 1.0] {
-                let tangent = (rng.direction().cross(side)).normalize_or(side.any_orthonormal_vector());
+                let tangent =
+                    (rng.direction().cross(side)).normalize_or(side.any_orthonormal_vector());
                 let direction =
                     (side * cosine + tangent * (1.0 - cosine * cosine).sqrt()).normalize();
                 if direction.dot(side) <= 0.0 {
@@ -257,7 +293,11 @@ fn rays_leaving_the_surface_do_not_meet_it_again_there() {
                 let patch = t.patch(hit).expect("a patch hit");
                 let k_max = largest_curvature(patch, hit.u, hit.v);
                 let shortest_chord = 2.0 * f64::from(cosine) / k_max;
-                leaving.push((ray(spawn.offset_origin(side), direction), surface.position, shortest_chord));
+                leaving.push((
+                    ray(spawn.offset_origin(side), direction),
+                    surface.position,
+                    shortest_chord,
+                ));
             }
         }
     }
@@ -290,7 +330,12 @@ fn rays_leaving_the_surface_do_not_meet_it_again_there() {
         self_hits.len()
     );
     assert!(rays.len() > 2000);
-    assert!(self_hits.is_empty(), "{} self-intersections, e.g. {}", self_hits.len(), self_hits[0]);
+    assert!(
+        self_hits.is_empty(),
+        "{} self-intersections, e.g. {}",
+        self_hits.len(),
+        self_hits[0]
+    );
 }
 
 #[test]

@@ -48,12 +48,18 @@ fn bad_control_data_is_refused() {
         ),
         (
             "nan.toml",
-            format!("[[patch]]\ncontrol_points = {}\n", flat_grid(Some("[nan, 0, 0]"))),
+            format!(
+                "[[patch]]\ncontrol_points = {}\n",
+                flat_grid(Some("[nan, 0, 0]"))
+            ),
             vec!["nan.toml:", "not finite"],
         ),
         (
             "degenerate.toml",
-            format!("[[patch]]\nkind = \"lagrange\"\ncontrol_points = [{}]\n", vec!["[1, 2, 3]"; 16].join(", ")),
+            format!(
+                "[[patch]]\nkind = \"lagrange\"\ncontrol_points = [{}]\n",
+                vec!["[1, 2, 3]"; 16].join(", ")
+            ),
             vec!["degenerate.toml:", "fully degenerate"],
         ),
         (
@@ -77,8 +83,16 @@ fn bad_patch_files_are_refused_naming_the_patch_file() {
     }
     write(dir.path(), "nan.bpt", &bpt.replace("2 1 0", "2 nan 0"));
     write(dir.path(), "short.bpt", &bpt.replace("1\n3 3", "2\n3 3"));
-    write(dir.path(), "a.toml", &scene("[[patch_file]]\nfile = \"nan.bpt\"\n"));
-    write(dir.path(), "b.toml", &scene("[[patch_file]]\nfile = \"short.bpt\"\n"));
+    write(
+        dir.path(),
+        "a.toml",
+        &scene("[[patch_file]]\nfile = \"nan.bpt\"\n"),
+    );
+    write(
+        dir.path(),
+        "b.toml",
+        &scene("[[patch_file]]\nfile = \"short.bpt\"\n"),
+    );
     assert_refused(dir.path(), "a.toml", &["nan.bpt: line 9:", "not finite"]);
     assert_refused(dir.path(), "b.toml", &["short.bpt:", "ends where"]);
 }
@@ -95,12 +109,20 @@ fn a_mirror_patch_turns_reflections_on_and_renders() {
     write(dir.path(), "m.toml", &scene(surface));
     let out = run_in(
         dir.path(),
-        &["render", "m.toml", "-o", "o.exr", "--no-png", "--quiet", "--stats", "s.json"],
+        &[
+            "render", "m.toml", "-o", "o.exr", "--no-png", "--quiet", "--stats", "s.json",
+        ],
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stats: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
-    let reflection = stats["counters"]["reflection_rays"].as_u64().expect("a counter");
+    let reflection = stats["counters"]["reflection_rays"]
+        .as_u64()
+        .expect("a counter");
     assert!(reflection > 0, "no reflection rays: {}", stats["counters"]);
     let effects = stats["effects"].to_string();
     assert!(effects.contains("mirror reflection"), "{effects}");
@@ -121,11 +143,25 @@ fn tessellation_is_reported_and_follows_the_error_bound() {
         let out = run_in(
             dir.path(),
             &[
-                "render", "t.toml", "-o", "o.exr", "--no-png", "--quiet", "--stats", "s.json",
-                "--patch-mode", "tessellate", "--tessellation-error", error,
+                "render",
+                "t.toml",
+                "-o",
+                "o.exr",
+                "--no-png",
+                "--quiet",
+                "--stats",
+                "s.json",
+                "--patch-mode",
+                "tessellate",
+                "--tessellation-error",
+                error,
             ],
         );
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let stats: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap())
                 .unwrap();
@@ -134,9 +170,18 @@ fn tessellation_is_reported_and_follows_the_error_bound() {
             .split('"')
             .find(|n| n.contains("tessellated"))
             .unwrap_or_else(|| panic!("no tessellation note in {notes}"));
-        assert!(note.contains(" s") && note.contains("32 curved patches"), "{note}");
-        let count = note.split(": ").nth(1).and_then(|r| r.split(' ').next()).unwrap();
-        count.parse().unwrap_or_else(|_| panic!("no triangle count in {note}"))
+        assert!(
+            note.contains(" s") && note.contains("32 curved patches"),
+            "{note}"
+        );
+        let count = note
+            .split(": ")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .unwrap();
+        count
+            .parse()
+            .unwrap_or_else(|_| panic!("no triangle count in {note}"))
     };
     let coarse = triangles("0.01");
     let fine = triangles("0.0001");
@@ -144,7 +189,15 @@ fn tessellation_is_reported_and_follows_the_error_bound() {
     assert!(coarse > 32 * 2 && fine > 4 * coarse, "{coarse} vs {fine}");
     let out = run_in(
         dir.path(),
-        &["render", "t.toml", "-o", "o.exr", "--quiet", "--tessellation-error", "0"],
+        &[
+            "render",
+            "t.toml",
+            "-o",
+            "o.exr",
+            "--quiet",
+            "--tessellation-error",
+            "0",
+        ],
     );
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--tessellation-error 0"));

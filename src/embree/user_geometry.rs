@@ -26,7 +26,10 @@ use super::context::TraceContext;
 use super::error::EmbreeError;
 use super::ffi;
 use super::geometry::GeometryRecord;
-use super::packet::{DIR_X, DIR_Y, DIR_Z, GEOM_ID, INST_ID, NG_X, NG_Y, NG_Z, ORG_X, ORG_Y, ORG_Z, PRIM_ID, TFAR, TNEAR, U, V};
+use super::packet::{
+    DIR_X, DIR_Y, DIR_Z, GEOM_ID, INST_ID, NG_X, NG_Y, NG_Z, ORG_X, ORG_Y, ORG_Z, PRIM_ID, TFAR,
+    TNEAR, U, V,
+};
 use super::scene::{Bounds, SceneBuilder};
 
 /// One ray as a user geometry sees it: `origin + t direction` for `t` in `(tnear, tfar)`.
@@ -65,7 +68,10 @@ pub trait UserGeometry: Send + Sync {
 impl SceneBuilder {
     /// Adds a user geometry whose `primitive_count()` primitives are bounded and intersected
     /// by `geometry`; returns its geometry id. A hit's `prim_id` is the primitive index.
-    pub fn add_user_geometry(&mut self, geometry: Arc<dyn UserGeometry>) -> Result<u32, EmbreeError> {
+    pub fn add_user_geometry(
+        &mut self,
+        geometry: Arc<dyn UserGeometry>,
+    ) -> Result<u32, EmbreeError> {
         let count = geometry.primitive_count() as usize;
         if count == 0 || count >= u32::MAX as usize {
             return Err(EmbreeError::BadPrimitiveCount {
@@ -214,7 +220,7 @@ unsafe fn run_lanes(
             tnear: get(TNEAR, lane),
             tfar: get(TFAR, lane),
         };
-        if !(ray.tnear <= ray.tfar) {
+        if ray.tnear.is_nan() || ray.tfar.is_nan() || ray.tnear > ray.tfar {
             continue; // an occluded lane (tfar = -inf) or an empty interval
         }
         let hit = match catch_unwind(AssertUnwindSafe(|| {

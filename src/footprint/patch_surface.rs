@@ -141,10 +141,17 @@ mod tests {
     #[test]
     fn a_sphere_has_curvature_one_over_r_and_dn_equals_dp_over_r() {
         let frame = sphere_frame(2.0, 0.7, 1.1);
-        let outward = Vec3::new(1.1f32.sin() * 0.7f32.cos(), 1.1f32.sin() * 0.7f32.sin(), 1.1f32.cos());
+        let outward = Vec3::new(
+            1.1f32.sin() * 0.7f32.cos(),
+            1.1f32.sin() * 0.7f32.sin(),
+            1.1f32.cos(),
+        );
         assert!((frame.normal() - outward).length() < 1e-5);
         let (k1, k2) = frame.principal_curvatures().unwrap();
-        assert!((k1 - 0.5).abs() < 1e-5 && (k2 - 0.5).abs() < 1e-5, "{k1} {k2}");
+        assert!(
+            (k1 - 0.5).abs() < 1e-5 && (k2 - 0.5).abs() < 1e-5,
+            "{k1} {k2}"
+        );
         assert!((frame.cone_curvature() - 0.5).abs() < 1e-5);
         let dp = frame.dpdu * 0.01 + frame.dpdv * -0.02;
         let dn = frame.normal_derivative(dp);

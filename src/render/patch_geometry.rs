@@ -84,10 +84,7 @@ pub fn patch_surface_hit(patch: &BezierPatch, hit: &TraceHit, texturing: bool) -
         .try_normalize()
         .unwrap_or(DVec3::Y)
         .as_vec3();
-    let magnitude = patch
-        .control
-        .iter()
-        .fold(Vec3::ZERO, |m, p| m.max(p.abs()));
+    let magnitude = patch.control.iter().fold(Vec3::ZERO, |m, p| m.max(p.abs()));
     let spawn = SpawnPoint::on_curved_patch(point.position, magnitude);
     let dpdu = point.dpdu.as_vec3();
     let dpdv = point.dpdv.as_vec3();

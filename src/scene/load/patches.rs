@@ -101,8 +101,14 @@ pub(super) fn build_patches(
             RawPatchKind::Bezier => {
                 let [du, dv] = raw.degree.as_ref().map_or([3, 3], |d| *d.get_ref());
                 if !(1..=3).contains(&du) || !(1..=3).contains(&dv) {
-                    let at = raw.degree.as_ref().expect("only a written degree can be wrong");
-                    return Err(loc.at(at, format!("patch degree [{du}, {dv}]: each must be 1 to 3")));
+                    let at = raw
+                        .degree
+                        .as_ref()
+                        .expect("only a written degree can be wrong");
+                    return Err(loc.at(
+                        at,
+                        format!("patch degree [{du}, {dv}]: each must be 1 to 3"),
+                    ));
                 }
                 elevate_to_bicubic(du, dv, &given).ok_or_else(|| {
                     loc.at(
@@ -122,8 +128,11 @@ pub(super) fn build_patches(
                 let grid: [Vec3; 16] = given.as_slice().try_into().map_err(|_| {
                     loc.at(
                         &raw.control_points,
-                        format!("a {kind:?} patch needs 16 control points, not {}", given.len())
-                            .to_lowercase(),
+                        format!(
+                            "a {kind:?} patch needs 16 control points, not {}",
+                            given.len()
+                        )
+                        .to_lowercase(),
                     )
                 })?;
                 if kind == RawPatchKind::Hermite {
@@ -133,16 +142,16 @@ pub(super) fn build_patches(
                 }
             }
         };
-        let corner_st = raw
-            .st
-            .map(|c| c.map(|[s, t]| Vec2::new(s.0, t.0)));
+        let corner_st = raw.st.map(|c| c.map(|[s, t]| Vec2::new(s.0, t.0)));
         let index = material(scene, &raw.material)?;
         let patch = BezierPatch {
             control,
             corner_st,
             material: index,
         };
-        scene.patches.push(checked(loc, &raw.control_points, "patch", patch)?);
+        scene
+            .patches
+            .push(checked(loc, &raw.control_points, "patch", patch)?);
     }
 
     for raw in triangles {
@@ -150,7 +159,10 @@ pub(super) fn build_patches(
         let control: [Vec3; 10] = given.as_slice().try_into().map_err(|_| {
             loc.at(
                 &raw.control_points,
-                format!("a cubic Bezier triangle needs 10 control points, not {}", given.len()),
+                format!(
+                    "a cubic Bezier triangle needs 10 control points, not {}",
+                    given.len()
+                ),
             )
         })?;
         let index = material(scene, &raw.material)?;
@@ -194,7 +206,10 @@ pub(super) fn build_patches(
                 material: index,
             };
             if let Some(problem) = patch.problem() {
-                return Err(SceneError::invalid(&label, format!("patch {number}: {problem}")));
+                return Err(SceneError::invalid(
+                    &label,
+                    format!("patch {number}: {problem}"),
+                ));
             }
             scene.patches.push(patch);
         }
@@ -204,8 +219,8 @@ pub(super) fn build_patches(
 
 #[cfg(test)]
 mod tests {
-    use crate::scene::load::toml_format::parse;
     use crate::scene::load::files::Files;
+    use crate::scene::load::toml_format::parse;
     use std::path::Path;
 
     fn parse_here(text: &str) -> Result<crate::scene::SceneDescription, String> {
@@ -236,7 +251,8 @@ mod tests {
 
     #[test]
     fn the_teapot_file_loads_placed() {
-        let text = "[[patch_file]]\nfile = \"../models/teapot.bpt\"\ntranslate = [0, 1, 0]\nscale = 2\n";
+        let text =
+            "[[patch_file]]\nfile = \"../models/teapot.bpt\"\ntranslate = [0, 1, 0]\nscale = 2\n";
         let scene = parse_here(text).unwrap();
         assert_eq!(scene.patches.len(), 32);
         assert_eq!(scene.patches[0].control[0], glam::Vec3::new(2.8, 1.0, 4.8));
@@ -245,9 +261,16 @@ mod tests {
     #[test]
     fn bad_control_data_is_refused_with_its_place() {
         let e = parse_here("[[patch]]\ncontrol_points = [[0,0,0],[1,0,0]]\n").unwrap_err();
-        assert!(e.starts_with("t.toml:2:18: a Bezier patch of degree [3, 3] needs 16"), "{e}");
-        let e = parse_here("[[patch]]\nkind = 'hermite'\ncontrol_points = [[0,0,0]]\n").unwrap_err();
-        assert!(e.contains("hermite patch needs 16 control points, not 1"), "{e}");
+        assert!(
+            e.starts_with("t.toml:2:18: a Bezier patch of degree [3, 3] needs 16"),
+            "{e}"
+        );
+        let e =
+            parse_here("[[patch]]\nkind = 'hermite'\ncontrol_points = [[0,0,0]]\n").unwrap_err();
+        assert!(
+            e.contains("hermite patch needs 16 control points, not 1"),
+            "{e}"
+        );
         let nan = grid(|_, _| 0.0).replacen("0]", "nan]", 1);
         let e = parse_here(&format!("[[patch]]\ncontrol_points = {nan}\n")).unwrap_err();
         assert!(e.contains("not finite"), "{e}");

@@ -255,7 +255,9 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
         }
         if let Some(st) = patch.corner_st {
             if st.iter().any(|c| !c.is_finite()) {
-                return Err(format!("patch {i}: corner texture coordinates are not finite"));
+                return Err(format!(
+                    "patch {i}: corner texture coordinates are not finite"
+                ));
             }
         }
     }

@@ -143,8 +143,10 @@ pub fn triangle_point(control: &[Vec3; 10], a: f64, b: f64) -> DVec3 {
     for j in 0..=3 {
         for i in 0..=3 - j {
             let k = 3 - i - j;
-            let weight =
-                6.0 / (factorial[i] * factorial[j] * factorial[k]) * a.powi(i as i32) * b.powi(j as i32) * c.powi(k as i32);
+            let weight = 6.0 / (factorial[i] * factorial[j] * factorial[k])
+                * a.powi(i as i32)
+                * b.powi(j as i32)
+                * c.powi(k as i32);
             sum += control[triangle_index(i, j)].as_dvec3() * weight;
         }
     }
@@ -259,7 +261,12 @@ mod tests {
             let points: Vec<Vec3> = (0..(du + 1) * (dv + 1)).map(|_| rng.point()).collect();
             let c = control_f64(&elevate_to_bicubic(du, dv, &points).unwrap());
             let bern = |d: usize, i: usize, t: f64| {
-                let binom = [[1.0, 0.0, 0.0, 0.0], [1.0, 1.0, 0.0, 0.0], [1.0, 2.0, 1.0, 0.0], [1.0, 3.0, 3.0, 1.0]];
+                let binom = [
+                    [1.0, 0.0, 0.0, 0.0],
+                    [1.0, 1.0, 0.0, 0.0],
+                    [1.0, 2.0, 1.0, 0.0],
+                    [1.0, 3.0, 3.0, 1.0],
+                ];
                 binom[d][i] * t.powi(i as i32) * (1.0 - t).powi((d - i) as i32)
             };
             for _ in 0..10 {
@@ -267,7 +274,8 @@ mod tests {
                 let mut direct = DVec3::ZERO;
                 for j in 0..=dv {
                     for i in 0..=du {
-                        direct += points[j * (du + 1) + i].as_dvec3() * (bern(du, i, u) * bern(dv, j, v));
+                        direct +=
+                            points[j * (du + 1) + i].as_dvec3() * (bern(du, i, u) * bern(dv, j, v));
                     }
                 }
                 let d = (evaluate(&c, u, v).position - direct).length();

@@ -128,8 +128,10 @@ fn bilinear_deviation(net: &[DVec3; 16]) -> f64 {
     for j in 0..4 {
         for i in 0..4 {
             let (s, t) = (i as f64 / 3.0, j as f64 / 3.0);
-            let bilinear =
-                c00 * ((1.0 - s) * (1.0 - t)) + c30 * (s * (1.0 - t)) + c03 * ((1.0 - s) * t) + c33 * (s * t);
+            let bilinear = c00 * ((1.0 - s) * (1.0 - t))
+                + c30 * (s * (1.0 - t))
+                + c03 * ((1.0 - s) * t)
+                + c33 * (s * t);
             worst = worst.max((net[4 * j + i] - bilinear).length());
         }
     }
@@ -247,8 +249,11 @@ impl Search<'_> {
         let leaf = depth >= MAX_DEPTH || size <= self.tolerance;
         // A flat sub-patch is settled when Newton finds its root; otherwise (Newton led
         // away, e.g. across a collapsed edge to the mirror-image parameters) it is split on.
-        if (leaf || (depth >= 1 && flat)) && (self.newton(&node) || leaf) {
-            return;
+        if leaf || (depth >= 1 && flat) {
+            let settled = self.newton(&node);
+            if settled || leaf {
+                return;
+            }
         }
         let (left, right) = split_u(&node.net);
         let um = 0.5 * (node.u0 + node.u1);
@@ -256,10 +261,34 @@ impl Search<'_> {
         let (ll, lh) = split_v(&left);
         let (rl, rh) = split_v(&right);
         let mut children = [
-            Node { net: ll, u0: node.u0, u1: um, v0: node.v0, v1: vm },
-            Node { net: rl, u0: um, u1: node.u1, v0: node.v0, v1: vm },
-            Node { net: lh, u0: node.u0, u1: um, v0: vm, v1: node.v1 },
-            Node { net: rh, u0: um, u1: node.u1, v0: vm, v1: node.v1 },
+            Node {
+                net: ll,
+                u0: node.u0,
+                u1: um,
+                v0: node.v0,
+                v1: vm,
+            },
+            Node {
+                net: rl,
+                u0: um,
+                u1: node.u1,
+                v0: node.v0,
+                v1: vm,
+            },
+            Node {
+                net: lh,
+                u0: node.u0,
+                u1: um,
+                v0: vm,
+                v1: node.v1,
+            },
+            Node {
+                net: rh,
+                u0: um,
+                u1: node.u1,
+                v0: vm,
+                v1: node.v1,
+            },
         ];
         // Nearest first, so later children are pruned by the closest hit.
         let near = |n: &Node| n.net.iter().fold(f64::INFINITY, |a, p| a.min(p.z));
@@ -284,7 +313,7 @@ impl Search<'_> {
             let f = DVec2::new(p.position.x, p.position.y);
             let (a, b, c, d) = (p.dpdu.x, p.dpdv.x, p.dpdu.y, p.dpdv.y);
             let det = a * d - b * c;
-            if !(det.abs() > 0.0) || !det.is_finite() {
+            if det == 0.0 || !det.is_finite() {
                 return false;
             }
             // [du dv] = -J^-1 f
@@ -311,7 +340,7 @@ impl Search<'_> {
         let (u, v) = (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
         let p = evaluate(self.frame, u, v).position;
         let miss = p.x.hypot(p.y);
-        if !(miss <= self.tolerance) {
+        if miss.is_nan() || miss > self.tolerance {
             return false;
         }
         let t = p.z;
@@ -332,7 +361,12 @@ mod tests {
     use crate::scene::patch::basis::elevate_to_bicubic;
 
     fn ray(origin: DVec3, direction: DVec3) -> PatchRay {
-        PatchRay { origin, direction, tnear: 0.0, tfar: f64::INFINITY }
+        PatchRay {
+            origin,
+            direction,
+            tnear: 0.0,
+            tfar: f64::INFINITY,
+        }
     }
 
     /// A bilinear saddle elevated to bicubic: z = (2u - 1)(2v - 1) over [-1, 1]^2.
@@ -351,15 +385,29 @@ mod tests {
         let patch = saddle();
         for &(x, y) in &[(0.3, -0.2), (-0.9, 0.8), (0.0, 0.0), (0.99, 0.99)] {
             let hit = patch
-                .intersect(&ray(DVec3::new(x, y, 5.0), DVec3::new(0.0, 0.0, -1.0)), false)
+                .intersect(
+                    &ray(DVec3::new(x, y, 5.0), DVec3::new(0.0, 0.0, -1.0)),
+                    false,
+                )
                 .expect("a ray straight down hits the saddle");
             let z = x * y;
-            assert!((hit.t - (5.0 - z)).abs() < 1e-9, "t {} at ({x}, {y})", hit.t);
-            assert!((hit.u - (x + 1.0) / 2.0).abs() < 1e-8, "u {} at ({x}, {y})", hit.u);
+            assert!(
+                (hit.t - (5.0 - z)).abs() < 1e-9,
+                "t {} at ({x}, {y})",
+                hit.t
+            );
+            assert!(
+                (hit.u - (x + 1.0) / 2.0).abs() < 1e-8,
+                "u {} at ({x}, {y})",
+                hit.u
+            );
             assert!(hit.normal.z > 0.0);
         }
         assert!(patch
-            .intersect(&ray(DVec3::new(1.1, 0.0, 5.0), DVec3::new(0.0, 0.0, -1.0)), false)
+            .intersect(
+                &ray(DVec3::new(1.1, 0.0, 5.0), DVec3::new(0.0, 0.0, -1.0)),
+                false
+            )
             .is_none());
     }
 
@@ -384,7 +432,11 @@ mod collapsed_edge_tests {
 
     /// The teapot's first lid patch (z up): its row v = 0 collapses onto the apex.
     fn lid() -> PatchIntersector {
-        let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models/teapot.bpt")).unwrap();
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/assets/models/teapot.bpt"
+        ))
+        .unwrap();
         let patches = crate::scene::patch::bpt::parse_bpt(&text).unwrap();
         PatchIntersector::new(&patches[20])
     }

@@ -105,7 +105,10 @@ impl BezierPatch {
     /// lies in the convex hull of its control points).
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let lo = self.control.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
-        let hi = self.control.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+        let hi = self
+            .control
+            .iter()
+            .fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
         (lo, hi)
     }
 
@@ -114,7 +117,9 @@ impl BezierPatch {
         match self.corner_st {
             None => (Vec2::new(u, v), Vec2::X, Vec2::Y),
             Some([a, b, c, d]) => {
-                let st = a * ((1.0 - u) * (1.0 - v)) + b * (u * (1.0 - v)) + c * ((1.0 - u) * v)
+                let st = a * ((1.0 - u) * (1.0 - v))
+                    + b * (u * (1.0 - v))
+                    + c * ((1.0 - u) * v)
                     + d * (u * v);
                 let dst_du = (b - a) * (1.0 - v) + (d - c) * v;
                 let dst_dv = (c - a) * (1.0 - u) + (d - b) * u;
@@ -190,7 +195,10 @@ mod tests {
                 (p.d2pdudv, fd_uv),
                 (p.d2pdv2, fd_vv),
             ] {
-                assert!((exact - fd).length() < 1e-6, "{exact} vs {fd} at ({u}, {v})");
+                assert!(
+                    (exact - fd).length() < 1e-6,
+                    "{exact} vs {fd} at ({u}, {v})"
+                );
             }
         }
     }

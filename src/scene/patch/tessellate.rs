@@ -79,7 +79,9 @@ pub fn tessellate(patch: &BezierPatch, epsilon: f32) -> TriangleMesh {
         for i in 0..=nu {
             let (u, v) = (i as f64 / nu as f64, j as f64 / nv as f64);
             mesh.positions.push(evaluate(&c, u, v).position.as_vec3());
-            let n = geometric_normal(&c, u, v).try_normalize().unwrap_or(DVec3::Z);
+            let n = geometric_normal(&c, u, v)
+                .try_normalize()
+                .unwrap_or(DVec3::Z);
             mesh.normals.push(n.as_vec3());
             mesh.st.push(patch.st(u as f32, v as f32).0);
         }
@@ -89,7 +91,10 @@ pub fn tessellate(patch: &BezierPatch, epsilon: f32) -> TriangleMesh {
     // area is negligible against its longest edge.
     let proper = |t: [u32; 3], p: &[Vec3]| {
         let [a, b, c] = t.map(|k| p[k as usize]);
-        let longest = (b - a).length_squared().max((c - a).length_squared()).max((c - b).length_squared());
+        let longest = (b - a)
+            .length_squared()
+            .max((c - a).length_squared())
+            .max((c - b).length_squared());
         (b - a).cross(c - a).length() > 1e-7 * longest
     };
     for j in 0..nv {
@@ -174,7 +179,10 @@ mod tests {
                     worst = worst.max((exact - approx).length());
                 }
             }
-            assert!(worst <= f64::from(epsilon), "epsilon {epsilon}: {worst} with {nu}x{nv}");
+            assert!(
+                worst <= f64::from(epsilon),
+                "epsilon {epsilon}: {worst} with {nu}x{nv}"
+            );
             assert_eq!(mesh.triangles.len(), 2 * nu * nv);
         }
     }
@@ -193,6 +201,9 @@ mod tests {
         let mesh = tessellate(&fan, 1e-2);
         let (nu, nv) = cells_for(&fan, 1e-2);
         assert_eq!(mesh.triangles.len(), 2 * nu * nv - nu);
-        assert!(mesh.normals.iter().all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-4));
+        assert!(mesh
+            .normals
+            .iter()
+            .all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-4));
     }
 }
