@@ -345,3 +345,106 @@ fn scenes_without_patches_have_no_user_geometry() {
     let with = traced(TEAPOT);
     assert_eq!(with.lookup.geometries, vec![GeometryRef::Patches]);
 }
+
+/// A user geometry of one plane square `z = 0, |x|, |y| <= 1` (u, v = x, y), or one that
+/// panics in `intersect`.
+struct Square {
+    panics: bool,
+}
+
+impl conetrace::embree::UserGeometry for Square {
+    fn primitive_count(&self) -> u32 {
+        1
+    }
+    fn bounds(&self, _: u32) -> conetrace::embree::Bounds {
+        conetrace::embree::Bounds {
+            lower: Vec3::new(-1.0, -1.0, 0.0),
+            upper: Vec3::new(1.0, 1.0, 0.0),
+        }
+    }
+    fn intersect(
+        &self,
+        _: u32,
+        ray: &conetrace::embree::UserRay,
+        _: bool,
+    ) -> Option<conetrace::embree::UserHit> {
+        assert!(!self.panics, "a user geometry that panics");
+        let t = -ray.origin.z / ray.direction.z;
+        let p = ray.origin + ray.direction * t;
+        (t > ray.tnear && t < ray.tfar && p.x.abs() <= 1.0 && p.y.abs() <= 1.0).then_some(
+            conetrace::embree::UserHit {
+                t,
+                u: p.x,
+                v: p.y,
+                normal: Vec3::Z,
+            },
+        )
+    }
+}
+
+/// Every lane of a 16-wide packet gets its own answer from the Rust callback (invalid lanes
+/// none), the same as single rays and as occlusion; a panic in the callback is caught and
+/// returned as an error, never unwinding into Embree.
+#[test]
+fn user_geometry_lanes_and_panics() {
+    use conetrace::embree::{Device, EmbreeError, Ray, RayPacket, SceneBuilder, TraceOptions};
+    let device = Device::new().expect("device");
+    let build = |panics: bool| {
+        let mut builder = SceneBuilder::new(&device).expect("builder");
+        builder
+            .add_user_geometry(Arc::new(Square { panics }))
+            .expect("user geometry");
+        builder.commit().expect("commit")
+    };
+    let scene = build(false);
+    let mut packet = RayPacket::<16>::new();
+    let mut shadow = RayPacket::<16>::new();
+    let lane_ray = |lane: usize| {
+        let x = -1.5 + 3.0 * lane as f32 / 15.0; // lanes beyond |x| = 1 miss
+        Ray::new(Vec3::new(x, 0.25, 2.0), Vec3::NEG_Z)
+    };
+    for lane in 0..16 {
+        if lane % 5 == 4 {
+            continue; // left invalid
+        }
+        packet.set_ray(lane, &lane_ray(lane));
+        shadow.set_ray(lane, &lane_ray(lane));
+    }
+    scene
+        .intersect_tile(&mut packet, TraceOptions::coherent())
+        .expect("packet trace");
+    scene
+        .occluded_tile(&mut shadow, TraceOptions::coherent())
+        .expect("occlusion trace");
+    for lane in 0..16 {
+        let single = scene
+            .intersect1(&lane_ray(lane), TraceOptions::incoherent())
+            .expect("single trace");
+        if lane % 5 == 4 {
+            assert!(packet.hit(lane).is_none(), "invalid lane {lane} was traced");
+            continue;
+        }
+        assert_eq!(packet.hit(lane).is_some(), single.is_some(), "lane {lane}");
+        assert_eq!(shadow.is_occluded(lane), single.is_some(), "lane {lane}");
+        if let (Some(a), Some(b)) = (packet.hit(lane), single) {
+            assert!(
+                (a.t - 2.0).abs() < 1e-6 && a.t == b.t && a.u == b.u,
+                "lane {lane}"
+            );
+            assert!((a.v - 0.25).abs() < 1e-6);
+        }
+    }
+    let panicking = build(true);
+    let mut packet = RayPacket::<16>::new();
+    packet.set_ray(3, &lane_ray(7));
+    match panicking.intersect_tile(&mut packet, TraceOptions::coherent()) {
+        Err(EmbreeError::FilterPanicked { message, .. }) => {
+            assert!(message.contains("panics"), "{message}")
+        }
+        other => panic!("a panicking callback gave {other:?}"),
+    }
+    assert!(packet.hit(3).is_none());
+    assert!(panicking
+        .intersect1(&lane_ray(7), TraceOptions::incoherent())
+        .is_err());
+}
