@@ -23,6 +23,20 @@ pub enum Patch {
     },
     /// An analytic sphere; st is its lat-long parameterisation (see `crate::scene::Sphere`).
     Sphere { center: Vec3, radius: f32 },
+    /// A point of a curved patch (`crate::scene::patch`) with its exact local differential
+    /// geometry at the hit's (u, v): first and second partial derivatives of the position,
+    /// the derivatives of the texture coordinates with respect to u and v, and the bound on
+    /// the rounding error of the hit's position.
+    Curved {
+        dpdu: Vec3,
+        dpdv: Vec3,
+        d2pdu2: Vec3,
+        d2pdudv: Vec3,
+        d2pdv2: Vec3,
+        dstdu: Vec2,
+        dstdv: Vec2,
+        error: Vec3,
+    },
 }
 
 /// A hit on a surface, in world space.
@@ -40,7 +54,8 @@ pub struct SurfaceHit {
     /// Unit shading normal (interpolated vertex normals, or the geometric normal),
     /// facing the same side as `geometric_normal`.
     pub shading_normal: Vec3,
-    /// Barycentric (u, v) on a triangle; (s, t) on a sphere.
+    /// Barycentric (u, v) on a triangle; (s, t) on a sphere; the patch's (u, v) on a curved
+    /// patch.
     pub barycentric: Vec2,
     /// Texture coordinates in OpenImageIO convention (zero when the surface has none).
     pub st: Vec2,
@@ -72,6 +87,10 @@ impl SurfaceHit {
             Patch::Sphere { center, radius } => {
                 SpawnPoint::on_sphere(center, radius, self.position).0
             }
+            Patch::Curved { error, .. } => SpawnPoint {
+                position: self.position,
+                error,
+            },
         }
     }
 }

@@ -8,6 +8,7 @@ pub mod bench_effects;
 pub mod bench_render;
 pub mod bench_textures;
 pub mod outputs;
+pub mod patch_mode;
 pub mod render_cmd;
 pub mod resume;
 pub mod sample_texture;

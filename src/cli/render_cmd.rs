@@ -114,6 +114,21 @@ pub struct RenderArgs {
     /// or a pixel-changing option changed since.
     #[arg(long)]
     pub resume: bool,
+    /// How curved patches are traced: `exact` (the polynomial surface itself, through an
+    /// Embree user geometry) or `tessellate` (triangles within --tessellation-error of it).
+    #[arg(long, value_enum, default_value = "exact")]
+    pub patch_mode: PatchMode,
+    /// With --patch-mode tessellate: the largest distance, in world units, between a patch
+    /// and its triangles.
+    #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true)]
+    pub tessellation_error: f32,
+}
+
+/// `--patch-mode`'s values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PatchMode {
+    Exact,
+    Tessellate,
 }
 
 use crate::cli::resume::{encode_tiles, TILES_DONE_ATTRIBUTE};
@@ -141,6 +156,7 @@ pub fn load(args: &RenderArgs) -> Result<SceneDescription, CommandError> {
         Some(path) => load_scene(path).map_err(|e| CommandError::bad_input(e.to_string()))?,
         None => default_scene(),
     };
+    crate::cli::patch_mode::apply(&mut scene, args.patch_mode, args.tessellation_error)?;
     let width = args.width.unwrap_or(scene.settings.width);
     let height = args.height.unwrap_or(scene.settings.height);
     // A camera the loader placed to frame the bounds is re-placed for the aspect ratio the

@@ -184,6 +184,7 @@ impl RenderSignature {
                 .bytes(&(mesh.material as u64).to_le_bytes());
         }
         geometry.text(&scene.spheres);
+        geometry.text(&scene.patches);
         input("geometry", &geometry);
         for (index, (texture, encoded)) in scene.textures.iter().zip(texture_digests).enumerate() {
             let mut digest = ContentDigest::new();

@@ -17,6 +17,8 @@ pub(crate) struct GeometryRecord {
     /// Our geometry index (equal to Embree's geometry id in this scene).
     pub index: u32,
     pub filter: Option<AlphaFilter>,
+    /// The Rust intersector of a user geometry (`super::user_geometry`).
+    pub user: Option<std::sync::Arc<dyn super::user_geometry::UserGeometry>>,
 }
 
 impl SceneBuilder {

@@ -1,6 +1,7 @@
 //! The one place that knows Embree: a safe layer over Embree 3 (bindgen bindings in `ffi.rs`).
 //!
-//! The data flow is `Device` -> [`SceneBuilder`] (triangle meshes, spheres, alpha filters)
+//! The data flow is `Device` -> [`SceneBuilder`] (triangle meshes, spheres, alpha filters,
+//! user geometries traced by Rust code)
 //! -> [`CommittedScene`] (immutable, `Send + Sync`, shared across rayon threads in an `Arc`)
 //! -> traces: 16/8/4-wide SoA [`RayPacket`]s, single rays, and ray streams ([`RayHit`]).
 //! Every `unsafe` block of the crate lives under `src/embree/`; nothing above this module
@@ -55,6 +56,7 @@ mod packet;
 mod ray;
 mod scene;
 mod stream;
+mod user_geometry;
 
 pub use context::{Coherence, RayPayload, TraceOptions};
 pub use denormals::{enable_flush_denormals, flush_denormals_enabled};
@@ -64,3 +66,4 @@ pub use filter::{AlphaFilter, FilterCandidate};
 pub use packet::RayPacket;
 pub use ray::{Hit, Ray, RayHit, INVALID_GEOMETRY_ID};
 pub use scene::{Bounds, CommittedScene, SceneBuilder};
+pub use user_geometry::{UserGeometry, UserHit, UserRay};

@@ -120,6 +120,7 @@ impl SceneBuilder {
             record: Box::new(GeometryRecord {
                 index: u32::MAX,
                 filter: None,
+                user: None,
             }),
         });
         Ok(raw)

@@ -28,6 +28,7 @@ mod environment;
 mod gradients;
 mod normal_derivatives;
 mod packed_cone;
+mod patch_surface;
 mod ray_cone;
 mod ray_differential;
 pub(crate) mod robust;

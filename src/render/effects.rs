@@ -77,6 +77,11 @@ impl EffectSet {
                     *u = true;
                 }
             }
+            for patch in &scene.patches {
+                if let Some(u) = used.get_mut(patch.material) {
+                    *u = true;
+                }
+            }
             used
         };
         let materials = || {

@@ -11,6 +11,7 @@ pub mod effects;
 pub mod external_textures;
 pub mod integrator;
 pub mod memory;
+pub mod patch_geometry;
 pub mod prepared;
 pub mod stats;
 pub mod tracer;

@@ -17,6 +17,9 @@ pub enum GeometryRef {
     Mesh(usize),
     /// All spheres live in one geometry; the primitive id indexes `SceneDescription::spheres`.
     Spheres,
+    /// All curved patches live in one user geometry; the primitive id indexes
+    /// `SceneDescription::patches`.
+    Patches,
 }
 
 /// Per-material values the integrator needs on every hit, computed once.
@@ -121,6 +124,7 @@ impl SurfaceLookup {
         let material = match self.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(index) => self.scene.meshes[index].material,
             GeometryRef::Spheres => self.scene.spheres[hit.primitive as usize].material,
+            GeometryRef::Patches => self.scene.patches[hit.primitive as usize].material,
         };
         self.textured_materials[material]
     }
@@ -225,6 +229,11 @@ impl SurfaceLookup {
                     },
                 }
             }
+            GeometryRef::Patches => crate::render::patch_geometry::patch_surface_hit(
+                &self.scene.patches[hit.primitive as usize],
+                hit,
+                texturing,
+            ),
         }
     }
 }

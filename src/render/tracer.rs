@@ -227,6 +227,13 @@ impl Tracer {
             builder.add_spheres(&spheres).map_err(embree_error)?;
             geometries.push(GeometryRef::Spheres);
         }
+        if !scene.patches.is_empty() {
+            let patches = crate::render::patch_geometry::PatchGeometry::new(&scene.patches);
+            builder
+                .add_user_geometry(Arc::new(patches))
+                .map_err(embree_error)?;
+            geometries.push(GeometryRef::Patches);
+        }
         let committed = builder.commit().map_err(embree_error)?;
         Ok((
             Tracer {

@@ -11,6 +11,7 @@
 //! glTF's v-down coordinates onto it.
 
 pub mod load;
+pub mod patch;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -30,6 +31,9 @@ pub struct SceneDescription {
     pub textures: Vec<TextureDesc>,
     pub meshes: Vec<TriangleMesh>,
     pub spheres: Vec<Sphere>,
+    /// Curved surfaces (Bezier, Hermite and Lagrange rectangles, Bezier triangles), all
+    /// converted to bicubic Bezier patches ([`patch`]).
+    pub patches: Vec<patch::BezierPatch>,
     pub environment: Environment,
     pub settings: RenderSettings,
     /// Things the loader decided on the user's behalf ("camera placed to frame the bounds",
@@ -288,6 +292,11 @@ impl SceneDescription {
         for sphere in &self.spheres {
             lo = lo.min(sphere.center - Vec3::splat(sphere.radius));
             hi = hi.max(sphere.center + Vec3::splat(sphere.radius));
+        }
+        for patch in &self.patches {
+            let (plo, phi) = patch.bounds();
+            lo = lo.min(plo);
+            hi = hi.max(phi);
         }
         (lo.x <= hi.x).then_some((lo, hi))
     }

@@ -131,6 +131,20 @@ impl SpawnPoint {
         )
     }
 
+    /// The point of a curved patch evaluated in f64 (`crate::render::patch_geometry`), whose
+    /// control points have coordinates of at most `magnitude`. The f64 evaluation's own error
+    /// (a few dozen roundings of 2^-53 on sums of Bernstein-weighted control points, whose
+    /// weights sum to 1) is far below one f32 rounding, so the bound is the rounding to f32
+    /// (`gamma(1)`) plus the intersector's slack, on the control points' magnitude. The
+    /// patch intersector solves in f64 to 1e-9 of the patch's size, also far below it.
+    #[inline]
+    pub fn on_curved_patch(position: glam::DVec3, magnitude: Vec3) -> SpawnPoint {
+        SpawnPoint {
+            position: position.as_vec3(),
+            error: with_intersector_slack(magnitude, 1),
+        }
+    }
+
     /// The point `origin + t * direction` of a ray, when the surface is not at hand. Its
     /// error bound covers the rounding of the expression and a relative error of a few
     /// roundings in `t` (`gamma(INTERSECTOR_SLACK)`), but an intersector's `t` can be off

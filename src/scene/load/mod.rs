@@ -33,6 +33,7 @@ mod gltf;
 mod merge;
 mod obj;
 mod obj_text;
+mod patches;
 mod toml_format;
 mod uri;
 mod validate;

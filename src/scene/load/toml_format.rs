@@ -23,7 +23,7 @@ use crate::scene::{
 
 /// A finite number: TOML's `nan` and `inf` literals (and overflow past f32) are rejected.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Num(f32);
+pub(super) struct Num(pub(super) f32);
 
 impl<'de> Deserialize<'de> for Num {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
@@ -43,15 +43,15 @@ impl<'de> Deserialize<'de> for Num {
     }
 }
 
-type V3 = [Num; 3];
+pub(super) type V3 = [Num; 3];
 
-fn v3(v: V3) -> Vec3 {
+pub(super) fn v3(v: V3) -> Vec3 {
     Vec3::new(v[0].0, v[1].0, v[2].0)
 }
 
 /// `scale = 2` or `scale = [1, 2, 1]`.
 #[derive(Clone, Copy, Debug)]
-struct Scale(Vec3);
+pub(super) struct Scale(pub(super) Vec3);
 
 impl<'de> Deserialize<'de> for Scale {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
@@ -106,6 +106,12 @@ struct RawScene {
     sphere: Vec<RawSphere>,
     #[serde(default)]
     mesh: Vec<RawMesh>,
+    #[serde(default)]
+    patch: Vec<super::patches::RawPatch>,
+    #[serde(default)]
+    bezier_triangle: Vec<super::patches::RawBezierTriangle>,
+    #[serde(default)]
+    patch_file: Vec<super::patches::RawPatchFile>,
 }
 
 #[derive(Deserialize)]
@@ -267,13 +273,13 @@ struct RawMesh {
 }
 
 /// Errors located in the TOML text.
-struct Located<'a> {
+pub(super) struct Located<'a> {
     text: &'a str,
     label: &'a str,
 }
 
 impl Located<'_> {
-    fn at<T>(&self, spanned: &Spanned<T>, message: impl fmt::Display) -> SceneError {
+    pub(super) fn at<T>(&self, spanned: &Spanned<T>, message: impl fmt::Display) -> SceneError {
         SceneError::at_offset(self.label, self.text, spanned.span().start, message)
     }
 }
@@ -526,6 +532,16 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             material: index,
         });
     }
+
+    super::patches::build_patches(
+        &mut scene,
+        &raw.patch,
+        &raw.bezier_triangle,
+        &raw.patch_file,
+        files,
+        loc,
+        &mut material,
+    )?;
 
     for m in &raw.mesh {
         let placement = Placement {

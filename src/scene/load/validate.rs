@@ -243,6 +243,24 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
             ));
         }
     }
+    for (i, patch) in scene.patches.iter().enumerate() {
+        if let Some(problem) = patch.problem() {
+            return Err(format!("patch {i}: {problem}"));
+        }
+        if patch.material >= scene.materials.len() {
+            return Err(format!(
+                "patch {i}: material index {} out of range",
+                patch.material
+            ));
+        }
+        if let Some(st) = patch.corner_st {
+            if st.iter().any(|c| !c.is_finite()) {
+                return Err(format!(
+                    "patch {i}: corner texture coordinates are not finite"
+                ));
+            }
+        }
+    }
     Ok(())
 }
 

@@ -1,0 +1,151 @@
+//! Curved patches in the Embree scene and back: the user geometry that traces a scene's
+//! patches exactly, and the [`SurfaceHit`] of a hit on one.
+//!
+//! All patches of a scene form one Embree user geometry whose primitive `i` is
+//! `SceneDescription::patches[i]`; its bounds are the box of the control points (which
+//! contains the patch) and its intersections are `crate::scene::patch::intersect`'s. A scene
+//! without patches has no user geometry at all, so triangle-only scenes pay nothing.
+//!
+//! A hit is rebuilt from the patch itself at the hit's (u, v): the position, the normal
+//! `P_u x P_v` (from just inside a collapsed edge), and the exact first and second
+//! derivatives that footprints use (`crate::footprint`, "Curved patches").
+
+use glam::{DVec3, Vec2, Vec3};
+
+use crate::embree::{Bounds, UserGeometry, UserHit, UserRay};
+use crate::hit::{Patch, SurfaceHit};
+use crate::render::tracer::TraceHit;
+use crate::scene::patch::intersect::{geometric_normal, PatchIntersector, PatchRay};
+use crate::scene::patch::{control_f64, evaluate, BezierPatch};
+use crate::shading::ray_offset::SpawnPoint;
+
+/// The scene's patches as Embree user primitives.
+pub struct PatchGeometry {
+    intersectors: Vec<PatchIntersector>,
+    bounds: Vec<Bounds>,
+}
+
+impl PatchGeometry {
+    pub fn new(patches: &[BezierPatch]) -> PatchGeometry {
+        PatchGeometry {
+            intersectors: patches
+                .iter()
+                .map(|p| PatchIntersector::new(&p.control))
+                .collect(),
+            bounds: patches
+                .iter()
+                .map(|p| {
+                    let (lower, upper) = p.bounds();
+                    Bounds { lower, upper }
+                })
+                .collect(),
+        }
+    }
+}
+
+impl UserGeometry for PatchGeometry {
+    fn primitive_count(&self) -> u32 {
+        self.intersectors.len() as u32
+    }
+
+    fn bounds(&self, primitive: u32) -> Bounds {
+        self.bounds[primitive as usize]
+    }
+
+    fn intersect(&self, primitive: u32, ray: &UserRay, any_hit: bool) -> Option<UserHit> {
+        let query = PatchRay {
+            origin: ray.origin.as_dvec3(),
+            direction: ray.direction.as_dvec3(),
+            tnear: f64::from(ray.tnear),
+            tfar: f64::from(ray.tfar),
+        };
+        let hit = self.intersectors[primitive as usize].intersect(&query, any_hit)?;
+        let t = hit.t as f32;
+        // Rounding t to f32 must not move it out of the ray's interval.
+        (t > ray.tnear && t < ray.tfar).then_some(UserHit {
+            t,
+            u: hit.u as f32,
+            v: hit.v as f32,
+            normal: hit.normal.as_vec3(),
+        })
+    }
+}
+
+/// The surface at a hit on `patch` (the trace hit's u, v are the patch's).
+///
+/// The position is the patch evaluated in f64 at the f32 (u, v) the hit reports, so it lies
+/// on the surface up to its rounding to f32; its error bound is that rounding plus the
+/// intersector slack of `crate::shading::ray_offset`, on the magnitude of the control points.
+pub fn patch_surface_hit(patch: &BezierPatch, hit: &TraceHit, texturing: bool) -> SurfaceHit {
+    let control = control_f64(&patch.control);
+    let (u, v) = (f64::from(hit.u), f64::from(hit.v));
+    let point = evaluate(&control, u, v);
+    let normal = geometric_normal(&control, u, v)
+        .try_normalize()
+        .unwrap_or(DVec3::Y)
+        .as_vec3();
+    let magnitude = patch.control.iter().fold(Vec3::ZERO, |m, p| m.max(p.abs()));
+    let spawn = SpawnPoint::on_curved_patch(point.position, magnitude);
+    let dpdu = point.dpdu.as_vec3();
+    let dpdv = point.dpdv.as_vec3();
+    let (st, dstdu, dstdv) = patch.st(hit.u, hit.v);
+    let (st, dpds, dpdt) = if texturing {
+        let (dpds, dpdt) = position_st_derivatives(dpdu, dpdv, dstdu, dstdv);
+        (st, dpds, dpdt)
+    } else {
+        (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
+    };
+    SurfaceHit {
+        t: hit.t,
+        position: spawn.position,
+        geometric_normal: normal,
+        shading_normal: normal,
+        barycentric: Vec2::new(hit.u, hit.v),
+        st,
+        dpds,
+        dpdt,
+        material: patch.material as u32,
+        patch: Patch::Curved {
+            dpdu,
+            dpdv,
+            d2pdu2: point.d2pdu2.as_vec3(),
+            d2pdudv: point.d2pdudv.as_vec3(),
+            d2pdv2: point.d2pdv2.as_vec3(),
+            dstdu,
+            dstdv,
+            error: spawn.error,
+        },
+    }
+}
+
+/// dP/ds and dP/dt from dP/du, dP/dv and the st map's derivatives: `[P_u P_v] = [P_s P_t] J`
+/// with `J = [st_u st_v]`, so `[P_s P_t] = [P_u P_v] J^-1` (zero where J is singular).
+fn position_st_derivatives(dpdu: Vec3, dpdv: Vec3, dstdu: Vec2, dstdv: Vec2) -> (Vec3, Vec3) {
+    let det = dstdu.x * dstdv.y - dstdv.x * dstdu.y;
+    let inv = det.recip();
+    if !(inv.is_finite()) {
+        return (Vec3::ZERO, Vec3::ZERO);
+    }
+    let dpds = (dpdu * dstdv.y - dpdv * dstdu.y) * inv;
+    let dpdt = (dpdv * dstdu.x - dpdu * dstdv.x) * inv;
+    if dpds.is_finite() && dpdt.is_finite() {
+        (dpds, dpdt)
+    } else {
+        (Vec3::ZERO, Vec3::ZERO)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn st_derivatives_invert_the_parameter_map() {
+        let (dpdu, dpdv) = (Vec3::new(1.0, 0.2, 0.0), Vec3::new(0.1, 1.5, 0.3));
+        let (su, sv) = (Vec2::new(2.0, 0.5), Vec2::new(-0.25, 1.0));
+        let (ps, pt) = position_st_derivatives(dpdu, dpdv, su, sv);
+        // Chain rule back: P_u = P_s s_u + P_t t_u.
+        assert!((ps * su.x + pt * su.y - dpdu).length() < 1e-6);
+        assert!((ps * sv.x + pt * sv.y - dpdv).length() < 1e-6);
+    }
+}
