@@ -223,6 +223,39 @@ fn c_example_links_statically_with_the_documented_flags() {
     assert!(red.iter().any(|&v| v > 0.05), "the image is black");
 }
 
+/// The command line's dependencies (clap, indicatif, ctrlc, plotters, nv-flip and its C++
+/// code) belong to the `conetrace` binary: the static library defines none of their symbols
+/// (Rust's legacy mangling starts a path with its crate's name: `_ZN4clap...`) and no C++
+/// standard-library code (`std::` template instantiations, `_ZNSt`/`_ZNKSt`).
+#[test]
+fn static_library_carries_no_command_line_code() {
+    let archive = library_dir().join("libconetrace.a");
+    let symbols = run(Command::new("nm").arg("--defined-only").arg(&archive));
+    // The archive's own entry points are there, so the listing is not empty or mangled away.
+    assert!(
+        symbols.lines().any(|line| line.ends_with(" ct_render")),
+        "nm lists no ct_render in {}",
+        archive.display()
+    );
+    let foreign_prefixes = [
+        "_ZN4clap",
+        "_ZN12clap_builder",
+        "_ZN9indicatif",
+        "_ZN5ctrlc",
+        "_ZN8plotters",
+        "_ZN7nv_flip",
+        "_ZNSt",
+        "_ZNKSt",
+    ];
+    let foreign: Vec<&str> = symbols
+        .lines()
+        .filter_map(|line| line.split_whitespace().last())
+        .filter(|name| foreign_prefixes.iter().any(|p| name.starts_with(p)))
+        .take(5)
+        .collect();
+    assert!(foreign.is_empty(), "libconetrace.a defines {foreign:?}");
+}
+
 #[test]
 fn cpp_example_with_openimageio_textures_matches_builtin_filtering() {
     let include = Path::new("/usr/include/OpenImageIO/texture.h");
