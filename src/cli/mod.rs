@@ -7,6 +7,7 @@ pub mod accuracy;
 pub mod bench_effects;
 pub mod bench_render;
 pub mod bench_textures;
+pub mod merge;
 pub mod outputs;
 pub mod render_cmd;
 pub mod resume;
@@ -68,6 +69,9 @@ pub enum Command {
     /// Error against a supersampled ground truth and time of every footprint strategy and
     /// filter; writes CSV, markdown, an error-vs-time plot and crops (default docs/accuracy).
     Accuracy(accuracy::AccuracyArgs),
+    /// Merge the parts of a split render (--region, --samples, --part) into the image a
+    /// single render gives, bit for bit.
+    Merge(merge::MergeArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -114,6 +118,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::SampleTexture(args) => sample_texture::run(&args).map_err(CommandError::bad_input),
         Command::Bench(BenchCommand::Render(args)) => bench_render::run(&args),
         Command::Accuracy(args) => accuracy::run(&args),
+        Command::Merge(args) => merge::run(&args),
         Command::Bench(BenchCommand::Effects(args)) => bench_effects::run(&args),
         Command::Bench(BenchCommand::Textures(args)) => {
             bench_textures::run(&args).map_err(CommandError::bad_input)

@@ -38,6 +38,8 @@ pub mod exr_output;
 #[allow(clippy::module_inception)]
 pub mod film;
 pub mod png_output;
+pub mod region;
+pub mod sample_sum;
 
 pub use atomic_file::OutputSet;
 pub use channels::Layer;

@@ -10,6 +10,7 @@ pub mod context;
 pub mod effects;
 pub mod external_textures;
 pub mod memory;
+pub mod part;
 pub mod prepared;
 pub mod sampling;
 pub mod stats;
@@ -142,6 +143,9 @@ pub struct RenderControl<'a> {
     pub cancel: Option<&'a AtomicBool>,
     /// Tiles already finished by an earlier run (`--resume`): skipped.
     pub skip: Option<&'a [bool]>,
+    /// Render only this region and range of samples (`--region`, `--samples`, `--part`);
+    /// the film then covers the region only (see [`part::RenderPart`]).
+    pub part: Option<&'a part::RenderPart>,
 }
 
 impl Default for RenderControl<'_> {
@@ -150,6 +154,7 @@ impl Default for RenderControl<'_> {
             progress: None,
             cancel: None,
             skip: None,
+            part: None,
         }
     }
 }
@@ -180,12 +185,19 @@ pub fn render(
     // A failure left over from an earlier render of this context is not this render's.
     let _ = context.tracer.take_failure();
     let options = &context.options;
-    let tiles = work_tiles(options.width, options.height);
-    let mut film = Film::try_new(options.width, options.height, &film_layers(options.aovs))
-        .map_err(|message| RenderError::OutOfMemory {
-            scene: context.scene.source.clone(),
-            message,
-        })?;
+    let whole = part::RenderPart::whole(options);
+    let part = control.part.unwrap_or(&whole);
+    let tiles = part.tiles(options.width, options.height);
+    let sample_range = part.is_sample_range(options).then(|| part.samples.clone());
+    let mut film = Film::try_new(
+        part.region.width,
+        part.region.height,
+        &part.film_layers(options),
+    )
+    .map_err(|message| RenderError::OutOfMemory {
+        scene: context.scene.source.clone(),
+        message,
+    })?;
     let finished_count = AtomicUsize::new(0);
     let totals = Mutex::new(WorkerState::default());
     let count_tiles = options.count_tiles;
@@ -224,6 +236,7 @@ pub fn render(
                     return None;
                 }
                 let mut image = TileImage::new(*tile, options.aovs);
+                image.samples = sample_range.clone();
                 integrator.render_tile(context, *tile, &mut image, worker);
                 // Hand this tile's work to the total so nothing is lost when a worker's
                 // state is dropped.
@@ -261,7 +274,7 @@ pub fn render(
     let mut finished_tiles = vec![false; tiles.len()];
     for (index, (tile, image)) in tiles.iter().zip(&results).enumerate() {
         if let Some(image) = image {
-            copy_tile_to_film(image, *tile, &mut film);
+            copy_tile_to_film(image, *tile, (part.region.x0, part.region.y0), &mut film);
             finished_tiles[index] = true;
         }
     }
@@ -323,13 +336,27 @@ pub fn render(
     })
 }
 
-/// Copy an integrator's tile into the film, layer by layer.
-fn copy_tile_to_film(image: &TileImage, rect: TileRect, film: &mut Film) {
-    let mut tile: FilmTile = film.new_tile(rect);
+/// Copy an integrator's tile (image coordinates) into the film, whose top-left pixel is
+/// `origin` of the image, layer by layer.
+fn copy_tile_to_film(image: &TileImage, rect: TileRect, origin: (u32, u32), film: &mut Film) {
+    let film_rect = TileRect {
+        x0: rect.x0 - origin.0,
+        y0: rect.y0 - origin.1,
+        ..rect
+    };
+    let mut tile: FilmTile = film.new_tile(film_rect);
+    let sums = film.has(Layer::SampleSum);
     for y in 0..rect.height {
         for x in 0..rect.width {
             let i = (y * rect.width + x) as usize;
-            let (fx, fy) = (rect.x0 + x, rect.y0 + y);
+            let (fx, fy) = (film_rect.x0 + x, film_rect.y0 + y);
+            if sums {
+                let digits: Vec<f32> = image.color_sum[i]
+                    .iter()
+                    .flat_map(|&s| crate::film::sample_sum::encode(s))
+                    .collect();
+                tile.set(Layer::SampleSum, fx, fy, &digits);
+            }
             let c = image.color[i];
             let a = image.alpha[i];
             tile.set(Layer::Color, fx, fy, &[c[0], c[1], c[2], a]);
