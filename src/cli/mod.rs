@@ -6,6 +6,7 @@
 pub mod accuracy;
 pub mod bench_effects;
 pub mod bench_render;
+pub mod bench_scale_out;
 pub mod bench_textures;
 pub mod merge;
 pub mod outputs;
@@ -82,6 +83,9 @@ pub enum BenchCommand {
     Textures(bench_textures::BenchTexturesArgs),
     /// Specialised path vs general path (--all-effects), and each unneeded effect's cost.
     Effects(bench_effects::BenchEffectsArgs),
+    /// Predicted wall time of a render split over 1 to 1,000 Slurm tasks, from per-tile
+    /// costs measured here (docs/scale-out.md).
+    ScaleOut(bench_scale_out::BenchScaleOutArgs),
 }
 
 /// A render whose ray traversal failed: an internal failure (exit status 1) with the
@@ -120,6 +124,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Accuracy(args) => accuracy::run(&args),
         Command::Merge(args) => merge::run(&args),
         Command::Bench(BenchCommand::Effects(args)) => bench_effects::run(&args),
+        Command::Bench(BenchCommand::ScaleOut(args)) => bench_scale_out::run(&args),
         Command::Bench(BenchCommand::Textures(args)) => {
             bench_textures::run(&args).map_err(CommandError::bad_input)
         }
