@@ -45,6 +45,11 @@ pub struct BenchScaleOutArgs {
     /// Tasks that run at once (e.g. nodes x tasks per node); default: as many as tasks.
     #[arg(long)]
     pub slots: Option<u32>,
+    /// Predict for this many samples per pixel, from the costs measured at `--spp`: every
+    /// sample of a pixel costs the same on average (they differ only in position), so a
+    /// tile's time scales with its samples. Default: `--spp`.
+    #[arg(long)]
+    pub predict_spp: Option<u32>,
     /// Worker threads of each task (its CPUs).
     #[arg(long, default_value_t = 1)]
     pub threads_per_task: u32,
@@ -137,9 +142,11 @@ fn part_seconds(
     options: &render::RenderOptions,
     tasks: u32,
     threads: u32,
+    spp: u32,
 ) -> Result<Vec<f64>, CommandError> {
     let rows = measured.row_costs.len() as u32;
-    let spp = options.spp.max(1);
+    let spp = spp.max(1);
+    let sample_scale = f64::from(spp) / f64::from(options.spp.max(1));
     // Beyond one strip per tile row, each strip's samples are split into groups too.
     let groups = tasks.div_ceil(rows).min(spp);
     let strips = tasks.div_ceil(groups).min(rows);
@@ -154,13 +161,14 @@ fn part_seconds(
             options.height,
         )
         .map_err(|e| CommandError::bad_input(e.to_string()))?;
-        let render: f64 = measured
-            .tiles
-            .iter()
-            .zip(&measured.tile_seconds)
-            .filter(|(t, _)| t.y0 >= strip.y0 && t.y0 < strip.y0 + strip.height)
-            .map(|(_, s)| s)
-            .sum();
+        let render: f64 = sample_scale
+            * measured
+                .tiles
+                .iter()
+                .zip(&measured.tile_seconds)
+                .filter(|(t, _)| t.y0 >= strip.y0 && t.y0 < strip.y0 + strip.height)
+                .map(|(_, s)| s)
+                .sum::<f64>();
         let share = f64::from(strip.width) * f64::from(strip.height) / pixels;
         for group in 0..groups {
             let samples = spp * (group + 1) / groups - spp * group / groups;
@@ -232,7 +240,13 @@ pub fn run(args: &BenchScaleOutArgs) -> Result<(), CommandError> {
             "bench scale-out: --scheduler-tick must be a number of seconds >= 0",
         ));
     }
+    if args.predict_spp == Some(0) {
+        return Err(CommandError::bad_input(
+            "bench scale-out: --predict-spp must be at least 1",
+        ));
+    }
     let (measured, options) = measure(&args.render)?;
+    let spp = args.predict_spp.unwrap_or(options.spp);
     let total: f64 = measured.tile_seconds.iter().sum();
     println!(
         "measured ({}x{}, {} spp, one thread): {} tiles in {} rows, {total:.3} s of tile rendering; \
@@ -255,7 +269,7 @@ pub fn run(args: &BenchScaleOutArgs) -> Result<(), CommandError> {
         if tasks == 0 {
             continue;
         }
-        let parts = part_seconds(&measured, &options, tasks, args.threads_per_task)?;
+        let parts = part_seconds(&measured, &options, tasks, args.threads_per_task, spp)?;
         let slots = args.slots.unwrap_or(tasks);
         // The merge reads every part's pixels (each pixel once per sample group) and writes
         // the image.
