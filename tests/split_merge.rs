@@ -222,9 +222,13 @@ fn merge_refuses_parts_that_are_not_one_render() {
     assert_refused(d, &[top.clone(), other_depth], "conetrace.option.max-depth");
     let overlapping = render(d, "overlap.exr", &["--region", "0,16,80,64"]);
     assert_refused(d, &[top.clone(), overlapping], "overlaps");
-    assert_refused(d, &[top.clone()], "pixel 0,32 has 0 of its 4 samples");
+    assert_refused(
+        d,
+        std::slice::from_ref(&top),
+        "pixel 0,32 has 0 of its 4 samples",
+    );
     assert_refused(d, &[low.clone(), low.clone(), high.clone()], "overlaps");
-    assert_refused(d, &[low.clone()], "has 2 of its 4 samples");
+    assert_refused(d, std::slice::from_ref(&low), "has 2 of its 4 samples");
     let mid = render(d, "mid.exr", &["--samples", "1..3"]);
     assert_refused(d, &[low.clone(), mid], "overlaps");
     // A truncated file.

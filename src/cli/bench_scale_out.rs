@@ -225,10 +225,16 @@ pub fn mean_merge_start(task_seconds: &[f64], slots: u32, tick: f64) -> f64 {
 }
 
 pub fn run(args: &BenchScaleOutArgs) -> Result<(), CommandError> {
-    if args.render.output.is_some() || args.render.part.is_some() || args.render.region.is_some() {
-        return Err(CommandError::bad_input(
-            "bench scale-out: -o, --part and --region do not apply (it splits the whole image itself)",
-        ));
+    let given = [
+        ("-o", args.render.output.is_some()),
+        ("--part", args.render.part.is_some()),
+        ("--region", args.render.region.is_some()),
+        ("--samples", args.render.samples.is_some()),
+    ];
+    if let Some((option, _)) = given.iter().find(|(_, present)| *present) {
+        return Err(CommandError::bad_input(format!(
+            "bench scale-out: {option} does not apply (it splits the whole image itself)"
+        )));
     }
     if args.threads_per_task == 0 || args.slots == Some(0) {
         return Err(CommandError::bad_input(

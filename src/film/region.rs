@@ -79,7 +79,7 @@ pub fn parse_region(text: &str, width: u32, height: u32, grid: u32) -> Result<Ti
             "--region {text:?}: outside the {width}x{height} image"
         ));
     }
-    let on_grid = |v: u32, edge: u32| v % grid == 0 || v == edge;
+    let on_grid = |v: u32, edge: u32| v.is_multiple_of(grid) || v == edge;
     if !(on_grid(x0, width) && on_grid(y0, height) && on_grid(x1, width) && on_grid(y1, height)) {
         return Err(format!(
             "--region {text:?}: edges must be multiples of {grid} (the work-tile size) or the \
