@@ -27,6 +27,10 @@
 //! [`read_exr`] reads a film back. Every file is written atomically ([`atomic_file`]): a
 //! failed write never damages an existing file.
 //!
+//! A render split across machines writes partial films: a region of the image placed by the
+//! EXR's data and display windows, or a range of samples with their exact sums
+//! ([`region`], [`sample_sum`]).
+//!
 //! The film does not know about cameras, sampling or shading: it stores what it is given.
 
 pub mod atomic_file;

@@ -5,6 +5,8 @@
 //! [`Integrator`](crate::integrator::Integrator) on rayon workers (each with the
 //! flush-to-zero/denormals-are-zero bits Embree asks for) -> a [`RenderResult`] holding
 //! the film and the statistics. Writing files is the caller's business (`crate::film`).
+//! A render may cover one part of the image and of the samples ([`part::RenderPart`], for
+//! renders split across machines); its film then holds that region only.
 
 pub mod context;
 pub mod effects;
@@ -351,10 +353,11 @@ fn copy_tile_to_film(image: &TileImage, rect: TileRect, origin: (u32, u32), film
             let i = (y * rect.width + x) as usize;
             let (fx, fy) = (film_rect.x0 + x, film_rect.y0 + y);
             if sums {
-                let digits: Vec<f32> = image.color_sum[i]
-                    .iter()
-                    .flat_map(|&s| crate::film::sample_sum::encode(s))
-                    .collect();
+                use crate::film::sample_sum::{encode, DIGITS};
+                let mut digits = [0.0f32; 3 * DIGITS];
+                for (chunk, &sum) in digits.chunks_exact_mut(DIGITS).zip(&image.color_sum[i]) {
+                    chunk.copy_from_slice(&encode(sum));
+                }
                 tile.set(Layer::SampleSum, fx, fy, &digits);
             }
             let c = image.color[i];
