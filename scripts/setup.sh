@@ -19,6 +19,7 @@ packages=(
   assimp-testmodels      # real OBJ/glTF files, valid and malformed, used by the tests
   libopenimageio-dev g++ # the C API's C++ example (OpenImageIO TextureSystem via the texture callback)
   fonts-dejavu-core      # DejaVuSans.ttf: labels of `conetrace accuracy`'s plot and crops (drawn without text if absent)
+  slurm-wlm munge        # scripts/slurm/ and tests/slurm_cluster.rs (a one-node Slurm cluster: slurmctld, slurmd, sbatch, munged)
 )
 
 missing=()

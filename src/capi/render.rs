@@ -311,6 +311,7 @@ pub unsafe extern "C" fn ct_render(
                     progress,
                     cancel: Some(&cancel),
                     skip: None,
+                    part: None,
                 };
                 render::render(&context, &Whitted, &control)
                     .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))

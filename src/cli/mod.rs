@@ -6,7 +6,9 @@
 pub mod accuracy;
 pub mod bench_effects;
 pub mod bench_render;
+pub mod bench_scale_out;
 pub mod bench_textures;
+pub mod merge;
 pub mod outputs;
 pub mod patch_mode;
 pub mod render_cmd;
@@ -69,6 +71,9 @@ pub enum Command {
     /// Error against a supersampled ground truth and time of every footprint strategy and
     /// filter; writes CSV, markdown, an error-vs-time plot and crops (default docs/accuracy).
     Accuracy(accuracy::AccuracyArgs),
+    /// Merge the parts of a split render (--region, --samples, --part) into the image a
+    /// single render gives, bit for bit.
+    Merge(merge::MergeArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -79,6 +84,9 @@ pub enum BenchCommand {
     Textures(bench_textures::BenchTexturesArgs),
     /// Specialised path vs general path (--all-effects), and each unneeded effect's cost.
     Effects(bench_effects::BenchEffectsArgs),
+    /// Predicted wall time of a render split over 1 to 1,000 Slurm tasks, from per-tile
+    /// costs measured here (docs/scale-out.md).
+    ScaleOut(bench_scale_out::BenchScaleOutArgs),
 }
 
 /// A render whose ray traversal failed: an internal failure (exit status 1) with the
@@ -115,7 +123,9 @@ pub fn run(cli: Cli) -> i32 {
         Command::SampleTexture(args) => sample_texture::run(&args).map_err(CommandError::bad_input),
         Command::Bench(BenchCommand::Render(args)) => bench_render::run(&args),
         Command::Accuracy(args) => accuracy::run(&args),
+        Command::Merge(args) => merge::run(&args),
         Command::Bench(BenchCommand::Effects(args)) => bench_effects::run(&args),
+        Command::Bench(BenchCommand::ScaleOut(args)) => bench_scale_out::run(&args),
         Command::Bench(BenchCommand::Textures(args)) => {
             bench_textures::run(&args).map_err(CommandError::bad_input)
         }

@@ -122,6 +122,19 @@ pub struct RenderArgs {
     /// and its triangles.
     #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true)]
     pub tessellation_error: f32,
+    /// Render only this region, X0,Y0,X1,Y1 (columns X0..X1, rows Y0..Y1; edges on the
+    /// 16-pixel tile grid or the image edge). The EXR's data window is the region, its
+    /// display window the whole image; `conetrace merge` stitches regions.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", conflicts_with = "part")]
+    pub region: Option<String>,
+    /// Render only the sample indices START..END of every pixel (of --spp); the EXR keeps
+    /// their exact sums for `conetrace merge`.
+    #[arg(long, value_name = "START..END")]
+    pub samples: Option<String>,
+    /// Render part i of N (0-based) horizontal strips of about equal work, balanced by a
+    /// quick low-resolution cost estimate.
+    #[arg(long, value_name = "i/N")]
+    pub part: Option<String>,
 }
 
 /// `--patch-mode`'s values.
@@ -278,7 +291,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let (textures, texture_digests) = decode_textures(&scene, args.quiet)?;
     phases.textures = decoding.elapsed().as_secs_f64();
 
-    let tiles = render::work_tiles(options.width, options.height);
+    let split = requested_split(args, &options)?;
     let signature =
         RenderSignature::new(&scene, args.scene.as_deref(), &options, &texture_digests)?;
     let earlier = if args.resume {
@@ -287,7 +300,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
             &signature,
             &scene,
             &options,
-            tiles.len(),
+            render::work_tiles(options.width, options.height).len(),
         )?)
     } else {
         None
@@ -298,22 +311,25 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
 
     let scene = Arc::new(scene);
-    let (mut result, camera) = pool.install(|| -> Result<_, CommandError> {
+    let (mut result, camera, part, tiles) = pool.install(|| -> Result<_, CommandError> {
         let preparing = Instant::now();
         let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
         phases.prepare = preparing.elapsed().as_secs_f64();
+        let part = split.resolve(&context, &Whitted)?;
+        let tiles = part.tiles(options.width, options.height);
         let bar = progress_bar(args.quiet, tiles.len());
         let progress = |done: usize, _total: usize| bar.set_position(done as u64);
         let control = RenderControl {
             progress: Some(&progress),
             cancel: Some(&INTERRUPTED),
             skip: earlier.as_ref().map(|(_, finished)| finished.as_slice()),
+            part: Some(&part),
         };
         let result = render::render(&context, &Whitted, &control);
         bar.finish_and_clear();
         let result = result.map_err(crate::cli::render_failed)?;
-        Ok((result, context.camera))
+        Ok((result, context.camera, part, tiles))
     })?;
 
     // Tiles an earlier run finished come from its file.
@@ -355,6 +371,22 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         TILES_DONE_ATTRIBUTE.to_string(),
         encode_tiles(&result.finished_tiles),
     );
+    if part.region != render::part::RenderPart::whole(&options).region {
+        attributes.window = Some(film::partial::ImageWindow {
+            x0: part.region.x0,
+            y0: part.region.y0,
+            full_width: options.width,
+            full_height: options.height,
+        });
+    }
+    attributes.strings.insert(
+        film::partial::SAMPLES_ATTRIBUTE.to_string(),
+        film::partial::format_sample_range(&part.samples),
+    );
+    attributes.strings.insert(
+        film::partial::SAMPLE_WEIGHT_ATTRIBUTE.to_string(),
+        part.samples.len().to_string(),
+    );
     for (name, value) in signature.attributes() {
         attributes
             .strings
@@ -389,7 +421,12 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     }
     let writing = Instant::now();
     film::stage_exr(&mut set, &result.film, &outputs.exr, &attributes).map_err(written)?;
-    if let Some(png_path) = &outputs.png {
+    let png = if split.is_partial(&options) {
+        None
+    } else {
+        outputs.png.as_ref()
+    };
+    if let Some(png_path) = png {
         film::stage_png(&mut set, &result.film, png_path, tonemap, exposure).map_err(written)?;
     }
     // The statistics file cannot time its own writing: "write" is the images'.
@@ -409,11 +446,120 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     let mut line = result.stats.summary_line();
     line.push_str(&format!("; wrote {}", outputs.exr.display()));
-    if let Some(png_path) = &outputs.png {
+    if let Some(png_path) = png {
         line.push_str(&format!(" and {}", png_path.display()));
     }
     println!("{line}");
     Ok(())
+}
+
+/// The part of the image and samples the command line asks for, before the scene is
+/// prepared (`--part` needs the prepared scene for its cost estimate).
+pub enum RequestedSplit {
+    /// `--region` and/or `--samples` (each defaulting to the whole).
+    Fixed(render::part::RenderPart),
+    /// `--part i/N`, with `--samples` (or all samples).
+    Balanced {
+        index: u32,
+        count: u32,
+        samples: std::ops::Range<u32>,
+    },
+}
+
+impl RequestedSplit {
+    /// True unless the whole image and every sample are rendered.
+    pub fn is_partial(&self, options: &RenderOptions) -> bool {
+        match self {
+            RequestedSplit::Fixed(part) => *part != render::part::RenderPart::whole(options),
+            RequestedSplit::Balanced { count, .. } => *count > 1 || self.samples_partial(options),
+        }
+    }
+
+    fn samples_partial(&self, options: &RenderOptions) -> bool {
+        let samples = match self {
+            RequestedSplit::Fixed(part) => &part.samples,
+            RequestedSplit::Balanced { samples, .. } => samples,
+        };
+        *samples != (0..options.spp.max(1))
+    }
+
+    /// The part to render, estimating the cost of the image for `--part`.
+    pub fn resolve(
+        &self,
+        context: &render::RenderContext,
+        integrator: &impl render::Integrator,
+    ) -> Result<render::part::RenderPart, CommandError> {
+        match self {
+            RequestedSplit::Fixed(part) => Ok(part.clone()),
+            RequestedSplit::Balanced {
+                index,
+                count,
+                samples,
+            } => {
+                let options = &context.options;
+                let costs = render::part::estimate_tile_row_costs(context, integrator);
+                let region = render::part::balanced_strip(
+                    &costs,
+                    *index,
+                    *count,
+                    options.width,
+                    options.height,
+                )
+                .map_err(|e| CommandError::bad_input(e.to_string()))?;
+                Ok(render::part::RenderPart {
+                    region,
+                    samples: samples.clone(),
+                })
+            }
+        }
+    }
+}
+
+/// `--region`, `--samples` and `--part` checked against the image size and samples.
+fn requested_split(
+    args: &RenderArgs,
+    options: &RenderOptions,
+) -> Result<RequestedSplit, CommandError> {
+    let whole = render::part::RenderPart::whole(options);
+    let samples = match &args.samples {
+        Some(text) => film::partial::parse_sample_range(text, options.spp.max(1))
+            .map_err(CommandError::bad_input)?,
+        None => whole.samples.clone(),
+    };
+    let split = if let Some(text) = &args.part {
+        let (index, count) =
+            render::part::parse_part(text).map_err(|e| CommandError::bad_input(e.to_string()))?;
+        RequestedSplit::Balanced {
+            index,
+            count,
+            samples,
+        }
+    } else {
+        let region = match &args.region {
+            Some(text) => film::partial::parse_region(
+                text,
+                options.width,
+                options.height,
+                render::WORK_TILE_SIZE,
+            )
+            .map_err(CommandError::bad_input)?,
+            None => whole.region,
+        };
+        RequestedSplit::Fixed(render::part::RenderPart { region, samples })
+    };
+    if split.is_partial(options) {
+        if args.resume {
+            return Err(CommandError::bad_input(
+                "--resume continues whole renders only; rerun a failed part from the start",
+            ));
+        }
+        if args.png.is_some() {
+            return Err(CommandError::bad_input(
+                "--png: a partial render (--region, --samples, --part) writes only its EXR",
+            ));
+        }
+    }
+    Ok(split)
 }
 
 /// Decodes the scene's textures one by one, showing which one while large files load, and

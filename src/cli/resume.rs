@@ -38,6 +38,12 @@ const INPUT_PREFIX: &str = "conetrace.input.";
 /// The renderer version item.
 const VERSION_ATTRIBUTE: &str = "conetrace.version";
 
+/// True for the header attributes that make up a render's signature (see the module doc):
+/// `conetrace merge` requires them equal in every part.
+pub fn is_signature_attribute(name: &str) -> bool {
+    name.starts_with(OPTION_PREFIX) || name.starts_with(INPUT_PREFIX) || name == VERSION_ATTRIBUTE
+}
+
 /// Finished tiles as hexadecimal digits, four tiles per digit (tile `4k + b` is bit `b` of
 /// digit `k`), so a 4K image's 32,400 tiles take 8,100 characters.
 pub fn encode_tiles(finished: &[bool]) -> String {

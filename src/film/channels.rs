@@ -28,11 +28,15 @@ pub enum Layer {
     Lod,
     /// Footprint size (e.g. ray-cone width) at the first hit: `footprint`.
     Footprint,
+    /// The exact fixed-point sums of a partial render's samples (`super::sample_sum`): six
+    /// 24-bit digits per colour channel, `sum.R.0` (least significant) to `sum.B.5`. Only
+    /// renders of a sample range write it; `conetrace merge` consumes and removes it.
+    SampleSum,
 }
 
 impl Layer {
     /// Number of distinct layers.
-    pub const COUNT: usize = 9;
+    pub const COUNT: usize = 10;
 
     /// Every layer, in the canonical order used for channel listings.
     pub const ALL: [Layer; Layer::COUNT] = [
@@ -45,6 +49,7 @@ impl Layer {
         Layer::TexColor,
         Layer::Lod,
         Layer::Footprint,
+        Layer::SampleSum,
     ];
 
     /// The layer's channel names in storage order.
@@ -61,6 +66,11 @@ impl Layer {
             Layer::TexColor => &["texcolor.R", "texcolor.G", "texcolor.B", "texcolor.A"],
             Layer::Lod => &["lod"],
             Layer::Footprint => &["footprint"],
+            Layer::SampleSum => &[
+                "sum.R.0", "sum.R.1", "sum.R.2", "sum.R.3", "sum.R.4", "sum.R.5", "sum.G.0",
+                "sum.G.1", "sum.G.2", "sum.G.3", "sum.G.4", "sum.G.5", "sum.B.0", "sum.B.1",
+                "sum.B.2", "sum.B.3", "sum.B.4", "sum.B.5",
+            ],
         }
     }
 
@@ -92,6 +102,6 @@ mod tests {
         names.sort_unstable();
         names.dedup();
         assert_eq!(names.len(), count);
-        assert_eq!(count, 4 + 1 + 3 + 3 + 2 + 6 + 4 + 1 + 1);
+        assert_eq!(count, 4 + 1 + 3 + 3 + 2 + 6 + 4 + 1 + 1 + 18);
     }
 }

@@ -99,6 +99,42 @@ pub fn read_exr(path: &Path) -> Result<(Film, ExrAttributes), OutputError> {
             .map(|t| t.to_string()),
         ..Default::default()
     };
+    // A data window that is not the whole display window: a region of a larger image.
+    let display = &image.attributes.display_window;
+    let position = layer.attributes.layer_position;
+    if display.position != exr::math::Vec2(0, 0) {
+        return Err(OutputError::invalid(
+            path,
+            "the display window does not start at (0, 0)",
+        ));
+    }
+    if position != exr::math::Vec2(0, 0)
+        || (display.size.0, display.size.1) != (width as usize, height as usize)
+    {
+        let window = super::partial::ImageWindow {
+            x0: u32::try_from(position.0)
+                .map_err(|_| OutputError::invalid(path, "the data window starts left of 0"))?,
+            y0: u32::try_from(position.1)
+                .map_err(|_| OutputError::invalid(path, "the data window starts above 0"))?,
+            full_width: u32::try_from(display.size.0)
+                .map_err(|_| OutputError::invalid(path, "the display window is too large"))?,
+            full_height: u32::try_from(display.size.1)
+                .map_err(|_| OutputError::invalid(path, "the display window is too large"))?,
+        };
+        window
+            .check_fits(width, height)
+            .map_err(|problem| OutputError::invalid(path, problem))?;
+        attributes.window = Some(window);
+    }
+    let unflatten = |m: &[f32; 16]| -> [[f32; 4]; 4] {
+        std::array::from_fn(|row| std::array::from_fn(|col| m[row * 4 + col]))
+    };
+    attributes.world_to_camera = layer.attributes.world_to_camera.as_ref().map(unflatten);
+    attributes.world_to_ndc = layer
+        .attributes
+        .world_to_normalized_device
+        .as_ref()
+        .map(unflatten);
     let others = layer
         .attributes
         .other

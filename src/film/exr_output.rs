@@ -48,6 +48,10 @@ pub struct ExrAttributes {
     /// normalized device coordinates in [0, 1] with (0, 0) at the image's top-left corner,
     /// as OpenImageIO defines them.
     pub world_to_ndc: Option<[[f32; 4]; 4]>,
+    /// Where the film sits in a larger image: the data window's top-left corner and the
+    /// display window's size (the whole image), for a render of one region
+    /// (`super::region`). `None`: the film is the whole image, at the origin.
+    pub window: Option<super::partial::ImageWindow>,
 }
 
 /// Names of the standard camera-matrix attributes.
@@ -144,13 +148,28 @@ pub fn stage_exr(
         );
     }
 
+    if let Some(window) = &attributes.window {
+        window
+            .check_fits(film.width(), film.height())
+            .map_err(|problem| OutputError::invalid(path, problem))?;
+    }
     let layer = exr::prelude::Layer::new(
         (film.width() as usize, film.height() as usize),
         layer_attributes,
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(channels.into()),
     );
-    let image = Image::from_layer(layer);
+    let mut layer = layer;
+    if let Some(window) = &attributes.window {
+        layer.attributes.layer_position = exr::math::Vec2(window.x0 as i32, window.y0 as i32);
+    }
+    let mut image = Image::from_layer(layer);
+    if let Some(window) = &attributes.window {
+        image.attributes.display_window = exr::meta::attribute::IntegerBounds::new(
+            (0, 0),
+            (window.full_width as usize, window.full_height as usize),
+        );
+    }
     set.stage(path, |writer| {
         image
             .write()

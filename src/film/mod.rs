@@ -31,6 +31,9 @@
 //!
 //! An integrator fills a [`TileImage`] per work tile with colour and the AOVs an
 //! [`AovSelection`] asks for; the render copies it into the film.
+//! A render split across machines writes partial films: a region of the image placed by the
+//! EXR's data and display windows, or a range of samples with their exact sums
+//! ([`partial`], [`sample_sum`]).
 //!
 //! The film does not know about cameras, sampling or shading: it stores what it is given.
 
@@ -42,8 +45,10 @@ pub mod exr_input;
 pub mod exr_output;
 #[allow(clippy::module_inception)]
 pub mod film;
+pub mod partial;
 pub mod png_output;
 pub mod regions;
+pub mod sample_sum;
 pub mod tile_image;
 
 pub use atomic_file::OutputSet;

@@ -88,6 +88,12 @@ impl FilmRegion<'_> {
         self.rect
     }
 
+    /// Whether the film has `layer`.
+    #[inline]
+    pub fn has(&self, layer: Layer) -> bool {
+        self.layout.first_channel(layer).is_some()
+    }
+
     /// Writes one pixel of `layer` at image coordinates `(x, y)`; the rules of
     /// [`super::Film::set`] (absent layers and pixels outside the region are ignored).
     #[inline]

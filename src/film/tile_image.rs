@@ -31,8 +31,15 @@ pub struct AovSelection {
 /// AOVs describe the first camera sample of each pixel (the pixel centre at 1 spp).
 #[derive(Clone, Debug, Default)]
 pub struct TileImage {
-    /// Linear RGB radiance, averaged over samples.
+    /// Which sample indices of each pixel to render; `None`: all of the render's samples.
+    /// Set by the render loop for a render of a sample range.
+    pub samples: Option<std::ops::Range<u32>>,
+    /// Linear RGB radiance: while a sample is traced, that sample's radiance; when the tile
+    /// is done, the mean over the samples rendered (`film::sample_sum::mean_of_sum`).
     pub color: Vec<[f32; 3]>,
+    /// Exact fixed-point sums of each pixel's sample radiances (`film::sample_sum`), in the
+    /// same grouping-free form whatever range of samples the tile covers.
+    pub color_sum: Vec<[i128; 3]>,
     /// 1 for a rendered pixel (the environment is part of the image).
     pub alpha: Vec<f32>,
     /// Camera-space depth of the first hit (f32::MAX where the camera ray missed).
@@ -58,7 +65,9 @@ impl TileImage {
         let n = tile.area();
         let take = |on: bool| if on { n } else { 0 };
         TileImage {
+            samples: None,
             color: vec![[0.0; 3]; n],
+            color_sum: vec![[0; 3]; n],
             alpha: vec![0.0; n],
             depth: vec![f32::MAX; take(aovs.surface)],
             normal: vec![[0.0; 3]; take(aovs.surface)],

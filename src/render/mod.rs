@@ -5,12 +5,15 @@
 //! [`Integrator`] (e.g. Whitted's, from `crate::integrator`) on rayon workers (each with the
 //! flush-to-zero/denormals-are-zero bits Embree asks for) -> a [`RenderResult`] holding
 //! the film and the statistics. Writing files is the caller's business (`crate::film`).
+//! A render may cover one part of the image and of the samples ([`part::RenderPart`], for
+//! renders split across machines); its film then holds that region only.
 
 pub mod context;
 pub mod effects;
 pub mod external_textures;
 pub mod integrator;
 pub mod memory;
+pub mod part;
 pub mod patch_geometry;
 pub mod prepared;
 pub mod stats;
@@ -154,6 +157,9 @@ pub struct RenderControl<'a> {
     pub cancel: Option<&'a AtomicBool>,
     /// Tiles already finished by an earlier run (`--resume`): skipped.
     pub skip: Option<&'a [bool]>,
+    /// Render only this region and range of samples (`--region`, `--samples`, `--part`);
+    /// the film then covers the region only (see [`part::RenderPart`]).
+    pub part: Option<&'a part::RenderPart>,
 }
 
 impl Default for RenderControl<'_> {
@@ -162,6 +168,7 @@ impl Default for RenderControl<'_> {
             progress: None,
             cancel: None,
             skip: None,
+            part: None,
         }
     }
 }
@@ -192,12 +199,19 @@ pub fn render<I: Integrator>(
     // A failure left over from an earlier render of this context is not this render's.
     let _ = context.tracer.take_failure();
     let options = &context.options;
-    let tiles = work_tiles(options.width, options.height);
-    let mut film = Film::try_new(options.width, options.height, &film_layers(options.aovs))
-        .map_err(|message| RenderError::OutOfMemory {
-            scene: context.scene.source.clone(),
-            message,
-        })?;
+    let whole = part::RenderPart::whole(options);
+    let part = control.part.unwrap_or(&whole);
+    let tiles = part.tiles(options.width, options.height);
+    let sample_range = part.is_sample_range(options).then(|| part.samples.clone());
+    let mut film = Film::try_new(
+        part.region.width,
+        part.region.height,
+        &part.film_layers(options),
+    )
+    .map_err(|message| RenderError::OutOfMemory {
+        scene: context.scene.source.clone(),
+        message,
+    })?;
     let finished_count = AtomicUsize::new(0);
     let count_texture_tiles = options.count_texture_tiles;
     let start = Instant::now();
@@ -214,7 +228,10 @@ pub fn render<I: Integrator>(
             Vec::new()
         },
     };
-    let tiles_per_row = options.width.div_ceil(WORK_TILE_SIZE) as usize;
+    // The film covers the part's region, whose edges lie on the work-tile grid: its bands
+    // and columns are the part's work tiles, moved to the region's origin.
+    let origin = (part.region.x0, part.region.y0);
+    let tiles_per_row = part.region.width.div_ceil(WORK_TILE_SIZE) as usize;
     // Each worker writes its finished tiles straight into its own region of the film and
     // keeps its counters to itself; the workers' states are merged once at the end. Bands
     // are cut into regions only when a worker reaches them.
@@ -236,7 +253,10 @@ pub fn render<I: Integrator>(
             |(mut worker, mut state, mut finished): (WorkerState, I::ThreadState, Vec<usize>),
              (index, mut region)| {
                 let tile = tiles[index];
-                debug_assert_eq!(region.rect(), tile);
+                debug_assert_eq!(
+                    (region.rect().x0 + origin.0, region.rect().y0 + origin.1),
+                    (tile.x0, tile.y0)
+                );
                 let skipped = control
                     .skip
                     .is_some_and(|skip| skip.get(index) == Some(&true));
@@ -244,6 +264,7 @@ pub fn render<I: Integrator>(
                     || context.tracer.failed();
                 if !skipped && !stopped {
                     let mut image = TileImage::new(tile, options.aovs);
+                    image.samples = sample_range.clone();
                     integrator.render_tile(context, tile, &mut image, &mut worker, &mut state);
                     copy_tile_to_film(&image, &mut region);
                     finished.push(index);
@@ -336,10 +357,19 @@ pub fn render<I: Integrator>(
 /// Copy an integrator's tile into its region of the film, layer by layer.
 fn copy_tile_to_film(image: &TileImage, region: &mut FilmRegion) {
     let rect = region.rect();
+    let sums = region.has(Layer::SampleSum);
     for y in 0..rect.height {
         for x in 0..rect.width {
             let i = (y * rect.width + x) as usize;
             let (fx, fy) = (rect.x0 + x, rect.y0 + y);
+            if sums {
+                use crate::film::sample_sum::{encode, DIGITS};
+                let mut digits = [0.0f32; 3 * DIGITS];
+                for (chunk, &sum) in digits.chunks_exact_mut(DIGITS).zip(&image.color_sum[i]) {
+                    chunk.copy_from_slice(&encode(sum));
+                }
+                region.set(Layer::SampleSum, fx, fy, &digits);
+            }
             let c = image.color[i];
             let a = image.alpha[i];
             region.set(Layer::Color, fx, fy, &[c[0], c[1], c[2], a]);

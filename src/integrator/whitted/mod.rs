@@ -34,6 +34,7 @@ mod surface;
 
 use glam::Vec3;
 
+use crate::film::sample_sum;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
 use crate::render::context::{RenderContext, WorkerState};
@@ -103,7 +104,9 @@ impl Integrator for Whitted {
         let options = &context.options;
         let spp = options.spp.max(1);
         let image_width = options.width;
-        for sample in 0..spp {
+        let samples = image.samples.clone().unwrap_or(0..spp);
+        let sample_count = samples.len() as u32;
+        for sample in samples {
             generate_camera_rays(context, tile, sample, image_width, &mut waves.current);
             worker
                 .counters
@@ -115,12 +118,15 @@ impl Integrator for Whitted {
                 std::mem::swap(&mut waves.current, &mut waves.next);
                 waves.next.clear();
             }
-        }
-        let scale = 1.0 / spp as f32;
-        for c in image.color.iter_mut() {
-            for v in c.iter_mut() {
-                *v *= scale;
+            // This sample's radiance joins the exact sums (`film::sample_sum`): any split of
+            // the samples into ranges then adds up to the same bits.
+            for (sum, color) in image.color_sum.iter_mut().zip(image.color.iter_mut()) {
+                sample_sum::add_sample(sum, *color);
+                *color = [0.0; 3];
             }
+        }
+        for (color, sum) in image.color.iter_mut().zip(&image.color_sum) {
+            *color = sum.map(|s| sample_sum::mean_of_sum(s, sample_count));
         }
         // The background is rendered too: a finished pixel is opaque. (Alpha 0 marks pixels
         // an interrupted render did not reach.)

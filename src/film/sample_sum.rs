@@ -1,0 +1,158 @@
+//! Exact, order-independent sums of a pixel's samples, so that a render split by sample
+//! ranges and merged equals a single render bit for bit.
+//!
+//! Floating-point addition is not associative: `(a + b) + c` and `a + (b + c)` may differ
+//! in the last bit, so summing samples 0..4 and 4..8 separately and adding the two sums
+//! would not reproduce a sequential sum over 0..8. Instead, every sample's radiance (one
+//! `f32` per colour channel) is converted to a signed fixed-point integer and the integers
+//! are added in `i128`. Integer addition is associative and commutative, so any split of the
+//! sample indices, in any order, gives the same sum; the single-machine render accumulates
+//! the same way, and the pixel's final value is one rounding of that exact sum
+//! ([`mean_of_sum`]).
+//!
+//! The fixed-point scale, and why the sum never overflows:
+//! - a sample value `v` becomes `round(v * 2^FRACTION_BITS)` with `FRACTION_BITS = 64`:
+//!   every `f32` of magnitude at least `2^-40` converts exactly (its last mantissa bit is
+//!   worth at least `2^-64`), smaller ones are rounded to a multiple of `2^-64` (`5.4e-20`);
+//! - values are clamped to `|v| <= 2^31` first (radiance beyond two billion is not light a
+//!   camera records), and NaN counts as 0, so one sample is at most `2^95` in magnitude;
+//! - a pixel has fewer than `2^32` samples (`spp` is a `u32`), so the sum stays below
+//!   `2^127`, inside `i128`: no addition can overflow, none saturates, and the sum is exact.
+//!
+//! A partial render over a sample range stores the exact sums in the film's
+//! [`Layer::SampleSum`](super::Layer::SampleSum) channels, each `i128` as six 24-bit
+//! digits in `f32` channels (every integer below `2^24` is an exact `f32`), which
+//! `conetrace merge` adds up and removes.
+
+/// Binary digits after the point of the fixed-point sample values.
+pub const FRACTION_BITS: i32 = 64;
+/// Sample values are clamped to this magnitude before conversion (`2^31`).
+pub const MAX_SAMPLE_MAGNITUDE: f64 = 2_147_483_648.0;
+/// Bits per stored digit of an encoded sum: integers below `2^24` are exact in `f32`.
+const DIGIT_BITS: u32 = 24;
+/// Digits per encoded sum: `6 * 24 = 144 >= 128` bits.
+pub const DIGITS: usize = 6;
+
+/// One sample's value as a fixed-point integer (see the module doc for the scale).
+#[inline]
+pub fn to_fixed(value: f32) -> i128 {
+    let clamped = (value as f64).clamp(-MAX_SAMPLE_MAGNITUDE, MAX_SAMPLE_MAGNITUDE);
+    // Multiplying by a power of two is exact; `round` then rounds half away from zero, and
+    // `as` maps NaN (which `clamp` passes through) to 0.
+    (clamped * 2f64.powi(FRACTION_BITS)).round() as i128
+}
+
+/// The mean of `count` samples whose fixed-point values add up to `sum`, as the pixel's
+/// final `f32`. A pure function of (`sum`, `count`), so equal sums give equal pixels.
+#[inline]
+pub fn mean_of_sum(sum: i128, count: u32) -> f32 {
+    if count == 0 {
+        return 0.0;
+    }
+    // `sum as f64` and the division round once each; the power of two is exact.
+    ((sum as f64 / count as f64) * 2f64.powi(-FRACTION_BITS)) as f32
+}
+
+/// Adds one sample's RGB to a pixel's fixed-point sum.
+#[inline]
+pub fn add_sample(sum: &mut [i128; 3], rgb: [f32; 3]) {
+    for (s, v) in sum.iter_mut().zip(rgb) {
+        // Cannot overflow: see the module doc.
+        *s += to_fixed(v);
+    }
+}
+
+/// A sum as six exact `f32` digits, least significant first (two's complement bits of the
+/// `i128`, 24 per digit, the last digit holding the top 8).
+pub fn encode(sum: i128) -> [f32; DIGITS] {
+    let bits = sum as u128;
+    std::array::from_fn(|d| ((bits >> (d as u32 * DIGIT_BITS)) & ((1 << DIGIT_BITS) - 1)) as f32)
+}
+
+/// The inverse of [`encode`]; `None` when a digit is not an integer in `0 .. 2^24` or the
+/// top digit has bits beyond the 128th (a damaged or foreign channel).
+pub fn decode(digits: &[f32; DIGITS]) -> Option<i128> {
+    let mut bits: u128 = 0;
+    for (d, &value) in digits.iter().enumerate() {
+        let limit = if d == DIGITS - 1 {
+            (1u32 << (128 - DIGIT_BITS * (DIGITS as u32 - 1))) as f32
+        } else {
+            (1u32 << DIGIT_BITS) as f32
+        };
+        if !(value >= 0.0 && value < limit && value.fract() == 0.0) {
+            return None;
+        }
+        bits |= (value as u128) << (d as u32 * DIGIT_BITS);
+    }
+    Some(bits as i128)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_split_of_the_samples_sums_to_the_same_bits() {
+        // Values whose float sums depend on the grouping.
+        let samples: Vec<f32> = (0..64)
+            .map(|i| {
+                ((i * 7919 % 1000) as f32 * 0.001 + 1e-3).powi(3)
+                    * if i % 5 == 0 { 1e4 } else { 1.0 }
+            })
+            .collect();
+        let whole: i128 = samples.iter().map(|&v| to_fixed(v)).sum();
+        let mut float_results = std::collections::HashSet::new();
+        for split in [1, 3, 16, 31, 63] {
+            let (a, b) = samples.split_at(split);
+            let sa: i128 = a.iter().map(|&v| to_fixed(v)).sum();
+            let sb: i128 = b.iter().map(|&v| to_fixed(v)).sum();
+            assert_eq!(sa + sb, whole, "split at {split}");
+            let fa: f32 = a.iter().sum();
+            let fb: f32 = b.iter().sum();
+            float_results.insert((fa + fb).to_bits());
+        }
+        // The premise: plain float sums of the same split do disagree.
+        assert!(float_results.len() > 1, "{float_results:?}");
+        assert_eq!(
+            mean_of_sum(whole, 64),
+            ((whole as f64 / 64.0) * 2f64.powi(-64)) as f32
+        );
+    }
+
+    #[test]
+    fn one_sample_round_trips_exactly() {
+        for v in [0.0f32, 1.0, 0.1, 3.5e-12, 1234.567, -0.25, 2.0e9] {
+            assert_eq!(mean_of_sum(to_fixed(v), 1).to_bits(), v.to_bits(), "{v}");
+        }
+        assert_eq!(to_fixed(f32::NAN), 0);
+        assert_eq!(to_fixed(f32::INFINITY), to_fixed(2_147_483_648.0));
+        // The largest possible sum still fits.
+        let max = to_fixed(f32::MAX);
+        assert!(max.checked_mul(i128::from(u32::MAX)).is_some());
+    }
+
+    #[test]
+    fn encoded_sums_decode_to_the_same_integer() {
+        for sum in [
+            0i128,
+            1,
+            -1,
+            i128::MAX,
+            i128::MIN,
+            123_456_789_012_345_678_901_234,
+            -98_765_432_109_876_543_210,
+        ] {
+            let digits = encode(sum);
+            assert!(digits.iter().all(|d| d.fract() == 0.0 && *d >= 0.0));
+            assert_eq!(decode(&digits), Some(sum), "{sum}");
+        }
+        let mut bad = encode(5);
+        bad[2] = 0.5;
+        assert_eq!(decode(&bad), None);
+        bad[2] = 16_777_216.0;
+        assert_eq!(decode(&bad), None);
+        let mut top = encode(0);
+        top[5] = 256.0;
+        assert_eq!(decode(&top), None);
+    }
+}
