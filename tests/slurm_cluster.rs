@@ -48,6 +48,18 @@ fn program(name: &str) -> PathBuf {
     panic!("{name} is not installed: Slurm cannot run here (run scripts/setup.sh, which installs Debian's slurm-wlm and munge)");
 }
 
+/// Whether this root has cgroup file systems mounted under /sys/fs/cgroup, as a booted
+/// machine has (a chroot usually has no /sys at all).
+fn cgroups_mounted() -> bool {
+    fs::read_to_string("/proc/self/mountinfo").is_ok_and(|mounts| {
+        mounts.lines().any(|line| {
+            line.split_whitespace()
+                .nth(4)
+                .is_some_and(|mount_point| mount_point.starts_with("/sys/fs/cgroup"))
+        })
+    })
+}
+
 fn free_port() -> u16 {
     std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())
@@ -137,10 +149,30 @@ PartitionName=main Nodes=localhost Default=YES MaxTime=INFINITE State=UP
             "slurmctld",
             Command::new(program("slurmctld")).args(["-D", "-f", &conf_arg]),
         );
-        cluster.spawn(
-            "slurmd",
-            Command::new(program("slurmd")).args(["-D", "-N", "localhost", "-f", &conf_arg]),
-        );
+        let slurmd = program("slurmd");
+        let slurmd_args = ["-D", "-N", "localhost", "-f", &conf_arg];
+        if cgroups_mounted() {
+            cluster.spawn("slurmd", Command::new(&slurmd).args(slurmd_args));
+        } else {
+            // A root without /sys (a chroot): slurmd 22.05 always loads a cgroup plugin and
+            // reads the CPU topology from sysfs. Give it both in a mount namespace of its own
+            // (nothing is mounted outside it, and it vanishes with slurmd): sysfs, and a
+            // cgroup v1 root with the freezer hierarchy where the kernel offers one.
+            cluster.spawn(
+                "slurmd",
+                Command::new(program("unshare"))
+                    .args(["--mount", "--propagation", "private", "--", "sh", "-c"])
+                    .arg(
+                        "mount -t sysfs sysfs /sys && \
+                         mount -t tmpfs cgroup_root /sys/fs/cgroup && \
+                         mkdir /sys/fs/cgroup/freezer && \
+                         { mount -t cgroup -o freezer freezer /sys/fs/cgroup/freezer || true; } && \
+                         exec \"$0\" \"$@\"",
+                    )
+                    .arg(&slurmd)
+                    .args(slurmd_args),
+            );
+        }
         let conf = cluster.conf.clone();
         cluster.wait_for("the node to be idle", || {
             let out = Command::new(program("sinfo"))
