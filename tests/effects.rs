@@ -227,27 +227,15 @@ fn shipped_scenes() -> Vec<std::path::PathBuf> {
 /// Prepare `path` at 48x32 with the scene's own depth and the renderer's default filtering.
 fn prepare_small(path: &std::path::Path) -> conetrace::render::RenderContext {
     use conetrace::film::AovSelection;
-    use conetrace::footprint::LodStrategy;
     use conetrace::render::RenderOptions;
-    use conetrace::texture::FilterOptions;
     let scene = conetrace::scene::load::load_scene(path).unwrap();
     let options = RenderOptions {
         width: 48,
         height: 32,
         spp: 1,
-        max_depth: scene.settings.max_depth,
-        min_throughput: scene.settings.min_throughput,
-        lod: LodStrategy::Cone,
-        filter: FilterOptions::default(),
-        fresnel: scene.settings.fresnel,
-        aovs: AovSelection {
-            surface: true,
-            texture_footprint: true,
-            lod: true,
-        },
-        count_texture_tiles: false,
-        all_effects: false,
+        aovs: AovSelection::ALL,
         seed: 0,
+        ..RenderOptions::from_settings(&scene.settings)
     };
     conetrace::render::prepare(std::sync::Arc::new(scene), options).unwrap()
 }

@@ -11,31 +11,23 @@ mod common;
 use std::path::Path;
 use std::sync::Arc;
 
-use conetrace::film::AovSelection;
 use conetrace::footprint::{curvature_at, LodStrategy, RayCone, RayDifferential};
 use conetrace::render::prepared::{SurfaceDetail, SurfaceLookup};
 use conetrace::render::stats::WorkCounters;
 use conetrace::render::tracer::{TraceRay, Tracer};
 use conetrace::render::RenderOptions;
 use conetrace::scene::load::load_toml_str;
-use conetrace::scene::FresnelMode;
-use conetrace::texture::FilterOptions;
+use conetrace::scene::RenderSettings;
 use glam::Vec3;
 
 fn options() -> RenderOptions {
     RenderOptions {
         width: 16,
         height: 16,
-        spp: 1,
         max_depth: 0,
         min_throughput: 0.0,
         lod: LodStrategy::Mip0,
-        filter: FilterOptions::default(),
-        fresnel: FresnelMode::Exact,
-        aovs: AovSelection::default(),
-        count_texture_tiles: false,
-        seed: 0,
-        all_effects: false,
+        ..RenderOptions::from_settings(&RenderSettings::default())
     }
 }
 

@@ -9,7 +9,6 @@ use std::path::Path;
 use std::sync::Arc;
 
 use common::Rng;
-use conetrace::film::AovSelection;
 use conetrace::footprint::LodStrategy;
 use conetrace::render::prepared::{GeometryRef, SurfaceDetail, SurfaceLookup};
 use conetrace::render::stats::WorkCounters;
@@ -17,24 +16,18 @@ use conetrace::render::tracer::{TraceHit, TraceRay, Tracer};
 use conetrace::render::RenderOptions;
 use conetrace::scene::load::load_toml_str;
 use conetrace::scene::patch::BezierPatch;
-use conetrace::scene::{FresnelMode, SceneDescription};
-use conetrace::texture::FilterOptions;
+use conetrace::scene::RenderSettings;
+use conetrace::scene::SceneDescription;
 use glam::Vec3;
 
 fn options() -> RenderOptions {
     RenderOptions {
         width: 16,
         height: 16,
-        spp: 1,
         max_depth: 0,
         min_throughput: 0.0,
         lod: LodStrategy::Mip0,
-        filter: FilterOptions::default(),
-        fresnel: FresnelMode::Exact,
-        aovs: AovSelection::default(),
-        count_texture_tiles: false,
-        seed: 0,
-        all_effects: false,
+        ..RenderOptions::from_settings(&RenderSettings::default())
     }
 }
 

@@ -8,10 +8,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use conetrace::film::AovSelection;
-use conetrace::footprint::LodStrategy;
 use conetrace::integrator::Whitted;
 use conetrace::render::{self, RenderControl, RenderOptions, RenderResult};
-use conetrace::texture::FilterOptions;
 
 fn shipped_scenes() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
@@ -38,19 +36,10 @@ fn render_on(path: &Path, threads: usize) -> RenderResult {
             width: 72,
             height: 40,
             spp: 2,
-            max_depth: scene.settings.max_depth,
-            min_throughput: scene.settings.min_throughput,
-            lod: LodStrategy::Cone,
-            filter: FilterOptions::default(),
-            fresnel: scene.settings.fresnel,
-            aovs: AovSelection {
-                surface: true,
-                texture_footprint: true,
-                lod: true,
-            },
+            aovs: AovSelection::ALL,
             count_texture_tiles: true,
-            all_effects: false,
             seed: 0,
+            ..RenderOptions::from_settings(&scene.settings)
         };
         let context = render::prepare(Arc::new(scene), options).expect("scene prepares");
         render::render(&context, &Whitted, &RenderControl::default()).expect("render succeeds")

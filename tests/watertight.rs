@@ -9,13 +9,12 @@ mod common;
 use std::sync::Arc;
 
 use common::*;
-use conetrace::film::AovSelection;
 use conetrace::footprint::LodStrategy;
 use conetrace::render::stats::WorkCounters;
 use conetrace::render::tracer::{TraceHit, TraceRay, Tracer};
 use conetrace::render::RenderOptions;
-use conetrace::scene::{FresnelMode, Material, SceneDescription, TriangleMesh};
-use conetrace::texture::FilterOptions;
+use conetrace::scene::RenderSettings;
+use conetrace::scene::{Material, SceneDescription, TriangleMesh};
 use glam::{Affine3A, Quat, Vec3};
 
 /// Cells per side of the test grid: (CELLS + 1)^2 vertices, 2 CELLS^2 triangles.
@@ -115,16 +114,10 @@ fn options() -> RenderOptions {
     RenderOptions {
         width: 16,
         height: 16,
-        spp: 1,
         max_depth: 0,
         min_throughput: 0.0,
         lod: LodStrategy::Mip0,
-        filter: FilterOptions::default(),
-        fresnel: FresnelMode::Exact,
-        aovs: AovSelection::default(),
-        count_texture_tiles: false,
-        all_effects: false,
-        seed: 0,
+        ..RenderOptions::from_settings(&RenderSettings::default())
     }
 }
 

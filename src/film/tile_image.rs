@@ -27,6 +27,15 @@ pub struct AovSelection {
     pub lod: bool,
 }
 
+impl AovSelection {
+    /// Every AOV.
+    pub const ALL: AovSelection = AovSelection {
+        surface: true,
+        texture_footprint: true,
+        lod: true,
+    };
+}
+
 /// Per-pixel values of a tile; AOVs are empty vectors when not selected.
 /// AOVs describe the first camera sample of each pixel (the pixel centre at 1 spp).
 #[derive(Clone, Debug, Default)]

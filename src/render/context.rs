@@ -37,6 +37,27 @@ pub struct RenderOptions {
     pub seed: u32,
 }
 
+impl RenderOptions {
+    /// A scene's own settings (size, samples, depth, throughput cut-off, Fresnel mode, seed),
+    /// with cone footprints, the default filter, no AOVs, and nothing counted or forced.
+    pub fn from_settings(settings: &crate::scene::RenderSettings) -> RenderOptions {
+        RenderOptions {
+            width: settings.width,
+            height: settings.height,
+            spp: settings.spp,
+            max_depth: settings.max_depth,
+            min_throughput: settings.min_throughput,
+            lod: LodStrategy::Cone,
+            filter: FilterOptions::default(),
+            fresnel: settings.fresnel,
+            aovs: AovSelection::default(),
+            count_texture_tiles: false,
+            all_effects: false,
+            seed: settings.seed,
+        }
+    }
+}
+
 /// The shared, read-only state of one render.
 pub struct RenderContext {
     pub scene: Arc<SceneDescription>,

@@ -195,20 +195,10 @@ mod tests {
         let options = RenderOptions {
             width: 7680,
             height: 4320,
-            spp: 1,
             max_depth: 1,
             min_throughput: 0.0,
-            lod: crate::footprint::LodStrategy::Cone,
-            filter: crate::texture::FilterOptions::default(),
-            fresnel: crate::scene::FresnelMode::default(),
-            aovs: crate::film::AovSelection {
-                surface: true,
-                texture_footprint: true,
-                lod: true,
-            },
-            count_texture_tiles: false,
-            all_effects: false,
-            seed: 0,
+            aovs: crate::film::AovSelection::ALL,
+            ..RenderOptions::from_settings(&crate::scene::RenderSettings::default())
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(64)
