@@ -28,15 +28,24 @@ pub enum Patch {
     /// the derivatives of the texture coordinates with respect to u and v, and the bound on
     /// the rounding error of the hit's position.
     Curved {
-        dpdu: Vec3,
-        dpdv: Vec3,
-        d2pdu2: Vec3,
-        d2pdudv: Vec3,
-        d2pdv2: Vec3,
+        frame: CurvedFrame,
         dstdu: Vec2,
         dstdv: Vec2,
         error: Vec3,
     },
+}
+
+/// The exact local geometry of a curved patch at a hit: first and second partial
+/// derivatives of the position with respect to the patch's (u, v). Its differential
+/// geometry (fundamental forms, normal derivatives, curvature) is in
+/// `crate::footprint::patch_surface`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurvedFrame {
+    pub dpdu: Vec3,
+    pub dpdv: Vec3,
+    pub d2pdu2: Vec3,
+    pub d2pdudv: Vec3,
+    pub d2pdv2: Vec3,
 }
 
 /// A hit on a surface, in world space.

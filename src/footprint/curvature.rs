@@ -70,21 +70,7 @@ pub fn curvature_at(hit: &SurfaceHit, dir: Vec3) -> f32 {
         Patch::Triangle { p, n: Some(n), .. } => triangle_curvature(*p, *n),
         Patch::Triangle { n: None, .. } => 0.0,
         Patch::Sphere { radius, .. } => sphere_curvature(*radius),
-        Patch::Curved {
-            dpdu,
-            dpdv,
-            d2pdu2,
-            d2pdudv,
-            d2pdv2,
-            ..
-        } => {
-            let frame = super::patch_surface::CurvedFrame {
-                dpdu: *dpdu,
-                dpdv: *dpdv,
-                d2pdu2: *d2pdu2,
-                d2pdudv: *d2pdudv,
-                d2pdv2: *d2pdv2,
-            };
+        Patch::Curved { frame, .. } => {
             // Signed for P_u x P_v; the hit's geometric normal may be its opposite.
             let k = frame.cone_curvature();
             if frame.normal().dot(hit.geometric_normal) >= 0.0 {

@@ -187,27 +187,14 @@ pub fn surface_gradients(hit: &SurfaceHit, dpdx: Vec3, dpdy: Vec3) -> TextureGra
         }
         Patch::Triangle { st: None, .. } => return TextureGradients::ZERO,
         Patch::Curved {
-            dpdu,
-            dpdv,
-            d2pdu2,
-            d2pdudv,
-            d2pdv2,
+            frame,
             dstdu,
             dstdv,
             ..
-        } => {
-            let frame = super::patch_surface::CurvedFrame {
-                dpdu: *dpdu,
-                dpdv: *dpdv,
-                d2pdu2: *d2pdu2,
-                d2pdudv: *d2pdudv,
-                d2pdv2: *d2pdv2,
-            };
-            (
-                super::patch_surface::curved_st_offset(&frame, *dstdu, *dstdv, dpdx),
-                super::patch_surface::curved_st_offset(&frame, *dstdu, *dstdv, dpdy),
-            )
-        }
+        } => (
+            super::patch_surface::curved_st_offset(frame, *dstdu, *dstdv, dpdx),
+            super::patch_surface::curved_st_offset(frame, *dstdu, *dstdv, dpdy),
+        ),
         Patch::Sphere { center, radius } => {
             let (dpds, dpdt) = if hit.dpds != Vec3::ZERO || hit.dpdt != Vec3::ZERO {
                 (hit.dpds, hit.dpdt)

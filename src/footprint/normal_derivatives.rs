@@ -30,21 +30,7 @@ pub fn shading_normal_derivative(hit: &SurfaceHit, dp: Vec3) -> Vec3 {
             };
             dp * (inv_r * outward)
         }
-        Patch::Curved {
-            dpdu,
-            dpdv,
-            d2pdu2,
-            d2pdudv,
-            d2pdv2,
-            ..
-        } => {
-            let frame = super::patch_surface::CurvedFrame {
-                dpdu: *dpdu,
-                dpdv: *dpdv,
-                d2pdu2: *d2pdu2,
-                d2pdudv: *d2pdudv,
-                d2pdv2: *d2pdv2,
-            };
+        Patch::Curved { frame, .. } => {
             // The Weingarten derivative is that of P_u x P_v normalised; match the shading
             // normal's side.
             let dn = frame.normal_derivative(dp);

@@ -18,15 +18,7 @@
 
 use glam::{Vec2, Vec3};
 
-/// Exact local geometry of a curved patch at a hit.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CurvedFrame {
-    pub dpdu: Vec3,
-    pub dpdv: Vec3,
-    pub d2pdu2: Vec3,
-    pub d2pdudv: Vec3,
-    pub d2pdv2: Vec3,
-}
+pub use crate::hit::CurvedFrame;
 
 impl CurvedFrame {
     /// `(E, F, G)` and `1 / (EG - F^2)`, or `None` where the tangents are degenerate.

@@ -13,7 +13,7 @@
 use glam::{DVec3, Vec2, Vec3};
 
 use crate::embree::{Bounds, UserGeometry, UserHit, UserRay};
-use crate::hit::{Patch, SurfaceHit};
+use crate::hit::{CurvedFrame, Patch, SurfaceHit};
 use crate::render::tracer::TraceHit;
 use crate::scene::patch::intersect::{geometric_normal, PatchIntersector, PatchRay};
 use crate::scene::patch::{control_f64, evaluate, BezierPatch};
@@ -106,11 +106,13 @@ pub fn patch_surface_hit(patch: &BezierPatch, hit: &TraceHit, texturing: bool) -
         dpdt,
         material: patch.material as u32,
         patch: Patch::Curved {
-            dpdu,
-            dpdv,
-            d2pdu2: point.d2pdu2.as_vec3(),
-            d2pdudv: point.d2pdudv.as_vec3(),
-            d2pdv2: point.d2pdv2.as_vec3(),
+            frame: CurvedFrame {
+                dpdu,
+                dpdv,
+                d2pdu2: point.d2pdu2.as_vec3(),
+                d2pdudv: point.d2pdudv.as_vec3(),
+                d2pdv2: point.d2pdv2.as_vec3(),
+            },
             dstdu,
             dstdv,
             error: spawn.error,
