@@ -7,7 +7,8 @@
 //! - the film: one f32 plane per channel of the layers the options ask for;
 //! - the finished tiles awaiting their copy into the film (as large as the film);
 //! - the outputs: the EXR encoder's copy of every plane and the PNG's 8-bit pixels;
-//! - every texture decoded with its mip levels (from the file headers, nothing decoded).
+//! - every texture with its mip levels, in the precision it is stored in (4 bytes a texel
+//!   for 8-bit sources, 8 for half, 16 otherwise), from the file headers, nothing decoded.
 //!
 //! The limit is `--max-memory` when given, else the memory the system reports available
 //! (`MemAvailable` in `/proc/meminfo`); where neither is known, nothing is refused.
@@ -16,7 +17,7 @@ use std::fmt;
 
 use crate::render::context::RenderOptions;
 use crate::scene::{SceneDescription, TextureSource};
-use crate::texture::{decoded_texture_bytes, encoded_image_size, file_image_size};
+use crate::texture::{encoded_texture_header, file_texture_header};
 
 /// What a render is estimated to need, in bytes.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -70,11 +71,11 @@ pub fn estimate(
         .textures
         .iter()
         .map(|texture| {
-            let (width, height) = match &texture.source {
-                TextureSource::File(path) => file_image_size(path)?,
-                TextureSource::Encoded { label, bytes } => encoded_image_size(bytes, label)?,
+            let header = match &texture.source {
+                TextureSource::File(path) => file_texture_header(path)?,
+                TextureSource::Encoded { label, bytes } => encoded_texture_header(bytes, label)?,
             };
-            Ok((texture.source.label(), decoded_texture_bytes(width, height)))
+            Ok((texture.source.label(), header.decoded_bytes()))
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(MemoryEstimate {

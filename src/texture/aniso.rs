@@ -158,7 +158,11 @@ mod tests {
 
     #[test]
     fn weights_sum_to_one_on_constant_texture() {
-        let p = MipPyramid::build(MipLevel::new(128, 96, vec![[0.7; 4]; 128 * 96]).unwrap());
+        let p = MipPyramid::build(
+            MipLevel::new(128, 96, vec![[0.7; 4]; 128 * 96]).unwrap(),
+            "t",
+        )
+        .unwrap();
         for k in 0..64 {
             let angle = k as f32 * 0.37;
             let major = 0.002 * (1.0 + k as f32);
@@ -191,7 +195,7 @@ mod tests {
         let texels = (0..64 * 64)
             .map(|i| [(i % 2) as f32, 0.0, 0.0, 1.0])
             .collect();
-        let p = MipPyramid::build(MipLevel::new(64, 64, texels).unwrap());
+        let p = MipPyramid::build(MipLevel::new(64, 64, texels).unwrap(), "t").unwrap();
         let centre = 1.5 / 64.0; // centre of column 1 (value 1)
         let along_s = TextureQuery {
             s: centre,

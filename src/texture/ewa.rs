@@ -119,7 +119,7 @@ fn ewa_on_level<O: TexelObserver>(
                 wsum += weight;
                 if let (Some(ix), Some(iy)) = (wrap_texel(tx, level.width, wrap.0), row) {
                     obs.touch(level_index, ix, iy);
-                    acc += weight * Vec4::from_array(level.texel(ix, iy));
+                    acc += weight * level.texel_vec4(ix, iy);
                 }
             }
         }
@@ -132,7 +132,7 @@ fn ewa_on_level<O: TexelObserver>(
         let ix = wrap_texel(x.round(), level.width, wrap.0);
         let iy = wrap_texel(y.round(), level.height, wrap.1);
         match (ix, iy) {
-            (Some(ix), Some(iy)) => Vec4::from_array(level.texel(ix, iy)),
+            (Some(ix), Some(iy)) => level.texel_vec4(ix, iy),
             _ => Vec4::ZERO,
         }
     }
@@ -145,7 +145,8 @@ mod tests {
 
     #[test]
     fn constant_texture_is_reproduced() {
-        let p = MipPyramid::build(MipLevel::new(40, 24, vec![[0.3; 4]; 40 * 24]).unwrap());
+        let p = MipPyramid::build(MipLevel::new(40, 24, vec![[0.3; 4]; 40 * 24]).unwrap(), "t")
+            .unwrap();
         for k in 0..40 {
             let a = k as f32 * 0.41;
             let q = TextureQuery {

@@ -52,7 +52,8 @@ mod tests {
     #[test]
     fn blends_two_levels_with_weights_summing_to_one() {
         // Level 0 all 1, so every level is 1: any convex blend gives exactly 1.
-        let p = MipPyramid::build(MipLevel::new(64, 32, vec![[1.0; 4]; 64 * 32]).unwrap());
+        let p = MipPyramid::build(MipLevel::new(64, 32, vec![[1.0; 4]; 64 * 32]).unwrap(), "t")
+            .unwrap();
         for k in 0..50 {
             let d = 1e-4 * 1.3f32.powi(k);
             let q = TextureQuery {
