@@ -61,6 +61,16 @@ pub fn estimate(
     scene: &SceneDescription,
     options: &RenderOptions,
 ) -> Result<MemoryEstimate, crate::texture::TextureError> {
+    estimate_decoding(scene, options, |_| true)
+}
+
+/// [`estimate`] counting only the textures `decoded(index)` says the render decodes (with a
+/// texture callback, the ones it serves are never decoded and their files need not exist).
+pub fn estimate_decoding(
+    scene: &SceneDescription,
+    options: &RenderOptions,
+    decoded: impl Fn(usize) -> bool,
+) -> Result<MemoryEstimate, crate::texture::TextureError> {
     let pixels = u64::from(options.width) * u64::from(options.height);
     let channels: u64 = crate::render::film_layers(options.aovs)
         .iter()
@@ -70,7 +80,9 @@ pub fn estimate(
     let textures = scene
         .textures
         .iter()
-        .map(|texture| {
+        .enumerate()
+        .filter(|(index, _)| decoded(*index))
+        .map(|(_, texture)| {
             let header = match &texture.source {
                 TextureSource::File(path) => file_texture_header(path)?,
                 TextureSource::Encoded { label, bytes } => encoded_texture_header(bytes, label)?,
@@ -126,8 +138,18 @@ pub fn parse_memory_size(text: &str) -> Result<u64, String> {
 /// Refuses a render whose estimate exceeds `limit` (or the available memory when `None`),
 /// with a one-line message giving the estimate and its largest parts.
 pub fn check(estimate: &MemoryEstimate, limit: Option<u64>, label: &str) -> Result<(), String> {
+    check_against(estimate, limit, "--max-memory", label)
+}
+
+/// [`check`] naming the limit `limit_name` in the message (an option or a field).
+pub fn check_against(
+    estimate: &MemoryEstimate,
+    limit: Option<u64>,
+    limit_name: &str,
+    label: &str,
+) -> Result<(), String> {
     let (limit, source) = match limit {
-        Some(limit) => (limit, "--max-memory"),
+        Some(limit) => (limit, limit_name),
         None => match available_memory() {
             Some(available) => (available, "available memory"),
             None => return Ok(()),

@@ -63,10 +63,20 @@ fn decode_png_jpeg(
     label: &str,
     color_space: ColorSpace,
 ) -> Result<MipLevel, TextureError> {
-    let img = image::load_from_memory(bytes).map_err(|e| TextureError::Decode {
+    let decode_error = |e: image::ImageError| TextureError::Decode {
         label: label.to_string(),
         message: e.to_string(),
-    })?;
+    };
+    let mut reader = image::ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| decode_error(e.into()))?;
+    // The decoder's own buffer is bounded like a TIFF level (the `image` crate's default,
+    // 512 MiB, would refuse an ordinary 16k 8-bit texture); larger ones are refused with
+    // an error, never an aborting allocation.
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(tiled_tiff::MAX_LEVEL_BYTES);
+    reader.limits(limits);
+    let img = reader.decode().map_err(decode_error)?;
     let (w, h) = (img.width(), img.height());
     let count = w as usize * h as usize;
     // 8-bit images keep their bytes (decoded at fetch through the colour space's table).

@@ -36,7 +36,7 @@ use super::{ColorSpace, TextureError};
 /// Largest decoded level accepted, in bytes of stored samples: a 16384x16384 RGBA
 /// float level. The `tiff` crate's default (256 MiB) would refuse ordinary 8k float
 /// textures.
-const MAX_LEVEL_BYTES: u64 = 16384 * 16384 * 4 * 4;
+pub(crate) const MAX_LEVEL_BYTES: u64 = 16384 * 16384 * 4 * 4;
 
 /// True when `bytes` start with a classic or BigTIFF signature, in either byte order.
 pub(crate) fn is_tiff(bytes: &[u8]) -> bool {
