@@ -102,13 +102,15 @@ pub(crate) fn bilinear<O: TexelObserver>(
         obs.touch(level_index, xi, yi + 1);
         obs.touch(level_index, xi + 1, yi + 1);
         // One storage dispatch and one bounds check for the whole 2x2 footprint.
-        let [a, b, c, d] = match level.texels.quad(k, row) {
-            Some(block) => block,
-            None => return bilinear_wrapped(level, level_index, s, t, wrap, obs),
+        let blended = level.texels.bilinear_quad(k, row, |a, b, c, d| {
+            let top = a * (1.0 - fs) + b * fs;
+            let bottom = c * (1.0 - fs) + d * fs;
+            top * (1.0 - ft) + bottom * ft
+        });
+        return match blended {
+            Some(v) => v,
+            None => bilinear_wrapped(level, level_index, s, t, wrap, obs),
         };
-        let top = a * (1.0 - fs) + b * fs;
-        let bottom = c * (1.0 - fs) + d * fs;
-        return top * (1.0 - ft) + bottom * ft;
     }
     bilinear_wrapped(level, level_index, s, t, wrap, obs)
 }

@@ -105,36 +105,46 @@ impl Texels {
 
     /// Texels `k`, `k + 1`, `k + row` and `k + row + 1` (a bilinear footprint), or `None`
     /// when they are not all inside: one storage dispatch and one bounds check for four.
-    #[inline(always)]
+    #[cfg(test)]
     pub(crate) fn quad(&self, k: usize, row: usize) -> Option<[Vec4; 4]> {
+        self.bilinear_quad(k, row, |a, b, c, d| [a, b, c, d])
+    }
+
+    /// `blend` of the four texels of [`Texels::quad`], evaluated inside each storage's own
+    /// branch so the float path stays straight-line code.
+    #[inline(always)]
+    pub(crate) fn bilinear_quad<R>(
+        &self,
+        k: usize,
+        row: usize,
+        blend: impl Fn(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
         let end = k.checked_add(row)?.checked_add(2)?;
         match self {
-            Texels::Byte { texels, colour, .. } => {
-                let b = texels.get(k..end)?;
-                Some([
-                    byte_texel(b[0], colour),
-                    byte_texel(b[1], colour),
-                    byte_texel(b[row], colour),
-                    byte_texel(b[row + 1], colour),
-                ])
-            }
-            Texels::Half(t) => {
-                let b = t.get(k..end)?;
-                Some([
-                    half_texel(&b[0]),
-                    half_texel(&b[1]),
-                    half_texel(&b[row]),
-                    half_texel(&b[row + 1]),
-                ])
-            }
             Texels::Float(t) => {
                 let b = t.get(k..end)?;
-                Some([
+                Some(blend(
                     Vec4::from_array(b[0]),
                     Vec4::from_array(b[1]),
                     Vec4::from_array(b[row]),
                     Vec4::from_array(b[row + 1]),
-                ])
+                ))
+            }
+            Texels::Byte { texels, colour, .. } => {
+                let b = texels.get(k..end)?;
+                Some(blend(
+                    byte_texel(b[0], colour),
+                    byte_texel(b[1], colour),
+                    byte_texel(b[row], colour),
+                    byte_texel(b[row + 1], colour),
+                ))
+            }
+            Texels::Half(t) => {
+                let b = t.get(k..end)?;
+                // Each pair of neighbours widened in one call (vectorised where the CPU
+                // converts halves).
+                let (upper, lower) = (half_pair(&b[..2]), half_pair(&b[row..row + 2]));
+                Some(blend(upper[0], upper[1], lower[0], lower[1]))
             }
         }
     }
@@ -189,10 +199,22 @@ fn byte_texel(t: [u8; 4], colour: &[f32; 256]) -> Vec4 {
     )
 }
 
+/// Two neighbouring half-float texels widened to f32 (exact) in one conversion.
+#[inline(always)]
+fn half_pair(pair: &[[f16; 4]]) -> [Vec4; 2] {
+    use half::slice::HalfFloatSliceExt;
+    let mut wide = [0.0f32; 8];
+    pair.as_flattened().convert_to_f32_slice(&mut wide);
+    [Vec4::from_slice(&wide[..4]), Vec4::from_slice(&wide[4..])]
+}
+
 /// One half-float texel widened to f32 (exact).
 #[inline(always)]
 fn half_texel(t: &[f16; 4]) -> Vec4 {
-    Vec4::new(t[0].to_f32(), t[1].to_f32(), t[2].to_f32(), t[3].to_f32())
+    use half::slice::HalfFloatSliceExt;
+    let mut wide = [0.0f32; 4];
+    t.convert_to_f32_slice(&mut wide);
+    Vec4::from_array(wide)
 }
 
 /// A value in [0, 1] as the nearest byte, ties upward; outside [0, 1] clamped.
