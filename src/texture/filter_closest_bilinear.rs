@@ -8,6 +8,7 @@
 use glam::Vec4;
 
 use super::mip_pyramid::MipLevel;
+use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
 use super::wrap::{floor_f32, wrap_texel};
 use super::WrapMode;
@@ -73,15 +74,54 @@ fn floor_i32(x: f32) -> i32 {
     t - ((t as f32 > x) as i32)
 }
 
-/// Bilinear interpolation of the four texels around (s, t).
+/// Bilinear interpolation of the four texels around (s, t): [`bilinear_from`] with the
+/// level's storage kind picked here.
+#[inline(always)]
+pub(crate) fn bilinear<O: TexelObserver>(
+    level: &MipLevel,
+    level_index: usize,
+    s: f32,
+    t: f32,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    with_texel_source!(&level.texels, |texels| bilinear_from(
+        level,
+        texels,
+        level_index,
+        s,
+        t,
+        wrap,
+        obs
+    ))
+}
+
+/// [`bilinear`] kept out of line, for the rare level whose storage kind differs from the
+/// one a mip-mapped filter was compiled for.
+#[cold]
+#[inline(never)]
+pub(crate) fn bilinear_other_kind<O: TexelObserver>(
+    level: &MipLevel,
+    level_index: usize,
+    s: f32,
+    t: f32,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    bilinear(level, level_index, s, t, wrap, obs)
+}
+
+/// Bilinear interpolation of the four texels around (s, t), reading `texels` (the
+/// level's own texels, of a storage kind the caller has picked).
 ///
 /// The common case, all four texels inside the level, is decided with two unsigned
 /// compares on the integer texel coordinates and reads the texels directly; footprints
 /// across an edge go to [`bilinear_wrapped`], kept out of line so the loops of the
 /// mip-mapped filters stay small.
 #[inline(always)]
-pub(crate) fn bilinear<O: TexelObserver>(
-    level: &MipLevel,
+pub(crate) fn bilinear_from<'a, S: TexelSource<'a>, O: TexelObserver>(
+    level: &'a MipLevel,
+    texels: S,
     level_index: usize,
     s: f32,
     t: f32,
@@ -101,8 +141,8 @@ pub(crate) fn bilinear<O: TexelObserver>(
         obs.touch(level_index, xi + 1, yi);
         obs.touch(level_index, xi, yi + 1);
         obs.touch(level_index, xi + 1, yi + 1);
-        // One storage dispatch and one bounds check for the whole 2x2 footprint.
-        let blended = level.texels.bilinear_quad(k, row, |a, b, c, d| {
+        // One bounds check for the whole 2x2 footprint.
+        let blended = texels.bilinear_quad(k, row, |a, b, c, d| {
             let top = a * (1.0 - fs) + b * fs;
             let bottom = c * (1.0 - fs) + d * fs;
             top * (1.0 - ft) + bottom * ft

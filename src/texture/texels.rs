@@ -36,6 +36,30 @@ pub(crate) fn byte_table(color_space: ColorSpace) -> &'static [f32; 256] {
     }
 }
 
+/// Evaluates `$body` with `$source` bound to the [`TexelSource`] of `$texels`'s storage
+/// kind: one match, and `$body` compiled once per kind.
+macro_rules! with_texel_source {
+    ($texels:expr, |$source:ident| $body:expr) => {{
+        #[allow(unused_imports)]
+        use $crate::texture::texels::{ByteTexels, FloatTexels, HalfTexels, TexelSource, Texels};
+        match $texels {
+            Texels::Float(t) => {
+                let $source = FloatTexels(t);
+                $body
+            }
+            Texels::Half(t) => {
+                let $source = HalfTexels(t);
+                $body
+            }
+            Texels::Byte { texels, colour, .. } => {
+                let $source = ByteTexels::new(texels, *colour);
+                $body
+            }
+        }
+    }};
+}
+pub(crate) use with_texel_source;
+
 /// A level's texels, row-major with t = 0 first, RGBA, in the source's precision.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Texels {
@@ -96,57 +120,15 @@ impl Texels {
     /// Linear RGBA of texel `index` (in range).
     #[inline(always)]
     pub fn get(&self, index: usize) -> Vec4 {
-        match self {
-            Texels::Byte { texels, colour, .. } => byte_texel(texels[index], colour),
-            Texels::Half(t) => half_texel(&t[index]),
-            Texels::Float(t) => Vec4::from_array(t[index]),
-        }
+        with_texel_source!(self, |source| source.texel(index))
     }
 
     /// Texels `k`, `k + 1`, `k + row` and `k + row + 1` (a bilinear footprint), or `None`
     /// when they are not all inside: one storage dispatch and one bounds check for four.
     #[cfg(test)]
     pub(crate) fn quad(&self, k: usize, row: usize) -> Option<[Vec4; 4]> {
-        self.bilinear_quad(k, row, |a, b, c, d| [a, b, c, d])
-    }
-
-    /// `blend` of the four texels of [`Texels::quad`], evaluated inside each storage's own
-    /// branch so the float path stays straight-line code.
-    #[inline(always)]
-    pub(crate) fn bilinear_quad<R>(
-        &self,
-        k: usize,
-        row: usize,
-        blend: impl Fn(Vec4, Vec4, Vec4, Vec4) -> R,
-    ) -> Option<R> {
-        let end = k.checked_add(row)?.checked_add(2)?;
-        match self {
-            Texels::Float(t) => {
-                let b = t.get(k..end)?;
-                Some(blend(
-                    Vec4::from_array(b[0]),
-                    Vec4::from_array(b[1]),
-                    Vec4::from_array(b[row]),
-                    Vec4::from_array(b[row + 1]),
-                ))
-            }
-            Texels::Byte { texels, colour, .. } => {
-                let b = texels.get(k..end)?;
-                Some(blend(
-                    byte_texel(b[0], colour),
-                    byte_texel(b[1], colour),
-                    byte_texel(b[row], colour),
-                    byte_texel(b[row + 1], colour),
-                ))
-            }
-            Texels::Half(t) => {
-                let b = t.get(k..end)?;
-                // Each pair of neighbours widened in one call (vectorised where the CPU
-                // converts halves).
-                let (upper, lower) = (half_pair(&b[..2]), half_pair(&b[row..row + 2]));
-                Some(blend(upper[0], upper[1], lower[0], lower[1]))
-            }
-        }
+        with_texel_source!(self, |source| source
+            .bilinear_quad(k, row, |a, b, c, d| [a, b, c, d]))
     }
 
     /// Texels of the same storage kind holding `values` (linear RGBA), each rounded to the
@@ -188,14 +170,154 @@ impl Texels {
     }
 }
 
+/// One storage kind of a level's texels, borrowed. Filters are generic over it and
+/// pick the kind once per lookup (see [`with_texel_source`]), so the loops that fetch
+/// texels are compiled once per kind and a fetch does not branch on the storage.
+pub(crate) trait TexelSource<'a>: Copy {
+    /// The texels of `texels` when they are of this kind.
+    fn view(texels: &'a Texels) -> Option<Self>;
+
+    /// Linear RGBA of texel `index` (in range).
+    fn texel(self, index: usize) -> Vec4;
+
+    /// `blend` of texels `k`, `k + 1`, `k + row` and `k + row + 1` (a bilinear
+    /// footprint), or `None` when they are not all inside: one bounds check for four.
+    fn bilinear_quad<R>(
+        self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R>;
+}
+
+/// f32 texels, used as stored.
+#[derive(Clone, Copy)]
+pub(crate) struct FloatTexels<'a>(pub(crate) &'a [[f32; 4]]);
+
+/// Half-float texels, widened exactly at fetch.
+#[derive(Clone, Copy)]
+pub(crate) struct HalfTexels<'a>(pub(crate) &'a [[f16; 4]]);
+
+/// 8-bit texels with the tables decoding their colour and alpha bytes.
+#[derive(Clone, Copy)]
+pub(crate) struct ByteTexels<'a> {
+    texels: &'a [[u8; 4]],
+    colour: &'static [f32; 256],
+    alpha: &'static [f32; 256],
+}
+
+impl<'a> TexelSource<'a> for FloatTexels<'a> {
+    #[inline(always)]
+    fn view(texels: &'a Texels) -> Option<Self> {
+        match texels {
+            Texels::Float(t) => Some(FloatTexels(t)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn texel(self, index: usize) -> Vec4 {
+        Vec4::from_array(self.0[index])
+    }
+
+    #[inline(always)]
+    fn bilinear_quad<R>(
+        self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        let b = self.0.get(k..k.checked_add(row)?.checked_add(2)?)?;
+        Some(blend(
+            Vec4::from_array(b[0]),
+            Vec4::from_array(b[1]),
+            Vec4::from_array(b[row]),
+            Vec4::from_array(b[row + 1]),
+        ))
+    }
+}
+
+impl<'a> TexelSource<'a> for HalfTexels<'a> {
+    #[inline(always)]
+    fn view(texels: &'a Texels) -> Option<Self> {
+        match texels {
+            Texels::Half(t) => Some(HalfTexels(t)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn texel(self, index: usize) -> Vec4 {
+        half_texel(&self.0[index])
+    }
+
+    #[inline(always)]
+    fn bilinear_quad<R>(
+        self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        let b = self.0.get(k..k.checked_add(row)?.checked_add(2)?)?;
+        // Each pair of neighbours widened in one call (vectorised where the CPU
+        // converts halves).
+        let (upper, lower) = (half_pair(&b[..2]), half_pair(&b[row..row + 2]));
+        Some(blend(upper[0], upper[1], lower[0], lower[1]))
+    }
+}
+
+impl<'a> ByteTexels<'a> {
+    /// `texels` with colour bytes decoded through `colour`.
+    #[inline(always)]
+    pub(crate) fn new(texels: &'a [[u8; 4]], colour: &'static [f32; 256]) -> Self {
+        ByteTexels {
+            texels,
+            colour,
+            alpha: &LINEAR_BYTES,
+        }
+    }
+}
+
+impl<'a> TexelSource<'a> for ByteTexels<'a> {
+    #[inline(always)]
+    fn view(texels: &'a Texels) -> Option<Self> {
+        match texels {
+            Texels::Byte { texels, colour, .. } => Some(ByteTexels::new(texels, *colour)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn texel(self, index: usize) -> Vec4 {
+        byte_texel(self.texels[index], self.colour, self.alpha)
+    }
+
+    #[inline(always)]
+    fn bilinear_quad<R>(
+        self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        let b = self.texels.get(k..k.checked_add(row)?.checked_add(2)?)?;
+        let decode = |t| byte_texel(t, self.colour, self.alpha);
+        Some(blend(
+            decode(b[0]),
+            decode(b[1]),
+            decode(b[row]),
+            decode(b[row + 1]),
+        ))
+    }
+}
+
 /// Linear RGBA of one 8-bit texel.
 #[inline(always)]
-fn byte_texel(t: [u8; 4], colour: &[f32; 256]) -> Vec4 {
+fn byte_texel(t: [u8; 4], colour: &[f32; 256], alpha: &[f32; 256]) -> Vec4 {
     Vec4::new(
         colour[usize::from(t[0])],
         colour[usize::from(t[1])],
         colour[usize::from(t[2])],
-        LINEAR_BYTES[usize::from(t[3])],
+        alpha[usize::from(t[3])],
     )
 }
 

@@ -5,8 +5,9 @@
 use glam::Vec4;
 
 use super::ellipse::{adjust_derivatives, choose_levels, LevelChoice};
-use super::filter_closest_bilinear::bilinear;
+use super::filter_closest_bilinear::{bilinear_from, bilinear_other_kind};
 use super::mip_pyramid::MipPyramid;
+use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
 use super::{TextureQuery, WrapMode};
 
@@ -22,10 +23,26 @@ pub(crate) fn level_choice(pyramid: &MipPyramid, q: &TextureQuery) -> LevelChoic
     })
 }
 
-/// The trilinear lookup.
+/// The trilinear lookup, compiled once per storage kind (that of level 0, which every
+/// level of a pyramid normally shares).
 #[inline]
 pub(crate) fn sample<O: TexelObserver>(
     pyramid: &MipPyramid,
+    q: &TextureQuery,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    with_texel_source!(&pyramid.levels[0].texels, |kind| sample_from(
+        kind, pyramid, q, wrap, obs
+    ))
+}
+
+/// [`sample`] reading levels of the storage kind of `_kind`; a level of another kind
+/// goes through [`bilinear_other_kind`], which picks its kind itself.
+#[inline(always)]
+fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
+    _kind: S,
+    pyramid: &'a MipPyramid,
     q: &TextureQuery,
     wrap: (WrapMode, WrapMode),
     obs: &mut O,
@@ -38,7 +55,11 @@ pub(crate) fn sample<O: TexelObserver>(
             continue;
         }
         let m = choice.levels[k];
-        sum += w * bilinear(&pyramid.levels[m], m, q.s, q.t, wrap, obs);
+        let level = &pyramid.levels[m];
+        sum += w * match S::view(&level.texels) {
+            Some(texels) => bilinear_from(level, texels, m, q.s, q.t, wrap, obs),
+            None => bilinear_other_kind(level, m, q.s, q.t, wrap, obs),
+        };
     }
     sum
 }
