@@ -20,7 +20,7 @@
 #include <stdint.h>
 
 // The version of the C interface (bumped when a function or struct changes incompatibly).
-#define CT_ABI_VERSION 1
+#define CT_ABI_VERSION 2
 
 // Level of detail: every lookup samples mip level 0.
 #define CT_LOD_MIP0 0
@@ -104,6 +104,9 @@ typedef enum CtStatus {
   CT_ERROR_CALLBACK = 10,
   // A bug inside the library (a caught Rust panic); the call had no effect on handles.
   CT_ERROR_INTERNAL = 11,
+  // The render's estimated memory (`ct_render_memory_estimate`) exceeds the options'
+  // `max_memory`, or the memory the system reports available; nothing large was allocated.
+  CT_ERROR_OUT_OF_MEMORY = 12,
 } CtStatus;
 
 // A rendered image (all channels, planar float). `id == 0` is the null handle.
@@ -203,6 +206,10 @@ typedef struct CtRenderOptions {
   CtTextureFn texture_callback;
   // Passed to `texture_callback`.
   void *texture_user_data;
+  // Most memory the render may need, in bytes, by `ct_render_memory_estimate`; a render
+  // estimated above it fails with `CT_ERROR_OUT_OF_MEMORY` before allocating anything
+  // large. 0 = the memory the system reports available (no limit where it reports none).
+  uint64_t max_memory;
 } CtRenderOptions;
 
 // A loaded scene. `id == 0` is the null handle.
@@ -380,6 +387,24 @@ enum CtStatus ct_render_options_init(struct CtRenderOptions *options, size_t str
 enum CtStatus ct_render(struct CtScene scene,
                         const struct CtRenderOptions *options,
                         struct CtImage *out_image);
+
+// Writes to `*out_bytes` the memory, in bytes, that `ct_render` of `scene` with `options`
+// (NULL: defaults) is estimated to need at its peak: the film and its copies for the
+// outputs, and every texture the library decodes with its mip levels, in the precision it
+// is stored in (from the file headers; nothing is decoded). Textures a texture callback
+// serves are not decoded and not counted. `ct_render` refuses a render whose estimate
+// exceeds `max_memory` with `CT_ERROR_OUT_OF_MEMORY`.
+//
+// Returns `CT_ERROR_TEXTURE` when a texture's header cannot be read.
+//
+// Thread safety: any thread.
+//
+// # Safety
+// `options` is NULL or a `CtRenderOptions` whose `struct_size` is correct; `out_bytes` is
+// writable.
+enum CtStatus ct_render_memory_estimate(struct CtScene scene,
+                                        const struct CtRenderOptions *options,
+                                        uint64_t *out_bytes);
 
 // Loads a scene from a `.toml`, `.obj`, `.gltf` or `.glb` file (a camera and lights are added
 // when missing) into `*out_scene`. On failure `*out_scene` is the null handle and the status

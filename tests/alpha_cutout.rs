@@ -237,7 +237,7 @@ fn magnified_leaves_are_a_crisp_cutout() {
         let (s, tt) = ((p.x + 1.0) / 2.0, (1.0 - p.y) / 2.0);
         let x = ((s * level.width as f32) as usize).min(level.width as usize - 1);
         let y = ((tt * level.height as f32) as usize).min(level.height as usize - 1);
-        let opaque = level.texels[y * level.width as usize + x][3] >= 0.5;
+        let opaque = level.texel(x, y)[3] >= 0.5;
         expected_hits += opaque as usize;
         agree += (opaque == hit.is_hit()) as usize;
     }

@@ -1096,3 +1096,72 @@ fn workers_keep_rendering_while_the_progress_callback_runs() {
         "a progress call ran on a thread other than the caller's"
     );
 }
+
+// ---- The memory estimate, and renders refused by it. ----
+
+fn memory_estimate(scene: CtScene, options: &CtRenderOptions) -> u64 {
+    let mut bytes = 0u64;
+    // SAFETY: valid options and out-pointer.
+    let status = unsafe { ct_render_memory_estimate(scene, options, &mut bytes) };
+    assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
+    bytes
+}
+
+#[test]
+fn the_memory_estimate_bounds_the_render() {
+    let scene = default_scene();
+    let options = small_options();
+    let estimate = memory_estimate(scene, &options);
+    // The film grows with the image: four times the pixels, more than three times the bytes
+    // (the textures stay the same).
+    let mut larger = options;
+    larger.width *= 2;
+    larger.height *= 2;
+    let film_part = memory_estimate(scene, &larger) - estimate;
+    assert!(film_part > 3 * 64 * 48 * 4 * 4, "{film_part}");
+    assert!(estimate > film_part / 3, "textures counted: {estimate}");
+
+    // One byte less than the estimate is refused before anything is allocated.
+    let mut limited = options;
+    limited.max_memory = estimate - 1;
+    let mut image = CtImage::default();
+    // SAFETY: valid handles and out-pointer.
+    let status = unsafe { ct_render(scene, &limited, &mut image) };
+    assert_eq!(status, CtStatus::CT_ERROR_OUT_OF_MEMORY, "{}", last_error());
+    assert_eq!(image, CtImage::default(), "no image on error");
+    let message = last_error();
+    println!("{message}");
+    assert!(
+        message.contains("needs about") && message.contains("max_memory"),
+        "{message}"
+    );
+
+    // Exactly the estimate renders.
+    limited.max_memory = estimate;
+    // SAFETY: as above.
+    let status = unsafe { ct_render(scene, &limited, &mut image) };
+    assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
+    ct_image_free(image);
+    ct_scene_free(scene);
+}
+
+#[test]
+fn an_image_larger_than_memory_is_refused_not_aborted() {
+    let scene = default_scene();
+    let mut options = small_options();
+    options.width = 65536;
+    options.height = 65536;
+    let estimate = memory_estimate(scene, &options);
+    assert!(estimate > 65536 * 65536 * 16, "{estimate}");
+    let mut image = CtImage::default();
+    // SAFETY: valid handles and out-pointer.
+    let status = unsafe { ct_render(scene, &options, &mut image) };
+    let message = last_error();
+    println!("{message}");
+    assert_eq!(status, CtStatus::CT_ERROR_OUT_OF_MEMORY, "{message}");
+    assert!(message.contains("available memory"), "{message}");
+    // SAFETY: a valid out-pointer; NULL is what is being tested.
+    let status = unsafe { ct_render_memory_estimate(scene, &options, std::ptr::null_mut()) };
+    assert_eq!(status, CtStatus::CT_ERROR_NULL_POINTER);
+    ct_scene_free(scene);
+}

@@ -36,6 +36,9 @@ pub enum CtStatus {
     CT_ERROR_CALLBACK = 10,
     /// A bug inside the library (a caught Rust panic); the call had no effect on handles.
     CT_ERROR_INTERNAL = 11,
+    /// The render's estimated memory (`ct_render_memory_estimate`) exceeds the options'
+    /// `max_memory`, or the memory the system reports available; nothing large was allocated.
+    CT_ERROR_OUT_OF_MEMORY = 12,
 }
 
 /// An error on its way out of an entry point: a status and a message for the caller.
@@ -126,6 +129,7 @@ pub extern "C" fn ct_status_name(status: i32) -> *const c_char {
         9 => c"CT_ERROR_IO",
         10 => c"CT_ERROR_CALLBACK",
         11 => c"CT_ERROR_INTERNAL",
+        12 => c"CT_ERROR_OUT_OF_MEMORY",
         _ => c"unknown status",
     };
     name.as_ptr()

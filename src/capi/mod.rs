@@ -36,7 +36,7 @@ pub use texture::*;
 use errors::CapiError;
 
 /// The version of the C interface (bumped when a function or struct changes incompatibly).
-pub const CT_ABI_VERSION: u32 = 1;
+pub const CT_ABI_VERSION: u32 = 2;
 
 /// The library version, e.g. "0.1.0" (static string, never NULL).
 ///

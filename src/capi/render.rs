@@ -89,6 +89,10 @@ pub struct CtRenderOptions {
     pub texture_callback: CtTextureFn,
     /// Passed to `texture_callback`.
     pub texture_user_data: *mut c_void,
+    /// Most memory the render may need, in bytes, by `ct_render_memory_estimate`; a render
+    /// estimated above it fails with `CT_ERROR_OUT_OF_MEMORY` before allocating anything
+    /// large. 0 = the memory the system reports available (no limit where it reports none).
+    pub max_memory: u64,
 }
 
 impl CtRenderOptions {
@@ -99,6 +103,7 @@ impl CtRenderOptions {
             height: 0,
             spp: 0,
             max_depth: -1,
+            max_memory: 0,
             threads: 0,
             lod: CT_LOD_CONE,
             filter: CT_FILTER_ANISO,
@@ -249,6 +254,13 @@ pub unsafe extern "C" fn ct_render(
         let object = handles::scene(scene)?;
         let scene = object.scene.clone();
         let render_options = render_options(&c_options, &scene)?;
+        // Refused before the film or any texture is allocated. A texture whose header cannot
+        // be read is left to the preparation below, which reports it with its role.
+        if let Ok(estimate) = memory_estimate(&c_options, &scene, &render_options) {
+            let limit = (c_options.max_memory > 0).then_some(c_options.max_memory);
+            render::memory::check_against(&estimate, limit, "max_memory", &scene.source)
+                .map_err(|message| CapiError::new(CtStatus::CT_ERROR_OUT_OF_MEMORY, message))?;
+        }
         // The camera's matrices go into the image's EXR header.
         let camera = scene.camera.as_ref().map(|desc| {
             crate::camera::Camera::new(desc, render_options.width, render_options.height)
@@ -373,6 +385,62 @@ pub unsafe extern "C" fn ct_render(
             CtStatus::CT_OK
         })
     })
+}
+
+/// Writes to `*out_bytes` the memory, in bytes, that `ct_render` of `scene` with `options`
+/// (NULL: defaults) is estimated to need at its peak: the film and its copies for the
+/// outputs, and every texture the library decodes with its mip levels, in the precision it
+/// is stored in (from the file headers; nothing is decoded). Textures a texture callback
+/// serves are not decoded and not counted. `ct_render` refuses a render whose estimate
+/// exceeds `max_memory` with `CT_ERROR_OUT_OF_MEMORY`.
+///
+/// Returns `CT_ERROR_TEXTURE` when a texture's header cannot be read.
+///
+/// Thread safety: any thread.
+///
+/// # Safety
+/// `options` is NULL or a `CtRenderOptions` whose `struct_size` is correct; `out_bytes` is
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn ct_render_memory_estimate(
+    scene: CtScene,
+    options: *const CtRenderOptions,
+    out_bytes: *mut u64,
+) -> CtStatus {
+    guard(|| {
+        require_out(out_bytes, "out_bytes")?;
+        let c_options = if options.is_null() {
+            CtRenderOptions::defaults()
+        } else {
+            // SAFETY: caller's contract.
+            unsafe { read_sized(options, "options") }?
+        };
+        let object = handles::scene(scene)?;
+        let render_options = render_options(&c_options, &object.scene)?;
+        let estimate = memory_estimate(&c_options, &object.scene, &render_options)?;
+        // SAFETY: checked non-null above.
+        unsafe { out_bytes.write(estimate.total()) };
+        Ok(CtStatus::CT_OK)
+    })
+}
+
+/// The memory estimate of a render: with a texture callback, only the textures the library
+/// still decodes (alpha cut-out masks; all of them for the `lod` AOV) are counted.
+fn memory_estimate(
+    c: &CtRenderOptions,
+    scene: &crate::scene::SceneDescription,
+    options: &RenderOptions,
+) -> Result<render::memory::MemoryEstimate, CapiError> {
+    let mut decoded = vec![c.texture_callback.is_none() || options.aovs.lod; scene.textures.len()];
+    for material in &scene.materials {
+        if let (Some(_), Some(binding)) = (material.alpha_cutoff, &material.alpha_texture) {
+            if let Some(flag) = decoded.get_mut(binding.texture) {
+                *flag = true;
+            }
+        }
+    }
+    render::memory::estimate_decoding(scene, options, |i| decoded.get(i) == Some(&true))
+        .map_err(|e| CapiError::new(CtStatus::CT_ERROR_TEXTURE, e.to_string()))
 }
 
 /// The renderer's options from the C options over the scene's settings, validated.

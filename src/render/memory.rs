@@ -8,7 +8,8 @@
 //! - the work tiles in flight: per worker thread, one tile's pixels and the slices of the
 //!   film band it writes into (finished tiles go straight into the film, so this is small);
 //! - the outputs: the EXR encoder's copy of every plane and the PNG's 8-bit pixels;
-//! - every texture decoded with its mip levels (from the file headers, nothing decoded).
+//! - every texture with its mip levels, in the precision it is stored in (4 bytes a texel
+//!   for 8-bit sources, 8 for half, 16 otherwise), from the file headers, nothing decoded.
 //!
 //! The limit is `--max-memory` when given, else the memory the system reports available
 //! (`MemAvailable` in `/proc/meminfo`); where neither is known, nothing is refused.
@@ -17,7 +18,7 @@ use std::fmt;
 
 use crate::render::context::RenderOptions;
 use crate::scene::{SceneDescription, TextureSource};
-use crate::texture::{decoded_texture_bytes, encoded_image_size, file_image_size};
+use crate::texture::{encoded_texture_header, file_texture_header};
 
 /// What a render is estimated to need, in bytes.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -61,6 +62,16 @@ pub fn estimate(
     scene: &SceneDescription,
     options: &RenderOptions,
 ) -> Result<MemoryEstimate, crate::texture::TextureError> {
+    estimate_decoding(scene, options, |_| true)
+}
+
+/// [`estimate`] counting only the textures `decoded(index)` says the render decodes (with a
+/// texture callback, the ones it serves are never decoded and their files need not exist).
+pub fn estimate_decoding(
+    scene: &SceneDescription,
+    options: &RenderOptions,
+    decoded: impl Fn(usize) -> bool,
+) -> Result<MemoryEstimate, crate::texture::TextureError> {
     let pixels = u64::from(options.width) * u64::from(options.height);
     let channels: u64 = crate::render::film_layers(options.aovs)
         .iter()
@@ -70,12 +81,14 @@ pub fn estimate(
     let textures = scene
         .textures
         .iter()
-        .map(|texture| {
-            let (width, height) = match &texture.source {
-                TextureSource::File(path) => file_image_size(path)?,
-                TextureSource::Encoded { label, bytes } => encoded_image_size(bytes, label)?,
+        .enumerate()
+        .filter(|(index, _)| decoded(*index))
+        .map(|(_, texture)| {
+            let header = match &texture.source {
+                TextureSource::File(path) => file_texture_header(path)?,
+                TextureSource::Encoded { label, bytes } => encoded_texture_header(bytes, label)?,
             };
-            Ok((texture.source.label(), decoded_texture_bytes(width, height)))
+            Ok((texture.source.label(), header.decoded_bytes()))
         })
         .collect::<Result<Vec<_>, _>>()?;
     // Per worker: a tile's pixels (at most every channel of every pixel, plus a flag) and
@@ -136,8 +149,18 @@ pub fn parse_memory_size(text: &str) -> Result<u64, String> {
 /// Refuses a render whose estimate exceeds `limit` (or the available memory when `None`),
 /// with a one-line message giving the estimate and its largest parts.
 pub fn check(estimate: &MemoryEstimate, limit: Option<u64>, label: &str) -> Result<(), String> {
+    check_against(estimate, limit, "--max-memory", label)
+}
+
+/// [`check`] naming the limit `limit_name` in the message (an option or a field).
+pub fn check_against(
+    estimate: &MemoryEstimate,
+    limit: Option<u64>,
+    limit_name: &str,
+    label: &str,
+) -> Result<(), String> {
     let (limit, source) = match limit {
-        Some(limit) => (limit, "--max-memory"),
+        Some(limit) => (limit, limit_name),
         None => match available_memory() {
             Some(available) => (available, "available memory"),
             None => return Ok(()),

@@ -337,11 +337,11 @@ pub fn environment_mean(environment: &Environment, textures: &[Arc<Texture>]) ->
             let (width, height) = (level.width as usize, level.height as usize);
             let polar_angle = |row: usize| std::f64::consts::PI * row as f64 / height as f64;
             let mut mean = [0.0f64; 3];
-            for (row, texels) in level.texels.chunks_exact(width).enumerate() {
+            for row in 0..height {
                 let band_share = (polar_angle(row).cos() - polar_angle(row + 1).cos()) / 2.0;
                 let weight = band_share / width as f64;
-                for texel in texels {
-                    for (sum, &value) in mean.iter_mut().zip(texel) {
+                for column in 0..width {
+                    for (sum, value) in mean.iter_mut().zip(level.texel(column, row)) {
                         *sum += weight * f64::from(value);
                     }
                 }

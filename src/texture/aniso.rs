@@ -9,8 +9,9 @@ use glam::Vec4;
 
 use super::ellipse;
 pub(crate) use super::ellipse::footprint;
-use super::filter_closest_bilinear::bilinear;
-use super::mip_pyramid::MipPyramid;
+use super::filter_closest_bilinear::bilinear_from;
+use super::mip_pyramid::{MipLevel, MipPyramid};
+use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
 use super::{TextureQuery, WrapMode};
 
@@ -41,10 +42,28 @@ fn symmetric_weights(weights: &mut [f32], inv_n: f32, gauss_scale: f32) -> f32 {
     sum
 }
 
-/// The anisotropic lookup (out of line for the same reason as `ewa::sample`).
+/// The anisotropic lookup (out of line for the same reason as `ewa::sample`), compiled
+/// once per storage kind (that of level 0, which every level of a pyramid normally
+/// shares).
 #[inline(never)]
 pub(crate) fn sample<O: TexelObserver>(
     pyramid: &MipPyramid,
+    q: &TextureQuery,
+    max_aniso: f32,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    with_texel_source!(&pyramid.levels[0].texels, |kind| sample_from(
+        kind, pyramid, q, max_aniso, wrap, obs
+    ))
+}
+
+/// The probes along the major axis on each level, for levels of the storage kind of
+/// `_kind`; a level of another kind goes through [`probes_other_kind`].
+#[inline(always)]
+fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
+    _kind: S,
+    pyramid: &'a MipPyramid,
     q: &TextureQuery,
     max_aniso: f32,
     wrap: (WrapMode, WrapMode),
@@ -61,18 +80,22 @@ pub(crate) fn sample<O: TexelObserver>(
     // Probe offsets p in [-1, 1] map to half the distance between the ellipse's
     // end-circle centres, (major - minor) / 2, on either side of (s, t).
     let ll = 2.0 * (f.axes.major - f.axes.minor);
-    let ds = cos * ll * 0.5;
-    let dt = sin * ll * 0.5;
-    let inv_n = 1.0 / n as f32;
-    let gauss_scale = f.axes.major / ll;
+    let line = ProbeLine {
+        n,
+        ds: cos * ll * 0.5,
+        dt: sin * ll * 0.5,
+        inv_n: 1.0 / n as f32,
+        gauss_scale: f.axes.major / ll,
+    };
 
     // Gaussian weights exp(-2 x^2), x = p * major / (2 (major - minor)), shared by
     // both levels; kept on the stack up to MAX_STACK_PROBES probes.
     let mut weights = [0.0f32; MAX_STACK_PROBES];
     let mut wsum = 0.0f32;
     if (3..=MAX_STACK_PROBES).contains(&n) {
-        wsum = symmetric_weights(&mut weights[..n], inv_n, gauss_scale);
+        wsum = symmetric_weights(&mut weights[..n], line.inv_n, line.gauss_scale);
     }
+    let weights = (&weights[..], wsum);
 
     let mut sum = Vec4::ZERO;
     for k in 0..2 {
@@ -82,38 +105,94 @@ pub(crate) fn sample<O: TexelObserver>(
         }
         let m = f.levels.levels[k];
         let level = &pyramid.levels[m];
-        let level_sum = match n {
-            1 => bilinear(level, m, q.s, q.t, wrap, obs),
-            2 => {
-                let a = bilinear(level, m, q.s - 0.5 * ds, q.t - 0.5 * dt, wrap, obs);
-                let b = bilinear(level, m, q.s + 0.5 * ds, q.t + 0.5 * dt, wrap, obs);
-                0.5 * a + 0.5 * b
-            }
-            _ if n <= MAX_STACK_PROBES => {
-                let mut acc = Vec4::ZERO;
-                for (i, w) in weights[..n].iter().enumerate() {
-                    let p = 2.0 * (i as f32 + 0.5) * inv_n - 1.0;
-                    acc += *w * bilinear(level, m, q.s + p * ds, q.t + p * dt, wrap, obs);
-                }
-                acc / wsum
-            }
-            _ => {
-                // Very high anisotropy limits: weights computed on the fly.
-                let mut acc = Vec4::ZERO;
-                let mut wsum = 0.0f32;
-                for i in 0..n {
-                    let p = 2.0 * (i as f32 + 0.5) * inv_n - 1.0;
-                    let x = p * gauss_scale;
-                    let w = (-2.0 * x * x).exp();
-                    wsum += w;
-                    acc += w * bilinear(level, m, q.s + p * ds, q.t + p * dt, wrap, obs);
-                }
-                acc / wsum
-            }
+        let level_sum = match S::view(&level.texels) {
+            Some(texels) => probes(level, texels, m, q, &line, weights, wrap, obs),
+            None => probes_other_kind(level, m, q, &line, weights, wrap, obs),
         };
         sum += level_weight * level_sum;
     }
     sum
+}
+
+/// Where the probes of one lookup sit: `n` probes at (s, t) + p (ds, dt), p in [-1, 1],
+/// Gaussian scale `gauss_scale`.
+#[derive(Clone, Copy)]
+struct ProbeLine {
+    n: usize,
+    ds: f32,
+    dt: f32,
+    inv_n: f32,
+    gauss_scale: f32,
+}
+
+/// Weighted average of the probes of `line` on one level, reading `texels` (the level's
+/// own); `weights` are the stacked Gaussian weights and their sum when 3 <= n <=
+/// MAX_STACK_PROBES.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn probes<'a, S: TexelSource<'a>, O: TexelObserver>(
+    level: &'a MipLevel,
+    texels: S,
+    m: usize,
+    q: &TextureQuery,
+    line: &ProbeLine,
+    (weights, wsum): (&[f32], f32),
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    let ProbeLine {
+        n,
+        ds,
+        dt,
+        inv_n,
+        gauss_scale,
+    } = *line;
+    match n {
+        1 => bilinear_from(level, texels, m, q.s, q.t, wrap, obs),
+        2 => {
+            let a = bilinear_from(level, texels, m, q.s - 0.5 * ds, q.t - 0.5 * dt, wrap, obs);
+            let b = bilinear_from(level, texels, m, q.s + 0.5 * ds, q.t + 0.5 * dt, wrap, obs);
+            0.5 * a + 0.5 * b
+        }
+        _ if n <= MAX_STACK_PROBES => {
+            let mut acc = Vec4::ZERO;
+            for (i, w) in weights[..n].iter().enumerate() {
+                let p = 2.0 * (i as f32 + 0.5) * inv_n - 1.0;
+                acc += *w * bilinear_from(level, texels, m, q.s + p * ds, q.t + p * dt, wrap, obs);
+            }
+            acc / wsum
+        }
+        _ => {
+            // Very high anisotropy limits: weights computed on the fly.
+            let mut acc = Vec4::ZERO;
+            let mut wsum = 0.0f32;
+            for i in 0..n {
+                let p = 2.0 * (i as f32 + 0.5) * inv_n - 1.0;
+                let x = p * gauss_scale;
+                let w = (-2.0 * x * x).exp();
+                wsum += w;
+                acc += w * bilinear_from(level, texels, m, q.s + p * ds, q.t + p * dt, wrap, obs);
+            }
+            acc / wsum
+        }
+    }
+}
+
+/// [`probes`] for the rare level whose storage kind differs from level 0's.
+#[cold]
+#[inline(never)]
+fn probes_other_kind<O: TexelObserver>(
+    level: &MipLevel,
+    m: usize,
+    q: &TextureQuery,
+    line: &ProbeLine,
+    weights: (&[f32], f32),
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    with_texel_source!(&level.texels, |texels| probes(
+        level, texels, m, q, line, weights, wrap, obs
+    ))
 }
 
 #[cfg(test)]
@@ -158,7 +237,11 @@ mod tests {
 
     #[test]
     fn weights_sum_to_one_on_constant_texture() {
-        let p = MipPyramid::build(MipLevel::new(128, 96, vec![[0.7; 4]; 128 * 96]).unwrap());
+        let p = MipPyramid::build(
+            MipLevel::new(128, 96, vec![[0.7; 4]; 128 * 96]).unwrap(),
+            "t",
+        )
+        .unwrap();
         for k in 0..64 {
             let angle = k as f32 * 0.37;
             let major = 0.002 * (1.0 + k as f32);
@@ -191,7 +274,7 @@ mod tests {
         let texels = (0..64 * 64)
             .map(|i| [(i % 2) as f32, 0.0, 0.0, 1.0])
             .collect();
-        let p = MipPyramid::build(MipLevel::new(64, 64, texels).unwrap());
+        let p = MipPyramid::build(MipLevel::new(64, 64, texels).unwrap(), "t").unwrap();
         let centre = 1.5 / 64.0; // centre of column 1 (value 1)
         let along_s = TextureQuery {
             s: centre,

@@ -249,7 +249,11 @@ mod tests {
     use super::*;
 
     fn pyramid(w: u32, h: u32) -> MipPyramid {
-        MipPyramid::build(MipLevel::new(w, h, vec![[0.0; 4]; (w * h) as usize]).unwrap())
+        MipPyramid::build(
+            MipLevel::new(w, h, vec![[0.0; 4]; (w * h) as usize]).unwrap(),
+            "t",
+        )
+        .unwrap()
     }
 
     #[test]

@@ -16,6 +16,7 @@ use glam::Vec4;
 use super::ellipse;
 use super::filter_closest_bilinear::bilinear;
 use super::mip_pyramid::{MipLevel, MipPyramid};
+use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
 use super::wrap::wrap_texel;
 use super::{TextureQuery, WrapMode};
@@ -50,16 +51,20 @@ pub(crate) fn sample<O: TexelObserver>(
             continue;
         }
         let m = f.levels.levels[k];
-        sum += w * ewa_on_level(&pyramid.levels[m], m, q.s, q.t, major, minor, wrap, obs);
+        let level = &pyramid.levels[m];
+        sum += w * with_texel_source!(&level.texels, |texels| ewa_on_level(
+            level, texels, m, q.s, q.t, major, minor, wrap, obs
+        ));
     }
     sum
 }
 
 /// Gaussian-weighted average over the ellipse with semi-axis vectors `major`,
-/// `minor` (st units) centred at (s, t), on one level.
+/// `minor` (st units) centred at (s, t), on one level, reading `texels` (the level's own).
 #[allow(clippy::too_many_arguments)]
-fn ewa_on_level<O: TexelObserver>(
-    level: &MipLevel,
+fn ewa_on_level<'a, S: TexelSource<'a>, O: TexelObserver>(
+    level: &'a MipLevel,
+    texels: S,
     level_index: usize,
     s: f32,
     t: f32,
@@ -119,7 +124,7 @@ fn ewa_on_level<O: TexelObserver>(
                 wsum += weight;
                 if let (Some(ix), Some(iy)) = (wrap_texel(tx, level.width, wrap.0), row) {
                     obs.touch(level_index, ix, iy);
-                    acc += weight * Vec4::from_array(level.texel(ix, iy));
+                    acc += weight * texels.texel(iy * level.width as usize + ix);
                 }
             }
         }
@@ -132,7 +137,7 @@ fn ewa_on_level<O: TexelObserver>(
         let ix = wrap_texel(x.round(), level.width, wrap.0);
         let iy = wrap_texel(y.round(), level.height, wrap.1);
         match (ix, iy) {
-            (Some(ix), Some(iy)) => Vec4::from_array(level.texel(ix, iy)),
+            (Some(ix), Some(iy)) => texels.texel(iy * level.width as usize + ix),
             _ => Vec4::ZERO,
         }
     }
@@ -145,7 +150,8 @@ mod tests {
 
     #[test]
     fn constant_texture_is_reproduced() {
-        let p = MipPyramid::build(MipLevel::new(40, 24, vec![[0.3; 4]; 40 * 24]).unwrap());
+        let p = MipPyramid::build(MipLevel::new(40, 24, vec![[0.3; 4]; 40 * 24]).unwrap(), "t")
+            .unwrap();
         for k in 0..40 {
             let a = k as f32 * 0.41;
             let q = TextureQuery {

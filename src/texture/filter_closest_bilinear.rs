@@ -8,6 +8,7 @@
 use glam::Vec4;
 
 use super::mip_pyramid::MipLevel;
+use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
 use super::wrap::{floor_f32, wrap_texel};
 use super::WrapMode;
@@ -37,7 +38,7 @@ fn fetch<O: TexelObserver>(
     ) {
         (Some(x), Some(y)) => {
             obs.touch(level_index, x, y);
-            Vec4::from_array(level.texel(x, y))
+            level.texel_vec4(x, y)
         }
         _ => Vec4::ZERO,
     }
@@ -73,15 +74,54 @@ fn floor_i32(x: f32) -> i32 {
     t - ((t as f32 > x) as i32)
 }
 
-/// Bilinear interpolation of the four texels around (s, t).
+/// Bilinear interpolation of the four texels around (s, t): [`bilinear_from`] with the
+/// level's storage kind picked here.
+#[inline(always)]
+pub(crate) fn bilinear<O: TexelObserver>(
+    level: &MipLevel,
+    level_index: usize,
+    s: f32,
+    t: f32,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    with_texel_source!(&level.texels, |texels| bilinear_from(
+        level,
+        texels,
+        level_index,
+        s,
+        t,
+        wrap,
+        obs
+    ))
+}
+
+/// [`bilinear`] kept out of line, for the rare level whose storage kind differs from the
+/// one a mip-mapped filter was compiled for.
+#[cold]
+#[inline(never)]
+pub(crate) fn bilinear_other_kind<O: TexelObserver>(
+    level: &MipLevel,
+    level_index: usize,
+    s: f32,
+    t: f32,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    bilinear(level, level_index, s, t, wrap, obs)
+}
+
+/// Bilinear interpolation of the four texels around (s, t), reading `texels` (the
+/// level's own texels, of a storage kind the caller has picked).
 ///
 /// The common case, all four texels inside the level, is decided with two unsigned
 /// compares on the integer texel coordinates and reads the texels directly; footprints
 /// across an edge go to [`bilinear_wrapped`], kept out of line so the loops of the
 /// mip-mapped filters stay small.
 #[inline(always)]
-pub(crate) fn bilinear<O: TexelObserver>(
-    level: &MipLevel,
+pub(crate) fn bilinear_from<'a, S: TexelSource<'a>, O: TexelObserver>(
+    level: &'a MipLevel,
+    texels: S,
     level_index: usize,
     s: f32,
     t: f32,
@@ -101,16 +141,16 @@ pub(crate) fn bilinear<O: TexelObserver>(
         obs.touch(level_index, xi + 1, yi);
         obs.touch(level_index, xi, yi + 1);
         obs.touch(level_index, xi + 1, yi + 1);
-        // One bounds check for the whole 2x2 footprint instead of four.
-        let (upper, lower) = match level.texels.get(k..k + row + 2) {
-            Some(block) => (&block[..2], &block[row..]),
-            None => return bilinear_wrapped(level, level_index, s, t, wrap, obs),
+        // One bounds check for the whole 2x2 footprint.
+        let blended = texels.bilinear_quad(k, row, |a, b, c, d| {
+            let top = a * (1.0 - fs) + b * fs;
+            let bottom = c * (1.0 - fs) + d * fs;
+            top * (1.0 - ft) + bottom * ft
+        });
+        return match blended {
+            Some(v) => v,
+            None => bilinear_wrapped(level, level_index, s, t, wrap, obs),
         };
-        let (a, b) = (Vec4::from_array(upper[0]), Vec4::from_array(upper[1]));
-        let (c, d) = (Vec4::from_array(lower[0]), Vec4::from_array(lower[1]));
-        let top = a * (1.0 - fs) + b * fs;
-        let bottom = c * (1.0 - fs) + d * fs;
-        return top * (1.0 - ft) + bottom * ft;
     }
     bilinear_wrapped(level, level_index, s, t, wrap, obs)
 }
@@ -161,7 +201,7 @@ fn bilinear_any_wrap<O: TexelObserver>(
         for (col, x) in xs.iter().enumerate() {
             if let Some(x) = *x {
                 obs.touch(level_index, x, y);
-                corner[2 * row + col] = Vec4::from_array(level.texel(x, y));
+                corner[2 * row + col] = level.texel_vec4(x, y);
             }
         }
     }
@@ -201,10 +241,10 @@ fn bilinear_periodic<O: TexelObserver>(
     obs.touch(level_index, x1, y0);
     obs.touch(level_index, x0, y1);
     obs.touch(level_index, x1, y1);
-    let a = Vec4::from_array(level.texel(x0, y0));
-    let b = Vec4::from_array(level.texel(x1, y0));
-    let c = Vec4::from_array(level.texel(x0, y1));
-    let d = Vec4::from_array(level.texel(x1, y1));
+    let a = level.texel_vec4(x0, y0);
+    let b = level.texel_vec4(x1, y0);
+    let c = level.texel_vec4(x0, y1);
+    let d = level.texel_vec4(x1, y1);
     let top = a * (1.0 - fs) + b * fs;
     let bottom = c * (1.0 - fs) + d * fs;
     Some(top * (1.0 - ft) + bottom * ft)
@@ -212,6 +252,7 @@ fn bilinear_periodic<O: TexelObserver>(
 
 #[cfg(test)]
 mod tests {
+    use super::super::texels::Texels;
     use super::super::tiles::NoTextureTiles;
     use super::*;
 
@@ -275,7 +316,24 @@ mod tests {
                 })
             })
             .collect();
-        let l = MipLevel::new(w, h, texels).unwrap();
+        let float = MipLevel::new(w, h, texels).unwrap();
+        // The same level stored as bytes (sRGB) and as halves: each storage's fast path.
+        let values = float.to_rgba_f32();
+        let stored_as = |kind: Texels| MipLevel {
+            texels: kind.same_kind_from(&values, "t").unwrap(),
+            ..float.clone()
+        };
+        for l in [
+            float.clone(),
+            stored_as(Texels::bytes(vec![], crate::texture::ColorSpace::Srgb)),
+            stored_as(Texels::Half(vec![])),
+        ] {
+            fast_path_agrees(&l, w, h);
+        }
+    }
+
+    fn fast_path_agrees(l: &MipLevel, w: u32, h: u32) {
+        let l = l.clone();
         let mut interior = 0;
         let mut periodic = 0;
         for k in 0..2000 {

@@ -1,4 +1,4 @@
-//! Decoding texture files into linear RGBA f32 levels.
+//! Decoding texture files into RGBA levels in the source's precision.
 //!
 //! PNG and JPEG (8 or 16 bit; grey, grey-alpha, RGB, RGBA) go through the `image`
 //! crate; OpenEXR (half, float or uint channels) through the `exr` crate; TIFF,
@@ -8,6 +8,10 @@
 //! of integer TIFF are decoded from sRGB to linear; alpha, OpenEXR and floating-point
 //! TIFF data are always used as stored. A mip-mapped OpenEXR or `.tx` (as `maketx`
 //! writes) returns all its levels, finest first.
+//!
+//! Storage follows the source ([`Texels`]): 8-bit images keep their bytes (the sRGB
+//! decoding is a table applied at fetch), OpenEXR whose channels are all half stays
+//! half, everything else becomes f32.
 
 use std::io::Cursor;
 
@@ -15,6 +19,7 @@ use exr::prelude::{FlatSamples, Levels, ReadChannels, ReadLayers};
 use image::DynamicImage;
 
 use super::mip_pyramid::MipLevel;
+use super::texels::{try_texel_vec, Texels};
 use super::{tiled_tiff, ColorSpace, TextureError};
 
 /// Decodes `bytes` (PNG, JPEG, OpenEXR or TIFF) into one or more levels, finest first.
@@ -58,38 +63,35 @@ fn decode_png_jpeg(
     label: &str,
     color_space: ColorSpace,
 ) -> Result<MipLevel, TextureError> {
-    let img = image::load_from_memory(bytes).map_err(|e| TextureError::Decode {
+    let decode_error = |e: image::ImageError| TextureError::Decode {
         label: label.to_string(),
         message: e.to_string(),
-    })?;
+    };
+    let mut reader = image::ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| decode_error(e.into()))?;
+    // The decoder's own buffer is bounded like a TIFF level (the `image` crate's default,
+    // 512 MiB, would refuse an ordinary 16k 8-bit texture); larger ones are refused with
+    // an error, never an aborting allocation.
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(tiled_tiff::MAX_LEVEL_BYTES);
+    reader.limits(limits);
+    let img = reader.decode().map_err(decode_error)?;
     let (w, h) = (img.width(), img.height());
-    let srgb = color_space == ColorSpace::Srgb;
-    let texels: Vec<[f32; 4]> = match img {
-        DynamicImage::ImageLuma8(_)
-        | DynamicImage::ImageLumaA8(_)
-        | DynamicImage::ImageRgb8(_)
-        | DynamicImage::ImageRgba8(_) => {
-            let lut: [f32; 256] = std::array::from_fn(|i| {
-                let v = i as f32 / 255.0;
-                if srgb {
-                    srgb_to_linear(v)
-                } else {
-                    v
-                }
-            });
-            img.to_rgba8()
-                .pixels()
-                .map(|p| {
-                    [
-                        lut[p[0] as usize],
-                        lut[p[1] as usize],
-                        lut[p[2] as usize],
-                        p[3] as f32 / 255.0,
-                    ]
-                })
-                .collect()
-        }
+    let count = w as usize * h as usize;
+    // 8-bit images keep their bytes (decoded at fetch through the colour space's table).
+    let bytes = |raw: &[u8], channels: usize, expand: fn(&[u8]) -> [u8; 4]| {
+        let mut texels = try_texel_vec(count, label)?;
+        texels.extend(raw.chunks_exact(channels).map(expand));
+        Ok::<_, TextureError>(Texels::bytes(texels, color_space))
+    };
+    let texels = match &img {
+        DynamicImage::ImageLuma8(b) => bytes(b.as_raw(), 1, |p| [p[0], p[0], p[0], 255])?,
+        DynamicImage::ImageLumaA8(b) => bytes(b.as_raw(), 2, |p| [p[0], p[0], p[0], p[1]])?,
+        DynamicImage::ImageRgb8(b) => bytes(b.as_raw(), 3, |p| [p[0], p[1], p[2], 255])?,
+        DynamicImage::ImageRgba8(b) => bytes(b.as_raw(), 4, |p| [p[0], p[1], p[2], p[3]])?,
         _ => {
+            let srgb = color_space == ColorSpace::Srgb;
             let decode = |v: u16| {
                 let v = v as f32 / 65535.0;
                 if srgb {
@@ -98,20 +100,19 @@ fn decode_png_jpeg(
                     v
                 }
             };
-            img.to_rgba16()
-                .pixels()
-                .map(|p| {
-                    [
-                        decode(p[0]),
-                        decode(p[1]),
-                        decode(p[2]),
-                        p[3] as f32 / 65535.0,
-                    ]
-                })
-                .collect()
+            let mut texels = try_texel_vec(count, label)?;
+            texels.extend(img.to_rgba16().pixels().map(|p| {
+                [
+                    decode(p[0]),
+                    decode(p[1]),
+                    decode(p[2]),
+                    p[3] as f32 / 65535.0,
+                ]
+            }));
+            Texels::Float(texels)
         }
     };
-    MipLevel::new(w, h, texels).map_err(|m| dimensions_error(label, m))
+    MipLevel::with_texels(w, h, texels).map_err(|m| dimensions_error(label, m))
 }
 
 // Levels are indexed across the per-channel level lists, hence the index loop.
@@ -164,12 +165,16 @@ fn decode_exr(bytes: &[u8], label: &str) -> Result<Vec<MipLevel>, TextureError> 
     let n_levels = level_lists.iter().map(Vec::len).min().unwrap_or(0);
     let (mut w, mut h) = (layer.size.0, layer.size.1);
     let mut levels = Vec::with_capacity(n_levels);
+    // Half channels stay half when every channel read is half; anything else is f32.
+    let all_half = sources.iter().flatten().all(|&ci| {
+        level_lists[ci]
+            .iter()
+            .all(|samples| matches!(samples, FlatSamples::F16(_)))
+    });
     for li in 0..n_levels {
         let count = w * h;
-        let mut texels = vec![[0.0f32, 0.0, 0.0, 1.0]; count];
-        for (k, src) in sources.iter().enumerate() {
-            let Some(ci) = *src else { continue };
-            let samples = level_lists[ci][li];
+        for src in sources.iter().flatten() {
+            let samples = level_lists[*src][li];
             if samples.len() != count {
                 if li == 0 {
                     return Err(dimensions_error(
@@ -180,12 +185,36 @@ fn decode_exr(bytes: &[u8], label: &str) -> Result<Vec<MipLevel>, TextureError> 
                 // Level sizes not in the halving chain (e.g. rounded up): use level 0 only.
                 return Ok(levels.into_iter().take(1).collect());
             }
-            for (t, v) in texels.iter_mut().zip(samples.values_as_f32()) {
-                t[k] = v;
-            }
         }
-        let level =
-            MipLevel::new(w as u32, h as u32, texels).map_err(|m| dimensions_error(label, m))?;
+        let texels = if all_half {
+            let one = half::f16::ONE;
+            let mut texels = try_texel_vec(count, label)?;
+            texels.resize(
+                count,
+                [half::f16::ZERO, half::f16::ZERO, half::f16::ZERO, one],
+            );
+            for (k, src) in sources.iter().enumerate() {
+                let Some(ci) = *src else { continue };
+                if let FlatSamples::F16(values) = level_lists[ci][li] {
+                    for (t, v) in texels.iter_mut().zip(values) {
+                        t[k] = *v;
+                    }
+                }
+            }
+            Texels::Half(texels)
+        } else {
+            let mut texels = try_texel_vec(count, label)?;
+            texels.resize(count, [0.0f32, 0.0, 0.0, 1.0]);
+            for (k, src) in sources.iter().enumerate() {
+                let Some(ci) = *src else { continue };
+                for (t, v) in texels.iter_mut().zip(level_lists[ci][li].values_as_f32()) {
+                    t[k] = v;
+                }
+            }
+            Texels::Float(texels)
+        };
+        let level = MipLevel::with_texels(w as u32, h as u32, texels)
+            .map_err(|m| dimensions_error(label, m))?;
         levels.push(level);
         w = (w / 2).max(1);
         h = (h / 2).max(1);

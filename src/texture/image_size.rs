@@ -1,17 +1,35 @@
-//! A texture file's size in texels, read from its header without decoding it, so the memory
-//! a texture will take can be estimated before any of it is allocated.
+//! A texture file's size in texels and its sample type, read from its header without
+//! decoding it, so the memory a texture will take can be estimated before any of it is
+//! allocated. The estimate follows the storage of [`super::Texels`]: 4 bytes per texel for
+//! 8-bit sources, 8 for half-float ones, 16 for everything else, over every mip level.
 
 use std::io::{BufReader, Cursor, Read, Seek};
 use std::path::Path;
 
 use super::TextureError;
 
-/// Width and height of level 0 of the image in `reader` (PNG, JPEG, OpenEXR or TIFF, sniffed
-/// from the first bytes). `label` names the source in errors.
-fn image_size<R: Read + Seek + std::io::BufRead>(
+/// What a texture file's header says about its decoded storage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TextureHeader {
+    /// Width of level 0 in texels.
+    pub width: u32,
+    /// Height of level 0 in texels.
+    pub height: u32,
+    /// Bytes a decoded texel takes: 4 (8-bit samples), 8 (half) or 16 (anything else).
+    pub bytes_per_texel: u64,
+}
+
+/// Bytes per stored texel for 8-bit, half-float and other samples.
+const BYTE_TEXEL: u64 = 4;
+const HALF_TEXEL: u64 = 8;
+const FLOAT_TEXEL: u64 = 16;
+
+/// The header of the image in `reader` (PNG, JPEG, OpenEXR or TIFF, sniffed from the
+/// first bytes). `label` names the source in errors.
+fn image_header<R: Read + Seek + std::io::BufRead>(
     mut reader: R,
     label: &str,
-) -> Result<(u32, u32), TextureError> {
+) -> Result<TextureHeader, TextureError> {
     let bad = |message: String| TextureError::Dimensions {
         label: label.to_string(),
         message,
@@ -32,42 +50,100 @@ fn image_size<R: Read + Seek + std::io::BufRead>(
             .first()
             .ok_or_else(|| bad("OpenEXR file without a header".into()))?;
         let size = header.layer_size;
-        Ok((size.0 as u32, size.1 as u32))
+        let all_half = header
+            .channels
+            .list
+            .iter()
+            .all(|c| c.sample_type == exr::meta::attribute::SampleType::F16);
+        Ok(TextureHeader {
+            width: size.0 as u32,
+            height: size.1 as u32,
+            bytes_per_texel: if all_half { HALF_TEXEL } else { FLOAT_TEXEL },
+        })
     } else if magic.starts_with(b"II*\0") || magic.starts_with(b"MM\0*") {
         let mut decoder =
             tiff::decoder::Decoder::new(reader).map_err(|e| bad(format!("TIFF header: {e}")))?;
-        decoder
-            .dimensions()
-            .map_err(|e| bad(format!("TIFF header: {e}")))
+        let tiff_bad = |e: tiff::TiffError| bad(format!("TIFF header: {e}"));
+        let (width, height) = decoder.dimensions().map_err(tiff_bad)?;
+        let bits = match decoder.colortype().map_err(tiff_bad)? {
+            tiff::ColorType::Gray(b)
+            | tiff::ColorType::GrayA(b)
+            | tiff::ColorType::RGB(b)
+            | tiff::ColorType::RGBA(b) => b,
+            tiff::ColorType::Multiband { bit_depth, .. } => bit_depth,
+            _ => 32,
+        };
+        // SampleFormat 3 is IEEE floating point.
+        let float = decoder
+            .find_tag_unsigned::<u16>(tiff::tags::Tag::SampleFormat)
+            .map_err(tiff_bad)?
+            == Some(3);
+        let bytes_per_texel = match (bits, float) {
+            (8, false) => BYTE_TEXEL,
+            (16, true) => HALF_TEXEL,
+            _ => FLOAT_TEXEL,
+        };
+        Ok(TextureHeader {
+            width,
+            height,
+            bytes_per_texel,
+        })
     } else {
-        image::ImageReader::new(reader)
+        use image::ImageDecoder;
+        let decoder = image::ImageReader::new(reader)
             .with_guessed_format()
             .map_err(|e| bad(format!("cannot read the header: {e}")))?
-            .into_dimensions()
-            .map_err(|e| bad(format!("image header: {e}")))
+            .into_decoder()
+            .map_err(|e| bad(format!("image header: {e}")))?;
+        let (width, height) = decoder.dimensions();
+        let colour = decoder.color_type();
+        let eight_bit = colour.bytes_per_pixel() == colour.channel_count();
+        Ok(TextureHeader {
+            width,
+            height,
+            bytes_per_texel: if eight_bit { BYTE_TEXEL } else { FLOAT_TEXEL },
+        })
     }
 }
 
-/// Level-0 size of the texture file at `path`, from its header.
-pub fn file_image_size(path: &Path) -> Result<(u32, u32), TextureError> {
+/// The header of the texture file at `path`.
+pub fn file_texture_header(path: &Path) -> Result<TextureHeader, TextureError> {
     let label = path.display().to_string();
     let file = std::fs::File::open(path).map_err(|source| TextureError::Io {
         label: label.clone(),
         source,
     })?;
-    image_size(BufReader::new(file), &label)
+    image_header(BufReader::new(file), &label)
+}
+
+/// The header of encoded texture bytes.
+pub fn encoded_texture_header(bytes: &[u8], label: &str) -> Result<TextureHeader, TextureError> {
+    image_header(Cursor::new(bytes), label)
+}
+
+/// Level-0 size of the texture file at `path`, from its header.
+pub fn file_image_size(path: &Path) -> Result<(u32, u32), TextureError> {
+    file_texture_header(path).map(|h| (h.width, h.height))
 }
 
 /// Level-0 size of encoded texture bytes, from their header.
 pub fn encoded_image_size(bytes: &[u8], label: &str) -> Result<(u32, u32), TextureError> {
-    image_size(Cursor::new(bytes), label)
+    encoded_texture_header(bytes, label).map(|h| (h.width, h.height))
 }
 
-/// Bytes a decoded texture of level-0 size `width` x `height` takes with its mip levels:
-/// four f32 channels per texel, the pyramid adding at most a third.
-pub fn decoded_texture_bytes(width: u32, height: u32) -> u64 {
-    let level0 = u64::from(width) * u64::from(height) * 16;
-    level0 + level0.div_ceil(3)
+impl TextureHeader {
+    /// Bytes the decoded texture takes with all its mip levels: every level of the
+    /// halving chain (integer division, minimum 1, down to 1x1) at `bytes_per_texel`.
+    pub fn decoded_bytes(&self) -> u64 {
+        let (mut w, mut h) = (u64::from(self.width), u64::from(self.height));
+        let mut texels = w * h;
+        while w > 1 || h > 1 {
+            w = (w / 2).max(1);
+            h = (h / 2).max(1);
+            texels += w * h;
+        }
+        texels.saturating_mul(self.bytes_per_texel)
+    }
 }
 
 #[cfg(test)]
@@ -95,14 +171,40 @@ mod tests {
     }
 
     #[test]
-    fn decoded_bytes_bound_the_real_pyramid() {
+    fn decoded_bytes_equal_the_real_pyramid() {
         let texture =
             crate::texture::Texture::from_rgba_f32(37, 21, vec![[0.5; 4]; 37 * 21]).unwrap();
-        let estimate = decoded_texture_bytes(37, 21);
-        let real = texture.memory_bytes() as u64;
-        assert!(
-            estimate >= real && estimate <= real * 11 / 10,
-            "{estimate} vs {real}"
-        );
+        let header = TextureHeader {
+            width: 37,
+            height: 21,
+            bytes_per_texel: FLOAT_TEXEL,
+        };
+        assert_eq!(header.decoded_bytes(), texture.memory_bytes() as u64);
+        // A thin texture's levels add up to almost twice level 0, not a third.
+        let thin = TextureHeader {
+            width: 1024,
+            height: 1,
+            bytes_per_texel: BYTE_TEXEL,
+        };
+        assert_eq!(thin.decoded_bytes(), 2047 * 4);
+    }
+
+    #[test]
+    fn headers_give_the_stored_precision() {
+        let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textures");
+        for (name, space) in [
+            ("checker.png", crate::texture::ColorSpace::Srgb),
+            ("miplevels.exr", crate::texture::ColorSpace::Linear),
+        ] {
+            let header = file_texture_header(&assets.join(name)).unwrap();
+            let decoded = crate::texture::Texture::from_file(&assets.join(name), space).unwrap();
+            assert_eq!(
+                header.decoded_bytes(),
+                decoded.memory_bytes() as u64,
+                "{name}: {header:?}"
+            );
+        }
+        let png = file_texture_header(&assets.join("checker.png")).unwrap();
+        assert_eq!(png.bytes_per_texel, BYTE_TEXEL);
     }
 }

@@ -7,11 +7,19 @@
 //! average, otherwise it is a bilinear sample of the previous level at the new
 //! texel's centre with edge clamping. Everything is computed in f32 from the
 //! previous f32 level. Non-power-of-two sizes are handled by the bilinear rule.
+//!
+//! Levels are stored in the precision of level 0 (see [`Texels`]): an 8-bit texture's
+//! levels are rounded to bytes as `maketx` rounds them for 8-bit output, so they equal
+//! `maketx`'s levels exactly, and a half texture's levels are rounded to half.
+
+use super::texels::{try_texel_vec, Texels};
+use super::TextureError;
 
 /// Largest accepted side, so every texel coordinate is exact in f32.
 const MAX_SIDE: u32 = 1 << 24;
 
-/// One level of the pyramid: linear RGBA texels, row-major, t = 0 first.
+/// One level of the pyramid: RGBA texels, row-major, t = 0 first, in the precision of
+/// the source ([`Texels`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MipLevel {
     /// Width in texels.
@@ -19,12 +27,17 @@ pub struct MipLevel {
     /// Height in texels.
     pub height: u32,
     /// `width * height` texels.
-    pub texels: Vec<[f32; 4]>,
+    pub texels: Texels,
 }
 
 impl MipLevel {
-    /// Checks the dimensions against the texel count.
+    /// A level of linear f32 texels; checks the dimensions against the texel count.
     pub fn new(width: u32, height: u32, texels: Vec<[f32; 4]>) -> Result<MipLevel, String> {
+        Self::with_texels(width, height, Texels::Float(texels))
+    }
+
+    /// A level of any storage; checks the dimensions against the texel count.
+    pub fn with_texels(width: u32, height: u32, texels: Texels) -> Result<MipLevel, String> {
         if width == 0 || height == 0 {
             return Err(format!("{width}x{height} has no texels"));
         }
@@ -47,10 +60,23 @@ impl MipLevel {
         })
     }
 
-    /// The texel at column x, row y (both in range).
+    /// The linear RGBA texel at column x, row y (both in range).
     #[inline(always)]
     pub fn texel(&self, x: usize, y: usize) -> [f32; 4] {
-        self.texels[y * self.width as usize + x]
+        self.texel_vec4(x, y).to_array()
+    }
+
+    /// [`MipLevel::texel`] as a vector: the accessor every filter reads through.
+    #[inline(always)]
+    pub(crate) fn texel_vec4(&self, x: usize, y: usize) -> glam::Vec4 {
+        self.texels.get(y * self.width as usize + x)
+    }
+
+    /// Every texel as linear RGBA f32, row-major (for tools and tests).
+    pub fn to_rgba_f32(&self) -> Vec<[f32; 4]> {
+        (0..self.texels.len())
+            .map(|i| self.texels.get(i).to_array())
+            .collect()
     }
 
     /// min(width, height) as f32: OIIO's per-level filter-width scale.
@@ -58,60 +84,61 @@ impl MipLevel {
     pub(crate) fn min_side(&self) -> f32 {
         self.width.min(self.height) as f32
     }
+}
 
-    /// The next coarser level by the `maketx` box rule.
-    fn halve(&self) -> MipLevel {
-        let (sw, sh) = (self.width as usize, self.height as usize);
-        let dw = (sw / 2).max(1);
-        let dh = (sh / 2).max(1);
-        let mut texels = Vec::with_capacity(dw * dh);
-        if sw % 2 == 0 && sh % 2 == 0 {
-            // Exact 2x2 box average.
-            for y in 0..dh {
-                for x in 0..dw {
-                    let a = self.texel(2 * x, 2 * y);
-                    let b = self.texel(2 * x + 1, 2 * y);
-                    let c = self.texel(2 * x, 2 * y + 1);
-                    let d = self.texel(2 * x + 1, 2 * y + 1);
-                    texels.push(std::array::from_fn(|k| {
-                        0.5 * (0.5 * (a[k] + b[k]) + 0.5 * (c[k] + d[k]))
-                    }));
-                }
-            }
-        } else {
-            // Bilinear sample of this level at each new texel's centre, edges clamped.
-            // The centre is (i + 0.5) times the f32 reciprocal of the new size, then
-            // scaled to source texels: the same roundings as maketx, for 1e-6 agreement.
-            let axis = |i: usize, src: usize, dst: usize| -> (usize, usize, f32) {
-                let centre = (i as f32 + 0.5) * (1.0 / dst as f32);
-                let x = centre * src as f32 - 0.5;
-                let x0 = x.floor();
-                let f = x - x0;
-                let lo = (x0.max(0.0) as usize).min(src - 1);
-                let hi = ((x0 + 1.0).max(0.0) as usize).min(src - 1);
-                (lo, hi, f)
-            };
-            for y in 0..dh {
-                let (y0, y1, fy) = axis(y, sh, dh);
-                for x in 0..dw {
-                    let (x0, x1, fx) = axis(x, sw, dw);
-                    let a = self.texel(x0, y0);
-                    let b = self.texel(x1, y0);
-                    let c = self.texel(x0, y1);
-                    let d = self.texel(x1, y1);
-                    texels.push(std::array::from_fn(|k| {
-                        (1.0 - fy) * ((1.0 - fx) * a[k] + fx * b[k])
-                            + fy * ((1.0 - fx) * c[k] + fx * d[k])
-                    }));
-                }
+/// The next coarser level of a `sw` x `sh` level whose texels `texel(x, y)` gives, by the
+/// `maketx` box rule, in f32.
+fn halve(
+    sw: usize,
+    sh: usize,
+    texel: impl Fn(usize, usize) -> [f32; 4],
+    label: &str,
+) -> Result<(usize, usize, Vec<[f32; 4]>), TextureError> {
+    let dw = (sw / 2).max(1);
+    let dh = (sh / 2).max(1);
+    let mut texels = try_texel_vec(dw * dh, label)?;
+    if sw % 2 == 0 && sh % 2 == 0 {
+        // Exact 2x2 box average.
+        for y in 0..dh {
+            for x in 0..dw {
+                let a = texel(2 * x, 2 * y);
+                let b = texel(2 * x + 1, 2 * y);
+                let c = texel(2 * x, 2 * y + 1);
+                let d = texel(2 * x + 1, 2 * y + 1);
+                texels.push(std::array::from_fn(|k| {
+                    0.5 * (0.5 * (a[k] + b[k]) + 0.5 * (c[k] + d[k]))
+                }));
             }
         }
-        MipLevel {
-            width: dw as u32,
-            height: dh as u32,
-            texels,
+    } else {
+        // Bilinear sample of this level at each new texel's centre, edges clamped.
+        // The centre is (i + 0.5) times the f32 reciprocal of the new size, then
+        // scaled to source texels: the same roundings as maketx, for 1e-6 agreement.
+        let axis = |i: usize, src: usize, dst: usize| -> (usize, usize, f32) {
+            let centre = (i as f32 + 0.5) * (1.0 / dst as f32);
+            let x = centre * src as f32 - 0.5;
+            let x0 = x.floor();
+            let f = x - x0;
+            let lo = (x0.max(0.0) as usize).min(src - 1);
+            let hi = ((x0 + 1.0).max(0.0) as usize).min(src - 1);
+            (lo, hi, f)
+        };
+        for y in 0..dh {
+            let (y0, y1, fy) = axis(y, sh, dh);
+            for x in 0..dw {
+                let (x0, x1, fx) = axis(x, sw, dw);
+                let a = texel(x0, y0);
+                let b = texel(x1, y0);
+                let c = texel(x0, y1);
+                let d = texel(x1, y1);
+                texels.push(std::array::from_fn(|k| {
+                    (1.0 - fy) * ((1.0 - fx) * a[k] + fx * b[k])
+                        + fy * ((1.0 - fx) * c[k] + fx * d[k])
+                }));
+            }
         }
     }
+    Ok((dw, dh, texels))
 }
 
 /// All levels, finest first; the last is 1x1.
@@ -122,18 +149,33 @@ pub struct MipPyramid {
 }
 
 impl MipPyramid {
-    /// Builds every level from level 0 by the `maketx` box rule.
-    pub fn build(base: MipLevel) -> MipPyramid {
+    /// Builds every level from level 0 by the `maketx` box rule. Each level is computed
+    /// in f32 from the previous level's f32 values and then stored in level 0's precision
+    /// (8-bit levels rounded to the nearest byte, ties up), the rounded values not fed back: how `maketx`
+    /// makes the levels of an 8-bit or half texture (reference note, step 9). `label`
+    /// names the texture if a level cannot be allocated.
+    pub fn build(base: MipLevel, label: &str) -> Result<MipPyramid, TextureError> {
+        let mut previous: Option<(usize, usize, Vec<[f32; 4]>)> = None;
         let mut levels = vec![base];
         loop {
             let last = &levels[levels.len() - 1];
             if last.width == 1 && last.height == 1 {
                 break;
             }
-            let next = last.halve();
-            levels.push(next);
+            let (sw, sh) = (last.width as usize, last.height as usize);
+            let next = match &previous {
+                None => halve(sw, sh, |x, y| last.texel(x, y), label)?,
+                Some((_, _, values)) => halve(sw, sh, |x, y| values[y * sw + x], label)?,
+            };
+            let texels = levels[0].texels.same_kind_from(&next.2, label)?;
+            levels.push(MipLevel {
+                width: next.0 as u32,
+                height: next.1 as u32,
+                texels,
+            });
+            previous = Some(next);
         }
-        MipPyramid { levels }
+        Ok(MipPyramid { levels })
     }
 
     /// Uses levels read from a file (e.g. a mip-mapped OpenEXR written by `maketx`).
@@ -155,10 +197,7 @@ impl MipPyramid {
 
     /// Bytes of texel storage over all levels.
     pub fn memory_bytes(&self) -> usize {
-        self.levels
-            .iter()
-            .map(|l| l.texels.len() * std::mem::size_of::<[f32; 4]>())
-            .sum()
+        self.levels.iter().map(|l| l.texels.memory_bytes()).sum()
     }
 }
 
@@ -180,7 +219,8 @@ mod tests {
     #[test]
     fn sizes_halve_down_to_one_by_one() {
         let sizes = |w, h| -> Vec<(u32, u32)> {
-            MipPyramid::build(level(w, h, |_, _| 0.0))
+            MipPyramid::build(level(w, h, |_, _| 0.0), "t")
+                .unwrap()
                 .levels
                 .iter()
                 .map(|l| (l.width, l.height))
@@ -190,14 +230,14 @@ mod tests {
         assert_eq!(sizes(13, 7), vec![(13, 7), (6, 3), (3, 1), (1, 1)]);
         assert_eq!(sizes(1, 5), vec![(1, 5), (1, 2), (1, 1)]);
         assert_eq!(sizes(1, 1), vec![(1, 1)]);
-        let p = MipPyramid::build(level(13, 7, |_, _| 0.0));
+        let p = MipPyramid::build(level(13, 7, |_, _| 0.0), "t").unwrap();
         assert!(MipPyramid::chain_is_valid(&p.levels));
         assert!(!MipPyramid::chain_is_valid(&p.levels[..2]));
     }
 
     #[test]
     fn even_sizes_average_two_by_two_blocks() {
-        let p = MipPyramid::build(level(4, 2, |x, y| (x + 4 * y) as f32));
+        let p = MipPyramid::build(level(4, 2, |x, y| (x + 4 * y) as f32), "t").unwrap();
         let l1 = &p.levels[1];
         assert_eq!((l1.width, l1.height), (2, 1));
         // (0+1+4+5)/4 and (2+3+6+7)/4
@@ -209,10 +249,10 @@ mod tests {
     #[test]
     fn odd_sizes_resample_bilinearly_at_texel_centres() {
         // 3 -> 1: centre of the new texel is source x = 1.0 exactly.
-        let p = MipPyramid::build(level(3, 1, |x, _| [1.0, 5.0, 9.0][x as usize]));
+        let p = MipPyramid::build(level(3, 1, |x, _| [1.0, 5.0, 9.0][x as usize]), "t").unwrap();
         assert_eq!(p.levels[1].texel(0, 0)[0], 5.0);
         // 5 -> 2: centres at source x = 0.75 and 3.25.
-        let p = MipPyramid::build(level(5, 1, |x, _| x as f32 * x as f32));
+        let p = MipPyramid::build(level(5, 1, |x, _| x as f32 * x as f32), "t").unwrap();
         let l1 = &p.levels[1];
         assert!((l1.texel(0, 0)[0] - 0.75).abs() < 1e-6);
         assert!((l1.texel(1, 0)[0] - (9.0 + 0.25 * 7.0)).abs() < 1e-6);
@@ -220,13 +260,13 @@ mod tests {
 
     #[test]
     fn constant_image_stays_constant_and_mean_is_preserved_for_pow2() {
-        let p = MipPyramid::build(level(6, 10, |_, _| 0.375));
+        let p = MipPyramid::build(level(6, 10, |_, _| 0.375), "t").unwrap();
         for l in &p.levels {
-            assert!(l.texels.iter().all(|t| (t[0] - 0.375).abs() < 1e-7));
+            assert!(l.to_rgba_f32().iter().all(|t| (t[0] - 0.375).abs() < 1e-7));
         }
-        let p = MipPyramid::build(level(16, 8, |x, y| ((x * 7 + y * 3) % 5) as f32));
+        let p = MipPyramid::build(level(16, 8, |x, y| ((x * 7 + y * 3) % 5) as f32), "t").unwrap();
         let mean = |l: &MipLevel| {
-            l.texels.iter().map(|t| t[0] as f64).sum::<f64>() / l.texels.len() as f64
+            l.to_rgba_f32().iter().map(|t| t[0] as f64).sum::<f64>() / l.texels.len() as f64
         };
         let m0 = mean(&p.levels[0]);
         for l in &p.levels {

@@ -29,6 +29,7 @@ mod filter_closest_bilinear;
 mod image_load;
 mod image_size;
 mod mip_pyramid;
+mod texels;
 mod tiled_tiff;
 mod tiles;
 mod trilinear;
@@ -41,8 +42,11 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::Vec4;
 
-pub use image_size::{decoded_texture_bytes, encoded_image_size, file_image_size};
+pub use image_size::{
+    encoded_image_size, encoded_texture_header, file_image_size, file_texture_header, TextureHeader,
+};
 pub use mip_pyramid::{MipLevel, MipPyramid};
+pub use texels::Texels;
 pub use tiles::{TextureTileSet, TEXTURE_TILE_SIZE};
 
 use tiles::{NoTextureTiles, TexelObserver, TextureTileRecorder};
@@ -169,6 +173,14 @@ pub enum TextureError {
         /// Reader message.
         message: String,
     },
+    /// The texels (with their mip levels) do not fit in memory.
+    #[error("{label}: not enough memory for its texels ({bytes} bytes more were needed)")]
+    OutOfMemory {
+        /// File path or label.
+        label: String,
+        /// Size of the allocation that failed.
+        bytes: u64,
+    },
     /// Width or height is zero, too large, or does not match the texel count.
     #[error("{label}: bad dimensions: {message}")]
     Dimensions {
@@ -218,7 +230,7 @@ impl Texture {
                     label: label.to_string(),
                     message: "no image levels".to_string(),
                 })?;
-            MipPyramid::build(base)
+            MipPyramid::build(base, label)?
         };
         Ok(Self::with_pyramid(label, pyramid))
     }
@@ -236,7 +248,17 @@ impl Texture {
             })?;
         Ok(Self::with_pyramid(
             "in-memory texture",
-            MipPyramid::build(base),
+            MipPyramid::build(base, "in-memory texture")?,
+        ))
+    }
+
+    /// This texture with its mip levels rebuilt from level 0 by the `maketx` box rule, in
+    /// level 0's precision (for a file whose stored levels are not box reductions).
+    pub fn with_rebuilt_pyramid(&self) -> Result<Texture, TextureError> {
+        let base = self.pyramid.levels[0].clone();
+        Ok(Self::with_pyramid(
+            &self.label,
+            MipPyramid::build(base, &self.label)?,
         ))
     }
 
@@ -286,7 +308,9 @@ impl Texture {
     /// Average alpha of level 0.
     pub fn mean_alpha(&self) -> f32 {
         let level = &self.pyramid.levels[0];
-        let sum: f64 = level.texels.iter().map(|t| t[3] as f64).sum();
+        let sum: f64 = (0..level.texels.len())
+            .map(|i| f64::from(level.texels.get(i).w))
+            .sum();
         (sum / level.texels.len() as f64) as f32
     }
 

@@ -12,7 +12,8 @@
 //!
 //! Samples: unsigned 8, 16 or 32 bit (scaled to 0..1 by the type's maximum, the sRGB
 //! decoding of [`ColorSpace::Srgb`] applied to the colour channels as for PNG), or
-//! half, float or double floating point (used as stored, as for OpenEXR). One channel
+//! half, float or double floating point (used as stored, as for OpenEXR). 8-bit levels
+//! keep their bytes and half levels their halves ([`Texels`]); the others become f32. One channel
 //! is grey, two are grey and alpha, three or more are R, G, B and then alpha; further
 //! channels are ignored. Alpha is used as stored (`maketx` keeps the source's
 //! associated alpha). Interleaved and separate planes (`maketx --separate`) are read,
@@ -29,12 +30,13 @@ use tiff::ColorType;
 
 use super::image_load::srgb_to_linear;
 use super::mip_pyramid::MipLevel;
+use super::texels::Texels;
 use super::{ColorSpace, TextureError};
 
 /// Largest decoded level accepted, in bytes of stored samples: a 16384x16384 RGBA
 /// float level. The `tiff` crate's default (256 MiB) would refuse ordinary 8k float
 /// textures.
-const MAX_LEVEL_BYTES: u64 = 16384 * 16384 * 4 * 4;
+pub(crate) const MAX_LEVEL_BYTES: u64 = 16384 * 16384 * 4 * 4;
 
 /// True when `bytes` start with a classic or BigTIFF signature, in either byte order.
 pub(crate) fn is_tiff(bytes: &[u8]) -> bool {
@@ -150,28 +152,32 @@ fn decode_directory(
             v
         }
     };
+    let level = |texels: Texels| MipLevel::with_texels(width, height, texels);
     match data {
-        DecodingResult::U8(v) => {
-            let colour: [f32; 256] =
-                std::array::from_fn(|i| integer(i as f32 / 255.0, Channel::Colour));
-            let alpha: [f32; 256] = std::array::from_fn(|i| i as f32 / 255.0);
-            layout.assemble(v.len(), |i, role| {
-                let x = usize::from(v[i]);
-                match role {
-                    Channel::Colour => colour[x],
-                    Channel::Alpha => alpha[x],
-                }
-            })
-        }
-        DecodingResult::U16(v) => layout.assemble(v.len(), |i, role| {
-            integer((f64::from(v[i]) / 65535.0) as f32, role)
-        }),
-        DecodingResult::U32(v) => layout.assemble(v.len(), |i, role| {
-            integer((f64::from(v[i]) / f64::from(u32::MAX)) as f32, role)
-        }),
-        DecodingResult::F16(v) => layout.assemble(v.len(), |i, _| v[i].to_f32()),
-        DecodingResult::F32(v) => layout.assemble(v.len(), |i, _| v[i]),
-        DecodingResult::F64(v) => layout.assemble(v.len(), |i, _| v[i] as f32),
+        // Bytes stay bytes: the colour space's table decodes them at fetch.
+        DecodingResult::U8(v) => level(Texels::bytes(
+            layout.assemble(v.len(), 255, |i, _| v[i])?,
+            color_space,
+        )),
+        DecodingResult::U16(v) => level(Texels::Float(layout.assemble(
+            v.len(),
+            1.0,
+            |i, role| integer((f64::from(v[i]) / 65535.0) as f32, role),
+        )?)),
+        DecodingResult::U32(v) => level(Texels::Float(layout.assemble(
+            v.len(),
+            1.0,
+            |i, role| integer((f64::from(v[i]) / f64::from(u32::MAX)) as f32, role),
+        )?)),
+        DecodingResult::F16(v) => level(Texels::Half(layout.assemble(
+            v.len(),
+            half::f16::ONE,
+            |i, _| v[i],
+        )?)),
+        DecodingResult::F32(v) => level(Texels::Float(layout.assemble(v.len(), 1.0, |i, _| v[i])?)),
+        DecodingResult::F64(v) => level(Texels::Float(
+            layout.assemble(v.len(), 1.0, |i, _| v[i] as f32)?,
+        )),
         _ => Err(UNSUPPORTED_SAMPLES.to_string()),
     }
 }
@@ -296,13 +302,14 @@ impl Layout {
         }
     }
 
-    /// Builds RGBA texels from `count` decoded samples; `sample(i, role)` gives the
-    /// linear value of sample `i`.
-    fn assemble(
+    /// Builds RGBA texels from `count` decoded samples; `sample(i, role)` gives the value
+    /// of sample `i` as stored (bytes, halves) or as linear f32, `one` is opaque alpha.
+    fn assemble<T: Copy>(
         &self,
         count: usize,
-        sample: impl Fn(usize, Channel) -> f32,
-    ) -> Result<MipLevel, String> {
+        one: T,
+        sample: impl Fn(usize, Channel) -> T,
+    ) -> Result<Vec<[T; 4]>, String> {
         let (width, height, channels) = (self.width, self.height, self.channels);
         let texel_count = width as usize * height as usize;
         if channels == 0 || count != texel_count * channels {
@@ -311,31 +318,33 @@ impl Layout {
                 texel_count * channels
             ));
         }
-        let texels = (0..texel_count)
-            .map(|t| {
-                let at = |c: usize| {
-                    let i = if self.separate_planes {
-                        c * texel_count + t
-                    } else {
-                        t * channels + c
-                    };
-                    sample(i, self.role(c))
+        let mut texels = Vec::new();
+        texels
+            .try_reserve_exact(texel_count)
+            .map_err(|_| format!("not enough memory for {width}x{height} texels"))?;
+        texels.extend((0..texel_count).map(|t| {
+            let at = |c: usize| {
+                let i = if self.separate_planes {
+                    c * texel_count + t
+                } else {
+                    t * channels + c
                 };
-                match channels {
-                    1 => {
-                        let g = at(0);
-                        [g, g, g, 1.0]
-                    }
-                    2 => {
-                        let g = at(0);
-                        [g, g, g, at(1)]
-                    }
-                    3 => [at(0), at(1), at(2), 1.0],
-                    _ => [at(0), at(1), at(2), at(3)],
+                sample(i, self.role(c))
+            };
+            match channels {
+                1 => {
+                    let g = at(0);
+                    [g, g, g, one]
                 }
-            })
-            .collect();
-        MipLevel::new(width, height, texels)
+                2 => {
+                    let g = at(0);
+                    [g, g, g, at(1)]
+                }
+                3 => [at(0), at(1), at(2), one],
+                _ => [at(0), at(1), at(2), at(3)],
+            }
+        }));
+        Ok(texels)
     }
 }
 

@@ -5,8 +5,9 @@
 use glam::Vec4;
 
 use super::ellipse::{adjust_derivatives, choose_levels, LevelChoice};
-use super::filter_closest_bilinear::bilinear;
+use super::filter_closest_bilinear::{bilinear_from, bilinear_other_kind};
 use super::mip_pyramid::MipPyramid;
+use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
 use super::{TextureQuery, WrapMode};
 
@@ -22,10 +23,26 @@ pub(crate) fn level_choice(pyramid: &MipPyramid, q: &TextureQuery) -> LevelChoic
     })
 }
 
-/// The trilinear lookup.
+/// The trilinear lookup, compiled once per storage kind (that of level 0, which every
+/// level of a pyramid normally shares).
 #[inline]
 pub(crate) fn sample<O: TexelObserver>(
     pyramid: &MipPyramid,
+    q: &TextureQuery,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    with_texel_source!(&pyramid.levels[0].texels, |kind| sample_from(
+        kind, pyramid, q, wrap, obs
+    ))
+}
+
+/// [`sample`] reading levels of the storage kind of `_kind`; a level of another kind
+/// goes through [`bilinear_other_kind`], which picks its kind itself.
+#[inline(always)]
+fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
+    _kind: S,
+    pyramid: &'a MipPyramid,
     q: &TextureQuery,
     wrap: (WrapMode, WrapMode),
     obs: &mut O,
@@ -38,7 +55,11 @@ pub(crate) fn sample<O: TexelObserver>(
             continue;
         }
         let m = choice.levels[k];
-        sum += w * bilinear(&pyramid.levels[m], m, q.s, q.t, wrap, obs);
+        let level = &pyramid.levels[m];
+        sum += w * match S::view(&level.texels) {
+            Some(texels) => bilinear_from(level, texels, m, q.s, q.t, wrap, obs),
+            None => bilinear_other_kind(level, m, q.s, q.t, wrap, obs),
+        };
     }
     sum
 }
@@ -52,7 +73,8 @@ mod tests {
     #[test]
     fn blends_two_levels_with_weights_summing_to_one() {
         // Level 0 all 1, so every level is 1: any convex blend gives exactly 1.
-        let p = MipPyramid::build(MipLevel::new(64, 32, vec![[1.0; 4]; 64 * 32]).unwrap());
+        let p = MipPyramid::build(MipLevel::new(64, 32, vec![[1.0; 4]; 64 * 32]).unwrap(), "t")
+            .unwrap();
         for k in 0..50 {
             let d = 1e-4 * 1.3f32.powi(k);
             let q = TextureQuery {

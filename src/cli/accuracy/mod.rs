@@ -224,9 +224,9 @@ fn consistent_pyramids(textures: &[Arc<Texture>]) -> Result<Vec<Arc<Texture>>, C
     textures
         .iter()
         .map(|texture| {
-            let base = &texture.pyramid().levels[0];
-            let rebuilt = Texture::from_rgba_f32(base.width, base.height, base.texels.clone())
-                .map_err(|e| CommandError::internal(format!("{}: {e}", texture.label())))?;
+            let rebuilt = texture
+                .with_rebuilt_pyramid()
+                .map_err(|e| CommandError::internal(e.to_string()))?;
             Ok(if rebuilt.pyramid() == texture.pyramid() {
                 texture.clone()
             } else {
@@ -525,7 +525,8 @@ mod tests {
         assert_eq!(old.levels[0], new.levels[0]);
         assert_eq!(old.levels.len(), new.levels.len());
         assert_ne!(old.levels[1], new.levels[1]);
-        let reference = crate::texture::MipPyramid::build(old.levels[0].clone());
+        let reference =
+            crate::texture::MipPyramid::build(old.levels[0].clone(), "miplevels.exr").unwrap();
         assert_eq!(new, &reference);
     }
 }

@@ -1,0 +1,448 @@
+//! How a mip level's texels are stored: in the precision of the source image.
+//!
+//! An 8-bit image keeps one byte per channel, a half-float image two, a float image four;
+//! every other source (16- and 32-bit integers, doubles) is stored as f32. Texels are
+//! always RGBA, so a fetch is one aligned load of 4, 8 or 16 bytes whatever the source's
+//! channel count. Conversion to linear f32 happens at fetch: an 8-bit channel goes through
+//! a 256-entry table (byte / 255, or the sRGB decoding of IEC 61966-2-1 for the colour
+//! channels of an sRGB texture; alpha is always byte / 255), a half through the `half`
+//! crate's exact widening. The values a filter sees are therefore exactly the ones an
+//! f32 copy decoded on load would hold.
+//!
+//! Every texel buffer is allocated fallibly ([`try_texel_vec`]): a texture too large for
+//! memory is a [`TextureError::OutOfMemory`] naming it, not an abort.
+
+use std::sync::LazyLock;
+
+use glam::Vec4;
+use half::f16;
+
+use super::image_load::srgb_to_linear;
+use super::{ColorSpace, TextureError};
+
+/// Decoded value of each byte: byte / 255 (linear data and alpha).
+static LINEAR_BYTES: LazyLock<[f32; 256]> =
+    LazyLock::new(|| std::array::from_fn(|i| i as f32 / 255.0));
+
+/// Decoded value of each byte of sRGB-encoded colour.
+static SRGB_BYTES: LazyLock<[f32; 256]> =
+    LazyLock::new(|| std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0)));
+
+/// The table decoding the colour channels of 8-bit texels in `color_space`.
+pub(crate) fn byte_table(color_space: ColorSpace) -> &'static [f32; 256] {
+    match color_space {
+        ColorSpace::Srgb => &SRGB_BYTES,
+        ColorSpace::Linear => &LINEAR_BYTES,
+    }
+}
+
+/// Evaluates `$body` with `$source` bound to the [`TexelSource`] of `$texels`'s storage
+/// kind: one match, and `$body` compiled once per kind.
+macro_rules! with_texel_source {
+    ($texels:expr, |$source:ident| $body:expr) => {{
+        #[allow(unused_imports)]
+        use $crate::texture::texels::{ByteTexels, FloatTexels, HalfTexels, TexelSource, Texels};
+        match $texels {
+            Texels::Float(t) => {
+                let $source = FloatTexels(t);
+                $body
+            }
+            Texels::Half(t) => {
+                let $source = HalfTexels(t);
+                $body
+            }
+            Texels::Byte { texels, colour, .. } => {
+                let $source = ByteTexels::new(texels, *colour);
+                $body
+            }
+        }
+    }};
+}
+pub(crate) use with_texel_source;
+
+/// A level's texels, row-major with t = 0 first, RGBA, in the source's precision.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texels {
+    /// One byte per channel; colour decoded through `colour` (linear or sRGB), alpha is
+    /// byte / 255.
+    Byte {
+        /// The texels.
+        texels: Vec<[u8; 4]>,
+        /// Whether the colour bytes are sRGB-encoded.
+        color_space: ColorSpace,
+        /// Decoded value of each colour byte (from [`byte_table`]).
+        colour: &'static [f32; 256],
+    },
+    /// IEEE half floats, used as stored.
+    Half(Vec<[f16; 4]>),
+    /// f32, used as stored.
+    Float(Vec<[f32; 4]>),
+}
+
+impl Texels {
+    /// 8-bit texels whose colour bytes are encoded in `color_space`.
+    pub fn bytes(texels: Vec<[u8; 4]>, color_space: ColorSpace) -> Texels {
+        Texels::Byte {
+            texels,
+            color_space,
+            colour: byte_table(color_space),
+        }
+    }
+
+    /// Number of texels.
+    pub fn len(&self) -> usize {
+        match self {
+            Texels::Byte { texels, .. } => texels.len(),
+            Texels::Half(t) => t.len(),
+            Texels::Float(t) => t.len(),
+        }
+    }
+
+    /// True when there are no texels.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bytes one texel takes (4, 8 or 16).
+    pub fn bytes_per_texel(&self) -> usize {
+        match self {
+            Texels::Byte { .. } => 4,
+            Texels::Half(_) => 8,
+            Texels::Float(_) => 16,
+        }
+    }
+
+    /// Bytes of texel storage.
+    pub fn memory_bytes(&self) -> usize {
+        self.len() * self.bytes_per_texel()
+    }
+
+    /// Linear RGBA of texel `index` (in range).
+    #[inline(always)]
+    pub fn get(&self, index: usize) -> Vec4 {
+        with_texel_source!(self, |source| source.texel(index))
+    }
+
+    /// Texels `k`, `k + 1`, `k + row` and `k + row + 1` (a bilinear footprint), or `None`
+    /// when they are not all inside: one storage dispatch and one bounds check for four.
+    #[cfg(test)]
+    pub(crate) fn quad(&self, k: usize, row: usize) -> Option<[Vec4; 4]> {
+        with_texel_source!(self, |source| source
+            .bilinear_quad(k, row, |a, b, c, d| [a, b, c, d]))
+    }
+
+    /// Texels of the same storage kind holding `values` (linear RGBA), each rounded to the
+    /// nearest representable value: half by IEEE round-to-nearest-even; bytes by encoding
+    /// (sRGB when the colour is sRGB) and rounding half up, as `maketx` rounds its 8-bit
+    /// levels (measured against OpenImageIO 2.x: a level-1 texel of 86.5 / 255 is stored as
+    /// 87; half-to-even would give 86).
+    pub(crate) fn same_kind_from(
+        &self,
+        values: &[[f32; 4]],
+        label: &str,
+    ) -> Result<Texels, TextureError> {
+        Ok(match self {
+            Texels::Float(_) => {
+                let mut out = try_texel_vec(values.len(), label)?;
+                out.extend_from_slice(values);
+                Texels::Float(out)
+            }
+            Texels::Half(_) => {
+                let mut out = try_texel_vec(values.len(), label)?;
+                out.extend(values.iter().map(|v| v.map(f16::from_f32)));
+                Texels::Half(out)
+            }
+            Texels::Byte { color_space, .. } => {
+                let srgb = *color_space == ColorSpace::Srgb;
+                let mut out = try_texel_vec(values.len(), label)?;
+                out.extend(values.iter().map(|v| {
+                    let colour = |c: f32| quantise_byte(if srgb { linear_to_srgb(c) } else { c });
+                    [
+                        colour(v[0]),
+                        colour(v[1]),
+                        colour(v[2]),
+                        quantise_byte(v[3]),
+                    ]
+                }));
+                Texels::bytes(out, *color_space)
+            }
+        })
+    }
+}
+
+/// One storage kind of a level's texels, borrowed. Filters are generic over it and
+/// pick the kind once per lookup (see [`with_texel_source`]), so the loops that fetch
+/// texels are compiled once per kind and a fetch does not branch on the storage.
+pub(crate) trait TexelSource<'a>: Copy {
+    /// The texels of `texels` when they are of this kind.
+    fn view(texels: &'a Texels) -> Option<Self>;
+
+    /// Linear RGBA of texel `index` (in range).
+    fn texel(self, index: usize) -> Vec4;
+
+    /// `blend` of texels `k`, `k + 1`, `k + row` and `k + row + 1` (a bilinear
+    /// footprint), or `None` when they are not all inside: one bounds check for four.
+    fn bilinear_quad<R>(
+        self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R>;
+}
+
+/// f32 texels, used as stored.
+#[derive(Clone, Copy)]
+pub(crate) struct FloatTexels<'a>(pub(crate) &'a [[f32; 4]]);
+
+/// Half-float texels, widened exactly at fetch.
+#[derive(Clone, Copy)]
+pub(crate) struct HalfTexels<'a>(pub(crate) &'a [[f16; 4]]);
+
+/// 8-bit texels with the tables decoding their colour and alpha bytes.
+#[derive(Clone, Copy)]
+pub(crate) struct ByteTexels<'a> {
+    texels: &'a [[u8; 4]],
+    colour: &'static [f32; 256],
+    alpha: &'static [f32; 256],
+}
+
+impl<'a> TexelSource<'a> for FloatTexels<'a> {
+    #[inline(always)]
+    fn view(texels: &'a Texels) -> Option<Self> {
+        match texels {
+            Texels::Float(t) => Some(FloatTexels(t)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn texel(self, index: usize) -> Vec4 {
+        Vec4::from_array(self.0[index])
+    }
+
+    #[inline(always)]
+    fn bilinear_quad<R>(
+        self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        let b = self.0.get(k..k.checked_add(row)?.checked_add(2)?)?;
+        Some(blend(
+            Vec4::from_array(b[0]),
+            Vec4::from_array(b[1]),
+            Vec4::from_array(b[row]),
+            Vec4::from_array(b[row + 1]),
+        ))
+    }
+}
+
+impl<'a> TexelSource<'a> for HalfTexels<'a> {
+    #[inline(always)]
+    fn view(texels: &'a Texels) -> Option<Self> {
+        match texels {
+            Texels::Half(t) => Some(HalfTexels(t)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn texel(self, index: usize) -> Vec4 {
+        half_texel(&self.0[index])
+    }
+
+    #[inline(always)]
+    fn bilinear_quad<R>(
+        self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        let b = self.0.get(k..k.checked_add(row)?.checked_add(2)?)?;
+        // Each pair of neighbours widened in one call (vectorised where the CPU
+        // converts halves).
+        let (upper, lower) = (half_pair(&b[..2]), half_pair(&b[row..row + 2]));
+        Some(blend(upper[0], upper[1], lower[0], lower[1]))
+    }
+}
+
+impl<'a> ByteTexels<'a> {
+    /// `texels` with colour bytes decoded through `colour`.
+    #[inline(always)]
+    pub(crate) fn new(texels: &'a [[u8; 4]], colour: &'static [f32; 256]) -> Self {
+        ByteTexels {
+            texels,
+            colour,
+            alpha: &LINEAR_BYTES,
+        }
+    }
+}
+
+impl<'a> TexelSource<'a> for ByteTexels<'a> {
+    #[inline(always)]
+    fn view(texels: &'a Texels) -> Option<Self> {
+        match texels {
+            Texels::Byte { texels, colour, .. } => Some(ByteTexels::new(texels, *colour)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn texel(self, index: usize) -> Vec4 {
+        byte_texel(self.texels[index], self.colour, self.alpha)
+    }
+
+    #[inline(always)]
+    fn bilinear_quad<R>(
+        self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        let b = self.texels.get(k..k.checked_add(row)?.checked_add(2)?)?;
+        let decode = |t| byte_texel(t, self.colour, self.alpha);
+        Some(blend(
+            decode(b[0]),
+            decode(b[1]),
+            decode(b[row]),
+            decode(b[row + 1]),
+        ))
+    }
+}
+
+/// Linear RGBA of one 8-bit texel.
+#[inline(always)]
+fn byte_texel(t: [u8; 4], colour: &[f32; 256], alpha: &[f32; 256]) -> Vec4 {
+    Vec4::new(
+        colour[usize::from(t[0])],
+        colour[usize::from(t[1])],
+        colour[usize::from(t[2])],
+        alpha[usize::from(t[3])],
+    )
+}
+
+/// Two neighbouring half-float texels widened to f32 (exact) in one conversion.
+#[inline(always)]
+fn half_pair(pair: &[[f16; 4]]) -> [Vec4; 2] {
+    use half::slice::HalfFloatSliceExt;
+    let mut wide = [0.0f32; 8];
+    pair.as_flattened().convert_to_f32_slice(&mut wide);
+    [Vec4::from_slice(&wide[..4]), Vec4::from_slice(&wide[4..])]
+}
+
+/// One half-float texel widened to f32 (exact).
+#[inline(always)]
+fn half_texel(t: &[f16; 4]) -> Vec4 {
+    use half::slice::HalfFloatSliceExt;
+    let mut wide = [0.0f32; 4];
+    t.convert_to_f32_slice(&mut wide);
+    Vec4::from_array(wide)
+}
+
+/// A value in [0, 1] as the nearest byte, ties upward; outside [0, 1] clamped.
+fn quantise_byte(v: f32) -> u8 {
+    (v * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+/// sRGB encoding (IEC 61966-2-1), the inverse of [`srgb_to_linear`].
+fn linear_to_srgb(c: f32) -> f32 {
+    if c <= 0.0031308 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// An empty vector with room for `len` texels, or [`TextureError::OutOfMemory`] naming
+/// `label` when that much cannot be allocated.
+pub(crate) fn try_texel_vec<T>(len: usize, label: &str) -> Result<Vec<T>, TextureError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| TextureError::OutOfMemory {
+            label: label.to_string(),
+            bytes: (len as u64).saturating_mul(std::mem::size_of::<T>() as u64),
+        })?;
+    Ok(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn byte_fetch_equals_the_decoded_f32_value() {
+        let srgb = Texels::bytes(vec![[188, 0, 255, 128]], ColorSpace::Srgb);
+        let v = srgb.get(0);
+        assert_eq!(v.x, srgb_to_linear(188.0 / 255.0));
+        assert_eq!((v.y, v.z, v.w), (0.0, 1.0, 128.0 / 255.0));
+        let linear = Texels::bytes(vec![[188, 0, 255, 128]], ColorSpace::Linear);
+        assert_eq!(linear.get(0).x, 188.0 / 255.0);
+        assert_eq!(linear.memory_bytes(), 4);
+    }
+
+    #[test]
+    fn every_byte_survives_a_round_trip_through_its_encoding() {
+        for space in [ColorSpace::Linear, ColorSpace::Srgb] {
+            let bytes: Vec<[u8; 4]> = (0..=255u8).map(|b| [b, b, b, b]).collect();
+            let texels = Texels::bytes(bytes.clone(), space);
+            let decoded: Vec<[f32; 4]> = (0..256).map(|i| texels.get(i).to_array()).collect();
+            let again = texels.same_kind_from(&decoded, "t").unwrap();
+            assert_eq!(again, texels, "{space}");
+        }
+    }
+
+    #[test]
+    fn bytes_round_half_up_and_clamp() {
+        // A 2x2 level of 86 and 87 averages to 86.5 / 255 (exactly 86.5 after * 255 in
+        // f32): maketx stores 87, so ties go up.
+        let base = super::super::MipLevel::with_texels(
+            2,
+            2,
+            Texels::bytes(
+                vec![
+                    [86, 87, 0, 255],
+                    [87, 86, 255, 255],
+                    [86, 87, 0, 255],
+                    [87, 86, 255, 255],
+                ],
+                ColorSpace::Linear,
+            ),
+        )
+        .unwrap();
+        let p = super::super::MipPyramid::build(base, "t").unwrap();
+        assert_eq!(
+            p.levels[1].texels,
+            Texels::bytes(vec![[87, 87, 128, 255]], ColorSpace::Linear)
+        );
+        let t = Texels::bytes(vec![], ColorSpace::Linear);
+        let clamped = t.same_kind_from(&[[-1.0, 2.0, 0.0, 1.0]], "t").unwrap();
+        assert_eq!(
+            clamped,
+            Texels::bytes(vec![[0, 255, 0, 255]], ColorSpace::Linear)
+        );
+    }
+
+    #[test]
+    fn quad_reads_a_two_by_two_block_of_every_kind() {
+        let values: Vec<[f32; 4]> = (0..6).map(|i| [i as f32 / 8.0, 0.0, 0.0, 1.0]).collect();
+        let float = Texels::Float(values.clone());
+        for texels in [
+            float.clone(),
+            float.same_kind_from(&values, "t").unwrap(),
+            Texels::Half(vec![]).same_kind_from(&values, "t").unwrap(),
+        ] {
+            let q = texels.quad(1, 3).unwrap();
+            assert_eq!(q.map(|v| v.x), [1.0 / 8.0, 2.0 / 8.0, 4.0 / 8.0, 5.0 / 8.0]);
+            assert!(texels.quad(2, 3).is_none());
+            assert!(texels.quad(usize::MAX - 1, 3).is_none());
+        }
+    }
+
+    #[test]
+    fn an_allocation_too_large_is_an_error_naming_the_texture() {
+        let e = try_texel_vec::<[f32; 4]>(usize::MAX / 32, "huge.exr").unwrap_err();
+        let message = e.to_string();
+        assert!(message.starts_with("huge.exr: "), "{message}");
+        assert!(try_texel_vec::<[u8; 4]>(16, "small.png").is_ok());
+    }
+}
