@@ -126,6 +126,12 @@ PartitionName=main Nodes=localhost Default=YES MaxTime=INFINITE State=UP
             ),
         )
         .unwrap();
+        if !cgroups_mounted() {
+            // A root without cgroup file systems (a chroot): slurmd 22.05 always loads a cgroup
+            // plugin, and its default, autodetect, fails there. The v1 plugin loads without
+            // touching any hierarchy, and with proctrack/pgid and task/none nothing asks it to.
+            fs::write(dir.join("cgroup.conf"), "CgroupPlugin=cgroup/v1\n").unwrap();
+        }
         let mut cluster = LocalCluster {
             dir: dir.to_path_buf(),
             conf,
@@ -149,30 +155,10 @@ PartitionName=main Nodes=localhost Default=YES MaxTime=INFINITE State=UP
             "slurmctld",
             Command::new(program("slurmctld")).args(["-D", "-f", &conf_arg]),
         );
-        let slurmd = program("slurmd");
-        let slurmd_args = ["-D", "-N", "localhost", "-f", &conf_arg];
-        if cgroups_mounted() {
-            cluster.spawn("slurmd", Command::new(&slurmd).args(slurmd_args));
-        } else {
-            // A root without /sys (a chroot): slurmd 22.05 always loads a cgroup plugin and
-            // reads the CPU topology from sysfs. Give it both in a mount namespace of its own
-            // (nothing is mounted outside it, and it vanishes with slurmd): sysfs, and a
-            // cgroup v1 root with the freezer hierarchy where the kernel offers one.
-            cluster.spawn(
-                "slurmd",
-                Command::new(program("unshare"))
-                    .args(["--mount", "--propagation", "private", "--", "sh", "-c"])
-                    .arg(
-                        "mount -t sysfs sysfs /sys && \
-                         mount -t tmpfs cgroup_root /sys/fs/cgroup && \
-                         mkdir /sys/fs/cgroup/freezer && \
-                         { mount -t cgroup -o freezer freezer /sys/fs/cgroup/freezer || true; } && \
-                         exec \"$0\" \"$@\"",
-                    )
-                    .arg(&slurmd)
-                    .args(slurmd_args),
-            );
-        }
+        cluster.spawn(
+            "slurmd",
+            Command::new(program("slurmd")).args(["-D", "-N", "localhost", "-f", &conf_arg]),
+        );
         let conf = cluster.conf.clone();
         cluster.wait_for("the node to be idle", || {
             let out = Command::new(program("sinfo"))

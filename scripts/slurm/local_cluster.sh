@@ -54,6 +54,11 @@ SlurmdLogFile=$dir/log/slurmd.log
 NodeName=localhost NodeAddr=127.0.0.1 CPUs=$(nproc) State=UNKNOWN
 PartitionName=main Nodes=localhost Default=YES MaxTime=INFINITE State=UP
 CONF
+    # In a root without cgroup file systems (a chroot) slurmd's default cgroup plugin,
+    # autodetect, fails; the v1 plugin loads without touching any hierarchy.
+    if ! grep -q ' /sys/fs/cgroup' /proc/self/mountinfo; then
+      echo "CgroupPlugin=cgroup/v1" > "$dir/cgroup.conf"
+    fi
     munged -f --socket="$dir/munge/munge.socket" --key-file="$dir/munge/munge.key" \
       --log-file="$dir/log/munged.log" --pid-file="$dir/munge/munged.pid" \
       --seed-file="$dir/munge/munged.seed"
