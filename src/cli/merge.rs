@@ -144,19 +144,6 @@ fn signature_difference(a: &Part, b: &Part) -> Option<String> {
     None
 }
 
-fn overlap(a: &PixelRect, b: &PixelRect) -> Option<PixelRect> {
-    let x0 = a.x0.max(b.x0);
-    let y0 = a.y0.max(b.y0);
-    let x1 = (a.x0 + a.width).min(b.x0 + b.width);
-    let y1 = (a.y0 + a.height).min(b.y0 + b.height);
-    (x0 < x1 && y0 < y1).then(|| PixelRect {
-        x0,
-        y0,
-        width: x1 - x0,
-        height: y1 - y0,
-    })
-}
-
 /// The merged film and the header of the whole render, from checked parts.
 pub fn merge_parts(paths: &[PathBuf]) -> Result<(Film, ExrAttributes), CommandError> {
     let parts: Vec<Part> = paths
@@ -220,7 +207,7 @@ pub fn merge_parts(paths: &[PathBuf]) -> Result<(Film, ExrAttributes), CommandEr
     for (i, a) in parts.iter().enumerate() {
         for b in &parts[i + 1..] {
             let samples_meet = a.samples.start < b.samples.end && b.samples.start < a.samples.end;
-            if let (true, Some(o)) = (samples_meet, overlap(&a.region, &b.region)) {
+            if let (true, Some(o)) = (samples_meet, a.region.intersection(&b.region)) {
                 return Err(refuse(
                     &b.path,
                     format!(

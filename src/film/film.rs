@@ -102,6 +102,20 @@ impl PixelRect {
         (r.y0..r.y0 + r.height).flat_map(move |y| (r.x0..r.x0 + r.width).map(move |x| (x, y)))
     }
 
+    /// The pixels this rectangle shares with `other`, if any.
+    pub fn intersection(&self, other: &PixelRect) -> Option<PixelRect> {
+        let x0 = self.x0.max(other.x0);
+        let y0 = self.y0.max(other.y0);
+        let x1 = (self.x0 + self.width).min(other.x0 + other.width);
+        let y1 = (self.y0 + self.height).min(other.y0 + other.height);
+        (x0 < x1 && y0 < y1).then(|| PixelRect {
+            x0,
+            y0,
+            width: x1 - x0,
+            height: y1 - y0,
+        })
+    }
+
     /// The part of this rectangle inside a `width` x `height` image.
     pub fn clipped(&self, width: u32, height: u32) -> PixelRect {
         let x0 = self.x0.min(width);

@@ -64,21 +64,9 @@ impl RenderPart {
 
     /// The whole image's work tiles that meet the region, clipped to it, in row-major order.
     pub fn tiles(&self, width: u32, height: u32) -> Vec<PixelRect> {
-        let r = self.region;
         crate::render::work_tiles(width, height)
             .into_iter()
-            .filter_map(|t| {
-                let x0 = t.x0.max(r.x0);
-                let y0 = t.y0.max(r.y0);
-                let x1 = (t.x0 + t.width).min(r.x0 + r.width);
-                let y1 = (t.y0 + t.height).min(r.y0 + r.height);
-                (x0 < x1 && y0 < y1).then(|| PixelRect {
-                    x0,
-                    y0,
-                    width: x1 - x0,
-                    height: y1 - y0,
-                })
-            })
+            .filter_map(|tile| tile.intersection(&self.region))
             .collect()
     }
 }
