@@ -393,8 +393,10 @@ fn slurm_array_render_merges_into_the_local_render_and_recovers_a_killed_task() 
     }
     assert_same_file(&outdir.join("merged.exr"), &local);
 
-    // A run with a task killed while it renders: enough samples that a part takes seconds.
-    let spp = "512";
+    // A run with a task killed while it renders: enough samples that a part takes seconds
+    // even on an idle machine (at 512 a part could finish between squeue reporting it
+    // running and scancel reaching it).
+    let spp = "2048";
     let outdir = d.join("killed");
     let mut extra = vec!["--spp", spp];
     extra.extend(SIZE);
