@@ -12,6 +12,8 @@
 //! - [`bsdf`]: the BSDF interface (`eval`, `sample`, `pdf`, delta lobes flagged) and
 //!   cosine-weighted hemisphere sampling.
 //! - [`brdf`]: the opaque lobe of a hit (Lambert plus normalised Blinn-Phong).
+//! - [`microfacet`]: the GGX distribution (visible-normal sampling, Smith masking) of the
+//!   rough lobes, which work in a local [`frame`].
 //! - [`mirror`] and [`dielectric`]: the smooth mirror and the smooth dielectric boundary
 //!   (exact or Schlick Fresnel, total internal reflection), both delta lobes.
 //! - [`material_bsdf`]: a scene material's lobes with their weights, as one BSDF.
@@ -30,12 +32,16 @@
 pub mod beer;
 pub mod brdf;
 pub mod bsdf;
+#[cfg(test)]
+mod bsdf_properties;
 pub mod dielectric;
 pub mod environment_light;
+pub mod frame;
 pub mod fresnel;
 pub mod light_selection;
 pub mod lights;
 pub mod material_bsdf;
+pub mod microfacet;
 pub mod mirror;
 pub mod ray_offset;
 pub mod reflection;
