@@ -204,3 +204,20 @@ fn a_failed_render_never_replaces_the_previous_output() {
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(std::fs::read(dir.path().join("keep.exr")).unwrap(), before);
 }
+
+#[test]
+fn metallic_roughness_out_of_range_names_the_material() {
+    let dir = temp_dir();
+    for (file, key) in [
+        ("rough.toml", "roughness = 1.5"),
+        ("metal.toml", "metallic = nan"),
+    ] {
+        let text = GOOD_SCENE.replace(
+            "base_color = [0.5, 0.5, 0.5]",
+            &format!("base_color = [0.5, 0.5, 0.5]\n{key}"),
+        );
+        write(dir.path(), file, &text);
+        assert_rejected(dir.path(), file, &[], file);
+        assert_rejected(dir.path(), file, &[], "material 'matte'");
+    }
+}

@@ -179,6 +179,13 @@ pub struct Material {
     pub alpha: f32,
     /// Texture whose alpha channel gives coverage (glTF: the base-colour texture).
     pub alpha_texture: Option<TextureBinding>,
+    /// glTF 2.0 metallic-roughness model (its Appendix B): `Some(perceptual roughness)` in
+    /// [0, 1] selects it (GGX lobes, alpha = roughness^2); `None` keeps the classic
+    /// Lambert plus Blinn-Phong opaque lobe.
+    pub roughness: Option<f32>,
+    /// Metalness in [0, 1] of the metallic-roughness model (0 = dielectric over diffuse,
+    /// 1 = conductor with the base colour as its reflectance at normal incidence).
+    pub metallic: f32,
 }
 
 impl Default for Material {
@@ -198,6 +205,8 @@ impl Default for Material {
             alpha_cutoff: None,
             alpha: 1.0,
             alpha_texture: None,
+            roughness: None,
+            metallic: 0.0,
         }
     }
 }

@@ -1,29 +1,99 @@
-//! The BSDF of a scene material at one hit: its opaque lobe ([`OpaqueBsdf`]), its mirror
-//! ([`SmoothMirror`]) and its dielectric boundary ([`SmoothDielectric`]), with the weights
-//! the material gives them (`crate::scene::Material`): `(1 - mirror)(1 - transmission)`
-//! for the opaque part, `mirror` and `transmission` for the other two, the weights of seed
-//! 001's recursion `local + k_r * reflected + k_t * refracted`.
+//! The BSDF of a scene material at one hit: its opaque lobe ([`OpaqueLobe`]), its mirror
+//! ([`SmoothMirror`]) and its dielectric boundary ([`SmoothDielectric`], or
+//! [`RoughDielectric`] for rough glass), with the weights the material gives them
+//! (`crate::scene::Material`): `(1 - mirror)(1 - transmission)` for the opaque part,
+//! `mirror` and `transmission` for the other two, the weights of seed 001's recursion
+//! `local + k_r * reflected + k_t * refracted`.
 //!
-//! Whitted follows each weighted lobe; a path tracer samples the mixture, choosing a lobe
-//! with probability proportional to its weight ([`Bsdf`] for [`MaterialBsdf`]).
+//! The opaque lobe is the classic Lambert plus Blinn-Phong ([`OpaqueBsdf`]) when the
+//! material's `roughness` is `None`, and the glTF 2.0 metallic-roughness lobe
+//! ([`MetallicRoughnessBsdf`]) when it is `Some`. The dielectric boundary is rough when the
+//! material has a roughness of at least [`ROUGH_DIELECTRIC_MIN_ROUGHNESS`], the media are
+//! not index-matched (`ior != 1`) and Fresnel reflection is on; otherwise it is smooth.
+//!
+//! Whitted follows each weighted lobe: it evaluates the opaque lobe for every light and
+//! follows the mirror and the *smooth* boundary's two directions (it can follow only delta
+//! directions, so rough glass renders as smooth glass there). A path tracer samples the
+//! mixture through [`Bsdf`] for [`MaterialBsdf`], choosing a lobe with probability
+//! proportional to its weight; there the rough boundary replaces the smooth one.
 
 use glam::{Vec2, Vec3};
 
 use super::brdf::OpaqueBsdf;
 use super::bsdf::{Bsdf, BsdfSample};
 use super::dielectric::SmoothDielectric;
+use super::metallic_roughness::MetallicRoughnessBsdf;
 use super::mirror::SmoothMirror;
+use super::rough_dielectric::RoughDielectric;
 use crate::scene::{FresnelMode, Material};
+
+/// Below this perceptual roughness a transmissive material keeps the smooth (delta)
+/// boundary: at `alpha = 0.05^2` the rough lobe is a mirror for every practical purpose,
+/// and the delta lobe is exact and cheaper for every integrator.
+pub const ROUGH_DIELECTRIC_MIN_ROUGHNESS: f32 = 0.05;
+
+/// The opaque lobe of a material: classic, or glTF metallic-roughness.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum OpaqueLobe {
+    /// Lambert plus normalised Blinn-Phong (`roughness: None`).
+    Classic(OpaqueBsdf),
+    /// The glTF 2.0 metallic-roughness lobe (`roughness: Some(r)`).
+    MetallicRoughness(MetallicRoughnessBsdf),
+}
+
+impl OpaqueLobe {
+    /// The shading normal, on the viewer's side.
+    #[inline]
+    pub fn normal(&self) -> Vec3 {
+        match self {
+            OpaqueLobe::Classic(lobe) => lobe.n,
+            OpaqueLobe::MetallicRoughness(lobe) => lobe.normal(),
+        }
+    }
+}
+
+impl Bsdf for OpaqueLobe {
+    #[inline]
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        match self {
+            OpaqueLobe::Classic(lobe) => lobe.eval(wo, wi),
+            OpaqueLobe::MetallicRoughness(lobe) => lobe.eval(wo, wi),
+        }
+    }
+
+    #[inline]
+    fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            OpaqueLobe::Classic(lobe) => lobe.sample(wo, u_lobe, u),
+            OpaqueLobe::MetallicRoughness(lobe) => lobe.sample(wo, u_lobe, u),
+        }
+    }
+
+    #[inline]
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            OpaqueLobe::Classic(lobe) => lobe.pdf(wo, wi),
+            OpaqueLobe::MetallicRoughness(lobe) => lobe.pdf(wo, wi),
+        }
+    }
+
+    fn has_delta(&self) -> bool {
+        false
+    }
+}
 
 /// A material's lobes at one hit, with their weights.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MaterialBsdf {
     pub opaque_weight: f32,
-    pub opaque: OpaqueBsdf,
+    pub opaque: OpaqueLobe,
     pub mirror_weight: f32,
     pub mirror: SmoothMirror,
     pub dielectric_weight: f32,
+    /// The smooth boundary (Whitted always follows this one).
     pub dielectric: SmoothDielectric,
+    /// The rough boundary that replaces the smooth one when sampling (see the module doc).
+    pub rough_dielectric: Option<RoughDielectric>,
 }
 
 impl MaterialBsdf {
@@ -45,14 +115,37 @@ impl MaterialBsdf {
         } else {
             (-outward_geometric, -outward_shading)
         };
-        MaterialBsdf {
-            opaque_weight: (1.0 - material.mirror) * (1.0 - material.transmission),
-            opaque: OpaqueBsdf {
+        let opaque = match material.roughness {
+            None => OpaqueLobe::Classic(OpaqueBsdf {
                 n: ns,
                 albedo,
                 specular: material.specular,
                 shininess: material.shininess,
-            },
+            }),
+            Some(roughness) => OpaqueLobe::MetallicRoughness(MetallicRoughnessBsdf::new(
+                ns,
+                albedo,
+                roughness,
+                material.metallic,
+            )),
+        };
+        let rough_dielectric = match material.roughness {
+            Some(roughness)
+                if roughness >= ROUGH_DIELECTRIC_MIN_ROUGHNESS
+                    && material.ior != 1.0
+                    && fresnel.is_some() =>
+            {
+                Some(RoughDielectric::new(
+                    outward_shading,
+                    roughness,
+                    material.ior,
+                ))
+            }
+            _ => None,
+        };
+        MaterialBsdf {
+            opaque_weight: (1.0 - material.mirror) * (1.0 - material.transmission),
+            opaque,
             mirror_weight: material.mirror,
             mirror: SmoothMirror {
                 ns,
@@ -66,6 +159,7 @@ impl MaterialBsdf {
                 ior: material.ior,
                 fresnel,
             },
+            rough_dielectric,
         }
     }
 
@@ -78,22 +172,28 @@ impl MaterialBsdf {
         ]
     }
 
-    /// Probability of choosing the opaque lobe when sampling.
-    fn opaque_probability(&self) -> f32 {
+    /// Probabilities of choosing the opaque lobe and the dielectric lobe when sampling.
+    fn probabilities(&self) -> (f32, f32) {
         let w = self.weights();
         let total = w[0] + w[1] + w[2];
         if total > 0.0 {
-            w[0] / total
+            (w[0] / total, w[2] / total)
         } else {
-            0.0
+            (0.0, 0.0)
         }
     }
 }
 
 impl Bsdf for MaterialBsdf {
-    /// Only the opaque lobe has a value; the delta lobes have none.
+    /// The opaque lobe and a rough boundary have values; the delta lobes have none.
     fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
-        self.opaque_weight.max(0.0) * self.opaque.eval(wo, wi)
+        let opaque = self.opaque_weight.max(0.0) * self.opaque.eval(wo, wi);
+        match &self.rough_dielectric {
+            Some(rough) if self.dielectric_weight > 0.0 => {
+                opaque + self.dielectric_weight * rough.eval(wo, wi)
+            }
+            _ => opaque,
+        }
     }
 
     /// Picks a lobe with probability proportional to its weight (`u_lobe`, rescaled to stay
@@ -117,8 +217,23 @@ impl Bsdf for MaterialBsdf {
             let mut sample = match index {
                 0 => self.opaque.sample(wo, u_inner, u)?,
                 1 => self.mirror.sample(wo, u_inner, u)?,
-                _ => self.dielectric.sample(wo, u_inner, u)?,
+                _ => match &self.rough_dielectric {
+                    Some(rough) => rough.sample(wo, u_inner, u)?,
+                    None => self.dielectric.sample(wo, u_inner, u)?,
+                },
             };
+            if !sample.lobe.is_delta() {
+                // A lobe with a density: the sample could have come from every smooth lobe
+                // of the mixture, so it carries the mixture's value and density (one-sample
+                // MIS, balance heuristic), which is what eval and pdf report.
+                sample.pdf = self.pdf(wo, sample.wi);
+                if !(sample.pdf > 0.0) {
+                    return None;
+                }
+                let cos = sample.wi.dot(self.opaque.normal()).abs();
+                sample.weight = self.eval(wo, sample.wi) * (cos / sample.pdf);
+                return Some(sample);
+            }
             sample.weight *= weight / p;
             sample.pdf *= p;
             return Some(sample);
@@ -127,11 +242,17 @@ impl Bsdf for MaterialBsdf {
     }
 
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.opaque_probability() * self.opaque.pdf(wo, wi)
+        let (p_opaque, p_dielectric) = self.probabilities();
+        let opaque = p_opaque * self.opaque.pdf(wo, wi);
+        match &self.rough_dielectric {
+            Some(rough) if p_dielectric > 0.0 => opaque + p_dielectric * rough.pdf(wo, wi),
+            _ => opaque,
+        }
     }
 
     fn has_delta(&self) -> bool {
-        self.mirror_weight > 0.0 || self.dielectric_weight > 0.0
+        self.mirror_weight > 0.0
+            || (self.dielectric_weight > 0.0 && self.rough_dielectric.is_none())
     }
 }
 
@@ -184,7 +305,7 @@ mod tests {
                 Lobe::Smooth => {
                     counts[0] += 1;
                     assert!((s.pdf - b.pdf(wo, s.wi)).abs() <= 1e-5 * s.pdf);
-                    let expected = b.eval(wo, s.wi) * b.opaque.n.dot(s.wi) / s.pdf;
+                    let expected = b.eval(wo, s.wi) * b.opaque.normal().dot(s.wi) / s.pdf;
                     assert!((s.weight - expected).abs().max_element() <= 1e-4);
                 }
                 Lobe::DeltaReflection => counts[1] += 1,

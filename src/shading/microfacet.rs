@@ -39,14 +39,22 @@ impl Ggx {
     /// Appendix B), never narrower than [`MIN_ALPHA`]; a non-finite `r` counts as smooth.
     #[inline]
     pub fn from_roughness(roughness: f32) -> Ggx {
-        let r = if roughness.is_finite() { roughness.clamp(0.0, 1.0) } else { 0.0 };
+        let r = if roughness.is_finite() {
+            roughness.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         Ggx::from_alpha(r * r)
     }
 
     /// The distribution of width `alpha`, clamped to at least [`MIN_ALPHA`].
     #[inline]
     pub fn from_alpha(alpha: f32) -> Ggx {
-        let alpha = if alpha.is_finite() { alpha.max(MIN_ALPHA) } else { MIN_ALPHA };
+        let alpha = if alpha.is_finite() {
+            alpha.max(MIN_ALPHA)
+        } else {
+            MIN_ALPHA
+        };
         Ggx { alpha }
     }
 
@@ -187,9 +195,13 @@ mod tests {
         let mut worst: f64 = 0.0;
         for alpha in [0.05f32, 0.2, 0.5, 1.0] {
             let ggx = Ggx::from_alpha(alpha);
-            for (index, w) in [direction(0.0, 0.0), direction(50.0, 0.7), -direction(80.0, 2.0)]
-                .into_iter()
-                .enumerate()
+            for (index, w) in [
+                direction(0.0, 0.0),
+                direction(50.0, 0.7),
+                -direction(80.0, 2.0),
+            ]
+            .into_iter()
+            .enumerate()
             {
                 let report = chi_square_directions(
                     0x5eed + index as u64,

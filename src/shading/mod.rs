@@ -16,6 +16,10 @@
 //!   rough lobes, which work in a local [`frame`].
 //! - [`mirror`] and [`dielectric`]: the smooth mirror and the smooth dielectric boundary
 //!   (exact or Schlick Fresnel, total internal reflection), both delta lobes.
+//! - [`conductor`]: the rough GGX metal (Schlick Fresnel from `F0`).
+//! - [`rough_dielectric`]: the rough GGX boundary that reflects and transmits (Walter et
+//!   al. 2007, exact Fresnel, total internal reflection).
+//! - [`metallic_roughness`]: the glTF 2.0 metallic-roughness opaque lobe.
 //! - [`material_bsdf`]: a scene material's lobes with their weights, as one BSDF.
 //! - [`lights`]: direction, distance and irradiance scale towards each punctual light, for
 //!   shadow rays (seed 001, "Shadow Rays"); punctual lights are delta lights.
@@ -34,6 +38,7 @@ pub mod brdf;
 pub mod bsdf;
 #[cfg(test)]
 mod bsdf_properties;
+pub mod conductor;
 pub mod dielectric;
 pub mod environment_light;
 pub mod frame;
@@ -41,22 +46,27 @@ pub mod fresnel;
 pub mod light_selection;
 pub mod lights;
 pub mod material_bsdf;
+pub mod metallic_roughness;
 pub mod microfacet;
 pub mod mirror;
 pub mod ray_offset;
 pub mod reflection;
 pub mod refraction;
+pub mod rough_dielectric;
 
 pub use beer::{sigma_from_attenuation, transmittance};
 pub use brdf::OpaqueBsdf;
 pub use bsdf::{Bsdf, BsdfSample, Lobe};
+pub use conductor::RoughConductor;
 pub use dielectric::{DielectricSplit, SmoothDielectric};
 pub use environment_light::{EnvironmentLight, EnvironmentSample};
 pub use fresnel::{fresnel, fresnel_dielectric, fresnel_schlick, DielectricBoundary};
 pub use light_selection::{LightSelection, SceneLights};
 pub use lights::{is_delta_light, light_position, pdf_li, sample_li, LightSample};
-pub use material_bsdf::MaterialBsdf;
+pub use material_bsdf::{MaterialBsdf, OpaqueLobe};
+pub use metallic_roughness::MetallicRoughnessBsdf;
 pub use mirror::SmoothMirror;
 pub use ray_offset::{entry_distance, shadow_ray_end, SpawnPoint};
 pub use reflection::{reflect, reflect_above};
 pub use refraction::refract;
+pub use rough_dielectric::RoughDielectric;

@@ -7,7 +7,7 @@ use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::environment_radiance;
-use crate::shading::{self, Bsdf, OpaqueBsdf, SpawnPoint};
+use crate::shading::{self, Bsdf, OpaqueLobe, SpawnPoint};
 
 /// A shadow ray and the radiance it delivers if unoccluded.
 #[derive(Clone, Copy, Debug)]
@@ -60,13 +60,13 @@ pub(super) fn shade_miss(
 pub(super) fn queue_shadow_rays(
     context: &RenderContext,
     ray: &PathRay,
-    bsdf: &OpaqueBsdf,
+    bsdf: &OpaqueLobe,
     opaque: f32,
     spawn: SpawnPoint,
     ng: Vec3,
     waves: &mut Waves,
 ) {
-    let ns = bsdf.n;
+    let ns = bsdf.normal();
     let wo = -ray.direction;
     let origin = spawn.offset_origin(ng);
     for light in &context.scene.lights {

@@ -252,6 +252,9 @@ struct RawMaterial {
     alpha: Option<Spanned<Num>>,
     alpha_texture: Option<Spanned<String>>,
     alpha_cutoff: Option<Spanned<Num>>,
+    // Plain f64 (not Num), so a nan is reported with the material's name.
+    roughness: Option<Spanned<f64>>,
+    metallic: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -454,6 +457,27 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             "transmission",
         )?;
         unit_weight(loc, &mut material.alpha, &m.alpha, "alpha")?;
+        // The metallic-roughness model (glTF 2.0 Appendix B): roughness selects it.
+        if let Some(r) = &m.roughness {
+            let x = *r.get_ref();
+            if !(0.0..=1.0).contains(&x) {
+                return Err(loc.at(
+                    r,
+                    format!("material '{name}': roughness = {x} must lie in [0, 1]"),
+                ));
+            }
+            material.roughness = Some(x as f32);
+        }
+        if let Some(v) = &m.metallic {
+            let x = *v.get_ref();
+            if !(0.0..=1.0).contains(&x) {
+                return Err(loc.at(
+                    v,
+                    format!("material '{name}': metallic = {x} must lie in [0, 1]"),
+                ));
+            }
+            material.metallic = x as f32;
+        }
         if let Some(s) = &m.shininess {
             if s.get_ref().0 < 0.0 {
                 return Err(loc.at(s, "shininess must be >= 0"));
@@ -1127,5 +1151,37 @@ material = "glass"
         .unwrap_err()
         .to_string();
         assert!(e.starts_with("s.toml:3:9:"), "{e}");
+    }
+
+    #[test]
+    fn metallic_roughness_keys_are_read_and_checked() {
+        let scene = |keys: &str| {
+            format!(
+                "[camera]\ntype = \"pinhole\"\neye = [0, 0, 5]\ntarget = [0, 0, 0]\n\n\
+                 [[material]]\nname = \"brass\"\n{keys}\n"
+            )
+        };
+        let s = parse_here(&scene("roughness = 0.3\nmetallic = 1.0")).unwrap();
+        assert_eq!(s.materials[0].roughness, Some(0.3));
+        assert_eq!(s.materials[0].metallic, 1.0);
+        let classic = parse_here(&scene("base_color = [0.5, 0.5, 0.5]")).unwrap();
+        assert_eq!(
+            (
+                classic.materials[0].roughness,
+                classic.materials[0].metallic
+            ),
+            (None, 0.0)
+        );
+        for (keys, key) in [
+            ("roughness = 1.5", "roughness"),
+            ("roughness = -0.1", "roughness"),
+            ("roughness = nan", "roughness"),
+            ("metallic = 2", "metallic"),
+            ("metallic = nan", "metallic"),
+        ] {
+            let e = err(&scene(keys));
+            assert!(e.starts_with("s.toml:"), "{e}");
+            assert!(e.contains("material 'brass'") && e.contains(key), "{e}");
+        }
     }
 }

@@ -1,0 +1,168 @@
+//! The rough conductor lobe: a metal's microfacet reflection with the GGX distribution
+//! ([`super::microfacet`]), the glTF 2.0 metal of its Appendix B.
+//!
+//! `f(wo, wi) = F(wo . h) D(h) G2(wo, wi) / (4 cos(theta_o) cos(theta_i))` with
+//! `h = normalize(wo + wi)` (Walter et al. 2007, eq. 20) and Schlick's Fresnel with the
+//! reflectance at normal incidence `F0` (the glTF base colour):
+//! `F(c) = F0 + (1 - F0)(1 - c)^5`. Directions are sampled through the visible normals:
+//! `h ~ D_wo`, `wi = reflect(wo, h)`, so `pdf = D_wo(h) / (4 wo . h)` (the reflection's
+//! Jacobian, Walter et al. 2007, eq. 14) and the weight `f cos / pdf` reduces to
+//! `F G2 / G1(wo)`, close to `F` whatever the roughness.
+//!
+//! The lobe is single-scattering: light that would bounce between microfacets is lost,
+//! which darkens very rough metals (the figures are in docs/materials.md). Roughness near
+//! zero is kept finite by [`super::microfacet::MIN_ALPHA`].
+
+use glam::{Vec2, Vec3};
+
+use super::bsdf::{Bsdf, BsdfSample, Lobe};
+use super::frame::ShadingFrame;
+use super::microfacet::Ggx;
+
+/// Schlick's Fresnel `F0 + (1 - F0)(1 - cos)^5` for a colour `F0` (glTF 2.0 Appendix B,
+/// "fresnel_mix" and "conductor_fresnel").
+#[inline]
+pub fn schlick_f0(f0: Vec3, cos: f32) -> Vec3 {
+    let m = (1.0 - cos.abs()).clamp(0.0, 1.0);
+    let m2 = m * m;
+    f0 + (Vec3::ONE - f0) * (m2 * m2 * m)
+}
+
+/// A rough metal about the shading normal `frame.n` (on the viewer's side).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoughConductor {
+    pub frame: ShadingFrame,
+    pub ggx: Ggx,
+    /// Reflectance at normal incidence.
+    pub f0: Vec3,
+}
+
+impl RoughConductor {
+    /// The conductor about the unit normal `n` with glTF perceptual `roughness` and `f0`.
+    pub fn new(n: Vec3, roughness: f32, f0: Vec3) -> RoughConductor {
+        RoughConductor {
+            frame: ShadingFrame::from_normal(n),
+            ggx: Ggx::from_roughness(roughness),
+            f0,
+        }
+    }
+
+    /// `f` in the local frame; zero unless both directions are above the surface.
+    #[inline]
+    pub(crate) fn eval_local(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let h = (wo + wi).normalize_or_zero();
+        if h == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let scale = self.ggx.d(h) * self.ggx.g2(wo, wi) / (4.0 * wo.z * wi.z);
+        schlick_f0(self.f0, wo.dot(h)) * scale
+    }
+
+    /// The sampling density in the local frame.
+    #[inline]
+    pub(crate) fn pdf_local(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let h = (wo + wi).normalize_or_zero();
+        let wo_dot_h = wo.dot(h);
+        if h == Vec3::ZERO || wo_dot_h <= 0.0 {
+            return 0.0;
+        }
+        self.ggx.visible_normal_pdf(wo, h) / (4.0 * wo_dot_h)
+    }
+
+    /// A local sample (`wi`, weight, pdf).
+    #[inline]
+    pub(crate) fn sample_local(&self, wo: Vec3, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let h = self.ggx.sample_visible_normal(wo, u);
+        let wo_dot_h = wo.dot(h);
+        if wo_dot_h <= 0.0 {
+            return None;
+        }
+        let wi = 2.0 * wo_dot_h * h - wo;
+        if wi.z <= 0.0 {
+            // The reflection off this microfacet leaves below the surface: the light is lost
+            // to the single-scattering model.
+            return None;
+        }
+        let pdf = self.ggx.visible_normal_pdf(wo, h) / (4.0 * wo_dot_h);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        let weight = schlick_f0(self.f0, wo_dot_h) * (self.ggx.g2(wo, wi) / self.ggx.g1(wo));
+        Some((wi, weight, pdf))
+    }
+}
+
+impl Bsdf for RoughConductor {
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        self.eval_local(self.frame.to_local(wo), self.frame.to_local(wi))
+    }
+
+    fn sample(&self, wo: Vec3, _u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let (wi, weight, pdf) = self.sample_local(self.frame.to_local(wo), u)?;
+        Some(BsdfSample {
+            wi: self.frame.to_world(wi),
+            weight,
+            pdf,
+            lobe: Lobe::Smooth,
+        })
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdf_local(self.frame.to_local(wo), self.frame.to_local(wi))
+    }
+
+    fn has_delta(&self) -> bool {
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schlick_goes_from_f0_to_one() {
+        let f0 = Vec3::new(0.9, 0.6, 0.3);
+        assert_eq!(schlick_f0(f0, 1.0), f0);
+        assert_eq!(schlick_f0(f0, 0.0), Vec3::ONE);
+        let mid = schlick_f0(f0, 0.5);
+        assert!(mid.cmpgt(f0).all() && mid.cmplt(Vec3::ONE).all());
+    }
+
+    #[test]
+    fn the_peak_sits_at_the_mirror_direction() {
+        let metal = RoughConductor::new(Vec3::Z, 0.3, Vec3::ONE);
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        let mirror = Vec3::new(-0.6, 0.0, 0.8);
+        let off = Vec3::new(-0.3, 0.4, 0.866).normalize();
+        assert!(metal.eval(wo, mirror).x > 5.0 * metal.eval(wo, off).x);
+        assert_eq!(metal.eval(wo, Vec3::new(0.0, 0.6, -0.8)), Vec3::ZERO);
+        assert!(metal.sample(-wo, 0.5, Vec2::splat(0.5)).is_none());
+    }
+
+    #[test]
+    fn a_mirror_like_metal_stays_finite() {
+        let metal = RoughConductor::new(Vec3::Z, 0.0, Vec3::splat(0.9));
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        let s = metal
+            .sample(wo, 0.5, Vec2::new(0.4, 0.7))
+            .expect("reflects");
+        assert!(
+            (s.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-2,
+            "{}",
+            s.wi
+        );
+        assert!(s.weight.is_finite() && s.pdf.is_finite() && s.pdf > 0.0);
+        assert!(s.weight.max_element() <= 1.0 + 1e-4);
+        assert!(metal.eval(wo, s.wi).is_finite());
+    }
+}
