@@ -7,9 +7,10 @@
 //!
 //! The opaque lobe is the classic Lambert plus Blinn-Phong ([`OpaqueBsdf`]) when the
 //! material's `roughness` is `None`, and the glTF 2.0 metallic-roughness lobe
-//! ([`MetallicRoughnessBsdf`]) when it is `Some`. The dielectric boundary is rough when the
-//! material has a roughness of at least [`ROUGH_DIELECTRIC_MIN_ROUGHNESS`], the media are
-//! not index-matched (`ior != 1`) and Fresnel reflection is on; otherwise it is smooth.
+//! ([`MetallicRoughnessBsdf`]) when it is `Some`. The dielectric boundary of a material with
+//! `transmission > 0` is rough when the material has a roughness of at least
+//! [`ROUGH_DIELECTRIC_MIN_ROUGHNESS`], the media are not index-matched (`ior != 1`) and
+//! Fresnel reflection is on; otherwise it is smooth.
 //!
 //! Whitted follows each weighted lobe: it evaluates the opaque lobe for every light and
 //! follows the mirror and the *smooth* boundary's two directions (it can follow only delta
@@ -131,7 +132,8 @@ impl MaterialBsdf {
         };
         let rough_dielectric = match material.roughness {
             Some(roughness)
-                if roughness >= ROUGH_DIELECTRIC_MIN_ROUGHNESS
+                if material.transmission > 0.0
+                    && roughness >= ROUGH_DIELECTRIC_MIN_ROUGHNESS
                     && material.ior != 1.0
                     && fresnel.is_some() =>
             {
@@ -330,5 +332,58 @@ mod tests {
         };
         assert!(b.sample(Vec3::Z, 0.5, Vec2::splat(0.5)).is_none());
         assert_eq!(b.pdf(Vec3::Z, Vec3::Z), 0.0);
+    }
+
+    #[test]
+    fn roughness_selects_the_metallic_roughness_lobe_and_none_keeps_the_classic_one() {
+        let classic = bsdf_of(&material(0.0, 0.0));
+        assert!(matches!(classic.opaque, OpaqueLobe::Classic(_)));
+        let mut metal = material(0.0, 0.0);
+        metal.roughness = Some(0.3);
+        metal.metallic = 1.0;
+        let b = bsdf_of(&metal);
+        let OpaqueLobe::MetallicRoughness(lobe) = b.opaque else {
+            panic!("expected the metallic-roughness lobe, got {:?}", b.opaque);
+        };
+        assert_eq!(lobe.metallic, 1.0);
+        assert!((lobe.ggx.alpha - 0.09).abs() < 1e-6, "{}", lobe.ggx.alpha);
+        // The GGX highlight: far brighter towards the mirror direction than to the side.
+        let wo = Vec3::new(-0.3, 0.0, 0.954).normalize();
+        let mirror = Vec3::new(0.3, 0.0, 0.954).normalize();
+        let side = Vec3::new(-0.5, 0.5, 0.707).normalize();
+        assert!(b.eval(wo, mirror).x > 20.0 * b.eval(wo, side).x);
+        assert!(b.rough_dielectric.is_none() && !b.has_delta());
+    }
+
+    #[test]
+    fn rough_transmission_replaces_the_smooth_boundary_above_the_threshold() {
+        let mut glass = material(0.0, 1.0);
+        glass.roughness = Some(0.3);
+        let b = bsdf_of(&glass);
+        assert!(b.rough_dielectric.is_some() && !b.has_delta());
+        // Below the threshold, index-matched, or without Fresnel: the smooth boundary.
+        glass.roughness = Some(0.5 * ROUGH_DIELECTRIC_MIN_ROUGHNESS);
+        assert!(bsdf_of(&glass).rough_dielectric.is_none());
+        glass.roughness = Some(0.3);
+        glass.ior = 1.0;
+        assert!(bsdf_of(&glass).rough_dielectric.is_none());
+        glass.ior = 1.5;
+        let index_matched = MaterialBsdf::new(
+            &glass,
+            glass.base_color,
+            Vec3::new(0.3, 0.0, -0.954).normalize(),
+            Vec3::Z,
+            Vec3::Z,
+            None,
+        );
+        assert!(index_matched.rough_dielectric.is_none() && index_matched.has_delta());
+        // A rough glass scatters light through the surface with a density.
+        let wo = Vec3::new(-0.3, 0.0, 0.954).normalize();
+        let mut u = Uniforms(31);
+        let transmitted = (0..1000)
+            .filter_map(|_| b.sample(wo, u.next(), u.vec2()))
+            .filter(|s| s.wi.z < 0.0 && s.lobe == Lobe::Smooth && s.pdf > 0.0)
+            .count();
+        assert!(transmitted > 800, "{transmitted}");
     }
 }
