@@ -229,7 +229,7 @@ impl Bsdf for MaterialBsdf {
                 // of the mixture, so it carries the mixture's value and density (one-sample
                 // MIS, balance heuristic), which is what eval and pdf report.
                 sample.pdf = self.pdf(wo, sample.wi);
-                if !(sample.pdf > 0.0) {
+                if sample.pdf.is_nan() || sample.pdf <= 0.0 {
                     return None;
                 }
                 let cos = sample.wi.dot(self.opaque.normal()).abs();

@@ -177,7 +177,7 @@ impl RoughDielectric {
         };
         // Value and density from the pair itself, so the sample agrees with eval and pdf.
         let pdf = self.pdf_local(wo, wi);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         let weight = self.eval_local(wo, wi) * (wi.z.abs() / pdf);
