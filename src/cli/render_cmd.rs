@@ -363,6 +363,13 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         if let Some(vct) = integrator.vct_stats() {
             result.stats.counters.vct_voxels_built = vct.occupied_voxels;
             result.stats.vct = Some(vct.clone());
+            let [x, y, z] = vct.dims;
+            result.stats.notes.push(format!(
+                "vct: {x}x{y}x{z} voxels ({} filled), built in {:.3} s, pyramid {:.1} MiB",
+                vct.occupied_voxels,
+                vct.seconds,
+                vct.pyramid_bytes as f64 / (1 << 20) as f64
+            ));
         }
         Ok((result, context.camera, part, tiles))
     })?;

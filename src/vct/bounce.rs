@@ -9,7 +9,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::cone::{diffuse_cones, trace_cone, DIFFUSE_APERTURE, START_OFFSET_VOXELS};
+use super::cone::{gather_diffuse, CONE_START, STEP_FRACTION};
 use super::grid::{VoxelLevel, VoxelPyramid};
 use super::mipmap::build_pyramid;
 
@@ -37,18 +37,11 @@ pub struct BounceWork {
 /// One more bounce: the pyramid whose voxels send out their direct light plus the diffuse
 /// reflection of what `current` shows them.
 pub fn add_bounce(current: &VoxelPyramid, surfaces: &[SurfaceVoxel]) -> (VoxelPyramid, BounceWork) {
-    let start = START_OFFSET_VOXELS * current.frame.voxel_size;
     let gathered: Vec<(Vec3, u64)> = surfaces
         .par_iter()
         .map(|s| {
-            let mut sum = Vec3::ZERO;
-            let mut steps = 0u64;
-            for (direction, weight) in diffuse_cones(s.normal) {
-                let r = trace_cone(current, s.center, direction, DIFFUSE_APERTURE, start, f32::INFINITY);
-                sum += weight * r.radiance;
-                steps += u64::from(r.steps);
-            }
-            (sum, steps)
+            let g = gather_diffuse(current, s.center, s.normal, CONE_START, STEP_FRACTION);
+            (g.radiance, g.steps)
         })
         .collect();
     let mut level0 = VoxelLevel::empty(current.frame.dims);

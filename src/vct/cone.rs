@@ -45,6 +45,19 @@ pub fn trace_cone(
     start: f32,
     max_distance: f32,
 ) -> ConeResult {
+    trace_cone_stepped(pyramid, origin, direction, aperture, start, max_distance, STEP_FRACTION)
+}
+
+/// [`trace_cone`] with steps of `step_fraction` diameters (for measuring the choice).
+pub fn trace_cone_stepped(
+    pyramid: &VoxelPyramid,
+    origin: Vec3,
+    direction: Vec3,
+    aperture: f32,
+    start: f32,
+    max_distance: f32,
+    step_fraction: f32,
+) -> ConeResult {
     let voxel = pyramid.frame.voxel_size;
     let spread = 2.0 * aperture.tan();
     let max_level = pyramid.max_level();
@@ -58,7 +71,7 @@ pub fn trace_cone(
         if level >= max_level || !pyramid.frame.contains(position) {
             break;
         }
-        let step = (diameter * STEP_FRACTION).min(max_distance - distance);
+        let step = (diameter * step_fraction).min(max_distance - distance);
         let sample = pyramid.sample(position, level);
         steps += 1;
         let alpha = sample[3].clamp(0.0, 1.0);
@@ -158,9 +171,61 @@ mod tests {
 
 /// Half-angle of each of the six diffuse cones (seed 003).
 pub const DIFFUSE_APERTURE: f32 = std::f32::consts::PI / 6.0;
-/// Where diffuse and specular cones start, in level-0 voxels from the surface point: past
-/// the surface's own voxel, whose light is the surface's own (`docs/vct.md` measures it).
-pub const START_OFFSET_VOXELS: f32 = 1.5;
+/// Where the cones of a surface point start, in level-0 voxels: the origin moved along the
+/// normal, then the first sample along the cone, past the surface's own voxel, whose light
+/// is the surface's own (`docs/vct.md` measures the choice).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConeStart {
+    /// Distance of the cones' origin from the surface along its normal.
+    pub normal_voxels: f32,
+    /// Distance along each cone of its first sample.
+    pub along_voxels: f32,
+}
+
+/// The start every integrator cone and every bounce cone uses.
+pub const CONE_START: ConeStart = ConeStart {
+    normal_voxels: 1.5,
+    along_voxels: 1.0,
+};
+
+/// What seed 003's six diffuse cones gather at a surface point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DiffuseGather {
+    /// `sum_j W_j L_v(x, w_j, pi/6)` (to be multiplied by the diffuse albedo `k_d`).
+    pub radiance: Vec3,
+    /// `sum_j W_j (1 - alpha_j)`: the cosine-weighted share of directions the voxels leave
+    /// open (what sees the environment).
+    pub open: f32,
+    pub steps: u64,
+}
+
+/// The six diffuse cones at point `p` with unit normal `n`.
+pub fn gather_diffuse(
+    pyramid: &VoxelPyramid,
+    p: Vec3,
+    n: Vec3,
+    start: ConeStart,
+    step_fraction: f32,
+) -> DiffuseGather {
+    let voxel = pyramid.frame.voxel_size;
+    let origin = p + n * (start.normal_voxels * voxel);
+    let mut out = DiffuseGather::default();
+    for (direction, weight) in diffuse_cones(n) {
+        let r = trace_cone_stepped(
+            pyramid,
+            origin,
+            direction,
+            DIFFUSE_APERTURE,
+            start.along_voxels * voxel,
+            f32::INFINITY,
+            step_fraction,
+        );
+        out.radiance += weight * r.radiance;
+        out.open += weight * (1.0 - r.alpha);
+        out.steps += u64::from(r.steps);
+    }
+    out
+}
 
 /// Seed 003's six diffuse cones about the unit normal `n`: one along `n` with weight 1/4
 /// (the cosine-weighted share of the cap of half-angle pi/6, `(1/pi) int cos sin = 1/4`)

@@ -19,7 +19,7 @@ use crate::film::{PixelRect, TileImage};
 use crate::integrator::whitted::{render_tile_with, IndirectLight, IndirectQuery, Waves};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::Integrator;
-use crate::vct::cone::{diffuse_cones, trace_cone, DIFFUSE_APERTURE, START_OFFSET_VOXELS};
+use crate::vct::cone::{gather_diffuse, trace_cone, CONE_START, STEP_FRACTION};
 use crate::vct::VoxelScene;
 
 pub use glossy::specular_cone_aperture;
@@ -65,7 +65,7 @@ impl IndirectLight for Vct {
         worker: &mut WorkerState,
     ) -> Vec3 {
         let pyramid = &self.voxels.pyramid;
-        let start = START_OFFSET_VOXELS * pyramid.frame.voxel_size;
+        let voxel = pyramid.frame.voxel_size;
         let environment = if context.effects.environment {
             context.lights.environment.mean_radiance
         } else {
@@ -73,28 +73,29 @@ impl IndirectLight for Vct {
         };
         let bsdf = query.bsdf;
         let n = bsdf.n;
-        let mut cone = |direction: Vec3, aperture: f32| {
-            let r = trace_cone(pyramid, query.position, direction, aperture, start, f32::INFINITY);
-            worker.counters.vct_cones_traced += 1;
-            worker.counters.vct_cone_steps += u64::from(r.steps);
-            r.radiance + (1.0 - r.alpha) * environment
-        };
-        // Seed 003: L_o = k_d sum_j W_j L_v(x, w_j, a_j).
-        let mut diffuse = Vec3::ZERO;
+        let counters = &mut worker.counters;
+        // Seed 003: L_o = k_d sum_j W_j L_v(x, w_j, a_j); what the cones leave open sees the
+        // environment.
+        let mut radiance = Vec3::ZERO;
         if bsdf.albedo.max_element() > 0.0 {
-            for (direction, weight) in diffuse_cones(n) {
-                diffuse += weight * cone(direction, DIFFUSE_APERTURE);
-            }
+            let g = gather_diffuse(pyramid, query.position, n, CONE_START, STEP_FRACTION);
+            counters.vct_cones_traced += 6;
+            counters.vct_cone_steps += g.steps;
+            radiance += bsdf.albedo * (g.radiance + g.open * environment);
         }
-        let mut radiance = bsdf.albedo * diffuse;
         // The normalised Blinn-Phong lobe reflects about `specular` of what arrives around
-        // the mirror direction: one cone there.
+        // the mirror direction: one cone there, started as the diffuse ones are.
         if bsdf.specular > 0.0 {
             let wo = query.outgoing;
             let reflected = 2.0 * n.dot(wo) * n - wo;
             if reflected.dot(query.geometric_normal) > 0.0 {
                 let aperture = specular_cone_aperture(bsdf.shininess);
-                radiance += bsdf.specular * cone(reflected, aperture);
+                let origin = query.position + n * (CONE_START.normal_voxels * voxel);
+                let start = CONE_START.along_voxels * voxel;
+                let r = trace_cone(pyramid, origin, reflected, aperture, start, f32::INFINITY);
+                counters.vct_cones_traced += 1;
+                counters.vct_cone_steps += u64::from(r.steps);
+                radiance += bsdf.specular * (r.radiance + (1.0 - r.alpha) * environment);
             }
         }
         query.weight * radiance
