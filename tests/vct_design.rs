@@ -91,7 +91,10 @@ fn cone_start_and_step_measurements() {
     println!("\ncorner: open share minus the exact one at d = h / 4 from a wall h voxels high");
     println!("start (normal, along) | h = 2 | 4 | 8 | 16 | 32");
     let heights = [2u32, 4, 8, 16, 32];
-    let walls: Vec<VoxelPyramid> = heights.iter().map(|&h| scene(128, h + 8, Some(h))).collect();
+    let walls: Vec<VoxelPyramid> = heights
+        .iter()
+        .map(|&h| scene(128, h + 8, Some(h)))
+        .collect();
     let mut errors = Vec::new();
     for (normal, along) in STARTS {
         let start = ConeStart {
@@ -117,7 +120,9 @@ fn cone_start_and_step_measurements() {
     // footprints a tall wall is seen through, and lets sky through).
     assert!(errors.iter().all(|&e| e < 0.25), "corner errors {errors:?}");
 
-    println!("\nstep length: open share and steps at the open floor and at d = 4 from a wall 16 high");
+    println!(
+        "\nstep length: open share and steps at the open floor and at d = 4 from a wall 16 high"
+    );
     println!("step (diameters) | open floor | steps | corner | steps");
     let wall = scene(128, 24, Some(16));
     let reference = open_share(&wall, floor_point(4.5, 64.0), CONE_START, 0.125).0;

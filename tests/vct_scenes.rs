@@ -10,7 +10,9 @@ use common::*;
 use serde_json::Value;
 
 fn scene(name: &str) -> PathBuf {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes")
+        .join(name);
     assert!(path.is_file(), "scene {} is missing", path.display());
     path
 }
@@ -62,7 +64,12 @@ fn light_leaks_through_a_thin_wall_less_as_the_grid_gets_finer() {
     // The right room (x from 0.3 to 1.7, z from -0.7 to 0.7) gets no light at all: Whitted,
     // which only traces the point light's shadow rays, shows it black.
     let right = ((0.575, 0.925), (0.15, 0.85));
-    let (whitted, _) = render(dir.path(), &leak, "whitted", &[&size[..], &["--integrator", "whitted"]].concat());
+    let (whitted, _) = render(
+        dir.path(),
+        &leak,
+        "whitted",
+        &[&size[..], &["--integrator", "whitted"]].concat(),
+    );
     assert_eq!(mean_red(&whitted, right.0, right.1), 0.0);
     let mut leaked = Vec::new();
     for resolution in ["8", "32", "128"] {
@@ -74,7 +81,10 @@ fn light_leaks_through_a_thin_wall_less_as_the_grid_gets_finer() {
     // Coarse voxels straddle the wall: the lit side's light shows on the dark side.
     assert!(leaked[0].1 > 1e-3, "no leak at resolution 8: {leaked:?}");
     // Finer voxels leak less.
-    assert!(leaked[1].1 < leaked[0].1 && leaked[2].1 < 0.5 * leaked[0].1, "{leaked:?}");
+    assert!(
+        leaked[1].1 < leaked[0].1 && leaked[2].1 < 0.5 * leaked[0].1,
+        "{leaked:?}"
+    );
 }
 
 #[test]
@@ -106,11 +116,17 @@ fn the_corner_error_falls_as_the_grid_gets_finer() {
         // Signed error at d = 0.1: the thin wall, diluted in coarse voxels, lets the
         // cones aimed at it see the sky.
         let x = (0.1f32 / 4.0 * 160.0) as usize;
-        near_wall.push((resolution, image.at("R", x, 80) - exact((x as f32 + 0.5) / 40.0)));
+        near_wall.push((
+            resolution,
+            image.at("R", x, 80) - exact((x as f32 + 0.5) / 40.0),
+        ));
     }
     println!("corner strip d in [0.02, 0.3]: mean |error| by resolution {errors:?}; signed at d = 0.1: {near_wall:?}");
     assert!(errors[0].1 > 0.15, "{errors:?}");
-    assert!(near_wall[0].1 > 0.15, "coarse voxels under-occlude at the wall: {near_wall:?}");
+    assert!(
+        near_wall[0].1 > 0.15,
+        "coarse voxels under-occlude at the wall: {near_wall:?}"
+    );
     assert!(errors[1].1 < 0.6 * errors[0].1, "{errors:?}");
 }
 
@@ -119,15 +135,28 @@ fn whitted_builds_no_voxels_and_counts_zero_cones() {
     let dir = temp_dir();
     let cornell = scene("vct_cornell.toml");
     let size = ["--width", "32", "--height", "32"];
-    let (_, whitted) = render(dir.path(), &cornell, "w", &[&size[..], &["--integrator", "whitted"]].concat());
+    let (_, whitted) = render(
+        dir.path(),
+        &cornell,
+        "w",
+        &[&size[..], &["--integrator", "whitted"]].concat(),
+    );
     for key in ["vct_voxels_built", "vct_cones_traced", "vct_cone_steps"] {
         assert_eq!(whitted["counters"][key], 0, "{key} of a Whitted render");
     }
     assert!(whitted["vct"].is_null());
     // The scene selects vct itself.
-    let (_, vct) = render(dir.path(), &cornell, "v", &[&size[..], &["--vct-resolution", "32"]].concat());
+    let (_, vct) = render(
+        dir.path(),
+        &cornell,
+        "v",
+        &[&size[..], &["--vct-resolution", "32"]].concat(),
+    );
     for key in ["vct_voxels_built", "vct_cones_traced", "vct_cone_steps"] {
-        assert!(vct["counters"][key].as_u64().unwrap() > 0, "{key} of a vct render");
+        assert!(
+            vct["counters"][key].as_u64().unwrap() > 0,
+            "{key} of a vct render"
+        );
     }
     assert_eq!(vct["vct"]["resolution"], 32);
     assert!(vct["vct"]["pyramid_bytes"].as_u64().unwrap() > 0);
@@ -139,7 +168,12 @@ fn the_extra_bounce_brightens_what_only_indirect_light_reaches() {
     let cornell = scene("vct_cornell.toml");
     let args = ["--width", "64", "--height", "64", "--vct-resolution", "32"];
     let (one, _) = render(dir.path(), &cornell, "b1", &args);
-    let (two, stats) = render(dir.path(), &cornell, "b2", &[&args[..], &["--vct-bounces", "2"]].concat());
+    let (two, stats) = render(
+        dir.path(),
+        &cornell,
+        "b2",
+        &[&args[..], &["--vct-bounces", "2"]].concat(),
+    );
     assert!(stats["vct"]["bounce_cones"].as_u64().unwrap() > 0);
     let whole = ((0.0, 1.0), (0.0, 1.0));
     assert!(mean_red(&two, whole.0, whole.1) > mean_red(&one, whole.0, whole.1));
@@ -155,15 +189,37 @@ fn bad_vct_settings_are_refused_with_one_line() {
         vec!["--vct-bounces", "0"],
         vec!["--integrator", "photon"],
     ] {
-        let mut all = vec!["render", cornell.to_str().unwrap(), "-o", out_exr.to_str().unwrap(), "--quiet"];
+        let mut all = vec![
+            "render",
+            cornell.to_str().unwrap(),
+            "-o",
+            out_exr.to_str().unwrap(),
+            "--quiet",
+        ];
         all.extend(args.iter().copied());
         let out = run_in(dir.path(), &all);
-        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         assert!(!out_exr.exists(), "{args:?} wrote an image");
     }
     let bad = write(dir.path(), "bad.toml", "[render]\nintegrator = 'photon'\n");
-    let out = run_in(dir.path(), &["render", bad.to_str().unwrap(), "-o", out_exr.to_str().unwrap()]);
+    let out = run_in(
+        dir.path(),
+        &[
+            "render",
+            bad.to_str().unwrap(),
+            "-o",
+            out_exr.to_str().unwrap(),
+        ],
+    );
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("integrator") && stderr.contains("bad.toml"), "{stderr}");
+    assert!(
+        stderr.contains("integrator") && stderr.contains("bad.toml"),
+        "{stderr}"
+    );
 }

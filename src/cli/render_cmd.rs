@@ -171,22 +171,36 @@ pub fn filter_parser() -> impl clap::builder::TypedValueParser<Value = FilterMod
         .try_map(|name| name.parse::<FilterMode>())
 }
 
-/// The integrator the command line or the scene selects, built for `context` (the voxel
-/// scene of vct; nothing for Whitted).
-fn select_integrator(
+/// `--integrator`, `--vct-resolution` and `--vct-bounces` over the scene's `[render]`
+/// settings.
+fn apply_integrator_options(
     args: &RenderArgs,
-    context: &render::RenderContext,
-) -> Result<SelectedIntegrator, CommandError> {
+    scene: &mut SceneDescription,
+) -> Result<(), CommandError> {
+    let settings = &mut scene.settings;
+    if let Some(name) = args.integrator.as_deref() {
+        settings.integrator = name
+            .parse::<IntegratorKind>()
+            .map_err(CommandError::bad_input)?;
+    }
+    if let Some(resolution) = args.vct_resolution {
+        settings.vct_resolution = Some(resolution);
+    }
+    if let Some(bounces) = args.vct_bounces {
+        settings.vct_bounces = bounces;
+    }
+    Ok(())
+}
+
+/// The integrator the scene's settings select (after [`apply_integrator_options`]), built
+/// for `context` (the voxel scene of vct; nothing for Whitted).
+fn select_integrator(context: &render::RenderContext) -> Result<SelectedIntegrator, CommandError> {
     let settings = &context.scene.settings;
-    let kind = match args.integrator.as_deref() {
-        Some(name) => name.parse::<IntegratorKind>().map_err(CommandError::bad_input)?,
-        None => settings.integrator,
-    };
     let vct = crate::vct::VctSettings {
-        resolution: args.vct_resolution.or(settings.vct_resolution),
-        bounces: args.vct_bounces.unwrap_or(settings.vct_bounces),
+        resolution: settings.vct_resolution,
+        bounces: settings.vct_bounces,
     };
-    selection::select(kind, context, &vct)
+    selection::select(settings.integrator, context, &vct)
         .map_err(|e| CommandError::bad_input(format!("{}: {e}", context.scene.source)))
 }
 
@@ -294,7 +308,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     // Outputs are checked before anything is loaded or rendered: a bad path costs nothing.
     let outputs = OutputPlan::from_args(args)?;
     let started = Instant::now();
-    let scene = load(args)?;
+    let mut scene = load(args)?;
+    // The integrator options join the scene's settings, so the resume signature covers them.
+    apply_integrator_options(args, &mut scene)?;
     let mut phases = PhaseSeconds {
         load: started.elapsed().as_secs_f64(),
         ..PhaseSeconds::default()
@@ -346,7 +362,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
         phases.prepare = preparing.elapsed().as_secs_f64();
-        let integrator = select_integrator(args, &context)?;
+        let integrator = select_integrator(&context)?;
         let part = split.resolve(&context, &integrator)?;
         let tiles = part.tiles(options.width, options.height);
         let bar = progress_bar(args.quiet, tiles.len());

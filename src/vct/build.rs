@@ -86,14 +86,14 @@ pub struct VoxelScene {
 }
 
 /// Check the settings and pick the resolution for `context`'s scene.
-pub fn resolution_for(context: &RenderContext, settings: &VctSettings) -> Result<(GridFrame, u32), VctError> {
+pub fn resolution_for(
+    context: &RenderContext,
+    settings: &VctSettings,
+) -> Result<(GridFrame, u32), VctError> {
     if !(1..=8).contains(&settings.bounces) {
         return Err(VctError::Bounces(settings.bounces));
     }
-    let (lo, hi) = context
-        .scene
-        .bounds()
-        .unwrap_or((Vec3::ZERO, Vec3::ZERO));
+    let (lo, hi) = context.scene.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
     let resolution = match settings.resolution {
         Some(r) if !(2..=MAX_RESOLUTION).contains(&r) => return Err(VctError::Resolution(r)),
         Some(r) => r,
@@ -109,7 +109,10 @@ pub fn resolution_for(context: &RenderContext, settings: &VctSettings) -> Result
 
 /// Voxelise `context`'s scene (triangles and spheres; curved patches are not voxelised),
 /// light it and build its pyramid, in parallel.
-pub fn build_voxel_scene(context: &RenderContext, settings: &VctSettings) -> Result<VoxelScene, VctError> {
+pub fn build_voxel_scene(
+    context: &RenderContext,
+    settings: &VctSettings,
+) -> Result<VoxelScene, VctError> {
     let started = Instant::now();
     let (frame, resolution) = resolution_for(context, settings)?;
     let scene = &context.scene;
@@ -128,13 +131,23 @@ pub fn build_voxel_scene(context: &RenderContext, settings: &VctSettings) -> Res
         })
         .collect();
     for sphere in &scene.spheres {
-        sphere_fragments(&frame, sphere.center, sphere.radius, sphere.material as u32, &mut fragments);
+        sphere_fragments(
+            &frame,
+            sphere.center,
+            sphere.radius,
+            sphere.material as u32,
+            &mut fragments,
+        );
     }
     let voxelise_seconds = voxelising.elapsed().as_secs_f64();
 
     let injecting = Instant::now();
     let grid_center = frame.origin
-        + Vec3::new(frame.dims[0] as f32, frame.dims[1] as f32, frame.dims[2] as f32) * (0.5 * frame.voxel_size);
+        + Vec3::new(
+            frame.dims[0] as f32,
+            frame.dims[1] as f32,
+            frame.dims[2] as f32,
+        ) * (0.5 * frame.voxel_size);
     let (mut lit, shadow_rays) = light_fragments(context, &fragments, grid_center);
     if let Some(error) = context.tracer.take_failure() {
         return Err(VctError::Trace(error.to_string()));

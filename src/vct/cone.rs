@@ -45,7 +45,15 @@ pub fn trace_cone(
     start: f32,
     max_distance: f32,
 ) -> ConeResult {
-    trace_cone_stepped(pyramid, origin, direction, aperture, start, max_distance, STEP_FRACTION)
+    trace_cone_stepped(
+        pyramid,
+        origin,
+        direction,
+        aperture,
+        start,
+        max_distance,
+        STEP_FRACTION,
+    )
 }
 
 /// [`trace_cone`] with steps of `step_fraction` diameters (for measuring the choice).
@@ -133,7 +141,11 @@ mod tests {
         for length in [0.8f32, 2.5, 5.0] {
             let r = trace_cone(&p, origin, Vec3::X, 1e-4, 0.0, length);
             let expect = 1.0 - (1.0 - a).powf(length / 0.5);
-            assert!((r.alpha - expect).abs() < 1e-5, "L={length}: {} vs {expect}", r.alpha);
+            assert!(
+                (r.alpha - expect).abs() < 1e-5,
+                "L={length}: {} vs {expect}",
+                r.alpha
+            );
             assert!((r.radiance.x - 3.0 * expect).abs() < 1e-4);
         }
     }
@@ -152,7 +164,11 @@ mod tests {
         let r = trace_cone(&p, origin, Vec3::X, aperture, d0, d1);
         let depth = (d1 / d0).ln() / (2.0 * aperture.tan());
         let expect = 1.0 - (1.0 - a).powf(depth);
-        assert!((r.alpha - expect).abs() < 1e-3 * expect, "{} vs {expect}", r.alpha);
+        assert!(
+            (r.alpha - expect).abs() < 1e-3 * expect,
+            "{} vs {expect}",
+            r.alpha
+        );
     }
 
     #[test]

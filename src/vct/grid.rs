@@ -181,7 +181,10 @@ impl VoxelPyramid {
 
     /// Bytes held by all levels.
     pub fn bytes(&self) -> u64 {
-        self.levels.iter().map(|l| l.voxels.len() as u64 * VOXEL_BYTES).sum()
+        self.levels
+            .iter()
+            .map(|l| l.voxels.len() as u64 * VOXEL_BYTES)
+            .sum()
     }
 
     /// Quadrilinear lookup at world point `p` and fractional level `level` (clamped to the
@@ -269,7 +272,10 @@ mod tests {
                     for x in 0..dx as i64 {
                         let expect = box_average(&p.levels[0], l as u32, x, y, z);
                         let got = level.get(x, y, z);
-                        assert!(close(got, expect, 1e-5), "level {l} ({x},{y},{z}): {got:?} vs {expect:?}");
+                        assert!(
+                            close(got, expect, 1e-5),
+                            "level {l} ({x},{y},{z}): {got:?} vs {expect:?}"
+                        );
                     }
                 }
             }
@@ -322,7 +328,10 @@ mod tests {
             let (a, b) = (brute_at(lo), brute_at(lo + 1));
             let expect: [f32; 4] = std::array::from_fn(|i| a[i] + t * (b[i] - a[i]));
             let got = p.sample(world, level);
-            assert!(close(got, expect, 1e-4), "at {v} level {level}: {got:?} vs {expect:?}");
+            assert!(
+                close(got, expect, 1e-4),
+                "at {v} level {level}: {got:?} vs {expect:?}"
+            );
         }
     }
 

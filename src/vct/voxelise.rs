@@ -89,7 +89,12 @@ fn clamped_barycentrics(tri: [Vec3; 3], c: Vec3) -> Option<(f32, f32)> {
 }
 
 /// The fragments of triangle `tri` of material `material`, appended to `out`.
-pub fn triangle_fragments(frame: &GridFrame, tri: [Vec3; 3], material: u32, out: &mut Vec<Fragment>) {
+pub fn triangle_fragments(
+    frame: &GridFrame,
+    tri: [Vec3; 3],
+    material: u32,
+    out: &mut Vec<Fragment>,
+) {
     let normal = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
     if normal == Vec3::ZERO {
         return;
@@ -197,10 +202,15 @@ mod tests {
         for i in 0..=samples {
             for j in [0.0f32, 0.5, 1.0] {
                 let s = i as f32 / samples as f32;
-                let p = tri[0] + (tri[1] - tri[0]) * s * (1.0 - 0.5 * j) + (tri[2] - tri[0]) * s * 0.5 * j;
+                let p = tri[0]
+                    + (tri[1] - tri[0]) * s * (1.0 - 0.5 * j)
+                    + (tri[2] - tri[0]) * s * 0.5 * j;
                 let v = p.floor();
                 let key = [v.x as u32, v.y as u32, v.z as u32];
-                assert!(marked.contains(&key), "point {p} lies in unmarked voxel {key:?}");
+                assert!(
+                    marked.contains(&key),
+                    "point {p} lies in unmarked voxel {key:?}"
+                );
             }
         }
         // Connectivity: flood fill from the first voxel.

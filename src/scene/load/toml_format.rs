@@ -651,7 +651,10 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
     if let Some(n) = &r.vct_resolution {
         if !(2..=crate::vct::build::MAX_RESOLUTION).contains(n.get_ref()) {
             let max = crate::vct::build::MAX_RESOLUTION;
-            return Err(loc.at(n, format!("render.vct_resolution must be between 2 and {max}")));
+            return Err(loc.at(
+                n,
+                format!("render.vct_resolution must be between 2 and {max}"),
+            ));
         }
         s.vct_resolution = Some(*n.get_ref());
     }
