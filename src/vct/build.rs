@@ -15,6 +15,9 @@ use super::mipmap::build_pyramid;
 use super::voxelise::{sphere_fragments, triangle_fragments, Fragment};
 use crate::render::context::RenderContext;
 
+/// Triangles voxelised per parallel task.
+const TRIANGLES_PER_TASK: usize = 256;
+
 /// The largest accepted `--vct-resolution`.
 pub const MAX_RESOLUTION: u32 = 1024;
 /// The largest pyramid an explicit resolution may ask for.
@@ -118,27 +121,35 @@ pub fn build_voxel_scene(
     let scene = &context.scene;
 
     let voxelising = Instant::now();
-    let mut fragments: Vec<Fragment> = scene
-        .meshes
+    // Parallel over chunks of triangles (a scene is often one large mesh), then spheres.
+    let mut fragments: Vec<Fragment> = Vec::new();
+    for mesh in &scene.meshes {
+        let material = mesh.material as u32;
+        let mesh_fragments: Vec<Fragment> = mesh
+            .triangles
+            .par_chunks(TRIANGLES_PER_TASK)
+            .flat_map_iter(|chunk| {
+                let mut out = Vec::new();
+                for t in chunk {
+                    let tri = t.map(|i| mesh.positions[i as usize]);
+                    triangle_fragments(&frame, tri, material, &mut out);
+                }
+                out
+            })
+            .collect();
+        fragments.extend(mesh_fragments);
+    }
+    let sphere_fragments_all: Vec<Fragment> = scene
+        .spheres
         .par_iter()
-        .flat_map_iter(|mesh| {
+        .flat_map_iter(|sphere| {
             let mut out = Vec::new();
-            for t in &mesh.triangles {
-                let tri = t.map(|i| mesh.positions[i as usize]);
-                triangle_fragments(&frame, tri, mesh.material as u32, &mut out);
-            }
+            let material = sphere.material as u32;
+            sphere_fragments(&frame, sphere.center, sphere.radius, material, &mut out);
             out
         })
         .collect();
-    for sphere in &scene.spheres {
-        sphere_fragments(
-            &frame,
-            sphere.center,
-            sphere.radius,
-            sphere.material as u32,
-            &mut fragments,
-        );
-    }
+    fragments.extend(sphere_fragments_all);
     let voxelise_seconds = voxelising.elapsed().as_secs_f64();
 
     let injecting = Instant::now();
