@@ -27,6 +27,7 @@ pub mod sampler;
 pub mod scene;
 pub mod shading;
 pub mod texture;
+pub mod vct;
 
 #[cfg(test)]
 mod unsafe_boundary {

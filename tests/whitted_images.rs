@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use common::*;
 
 /// The options `regenerate.sh` renders the references with.
-const OPTIONS: [&str; 12] = [
+const OPTIONS: [&str; 14] = [
     "--width",
     "64",
     "--height",
@@ -27,6 +27,8 @@ const OPTIONS: [&str; 12] = [
     "--quiet",
     "--threads",
     "2",
+    "--integrator",
+    "whitted",
 ];
 
 fn manifest_dir() -> PathBuf {

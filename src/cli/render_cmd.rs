@@ -26,7 +26,7 @@ use crate::cli::{CommandError, EXIT_INTERRUPTED};
 use crate::film::AovSelection;
 use crate::film::{self, ExrAttributes, OutputSet};
 use crate::footprint::LodStrategy;
-use crate::integrator::Whitted;
+use crate::integrator::selection::{self, IntegratorKind, SelectedIntegrator};
 use crate::render::stats::PhaseSeconds;
 use crate::render::{self, RenderControl, RenderOptions};
 use crate::scene::load::{default_scene, frame_camera, load_scene};
@@ -135,6 +135,17 @@ pub struct RenderArgs {
     /// quick low-resolution cost estimate.
     #[arg(long, value_name = "i/N")]
     pub part: Option<String>,
+    /// Integrator: whitted, or vct (voxel cone tracing) [default: the scene's, else whitted].
+    #[arg(long, value_parser = crate::integrator::selection::IntegratorKind::NAMES)]
+    pub integrator: Option<String>,
+    /// Voxel cone tracing: voxels across the scene's longest side, 2 to 1024 [default: the
+    /// scene's, else 128, halved until the voxel pyramid fits in 256 MiB].
+    #[arg(long, allow_negative_numbers = true)]
+    pub vct_resolution: Option<u32>,
+    /// Voxel cone tracing: light bounces held by the voxels, 1 (direct light) to 8
+    /// [default: the scene's, else 1].
+    #[arg(long, allow_negative_numbers = true)]
+    pub vct_bounces: Option<u32>,
 }
 
 /// `--patch-mode`'s values.
@@ -158,6 +169,39 @@ pub fn filter_parser() -> impl clap::builder::TypedValueParser<Value = FilterMod
     use clap::builder::TypedValueParser;
     clap::builder::PossibleValuesParser::new(["closest", "bilinear", "trilinear", "aniso", "ewa"])
         .try_map(|name| name.parse::<FilterMode>())
+}
+
+/// `--integrator`, `--vct-resolution` and `--vct-bounces` over the scene's `[render]`
+/// settings.
+fn apply_integrator_options(
+    args: &RenderArgs,
+    scene: &mut SceneDescription,
+) -> Result<(), CommandError> {
+    let settings = &mut scene.settings;
+    if let Some(name) = args.integrator.as_deref() {
+        settings.integrator = name
+            .parse::<IntegratorKind>()
+            .map_err(CommandError::bad_input)?;
+    }
+    if let Some(resolution) = args.vct_resolution {
+        settings.vct_resolution = Some(resolution);
+    }
+    if let Some(bounces) = args.vct_bounces {
+        settings.vct_bounces = bounces;
+    }
+    Ok(())
+}
+
+/// The integrator the scene's settings select (after [`apply_integrator_options`]), built
+/// for `context` (the voxel scene of vct; nothing for Whitted).
+fn select_integrator(context: &render::RenderContext) -> Result<SelectedIntegrator, CommandError> {
+    let settings = &context.scene.settings;
+    let vct = crate::vct::VctSettings {
+        resolution: settings.vct_resolution,
+        bounces: settings.vct_bounces,
+    };
+    selection::select(settings.integrator, context, &vct)
+        .map_err(|e| CommandError::bad_input(format!("{}: {e}", context.scene.source)))
 }
 
 /// Set by the Ctrl-C / SIGTERM handler; render workers stop taking new tiles.
@@ -264,7 +308,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     // Outputs are checked before anything is loaded or rendered: a bad path costs nothing.
     let outputs = OutputPlan::from_args(args)?;
     let started = Instant::now();
-    let scene = load(args)?;
+    let mut scene = load(args)?;
+    // The integrator options join the scene's settings, so the resume signature covers them.
+    apply_integrator_options(args, &mut scene)?;
     let mut phases = PhaseSeconds {
         load: started.elapsed().as_secs_f64(),
         ..PhaseSeconds::default()
@@ -316,7 +362,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
         phases.prepare = preparing.elapsed().as_secs_f64();
-        let part = split.resolve(&context, &Whitted)?;
+        let integrator = select_integrator(&context)?;
+        let part = split.resolve(&context, &integrator)?;
         let tiles = part.tiles(options.width, options.height);
         let bar = progress_bar(args.quiet, tiles.len());
         let progress = |done: usize, _total: usize| bar.set_position(done as u64);
@@ -326,9 +373,20 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
             skip: earlier.as_ref().map(|(_, finished)| finished.as_slice()),
             part: Some(&part),
         };
-        let result = render::render(&context, &Whitted, &control);
+        let result = render::render(&context, &integrator, &control);
         bar.finish_and_clear();
-        let result = result.map_err(crate::cli::render_failed)?;
+        let mut result = result.map_err(crate::cli::render_failed)?;
+        if let Some(vct) = integrator.vct_stats() {
+            result.stats.counters.vct_voxels_built = vct.occupied_voxels;
+            result.stats.vct = Some(vct.clone());
+            let [x, y, z] = vct.dims;
+            result.stats.notes.push(format!(
+                "vct: {x}x{y}x{z} voxels ({} filled), built in {:.3} s, pyramid {:.1} MiB",
+                vct.occupied_voxels,
+                vct.seconds,
+                vct.pyramid_bytes as f64 / (1 << 20) as f64
+            ));
+        }
         Ok((result, context.camera, part, tiles))
     })?;
 

@@ -346,6 +346,7 @@ pub fn render<I: Integrator>(
                 bytes: texture.memory_bytes() as u64,
             })
             .collect(),
+        vct: None,
     };
     Ok(RenderResult {
         film,

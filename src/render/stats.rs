@@ -33,6 +33,12 @@ pub struct WorkCounters {
     /// Shadow-ray segments traced as closest-hit queries to walk through transmissive
     /// occluders (with opaque occluders only, shadow rays are any-hit occlusion queries).
     pub shadow_walk_queries: u64,
+    /// Level-0 voxels the voxel cone tracer's voxelisation filled (zero unless `vct`).
+    pub vct_voxels_built: u64,
+    /// Cones traced through the voxels by the `vct` integrator.
+    pub vct_cones_traced: u64,
+    /// Lookups of those cones in the voxel pyramid.
+    pub vct_cone_steps: u64,
 }
 
 impl WorkCounters {
@@ -59,6 +65,9 @@ impl WorkCounters {
         self.filter_callbacks += other.filter_callbacks;
         self.absorption_evaluations += other.absorption_evaluations;
         self.shadow_walk_queries += other.shadow_walk_queries;
+        self.vct_voxels_built += other.vct_voxels_built;
+        self.vct_cones_traced += other.vct_cones_traced;
+        self.vct_cone_steps += other.vct_cone_steps;
     }
 }
 
@@ -96,6 +105,8 @@ pub struct RenderStats {
     pub phases: Option<PhaseSeconds>,
     /// Decoded memory of each texture (all mip levels), in scene order.
     pub texture_memory: Vec<TextureMemory>,
+    /// The voxel cone tracer's voxelisation: resolution, time and memory (`vct` only).
+    pub vct: Option<crate::vct::VctBuildStats>,
 }
 
 /// Seconds spent in each phase of a render, and in all of them.

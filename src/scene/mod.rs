@@ -269,6 +269,13 @@ pub struct RenderSettings {
     pub fresnel: FresnelMode,
     /// The sampler's seed (`--seed` overrides it).
     pub seed: u32,
+    /// `[render] integrator` (`--integrator` overrides it).
+    pub integrator: crate::integrator::selection::IntegratorKind,
+    /// `[render] vct_resolution`: voxels across the scene's longest side (`None`: the
+    /// default rule of `crate::vct::grid::default_resolution`).
+    pub vct_resolution: Option<u32>,
+    /// `[render] vct_bounces`: bounces held by the voxels (1: direct light only).
+    pub vct_bounces: u32,
 }
 
 impl Default for RenderSettings {
@@ -283,6 +290,9 @@ impl Default for RenderSettings {
             exposure: 0.0,
             fresnel: FresnelMode::Exact,
             seed: 0,
+            integrator: crate::integrator::selection::IntegratorKind::Whitted,
+            vct_resolution: None,
+            vct_bounces: 1,
         }
     }
 }

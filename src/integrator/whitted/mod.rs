@@ -42,6 +42,8 @@ use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::Integrator;
 
+pub(crate) use surface::{AmbientEnvironment, IndirectLight, IndirectQuery};
+
 use camera_rays::generate_camera_rays;
 use lights::{shade_miss, ShadowRay};
 use shadow_walk::{trace_shadows, ShadowWalk};
@@ -101,37 +103,51 @@ impl Integrator for Whitted {
         worker: &mut WorkerState,
         waves: &mut Waves,
     ) {
-        let options = &context.options;
-        let spp = options.spp.max(1);
-        let image_width = options.width;
-        let samples = image.samples.clone().unwrap_or(0..spp);
-        let sample_count = samples.len() as u32;
-        for sample in samples {
-            generate_camera_rays(context, tile, sample, image_width, &mut waves.current);
-            worker
-                .counters
-                .count_rays(RayKind::Camera, waves.current.len() as u64);
-            while !waves.current.is_empty() {
-                trace_wave(context, waves, worker);
-                shade_wave(context, waves, image, worker);
-                trace_shadows(context, waves, image, worker);
-                std::mem::swap(&mut waves.current, &mut waves.next);
-                waves.next.clear();
-            }
-            // This sample's radiance joins the exact sums (`film::sample_sum`): any split of
-            // the samples into ranges then adds up to the same bits.
-            for (sum, color) in image.color_sum.iter_mut().zip(image.color.iter_mut()) {
-                sample_sum::add_sample(sum, *color);
-                *color = [0.0; 3];
-            }
-        }
-        for (color, sum) in image.color.iter_mut().zip(&image.color_sum) {
-            *color = sum.map(|s| sample_sum::mean_of_sum(s, sample_count));
-        }
-        // The background is rendered too: a finished pixel is opaque. (Alpha 0 marks pixels
-        // an interrupted render did not reach.)
-        image.alpha.fill(1.0);
+        render_tile_with(context, tile, image, worker, waves, &AmbientEnvironment);
     }
+}
+
+/// Render `tile` with Whitted's waves, the opaque lobe of every hit lit by the punctual
+/// lights' shadow rays plus `indirect` (Whitted's constant ambient, or cones through the
+/// voxels for `crate::integrator::vct`).
+pub(crate) fn render_tile_with(
+    context: &RenderContext,
+    tile: PixelRect,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+    waves: &mut Waves,
+    indirect: &dyn IndirectLight,
+) {
+    let options = &context.options;
+    let spp = options.spp.max(1);
+    let image_width = options.width;
+    let samples = image.samples.clone().unwrap_or(0..spp);
+    let sample_count = samples.len() as u32;
+    for sample in samples {
+        generate_camera_rays(context, tile, sample, image_width, &mut waves.current);
+        worker
+            .counters
+            .count_rays(RayKind::Camera, waves.current.len() as u64);
+        while !waves.current.is_empty() {
+            trace_wave(context, waves, worker);
+            shade_wave(context, waves, image, worker, indirect);
+            trace_shadows(context, waves, image, worker);
+            std::mem::swap(&mut waves.current, &mut waves.next);
+            waves.next.clear();
+        }
+        // This sample's radiance joins the exact sums (`film::sample_sum`): any split of
+        // the samples into ranges then adds up to the same bits.
+        for (sum, color) in image.color_sum.iter_mut().zip(image.color.iter_mut()) {
+            sample_sum::add_sample(sum, *color);
+            *color = [0.0; 3];
+        }
+    }
+    for (color, sum) in image.color.iter_mut().zip(&image.color_sum) {
+        *color = sum.map(|s| sample_sum::mean_of_sum(s, sample_count));
+    }
+    // The background is rendered too: a finished pixel is opaque. (Alpha 0 marks pixels
+    // an interrupted render did not reach.)
+    image.alpha.fill(1.0);
 }
 
 /// Trace the current wave: camera waves as coherent 4x4 packets, later waves as incoherent
@@ -172,6 +188,7 @@ fn shade_wave(
     waves: &mut Waves,
     image: &mut TileImage,
     worker: &mut WorkerState,
+    indirect: &dyn IndirectLight,
 ) {
     waves.shadows.clear();
     for index in 0..waves.current.len() {
@@ -185,7 +202,7 @@ fn shade_wave(
         let surface = context
             .surfaces
             .surface_hit(ray.origin, ray.direction, &hit, detail);
-        shade_hit(context, ray, &surface, image, waves, worker);
+        shade_hit(context, ray, &surface, image, waves, worker, indirect);
     }
 }
 

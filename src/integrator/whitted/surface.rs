@@ -16,7 +16,51 @@ use crate::render::prepared::{binding_query, SurfaceDetail};
 use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
 use crate::scene::Material;
-use crate::shading::{self, MaterialBsdf};
+use crate::shading::{self, MaterialBsdf, OpaqueBsdf};
+
+/// A hit's opaque lobe, as the light beyond the punctual lights' shadow rays sees it.
+pub(crate) struct IndirectQuery<'a> {
+    /// The hit point.
+    pub(crate) position: Vec3,
+    /// Unit geometric normal on the incident side.
+    pub(crate) geometric_normal: Vec3,
+    /// Unit direction towards the viewer (`-ray.direction`).
+    pub(crate) outgoing: Vec3,
+    /// The opaque lobe (its shading normal faces the viewer).
+    pub(crate) bsdf: &'a OpaqueBsdf,
+    /// The lobe's weight in the material.
+    pub(crate) weight: f32,
+}
+
+/// Light reaching a hit's opaque lobe from everything but the punctual lights (whose shadow
+/// rays Whitted traces): the radiance it adds towards the viewer.
+pub(crate) trait IndirectLight: Sync {
+    fn opaque_indirect(
+        &self,
+        context: &RenderContext,
+        query: &IndirectQuery,
+        worker: &mut WorkerState,
+    ) -> Vec3;
+}
+
+/// Whitted's indirect light: the environment's mean radiance on the diffuse albedo, a
+/// constant ambient term.
+pub(crate) struct AmbientEnvironment;
+
+impl IndirectLight for AmbientEnvironment {
+    fn opaque_indirect(
+        &self,
+        context: &RenderContext,
+        query: &IndirectQuery,
+        _worker: &mut WorkerState,
+    ) -> Vec3 {
+        if context.effects.environment {
+            query.weight * query.bsdf.albedo * context.lights.environment.mean_radiance
+        } else {
+            Vec3::ZERO
+        }
+    }
+}
 
 /// Texture coordinates are needed for textured materials and for the camera hit's AOVs.
 #[inline]
@@ -42,6 +86,7 @@ pub(super) fn shade_hit(
     image: &mut TileImage,
     waves: &mut Waves,
     worker: &mut WorkerState,
+    indirect: &dyn IndirectLight,
 ) {
     let effects = &context.effects;
     let options = &context.options;
@@ -84,8 +129,8 @@ pub(super) fn shade_hit(
         effects.fresnel.then_some(options.fresnel),
     );
 
-    // Local illumination of the opaque part: direct light with shadow rays, plus ambient
-    // environment light.
+    // Local illumination of the opaque part: direct light with shadow rays, plus indirect
+    // light (Whitted: the ambient environment term).
     // The geometric normal on the incident side: rays leaving on that side start above it.
     let ng = bsdf.mirror.ng;
     let opaque = bsdf.opaque_weight;
@@ -93,9 +138,14 @@ pub(super) fn shade_hit(
         if effects.shadows {
             queue_shadow_rays(context, &ray, &bsdf.opaque, opaque, spawn, ng, waves);
         }
-        if effects.environment {
-            radiance += opaque * albedo * context.lights.environment.mean_radiance;
-        }
+        let query = IndirectQuery {
+            position: spawn.position,
+            geometric_normal: ng,
+            outgoing: -ray.direction,
+            bsdf: &bsdf.opaque,
+            weight: opaque,
+        };
+        radiance += indirect.opaque_indirect(context, &query, worker);
     }
     add_radiance(image, ray.pixel, ray.throughput * radiance);
 

@@ -126,6 +126,9 @@ struct RawRender {
     exposure: Option<Num>,
     fresnel: Option<RawFresnel>,
     seed: Option<u32>,
+    integrator: Option<Spanned<String>>,
+    vct_resolution: Option<Spanned<u32>>,
+    vct_bounces: Option<Spanned<u32>>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -662,6 +665,28 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
     }
     if let Some(seed) = r.seed {
         s.seed = seed;
+    }
+    if let Some(name) = &r.integrator {
+        s.integrator = name
+            .get_ref()
+            .parse()
+            .map_err(|e: String| loc.at(name, format!("render.integrator: {e}")))?;
+    }
+    if let Some(n) = &r.vct_resolution {
+        if !(2..=crate::vct::build::MAX_RESOLUTION).contains(n.get_ref()) {
+            let max = crate::vct::build::MAX_RESOLUTION;
+            return Err(loc.at(
+                n,
+                format!("render.vct_resolution must be between 2 and {max}"),
+            ));
+        }
+        s.vct_resolution = Some(*n.get_ref());
+    }
+    if let Some(n) = &r.vct_bounces {
+        if !(1..=8).contains(n.get_ref()) {
+            return Err(loc.at(n, "render.vct_bounces must be between 1 and 8"));
+        }
+        s.vct_bounces = *n.get_ref();
     }
     Ok(s)
 }

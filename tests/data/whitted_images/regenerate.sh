@@ -1,6 +1,7 @@
 #!/bin/sh
 # Renders the reference images that tests/whitted_images.rs compares against: every shipped
-# scene (assets/scenes/**/*.toml and the built-in default scene) with the Whitted integrator,
+# scene (assets/scenes/**/*.toml and the built-in default scene) with the Whitted integrator
+# (also for scenes that select another one),
 # 64x36, one sample per pixel, every AOV, once with the scene's own effects and once with
 # every effect forced on (the general path). The options must match tests/whitted_images.rs.
 #
@@ -14,9 +15,9 @@ render() {
     name=$1
     shift
     "$bin" render "$@" --width 64 --height 36 --spp 1 --aov all --no-png --quiet \
-        --threads 2 --output "$out/$name.exr"
+        --threads 2 --integrator whitted --output "$out/$name.exr"
     "$bin" render "$@" --width 64 --height 36 --spp 1 --aov all --no-png --quiet \
-        --threads 2 --all-effects --output "$out/$name.all_effects.exr"
+        --threads 2 --integrator whitted --all-effects --output "$out/$name.all_effects.exr"
 }
 render builtin_default
 for scene in $(find assets/scenes -name '*.toml' | sort); do

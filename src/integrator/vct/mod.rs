@@ -1,0 +1,103 @@
+//! Voxel cone tracing (seed 003): Whitted's camera and specular paths, with the light that
+//! reaches diffuse and glossy surfaces from everything but the punctual lights gathered by
+//! cones marched through the voxelised scene (`crate::vct`).
+//!
+//! At every hit the punctual lights' direct light is Whitted's (shadow rays); emission is
+//! the surface's own. The opaque lobe then adds seed 003's six diffuse cones,
+//! `k_d sum_j W_j L_v(x, w_j, pi/6)`, and, when it has a highlight, one specular cone about
+//! the mirror direction whose aperture follows the shininess (`glossy`). What a cone does
+//! not see blocked (`1 - alpha`) sees the environment's mean radiance: cones replace
+//! Whitted's constant ambient term with an occluded one.
+
+mod glossy;
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use crate::film::{PixelRect, TileImage};
+use crate::integrator::whitted::{render_tile_with, IndirectLight, IndirectQuery, Waves};
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::Integrator;
+use crate::vct::cone::{gather_diffuse, trace_cone, CONE_START, STEP_FRACTION};
+use crate::vct::VoxelScene;
+
+pub use glossy::specular_cone_aperture;
+
+/// The voxel cone tracing integrator over a built voxel scene.
+#[derive(Clone, Debug)]
+pub struct Vct {
+    pub voxels: Arc<VoxelScene>,
+}
+
+impl Vct {
+    pub fn new(voxels: VoxelScene) -> Vct {
+        Vct {
+            voxels: Arc::new(voxels),
+        }
+    }
+}
+
+impl Integrator for Vct {
+    type ThreadState = Waves;
+
+    fn thread_state(&self, _context: &RenderContext) -> Waves {
+        Waves::default()
+    }
+
+    fn render_tile(
+        &self,
+        context: &RenderContext,
+        tile: PixelRect,
+        image: &mut TileImage,
+        worker: &mut WorkerState,
+        waves: &mut Waves,
+    ) {
+        render_tile_with(context, tile, image, worker, waves, self);
+    }
+}
+
+impl IndirectLight for Vct {
+    fn opaque_indirect(
+        &self,
+        context: &RenderContext,
+        query: &IndirectQuery,
+        worker: &mut WorkerState,
+    ) -> Vec3 {
+        let pyramid = &self.voxels.pyramid;
+        let voxel = pyramid.frame.voxel_size;
+        let environment = if context.effects.environment {
+            context.lights.environment.mean_radiance
+        } else {
+            Vec3::ZERO
+        };
+        let bsdf = query.bsdf;
+        let n = bsdf.n;
+        let counters = &mut worker.counters;
+        // Seed 003: L_o = k_d sum_j W_j L_v(x, w_j, a_j); what the cones leave open sees the
+        // environment.
+        let mut radiance = Vec3::ZERO;
+        if bsdf.albedo.max_element() > 0.0 {
+            let g = gather_diffuse(pyramid, query.position, n, CONE_START, STEP_FRACTION);
+            counters.vct_cones_traced += 6;
+            counters.vct_cone_steps += g.steps;
+            radiance += bsdf.albedo * (g.radiance + g.open * environment);
+        }
+        // The normalised Blinn-Phong lobe reflects about `specular` of what arrives around
+        // the mirror direction: one cone there, started as the diffuse ones are.
+        if bsdf.specular > 0.0 {
+            let wo = query.outgoing;
+            let reflected = 2.0 * n.dot(wo) * n - wo;
+            if reflected.dot(query.geometric_normal) > 0.0 {
+                let aperture = specular_cone_aperture(bsdf.shininess);
+                let origin = query.position + n * (CONE_START.normal_voxels * voxel);
+                let start = CONE_START.along_voxels * voxel;
+                let r = trace_cone(pyramid, origin, reflected, aperture, start, f32::INFINITY);
+                counters.vct_cones_traced += 1;
+                counters.vct_cone_steps += u64::from(r.steps);
+                radiance += bsdf.specular * (r.radiance + (1.0 - r.alpha) * environment);
+            }
+        }
+        query.weight * radiance
+    }
+}

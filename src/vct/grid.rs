@@ -1,0 +1,355 @@
+//! The voxel grid: where it sits in the world (a [`GridFrame`]), how fine it is by default,
+//! and its 3D mip pyramid ([`VoxelPyramid`]) with the quadrilinear lookup cones use.
+//!
+//! Voxels are cubes. `resolution` voxels span the longest side of the scene's bounds, and
+//! half a voxel of margin surrounds the bounds on every side, so a surface lying on the
+//! bounds is inside a voxel, not on the grid's edge. Other axes get as many voxels as their
+//! extent needs (a flat scene gets a flat grid: dense, but not cubic).
+//!
+//! Each voxel holds `[r, g, b, a]`: opacity `a` and radiance premultiplied by it
+//! (`rgb = a * L`), so that averaging voxels is the alpha-weighted average of their
+//! radiance (`mipmap`). Level `l` has voxels `2^l` times larger, `ceil(dims / 2)` of them per
+//! axis; texels beyond a level's edge are empty (zero).
+
+use glam::Vec3;
+
+/// Default number of voxels along the longest side of the scene.
+pub const DEFAULT_RESOLUTION: u32 = 128;
+/// The default resolution is lowered until the whole pyramid fits in this many bytes.
+pub const DEFAULT_MEMORY_BUDGET: u64 = 256 << 20;
+/// Bytes of one voxel of the pyramid (four `f32`).
+pub const VOXEL_BYTES: u64 = 16;
+
+/// The placement of a voxel grid in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridFrame {
+    /// World position of the corner of voxel (0, 0, 0).
+    pub origin: Vec3,
+    /// Edge length of a level-0 voxel.
+    pub voxel_size: f32,
+    /// Voxels per axis at level 0.
+    pub dims: [u32; 3],
+}
+
+impl GridFrame {
+    /// The frame with `resolution` voxels across the longest side of `(lo, hi)`, plus half a
+    /// voxel of margin on every side. A degenerate (point-sized) scene gets unit extent.
+    pub fn for_bounds(lo: Vec3, hi: Vec3, resolution: u32) -> GridFrame {
+        let resolution = resolution.max(1);
+        let extent = (hi - lo).max(Vec3::ZERO);
+        let longest = extent.max_element().max(1e-6);
+        let voxel_size = longest / resolution as f32;
+        let origin = lo - Vec3::splat(0.5 * voxel_size);
+        let count = |e: f32| ((e / voxel_size).ceil() as u32 + 1).max(1);
+        GridFrame {
+            origin,
+            voxel_size,
+            dims: [count(extent.x), count(extent.y), count(extent.z)],
+        }
+    }
+
+    /// Level-0 voxel count.
+    pub fn voxel_count(&self) -> u64 {
+        self.dims.iter().map(|&d| u64::from(d)).product()
+    }
+
+    /// Continuous voxel coordinates of a world point (level-0 voxel `i` spans `[i, i+1)`).
+    #[inline]
+    pub fn to_voxel(&self, p: Vec3) -> Vec3 {
+        (p - self.origin) / self.voxel_size
+    }
+
+    /// World centre of level-0 voxel `(x, y, z)`.
+    #[inline]
+    pub fn voxel_center(&self, x: u32, y: u32, z: u32) -> Vec3 {
+        self.origin + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * self.voxel_size
+    }
+
+    /// Linear index of level-0 voxel `(x, y, z)` (x fastest).
+    #[inline]
+    pub fn index(&self, x: u32, y: u32, z: u32) -> usize {
+        let [dx, dy, _] = self.dims;
+        (x as usize) + (dx as usize) * ((y as usize) + (dy as usize) * (z as usize))
+    }
+
+    /// Whether a world point is inside the grid.
+    #[inline]
+    pub fn contains(&self, p: Vec3) -> bool {
+        let v = self.to_voxel(p);
+        v.cmpge(Vec3::ZERO).all()
+            && v.x <= self.dims[0] as f32
+            && v.y <= self.dims[1] as f32
+            && v.z <= self.dims[2] as f32
+    }
+
+    /// Bytes of the whole pyramid of this frame (all levels).
+    pub fn pyramid_bytes(&self) -> u64 {
+        level_dims(self.dims)
+            .iter()
+            .map(|d| d.iter().map(|&n| u64::from(n)).product::<u64>() * VOXEL_BYTES)
+            .sum()
+    }
+}
+
+/// The default resolution for a scene with bounds `(lo, hi)`: [`DEFAULT_RESOLUTION`]
+/// voxels across its longest side, halved until the pyramid fits in `budget` bytes.
+pub fn default_resolution(lo: Vec3, hi: Vec3, budget: u64) -> u32 {
+    let mut resolution = DEFAULT_RESOLUTION;
+    while resolution > 8 && GridFrame::for_bounds(lo, hi, resolution).pyramid_bytes() > budget {
+        resolution /= 2;
+    }
+    resolution
+}
+
+/// The dimensions of every level, from level 0 up to the level of one voxel.
+pub fn level_dims(dims: [u32; 3]) -> Vec<[u32; 3]> {
+    let mut out = vec![dims];
+    let mut d = dims;
+    while d.iter().any(|&n| n > 1) {
+        d = d.map(|n| n.div_ceil(2).max(1));
+        out.push(d);
+    }
+    out
+}
+
+/// One level of the pyramid: premultiplied `[r, g, b, a]` per voxel, x fastest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VoxelLevel {
+    pub dims: [u32; 3],
+    pub voxels: Vec<[f32; 4]>,
+}
+
+impl VoxelLevel {
+    /// An empty (transparent, black) level.
+    pub fn empty(dims: [u32; 3]) -> VoxelLevel {
+        let count = dims.iter().map(|&d| d as usize).product();
+        VoxelLevel {
+            dims,
+            voxels: vec![[0.0; 4]; count],
+        }
+    }
+
+    /// The voxel at integer coordinates, zero outside the level.
+    #[inline]
+    pub fn get(&self, x: i64, y: i64, z: i64) -> [f32; 4] {
+        let [dx, dy, dz] = self.dims.map(i64::from);
+        if x < 0 || y < 0 || z < 0 || x >= dx || y >= dy || z >= dz {
+            return [0.0; 4];
+        }
+        self.voxels[(x + dx * (y + dy * z)) as usize]
+    }
+
+    /// Trilinear interpolation between voxel centres at continuous coordinates `v` of this
+    /// level (voxel `i` spans `[i, i+1)`, its centre is at `i + 0.5`).
+    #[inline]
+    pub fn trilinear(&self, v: Vec3) -> [f32; 4] {
+        let p = v - Vec3::splat(0.5);
+        let base = p.floor();
+        let f = p - base;
+        let (x0, y0, z0) = (base.x as i64, base.y as i64, base.z as i64);
+        let mut out = [0.0f32; 4];
+        for corner in 0..8 {
+            let (cx, cy, cz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+            let w = if cx == 1 { f.x } else { 1.0 - f.x }
+                * if cy == 1 { f.y } else { 1.0 - f.y }
+                * if cz == 1 { f.z } else { 1.0 - f.z };
+            if w == 0.0 {
+                continue;
+            }
+            let t = self.get(x0 + cx, y0 + cy, z0 + cz);
+            for (o, c) in out.iter_mut().zip(t) {
+                *o += w * c;
+            }
+        }
+        out
+    }
+}
+
+/// The voxelised scene at every level of detail.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VoxelPyramid {
+    pub frame: GridFrame,
+    /// Level 0 first; the last level has one voxel per axis.
+    pub levels: Vec<VoxelLevel>,
+}
+
+impl VoxelPyramid {
+    /// The highest level index.
+    pub fn max_level(&self) -> f32 {
+        (self.levels.len() - 1) as f32
+    }
+
+    /// Bytes held by all levels.
+    pub fn bytes(&self) -> u64 {
+        self.levels
+            .iter()
+            .map(|l| l.voxels.len() as u64 * VOXEL_BYTES)
+            .sum()
+    }
+
+    /// Quadrilinear lookup at world point `p` and fractional level `level` (clamped to the
+    /// pyramid): trilinear within the two nearest levels, linear between them, as a
+    /// trilinear mip-mapped texture lookup is bilinear within and linear across levels.
+    pub fn sample(&self, p: Vec3, level: f32) -> [f32; 4] {
+        let level = level.clamp(0.0, self.max_level());
+        let lower = level.floor() as usize;
+        let v = self.frame.to_voxel(p);
+        let at = |l: usize| self.levels[l].trilinear(v / (1u32 << l) as f32);
+        let a = at(lower);
+        let t = level - lower as f32;
+        if t == 0.0 || lower + 1 >= self.levels.len() {
+            return a;
+        }
+        let b = at(lower + 1);
+        std::array::from_fn(|i| a[i] + t * (b[i] - a[i]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vct::mipmap::build_pyramid;
+
+    /// A deterministic pseudo-random level 0 (xorshift), half the voxels empty.
+    fn random_level(dims: [u32; 3]) -> VoxelLevel {
+        let mut level = VoxelLevel::empty(dims);
+        let mut state = 0x9E37_79B9u32;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            (state >> 8) as f32 / (1u32 << 24) as f32
+        };
+        for v in &mut level.voxels {
+            if next() < 0.5 {
+                let a = next();
+                *v = [a * next(), a * next(), a * next(), a];
+            }
+        }
+        level
+    }
+
+    /// The brute-force average of level 0 over the `2^l` block of level-`l` voxel
+    /// `(x, y, z)`, voxels beyond the grid counting as empty.
+    fn box_average(level0: &VoxelLevel, l: u32, x: i64, y: i64, z: i64) -> [f32; 4] {
+        let s = 1i64 << l;
+        let mut sum = [0.0f64; 4];
+        for k in 0..s {
+            for j in 0..s {
+                for i in 0..s {
+                    let t = level0.get(x * s + i, y * s + j, z * s + k);
+                    for (a, b) in sum.iter_mut().zip(t) {
+                        *a += f64::from(b);
+                    }
+                }
+            }
+        }
+        sum.map(|a| (a / (s * s * s) as f64) as f32)
+    }
+
+    fn pyramid(dims: [u32; 3]) -> VoxelPyramid {
+        let frame = GridFrame {
+            origin: Vec3::new(-1.0, 2.0, 0.5),
+            voxel_size: 0.25,
+            dims,
+        };
+        build_pyramid(frame, random_level(dims))
+    }
+
+    fn close(a: [f32; 4], b: [f32; 4], tol: f32) -> bool {
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
+    }
+
+    #[test]
+    fn every_level_is_the_box_average_of_level_zero() {
+        // Odd dimensions: blocks at the far edges reach past the grid and count empty space.
+        let p = pyramid([13, 8, 5]);
+        assert_eq!(p.levels.last().unwrap().dims, [1, 1, 1]);
+        for (l, level) in p.levels.iter().enumerate().skip(1) {
+            let [dx, dy, dz] = level.dims;
+            for z in 0..dz as i64 {
+                for y in 0..dy as i64 {
+                    for x in 0..dx as i64 {
+                        let expect = box_average(&p.levels[0], l as u32, x, y, z);
+                        let got = level.get(x, y, z);
+                        assert!(
+                            close(got, expect, 1e-5),
+                            "level {l} ({x},{y},{z}): {got:?} vs {expect:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn quadrilinear_lookup_matches_weighted_box_averages() {
+        let p = pyramid([16, 12, 9]);
+        let frame = p.frame;
+        let mut state = 7u32;
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) as f32 / (1u32 << 24) as f32
+        };
+        for _ in 0..200 {
+            let v = Vec3::new(next() * 16.0, next() * 12.0, next() * 9.0);
+            let world = frame.origin + v * frame.voxel_size;
+            let level = next() * 3.0;
+            // Brute force: at each of the two levels, the eight box averages around the
+            // point weighted by their distance to it.
+            let brute_at = |l: u32| -> [f32; 4] {
+                let s = (1u32 << l) as f32;
+                let q = v / s - Vec3::splat(0.5);
+                let b = q.floor();
+                let f = q - b;
+                let mut out = [0.0f32; 4];
+                for corner in 0..8 {
+                    let (cx, cy, cz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+                    let w = [f.x, f.y, f.z]
+                        .iter()
+                        .zip([cx, cy, cz])
+                        .map(|(&t, c)| if c == 1 { t } else { 1.0 - t })
+                        .product::<f32>();
+                    let avg = box_average(
+                        &p.levels[0],
+                        l,
+                        b.x as i64 + cx,
+                        b.y as i64 + cy,
+                        b.z as i64 + cz,
+                    );
+                    for (o, a) in out.iter_mut().zip(avg) {
+                        *o += w * a;
+                    }
+                }
+                out
+            };
+            let lo = level.floor() as u32;
+            let t = level - lo as f32;
+            let (a, b) = (brute_at(lo), brute_at(lo + 1));
+            let expect: [f32; 4] = std::array::from_fn(|i| a[i] + t * (b[i] - a[i]));
+            let got = p.sample(world, level);
+            assert!(
+                close(got, expect, 1e-4),
+                "at {v} level {level}: {got:?} vs {expect:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn frame_spans_bounds_with_half_a_voxel_of_margin() {
+        let f = GridFrame::for_bounds(Vec3::ZERO, Vec3::new(4.0, 1.0, 0.0), 8);
+        assert_eq!(f.voxel_size, 0.5);
+        assert_eq!(f.dims, [9, 3, 1]);
+        assert!(f.contains(Vec3::new(4.0, 1.0, 0.0)));
+        assert!(f.contains(Vec3::ZERO));
+    }
+
+    #[test]
+    fn default_resolution_fits_the_budget() {
+        let (lo, hi) = (Vec3::ZERO, Vec3::ONE);
+        assert_eq!(default_resolution(lo, hi, DEFAULT_MEMORY_BUDGET), 128);
+        let small = default_resolution(lo, hi, 4 << 20);
+        assert!(GridFrame::for_bounds(lo, hi, small).pyramid_bytes() <= 4 << 20);
+        assert!(small < 128);
+    }
+}
