@@ -21,6 +21,7 @@ use crate::render::context::{RenderContext, WorkerState};
 use crate::render::Integrator;
 use crate::vct::cone::{gather_diffuse, trace_cone, CONE_START, STEP_FRACTION};
 use crate::vct::VoxelScene;
+use crate::shading::OpaqueLobe;
 
 pub use glossy::specular_cone_aperture;
 
@@ -71,33 +72,64 @@ impl IndirectLight for Vct {
         } else {
             Vec3::ZERO
         };
-        let bsdf = query.bsdf;
-        let n = bsdf.n;
+        let lobe = diffuse_and_specular(query.bsdf);
+        let n = query.bsdf.normal();
         let counters = &mut worker.counters;
         // Seed 003: L_o = k_d sum_j W_j L_v(x, w_j, a_j); what the cones leave open sees the
         // environment.
         let mut radiance = Vec3::ZERO;
-        if bsdf.albedo.max_element() > 0.0 {
+        if lobe.diffuse.max_element() > 0.0 {
             let g = gather_diffuse(pyramid, query.position, n, CONE_START, STEP_FRACTION);
             counters.vct_cones_traced += 6;
             counters.vct_cone_steps += g.steps;
-            radiance += bsdf.albedo * (g.radiance + g.open * environment);
+            radiance += lobe.diffuse * (g.radiance + g.open * environment);
         }
-        // The normalised Blinn-Phong lobe reflects about `specular` of what arrives around
-        // the mirror direction: one cone there, started as the diffuse ones are.
-        if bsdf.specular > 0.0 {
+        // The specular lobe reflects about `specular` of what arrives around the mirror
+        // direction: one cone there, started as the diffuse ones are.
+        if lobe.specular.max_element() > 0.0 {
             let wo = query.outgoing;
             let reflected = 2.0 * n.dot(wo) * n - wo;
             if reflected.dot(query.geometric_normal) > 0.0 {
-                let aperture = specular_cone_aperture(bsdf.shininess);
+                let aperture = specular_cone_aperture(lobe.shininess);
                 let origin = query.position + n * (CONE_START.normal_voxels * voxel);
                 let start = CONE_START.along_voxels * voxel;
                 let r = trace_cone(pyramid, origin, reflected, aperture, start, f32::INFINITY);
                 counters.vct_cones_traced += 1;
                 counters.vct_cone_steps += u64::from(r.steps);
-                radiance += bsdf.specular * (r.radiance + (1.0 - r.alpha) * environment);
+                radiance += lobe.specular * (r.radiance + (1.0 - r.alpha) * environment);
             }
         }
         query.weight * radiance
+    }
+}
+
+/// An opaque lobe as the cones see it: a diffuse reflectance, a specular reflectance and the
+/// Blinn-Phong exponent that sets the specular cone's aperture.
+struct ConeLobe {
+    diffuse: Vec3,
+    specular: Vec3,
+    shininess: f32,
+}
+
+/// The classic lobe as it is; the metallic-roughness lobe as its diffuse part
+/// `(1 - metallic) base colour`, its specular reflectance at normal incidence
+/// `mix(0.04, base colour, metallic)`, and the Blinn-Phong exponent of the same highlight
+/// width, `2 / alpha^2 - 2` (Walter et al. 2007, section 5.2's Beckmann-Phong relation, which
+/// GGX shares near the peak).
+fn diffuse_and_specular(lobe: &OpaqueLobe) -> ConeLobe {
+    match lobe {
+        OpaqueLobe::Classic(classic) => ConeLobe {
+            diffuse: classic.albedo,
+            specular: Vec3::splat(classic.specular),
+            shininess: classic.shininess,
+        },
+        OpaqueLobe::MetallicRoughness(rough) => {
+            let alpha = rough.ggx.alpha.max(1e-3);
+            ConeLobe {
+                diffuse: rough.base_color * (1.0 - rough.metallic),
+                specular: Vec3::splat(0.04).lerp(rough.base_color, rough.metallic),
+                shininess: (2.0 / (alpha * alpha) - 2.0).max(0.0),
+            }
+        }
     }
 }

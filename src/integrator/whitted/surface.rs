@@ -16,7 +16,7 @@ use crate::render::prepared::{binding_query, SurfaceDetail};
 use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
 use crate::scene::Material;
-use crate::shading::{self, MaterialBsdf, OpaqueBsdf};
+use crate::shading::{self, MaterialBsdf, OpaqueLobe};
 
 /// A hit's opaque lobe, as the light beyond the punctual lights' shadow rays sees it.
 pub(crate) struct IndirectQuery<'a> {
@@ -27,7 +27,9 @@ pub(crate) struct IndirectQuery<'a> {
     /// Unit direction towards the viewer (`-ray.direction`).
     pub(crate) outgoing: Vec3,
     /// The opaque lobe (its shading normal faces the viewer).
-    pub(crate) bsdf: &'a OpaqueBsdf,
+    pub(crate) bsdf: &'a OpaqueLobe,
+    /// The material's (textured) albedo at the hit.
+    pub(crate) albedo: Vec3,
     /// The lobe's weight in the material.
     pub(crate) weight: f32,
 }
@@ -55,7 +57,7 @@ impl IndirectLight for AmbientEnvironment {
         _worker: &mut WorkerState,
     ) -> Vec3 {
         if context.effects.environment {
-            query.weight * query.bsdf.albedo * context.lights.environment.mean_radiance
+            query.weight * query.albedo * context.lights.environment.mean_radiance
         } else {
             Vec3::ZERO
         }
@@ -143,6 +145,7 @@ pub(super) fn shade_hit(
             geometric_normal: ng,
             outgoing: -ray.direction,
             bsdf: &bsdf.opaque,
+            albedo,
             weight: opaque,
         };
         radiance += indirect.opaque_indirect(context, &query, worker);
