@@ -310,6 +310,50 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// The footprint a camera ray through the point `p` (on a surface of unit normal `n`)
+    /// would have there: dP/dx and dP/dy on the tangent plane, for lookups at hits whose
+    /// own differentials were lost to a non-specular bounce. pbrt-v4 approximates its
+    /// non-specular bounces the same way (`Approximate_dp_dxy`): a ray from the eye towards
+    /// `p` and its neighbours one pixel over, turned by the per-pixel direction step at the
+    /// image centre (or moved by the per-pixel step, orthographic), are intersected with
+    /// the tangent plane; the steps are scaled by [`sample_footprint_scale`].
+    pub fn approximate_dp_dxy(&self, p: Vec3, n: Vec3, samples_per_pixel: u32) -> (Vec3, Vec3) {
+        let scale = sample_footprint_scale(samples_per_pixel);
+        let (dx, dy) = self.rectangle_per_pixel();
+        let n = unit_or(n, self.forward);
+        let on_plane = |origin: Vec3, dir: Vec3| -> Vec3 {
+            let denominator = n.dot(dir);
+            let denominator = if denominator.abs() < 1e-6 {
+                1e-6f32.copysign(denominator)
+            } else {
+                denominator
+            };
+            let t = n.dot(p - origin) / denominator;
+            crate::footprint::robust::finite3(origin + dir * t - p)
+        };
+        match self.model {
+            CameraModel::Orthographic => {
+                let origin = p - self.forward * self.forward.dot(p - self.eye);
+                (
+                    on_plane(origin + dx * scale, self.forward),
+                    on_plane(origin + dy * scale, self.forward),
+                )
+            }
+            _ => {
+                let dir = unit_or(p - self.eye, self.forward);
+                let w = self.w.length().max(f32::MIN_POSITIVE);
+                // The direction step per pixel at the image centre, |dx| / |W|.
+                let (ddx, ddy) = (dx * (scale / w), dy * (scale / w));
+                (
+                    on_plane(self.eye, dir + ddx),
+                    on_plane(self.eye, dir + ddy),
+                )
+            }
+        }
+    }
+}
+
 /// How much narrower than a whole pixel's a camera ray's footprint is when
 /// `samples_per_pixel` rays share the pixel: 1/sqrt(N), the side of the pixel's share of
 /// area, but at least 1/8 so that large counts still filter. pbrt-v4 (Pharr, Jakob &

@@ -26,7 +26,7 @@ use crate::cli::{CommandError, EXIT_INTERRUPTED};
 use crate::film::AovSelection;
 use crate::film::{self, ExrAttributes, OutputSet};
 use crate::footprint::LodStrategy;
-use crate::integrator::Whitted;
+use crate::integrator::selection::{self, SelectedIntegrator};
 use crate::render::stats::PhaseSeconds;
 use crate::render::{self, RenderControl, RenderOptions};
 use crate::scene::load::{default_scene, frame_camera, load_scene};
@@ -71,6 +71,11 @@ pub struct RenderArgs {
     /// [default: the scene's, else 0].
     #[arg(long)]
     pub seed: Option<u32>,
+    /// Integrator: whitted, path (Monte Carlo path tracing), or auto (path when the scene
+    /// has emissive geometry, rough materials or `[render] gi = true`) [default: the
+    /// scene's, else auto].
+    #[arg(long, value_parser = ["whitted", "path", "auto"])]
+    pub integrator: Option<String>,
     /// Maximum number of reflection/refraction bounces, 0 or more [default: the scene's,
     /// else 8].
     #[arg(long, allow_negative_numbers = true)]
@@ -316,7 +321,17 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
         phases.prepare = preparing.elapsed().as_secs_f64();
-        let part = split.resolve(&context, &Whitted)?;
+        let choice = match &args.integrator {
+            Some(name) => name.parse().map_err(|e: selection::UnknownIntegrator| {
+                CommandError::bad_input(e.to_string())
+            })?,
+            None => context.scene.settings.integrator,
+        };
+        let integrator = SelectedIntegrator::new(
+            selection::resolve(choice, &context.scene).kind,
+            &context.scene,
+        );
+        let part = split.resolve(&context, &integrator)?;
         let tiles = part.tiles(options.width, options.height);
         let bar = progress_bar(args.quiet, tiles.len());
         let progress = |done: usize, _total: usize| bar.set_position(done as u64);
@@ -326,7 +341,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
             skip: earlier.as_ref().map(|(_, finished)| finished.as_slice()),
             part: Some(&part),
         };
-        let result = render::render(&context, &Whitted, &control);
+        let result = selection::render(&context, choice, &control);
         bar.finish_and_clear();
         let result = result.map_err(crate::cli::render_failed)?;
         Ok((result, context.camera, part, tiles))

@@ -2,10 +2,20 @@
 //!
 //! An integrator implements [`crate::render::Integrator`]: it turns a work tile into a
 //! [`crate::film::TileImage`] (colour plus the AOVs the film asked for). Today there is the
-//! Whitted ray tracer (seeds 001 and 004); a Monte Carlo path tracer and voxel cone tracing
-//! plug in beside it, reusing the same scene, tracer, footprints, BSDFs and lights
-//! ([`crate::shading`]) and film. Integrators depend on the render stage, never the reverse.
+//! Whitted ray tracer (seeds 001 and 004) and a Monte Carlo path tracer ([`path`]); voxel
+//! cone tracing plugs in beside them, reusing the same scene, tracer, footprints, BSDFs and
+//! lights ([`crate::shading`]) and film. Integrators depend on the render stage, never the
+//! reverse. [`selection`] picks one for a scene (`--integrator`, `[render] integrator`) and
+//! says why; `camera_sample` and `texturing` hold what every integrator shares (camera
+//! rays, filtered texture lookups).
 
+mod camera_sample;
+pub mod path;
+pub mod selection;
+mod texturing;
+mod trace_wave;
 pub mod whitted;
 
+pub use path::PathTracer;
+pub use selection::{IntegratorChoice, IntegratorKind, SelectedIntegrator};
 pub use whitted::Whitted;

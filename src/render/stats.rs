@@ -33,6 +33,13 @@ pub struct WorkCounters {
     /// Shadow-ray segments traced as closest-hit queries to walk through transmissive
     /// occluders (with opaque occluders only, shadow rays are any-hit occlusion queries).
     pub shadow_walk_queries: u64,
+    /// Path tracing: paths started (one per camera ray), bounces (rays a hit scattered),
+    /// paths ended by Russian roulette, and samples dropped because their radiance was not
+    /// finite (NaN or infinity never reach the film).
+    pub paths: u64,
+    pub path_bounces: u64,
+    pub roulette_terminations: u64,
+    pub nonfinite_samples: u64,
 }
 
 impl WorkCounters {
@@ -59,6 +66,10 @@ impl WorkCounters {
         self.filter_callbacks += other.filter_callbacks;
         self.absorption_evaluations += other.absorption_evaluations;
         self.shadow_walk_queries += other.shadow_walk_queries;
+        self.paths += other.paths;
+        self.path_bounces += other.path_bounces;
+        self.roulette_terminations += other.roulette_terminations;
+        self.nonfinite_samples += other.nonfinite_samples;
     }
 }
 
@@ -96,6 +107,9 @@ pub struct RenderStats {
     pub phases: Option<PhaseSeconds>,
     /// Decoded memory of each texture (all mip levels), in scene order.
     pub texture_memory: Vec<TextureMemory>,
+    /// The integrator that rendered and why it was chosen (e.g. "path: emissive geometry
+    /// (12 triangles)"); `None` when the caller rendered with an integrator directly.
+    pub integrator: Option<String>,
 }
 
 /// Seconds spent in each phase of a render, and in all of them.
@@ -159,6 +173,21 @@ impl RenderStats {
             c.refraction_rays,
             self.mrays_per_second
         );
+        if c.paths > 0 {
+            line.push_str(&format!(
+                "; {} paths, {} bounces, {} ended by roulette",
+                c.paths, c.path_bounces, c.roulette_terminations
+            ));
+            if c.nonfinite_samples > 0 {
+                line.push_str(&format!(
+                    ", {} non-finite samples dropped",
+                    c.nonfinite_samples
+                ));
+            }
+        }
+        if let Some(integrator) = &self.integrator {
+            line.push_str(&format!("; integrator {integrator}"));
+        }
         if !self.effects.is_empty() {
             let names: Vec<&str> = self.effects.iter().map(|e| e.effect.as_str()).collect();
             line.push_str(&format!("; effects: {}", names.join(", ")));

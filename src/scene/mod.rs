@@ -179,6 +179,13 @@ pub struct Material {
     pub alpha: f32,
     /// Texture whose alpha channel gives coverage (glTF: the base-colour texture).
     pub alpha_texture: Option<TextureBinding>,
+    /// glTF 2.0 metallic-roughness model (its Appendix B): `Some(perceptual roughness)` in
+    /// [0, 1] selects it (GGX lobes, alpha = roughness^2); `None` keeps the classic
+    /// Lambert plus Blinn-Phong opaque lobe.
+    pub roughness: Option<f32>,
+    /// Metalness in [0, 1] of the metallic-roughness model (0 = dielectric over diffuse,
+    /// 1 = conductor with the base colour as its reflectance at normal incidence).
+    pub metallic: f32,
 }
 
 impl Default for Material {
@@ -198,6 +205,8 @@ impl Default for Material {
             alpha_cutoff: None,
             alpha: 1.0,
             alpha_texture: None,
+            roughness: None,
+            metallic: 0.0,
         }
     }
 }
@@ -260,6 +269,15 @@ pub struct RenderSettings {
     pub fresnel: FresnelMode,
     /// The sampler's seed (`--seed` overrides it).
     pub seed: u32,
+    /// Which integrator renders the scene (`[render] integrator`, `--integrator` overrides
+    /// it); `auto` picks one from the scene (`crate::integrator::selection`).
+    pub integrator: crate::integrator::IntegratorChoice,
+    /// `[render] gi = true`: the scene asks for global illumination (`auto` picks the path
+    /// tracer).
+    pub gi: bool,
+    /// `[render] diffuse_bounces`: how many non-delta bounces a path-traced path may take
+    /// (`None`: as many as `max_depth` allows; 0 gives Whitted's image in expectation).
+    pub diffuse_bounces: Option<u32>,
 }
 
 impl Default for RenderSettings {
@@ -274,6 +292,9 @@ impl Default for RenderSettings {
             exposure: 0.0,
             fresnel: FresnelMode::Exact,
             seed: 0,
+            integrator: crate::integrator::IntegratorChoice::Auto,
+            gi: false,
+            diffuse_bounces: None,
         }
     }
 }

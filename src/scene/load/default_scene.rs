@@ -47,7 +47,7 @@ static EMBEDDED: &[(&str, &[u8])] = &[
 pub fn default_scene() -> SceneDescription {
     let files = Files::embedded("assets/scenes", EMBEDDED);
     match toml_format::parse(SCENE_TEXT, &files, DEFAULT_SCENE_LABEL)
-        .and_then(|scene| super::finish(scene, super::DefaultLights::WhenOtherwiseBlack))
+        .and_then(|scene| super::finish(scene))
     {
         Ok(scene) => scene,
         Err(e) => {
@@ -65,10 +65,7 @@ pub fn default_scene() -> SceneDescription {
                 )],
                 ..Default::default()
             };
-            super::framing::add_missing_camera_and_lights(
-                &mut scene,
-                super::framing::DefaultLights::WhenNoLights,
-            );
+            super::framing::add_missing_camera_and_lights(&mut scene);
             scene
         }
     }

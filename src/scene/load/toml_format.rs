@@ -126,6 +126,9 @@ struct RawRender {
     exposure: Option<Num>,
     fresnel: Option<RawFresnel>,
     seed: Option<u32>,
+    integrator: Option<Spanned<String>>,
+    gi: Option<bool>,
+    diffuse_bounces: Option<u32>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -638,6 +641,20 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
     }
     if let Some(seed) = r.seed {
         s.seed = seed;
+    }
+    if let Some(name) = &r.integrator {
+        s.integrator = name
+            .get_ref()
+            .parse()
+            .map_err(|e: crate::integrator::selection::UnknownIntegrator| {
+                loc.at(name, format!("render.integrator: {e}"))
+            })?;
+    }
+    if let Some(gi) = r.gi {
+        s.gi = gi;
+    }
+    if let Some(bounces) = r.diffuse_bounces {
+        s.diffuse_bounces = Some(bounces);
     }
     Ok(s)
 }

@@ -1,0 +1,223 @@
+//! Which integrator renders a scene, and why: `--integrator whitted|path|auto` and
+//! `[render] integrator = "..."` (the command line wins), with `auto` the default.
+//!
+//! `auto` picks the path tracer when the scene calls for global illumination: emissive
+//! geometry (area lights), rough or glossy materials (a material with a metallic-roughness
+//! `roughness`; the classic Blinn-Phong highlight does not count, so classic ray-tracing
+//! scenes stay with Whitted), or `[render] gi = true`. Otherwise Whitted renders it.
+//!
+//! [`SelectedIntegrator`] is the one integrator value every render goes through: it
+//! implements [`Integrator`] by handing each tile to the chosen one, so the render loop,
+//! split renders and their cost estimates stay generic. A new kind is a new arm in
+//! [`IntegratorKind`], [`SelectedIntegrator`] and [`SelectedState`].
+
+use std::fmt;
+use std::str::FromStr;
+
+use crate::film::{PixelRect, TileImage};
+use crate::integrator::path::{PathTracer, PathWaves};
+use crate::integrator::whitted::{Waves, Whitted};
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::{Integrator, RenderControl, RenderError, RenderResult};
+use crate::scene::SceneDescription;
+
+/// A light-transport algorithm the renderer has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum IntegratorKind {
+    Whitted,
+    Path,
+}
+
+impl IntegratorKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Whitted => "whitted",
+            IntegratorKind::Path => "path",
+        }
+    }
+}
+
+/// What a scene or the command line asks for: one integrator, or the scene's choice.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum IntegratorChoice {
+    #[default]
+    Auto,
+    Fixed(IntegratorKind),
+}
+
+/// A name that is not an integrator.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown integrator '{0}' (expected whitted, path or auto)")]
+pub struct UnknownIntegrator(pub String);
+
+impl FromStr for IntegratorChoice {
+    type Err = UnknownIntegrator;
+
+    fn from_str(name: &str) -> Result<Self, Self::Err> {
+        match name {
+            "auto" => Ok(IntegratorChoice::Auto),
+            "whitted" => Ok(IntegratorChoice::Fixed(IntegratorKind::Whitted)),
+            "path" => Ok(IntegratorChoice::Fixed(IntegratorKind::Path)),
+            _ => Err(UnknownIntegrator(name.to_string())),
+        }
+    }
+}
+
+impl fmt::Display for IntegratorChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            IntegratorChoice::Auto => f.write_str("auto"),
+            IntegratorChoice::Fixed(kind) => f.write_str(kind.name()),
+        }
+    }
+}
+
+/// The integrator chosen for a scene and the reason, as the summary line and `--stats`
+/// print it ("path: emissive geometry (12 triangles)").
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Resolution {
+    pub kind: IntegratorKind,
+    pub reason: String,
+}
+
+impl fmt::Display for Resolution {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.kind.name(), self.reason)
+    }
+}
+
+/// The integrator for `scene` under `choice` (see the module doc), with the reason.
+pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution {
+    if let IntegratorChoice::Fixed(kind) = choice {
+        return Resolution {
+            kind,
+            reason: "requested".to_string(),
+        };
+    }
+    let mut reasons = Vec::new();
+    let emissive = |material: usize| {
+        scene
+            .materials
+            .get(material)
+            .is_some_and(|m| m.emission.max_element() > 0.0)
+    };
+    let triangles: usize = scene
+        .meshes
+        .iter()
+        .filter(|m| emissive(m.material))
+        .map(|m| m.triangles.len())
+        .sum();
+    let spheres = scene.spheres.iter().filter(|s| emissive(s.material)).count();
+    let patches = scene.patches.iter().filter(|p| emissive(p.material)).count();
+    let counted = [
+        (triangles, "triangle"),
+        (spheres, "sphere"),
+        (patches, "patch"),
+    ]
+    .iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!("{n} {what}{}", if *n == 1 { "" } else { "s" }))
+    .collect::<Vec<_>>();
+    if !counted.is_empty() {
+        reasons.push(format!("emissive geometry ({})", counted.join(", ")));
+    }
+    let rough: Vec<&str> = scene
+        .materials
+        .iter()
+        .filter(|m| m.roughness.is_some())
+        .map(|m| m.name.as_str())
+        .collect();
+    if !rough.is_empty() {
+        reasons.push(format!(
+            "rough or glossy materials ({} with roughness)",
+            rough.len()
+        ));
+    }
+    if scene.settings.gi {
+        reasons.push("[render] gi = true".to_string());
+    }
+    if reasons.is_empty() {
+        Resolution {
+            kind: IntegratorKind::Whitted,
+            reason: "no emissive geometry, rough materials or gi".to_string(),
+        }
+    } else {
+        Resolution {
+            kind: IntegratorKind::Path,
+            reason: reasons.join("; "),
+        }
+    }
+}
+
+/// The chosen integrator, with its settings from the scene.
+#[derive(Clone, Copy, Debug)]
+pub enum SelectedIntegrator {
+    Whitted(Whitted),
+    Path(PathTracer),
+}
+
+impl SelectedIntegrator {
+    /// The integrator of `kind` with the settings `scene` gives it.
+    pub fn new(kind: IntegratorKind, scene: &SceneDescription) -> SelectedIntegrator {
+        match kind {
+            IntegratorKind::Whitted => SelectedIntegrator::Whitted(Whitted),
+            IntegratorKind::Path => {
+                SelectedIntegrator::Path(PathTracer::for_settings(&scene.settings))
+            }
+        }
+    }
+}
+
+/// The per-thread state of the chosen integrator.
+pub enum SelectedState {
+    Whitted(Waves),
+    Path(PathWaves),
+}
+
+impl Integrator for SelectedIntegrator {
+    type ThreadState = SelectedState;
+
+    fn thread_state(&self, context: &RenderContext) -> SelectedState {
+        match self {
+            SelectedIntegrator::Whitted(i) => SelectedState::Whitted(i.thread_state(context)),
+            SelectedIntegrator::Path(i) => SelectedState::Path(i.thread_state(context)),
+        }
+    }
+
+    fn render_tile(
+        &self,
+        context: &RenderContext,
+        tile: PixelRect,
+        image: &mut TileImage,
+        worker: &mut WorkerState,
+        state: &mut SelectedState,
+    ) {
+        match (self, state) {
+            (SelectedIntegrator::Whitted(i), SelectedState::Whitted(s)) => {
+                i.render_tile(context, tile, image, worker, s)
+            }
+            (SelectedIntegrator::Path(i), SelectedState::Path(s)) => {
+                i.render_tile(context, tile, image, worker, s)
+            }
+            // A state is only ever made by its own integrator's `thread_state`.
+            (integrator, state) => {
+                *state = integrator.thread_state(context);
+                integrator.render_tile(context, tile, image, worker, state)
+            }
+        }
+    }
+}
+
+/// Render `context` with the integrator `choice` resolves to for its scene; the statistics
+/// name the integrator and the reason.
+pub fn render(
+    context: &RenderContext,
+    choice: IntegratorChoice,
+    control: &RenderControl,
+) -> Result<RenderResult, RenderError> {
+    let resolution = resolve(choice, &context.scene);
+    let integrator = SelectedIntegrator::new(resolution.kind, &context.scene);
+    let mut result = crate::render::render(context, &integrator, control)?;
+    result.stats.integrator = Some(resolution.to_string());
+    Ok(result)
+}
