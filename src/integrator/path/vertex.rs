@@ -224,7 +224,8 @@ pub(super) fn shade(
         start: 0.0,
         throughput,
         footprint,
-        approximate_footprint: approximate_footprint || ray.approximate_footprint && delta,
+        // After a delta bounce the footprint was rebuilt at this hit and carried on.
+        approximate_footprint,
         pixel: ray.pixel,
         depth,
         diffuse_depth: ray.diffuse_depth + u32::from(!delta),
