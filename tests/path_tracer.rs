@@ -9,6 +9,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use common::*;
+use conetrace::footprint::LodStrategy;
 use conetrace::integrator::path::{LightStrategy, PathTracer};
 use conetrace::integrator::selection::{self, IntegratorChoice, IntegratorKind};
 use conetrace::integrator::Whitted;
@@ -246,8 +247,14 @@ translate = [0.0, 1.6, 0.0]
     let (m, l, b) = (mean(&mis), mean(&light), mean(&bsdf));
     eprintln!("means: MIS {m:?}, light sampling {l:?}, BSDF sampling {b:?}");
     for c in 0..3 {
-        assert!((m[c] - l[c]).abs() < 0.02 * m[c], "light sampling: {l:?} vs {m:?}");
-        assert!((m[c] - b[c]).abs() < 0.03 * m[c], "BSDF sampling: {b:?} vs {m:?}");
+        assert!(
+            (m[c] - l[c]).abs() < 0.02 * m[c],
+            "light sampling: {l:?} vs {m:?}"
+        );
+        assert!(
+            (m[c] - b[c]).abs() < 0.03 * m[c],
+            "BSDF sampling: {b:?} vs {m:?}"
+        );
     }
 }
 
@@ -342,7 +349,10 @@ fn auto_selection_names_the_integrator_and_why() {
         conetrace::scene::load::load_scene(&root.join(relative))
             .unwrap_or_else(|e| panic!("{relative}: {e}"))
     };
-    let cornell = selection::resolve(IntegratorChoice::Auto, &load_file("assets/scenes/cornell.toml"));
+    let cornell = selection::resolve(
+        IntegratorChoice::Auto,
+        &load_file("assets/scenes/cornell.toml"),
+    );
     assert_eq!(cornell.kind, IntegratorKind::Path);
     assert_eq!(cornell.to_string(), "path: emissive geometry (2 triangles)");
 
@@ -357,7 +367,10 @@ fn auto_selection_names_the_integrator_and_why() {
     let mut rough = matte.clone();
     rough.materials[1].roughness = Some(0.4);
     let chosen = selection::resolve(IntegratorChoice::Auto, &rough);
-    assert_eq!(chosen.to_string(), "path: rough or glossy materials (1 with roughness)");
+    assert_eq!(
+        chosen.to_string(),
+        "path: rough or glossy materials (1 with roughness)"
+    );
 
     let dir = temp_dir();
     let gi = load(
@@ -370,7 +383,10 @@ fn auto_selection_names_the_integrator_and_why() {
     );
     let forced = selection::resolve(IntegratorChoice::Fixed(IntegratorKind::Whitted), &gi);
     assert_eq!(forced.to_string(), "whitted: requested");
-    assert_eq!("path".parse(), Ok(IntegratorChoice::Fixed(IntegratorKind::Path)));
+    assert_eq!(
+        "path".parse(),
+        Ok(IntegratorChoice::Fixed(IntegratorKind::Path))
+    );
     assert!("mlt".parse::<IntegratorChoice>().is_err());
 }
 
@@ -379,37 +395,74 @@ fn auto_selection_names_the_integrator_and_why() {
 #[test]
 fn the_summary_line_and_stats_say_which_integrator() {
     let dir = temp_dir();
-    let scene = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell.toml");
+    let scene =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell.toml");
     let scene = scene.to_str().expect("utf-8 path");
     let out = run_in(
         dir.path(),
         &[
-            "render", scene, "--width", "16", "--height", "16", "--spp", "2", "--no-png",
-            "-o", "c.exr", "--stats", "stats.json",
+            "render",
+            scene,
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--no-png",
+            "-o",
+            "c.exr",
+            "--stats",
+            "stats.json",
         ],
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let printed = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let printed =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
     assert!(
         printed.contains("integrator path: emissive geometry (2 triangles)"),
         "{printed}"
     );
     assert!(printed.contains("paths"), "{printed}");
     let stats = std::fs::read_to_string(dir.path().join("stats.json")).expect("stats");
-    assert!(stats.contains("\"integrator\": \"path: emissive geometry (2 triangles)\"")
-        || stats.contains("\"integrator\":\"path: emissive geometry (2 triangles)\""), "{stats}");
+    assert!(
+        stats.contains("\"integrator\": \"path: emissive geometry (2 triangles)\"")
+            || stats.contains("\"integrator\":\"path: emissive geometry (2 triangles)\""),
+        "{stats}"
+    );
     assert!(stats.contains("roulette_terminations"), "{stats}");
 
     let out = run_in(
         dir.path(),
         &[
-            "render", scene, "--width", "16", "--height", "16", "--no-png", "-o", "w.exr",
-            "--integrator", "whitted",
+            "render",
+            scene,
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--no-png",
+            "-o",
+            "w.exr",
+            "--integrator",
+            "whitted",
         ],
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let printed = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
-    assert!(printed.contains("integrator whitted: requested"), "{printed}");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let printed =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    assert!(
+        printed.contains("integrator whitted: requested"),
+        "{printed}"
+    );
 
     write(dir.path(), "bad.toml", "[render]\nintegrator = \"mlt\"\n");
     let out = run_in(dir.path(), &["render", "bad.toml", "-o", "bad.exr"]);
@@ -453,7 +506,8 @@ fn a_seed_determines_the_image() {
 fn texture_lookups_after_a_diffuse_bounce_use_coarser_levels() {
     let dir = temp_dir();
     write(dir.path(), "plane.obj", &square_obj(4.0, 0.0));
-    let checker = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/textures/checker.png");
+    let checker =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/textures/checker.png");
     let scene = |look_up: bool| {
         let (target, up) = if look_up {
             ("[0.0, 1.0, 0.0]", "[0.0, 0.0, -1.0]")
@@ -507,28 +561,46 @@ translate = [0.0, 1.0, 0.0]
             ),
         )
     };
-    let mean_level = |look_up: bool| {
+    let mean_level = |look_up: bool, lod: LodStrategy| {
         let (_, stats) = render_with(scene(look_up), &PathTracer::default(), |o| {
-            o.count_texture_tiles = true
+            o.count_texture_tiles = true;
+            o.lod = lod;
         });
         let usage = stats.texture_tiles.expect("tiles counted");
         let levels = &usage.per_texture[0].1;
         let (weighted, total) = levels
             .iter()
             .enumerate()
-            .fold((0.0, 0.0), |(w, t), (level, &n)| (w + level as f64 * n as f64, t + n as f64));
+            .fold((0.0, 0.0), |(w, t), (level, &n)| {
+                (w + level as f64 * n as f64, t + n as f64)
+            });
         assert!(total > 0.0, "no lookups");
         (weighted / total, stats.counters.texture_lookups)
     };
-    let (camera_level, camera_lookups) = mean_level(false);
-    let (bounce_level, bounce_lookups) = mean_level(true);
+    for lod in [LodStrategy::Cone, LodStrategy::Cone1] {
+        let (camera_level, camera_lookups) = mean_level(false, lod);
+        let (bounce_level, bounce_lookups) = mean_level(true, lod);
+        eprintln!(
+            "{}: mean mip level: camera hits {camera_level:.2} ({camera_lookups} lookups), \
+             after a diffuse bounce {bounce_level:.2} ({bounce_lookups} lookups)",
+            lod.name()
+        );
+        assert!(camera_lookups > 0 && bounce_lookups > 0);
+        assert!(
+            bounce_level > camera_level + 1.0,
+            "{}: camera {camera_level}, bounce {bounce_level}",
+            lod.name()
+        );
+    }
+    // Differentials take the camera's footprint at the bounced hit (pbrt-v4's
+    // approximation): filtered like a camera hit at that distance, not point-sampled.
+    let (camera_level, _) = mean_level(false, LodStrategy::Differential);
+    let (bounce_level, _) = mean_level(true, LodStrategy::Differential);
     eprintln!(
-        "mean mip level: camera hits {camera_level:.2} ({camera_lookups} lookups), after a \
-         diffuse bounce {bounce_level:.2} ({bounce_lookups} lookups)"
+        "differential: camera hits {camera_level:.2}, after a diffuse bounce {bounce_level:.2}"
     );
-    assert!(camera_lookups > 0 && bounce_lookups > 0);
     assert!(
-        bounce_level > camera_level + 1.0,
-        "camera {camera_level}, bounce {bounce_level}"
+        bounce_level > 1.0 && (bounce_level - camera_level).abs() < 1.0,
+        "differential: camera {camera_level}, bounce {bounce_level}"
     );
 }

@@ -329,7 +329,7 @@ pub unsafe extern "C" fn ct_render(
                     context.scene.settings.integrator,
                     &control,
                 )
-                    .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))
+                .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))
             })
         };
         let result = match &relay {

@@ -297,6 +297,14 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     phases.textures = decoding.elapsed().as_secs_f64();
 
     let split = requested_split(args, &options)?;
+    // `--integrator` overrides the scene's choice; kept in the scene's settings, so a
+    // resumed or merged render is checked against it too (the signature's settings).
+    let mut scene = scene;
+    if let Some(name) = &args.integrator {
+        scene.settings.integrator = name
+            .parse()
+            .map_err(|e: selection::UnknownIntegrator| CommandError::bad_input(e.to_string()))?;
+    }
     let signature =
         RenderSignature::new(&scene, args.scene.as_deref(), &options, &texture_digests)?;
     let earlier = if args.resume {
@@ -321,12 +329,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
         phases.prepare = preparing.elapsed().as_secs_f64();
-        let choice = match &args.integrator {
-            Some(name) => name.parse().map_err(|e: selection::UnknownIntegrator| {
-                CommandError::bad_input(e.to_string())
-            })?,
-            None => context.scene.settings.integrator,
-        };
+        let choice = context.scene.settings.integrator;
         let integrator = SelectedIntegrator::new(
             selection::resolve(choice, &context.scene).kind,
             &context.scene,

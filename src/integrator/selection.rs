@@ -107,8 +107,16 @@ pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution
         .filter(|m| emissive(m.material))
         .map(|m| m.triangles.len())
         .sum();
-    let spheres = scene.spheres.iter().filter(|s| emissive(s.material)).count();
-    let patches = scene.patches.iter().filter(|p| emissive(p.material)).count();
+    let spheres = scene
+        .spheres
+        .iter()
+        .filter(|s| emissive(s.material))
+        .count();
+    let patches = scene
+        .patches
+        .iter()
+        .filter(|p| emissive(p.material))
+        .count();
     let counted = [
         (triangles, "triangle"),
         (spheres, "sphere"),

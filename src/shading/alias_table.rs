@@ -26,7 +26,13 @@ impl AliasTable {
     pub fn new(weights: &[f32]) -> AliasTable {
         let clean: Vec<f64> = weights
             .iter()
-            .map(|&w| if w.is_finite() && w > 0.0 { w as f64 } else { 0.0 })
+            .map(|&w| {
+                if w.is_finite() && w > 0.0 {
+                    w as f64
+                } else {
+                    0.0
+                }
+            })
             .collect();
         let total: f64 = clean.iter().sum();
         if total <= 0.0 {
@@ -136,7 +142,10 @@ mod tests {
         }
         for i in 0..5 {
             let expected = weights[i] / 16.0;
-            assert!((counts[i] as f32 / steps as f32 - expected).abs() < 1e-3, "{i}");
+            assert!(
+                (counts[i] as f32 / steps as f32 - expected).abs() < 1e-3,
+                "{i}"
+            );
         }
         assert_eq!(table.sample(1.0).map(|s| s.1 > 0.0), Some(true));
     }

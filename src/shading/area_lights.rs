@@ -40,8 +40,15 @@ pub fn luminance(c: Vec3) -> f32 {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AreaShape {
     /// A triangle with its unit front normal and area.
-    Triangle { p: [Vec3; 3], normal: Vec3, area: f32 },
-    Sphere { center: Vec3, radius: f32 },
+    Triangle {
+        p: [Vec3; 3],
+        normal: Vec3,
+        area: f32,
+    },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+    },
 }
 
 /// One emissive triangle or sphere.
@@ -130,8 +137,8 @@ impl AreaLight {
                 let sin_theta = sin2_theta.sqrt();
                 let phi = 2.0 * PI * u.y;
                 let (t, b) = orthonormal_basis(axis);
-                let wi = (axis * cos_theta + (t * phi.cos() + b * phi.sin()) * sin_theta)
-                    .normalize();
+                let wi =
+                    (axis * cos_theta + (t * phi.cos() + b * phi.sin()) * sin_theta).normalize();
                 // Nearest intersection along wi: d cos - sqrt(r^2 - d^2 sin^2).
                 let root = (r2 - d2 * sin2_theta).max(0.0).sqrt();
                 let distance = (d * cos_theta - root).max(0.0);
@@ -195,9 +202,7 @@ impl AreaLights {
     pub fn new(scene: &SceneDescription) -> AreaLights {
         let emissive = |material: usize| {
             scene.materials.get(material).is_some_and(|m| {
-                m.emission.max_element() > 0.0
-                    && m.emission.is_finite()
-                    && m.alpha_cutoff.is_none()
+                m.emission.max_element() > 0.0 && m.emission.is_finite() && m.alpha_cutoff.is_none()
             })
         };
         let mut out = AreaLights::default();
@@ -209,7 +214,12 @@ impl AreaLights {
             let radiance = scene.materials[mesh.material].emission;
             out.mesh_first.push(Some(out.lights.len() as u32));
             for tri in &mesh.triangles {
-                let p = tri.map(|i| mesh.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
+                let p = tri.map(|i| {
+                    mesh.positions
+                        .get(i as usize)
+                        .copied()
+                        .unwrap_or(Vec3::ZERO)
+                });
                 let cross = (p[1] - p[0]).cross(p[2] - p[0]);
                 let area = 0.5 * cross.length();
                 let area = if area.is_finite() { area } else { 0.0 };
@@ -257,7 +267,11 @@ impl AreaLights {
     /// The light sphere `sphere` is, if it emits.
     #[inline]
     pub fn sphere_light(&self, sphere: usize) -> Option<usize> {
-        self.sphere_light.get(sphere).copied().flatten().map(|i| i as usize)
+        self.sphere_light
+            .get(sphere)
+            .copied()
+            .flatten()
+            .map(|i| i as usize)
     }
 }
 
@@ -308,7 +322,9 @@ mod tests {
         let e = irradiance(&light, Vec3::ZERO, Vec3::Y, 50_000);
         let expected = 2.0 * PI / 9.0;
         assert!((e - expected).abs() < 2e-3 * expected, "{e} vs {expected}");
-        assert!(light.sample(Vec3::new(0.0, 3.2, 0.0), Vec2::splat(0.5)).is_none());
+        assert!(light
+            .sample(Vec3::new(0.0, 3.2, 0.0), Vec2::splat(0.5))
+            .is_none());
     }
 
     #[test]
@@ -332,14 +348,22 @@ mod tests {
         let numerator = a.dot(b.cross(c)).abs();
         let denominator = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
         let exact = 2.0 * numerator.atan2(denominator) as f64;
-        assert!((estimate - exact).abs() < 0.01 * exact, "{estimate} vs {exact}");
+        assert!(
+            (estimate - exact).abs() < 0.01 * exact,
+            "{estimate} vs {exact}"
+        );
     }
 
     #[test]
     fn the_back_of_a_triangle_light_is_dark() {
         let light = quad_triangle();
-        assert!(light.sample(Vec3::new(0.0, 3.0, 0.0), Vec2::splat(0.3)).is_none());
-        assert_eq!(light.pdf(Vec3::new(0.0, 3.0, 0.0), Vec3::new(0.5, 2.0, -0.5)), 0.0);
+        assert!(light
+            .sample(Vec3::new(0.0, 3.0, 0.0), Vec2::splat(0.3))
+            .is_none());
+        assert_eq!(
+            light.pdf(Vec3::new(0.0, 3.0, 0.0), Vec3::new(0.5, 2.0, -0.5)),
+            0.0
+        );
         assert!((light.power() - 2.0 * PI).abs() < 1e-5);
     }
 }

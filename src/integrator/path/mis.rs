@@ -13,7 +13,10 @@ pub fn power_heuristic(pdf_chosen: f32, pdf_other: f32) -> f32 {
     if pdf_chosen.is_infinite() {
         return 1.0;
     }
-    let (a, b) = (pdf_chosen * pdf_chosen, pdf_other.max(0.0) * pdf_other.max(0.0));
+    let (a, b) = (
+        pdf_chosen * pdf_chosen,
+        pdf_other.max(0.0) * pdf_other.max(0.0),
+    );
     if b.is_infinite() {
         return 0.0;
     }
@@ -27,7 +30,13 @@ mod tests {
 
     #[test]
     fn weights_of_the_two_strategies_sum_to_one() {
-        for (a, b) in [(1.0, 1.0), (0.3, 7.0), (1e-20, 3.0), (1e30, 1e-30), (2.0, 0.0)] {
+        for (a, b) in [
+            (1.0, 1.0),
+            (0.3, 7.0),
+            (1e-20, 3.0),
+            (1e30, 1e-30),
+            (2.0, 0.0),
+        ] {
             let sum = power_heuristic(a, b) + power_heuristic(b, a);
             assert!((sum - 1.0).abs() < 1e-6, "{a} {b}: {sum}");
         }

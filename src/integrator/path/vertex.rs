@@ -99,7 +99,11 @@ pub(super) fn shade(
             // Emitters that are not lights are found by BSDF rays alone.
             None => 1.0,
         };
-        add_radiance(image, ray.pixel, ray.throughput * material.emission * weight);
+        add_radiance(
+            image,
+            ray.pixel,
+            ray.throughput * material.emission * weight,
+        );
     }
 
     // The same seven dimensions at every vertex, whichever are used.

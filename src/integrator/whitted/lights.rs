@@ -5,8 +5,8 @@ use glam::Vec3;
 
 use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
-use crate::render::context::{RenderContext, WorkerState};
 use crate::integrator::texturing::environment_lookup;
+use crate::render::context::{RenderContext, WorkerState};
 use crate::shading::{self, Bsdf, OpaqueBsdf, SpawnPoint};
 
 /// A shadow ray and the radiance it delivers if unoccluded.

@@ -37,9 +37,9 @@ use glam::Vec3;
 use crate::film::sample_sum;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
+use crate::integrator::trace_wave::WaveRay;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
-use crate::integrator::trace_wave::WaveRay;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::Integrator;
 

@@ -643,12 +643,11 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
         s.seed = seed;
     }
     if let Some(name) = &r.integrator {
-        s.integrator = name
-            .get_ref()
-            .parse()
-            .map_err(|e: crate::integrator::selection::UnknownIntegrator| {
+        s.integrator = name.get_ref().parse().map_err(
+            |e: crate::integrator::selection::UnknownIntegrator| {
                 loc.at(name, format!("render.integrator: {e}"))
-            })?;
+            },
+        )?;
     }
     if let Some(gi) = r.gi {
         s.gi = gi;
