@@ -181,6 +181,110 @@ fn a_plane_under_an_emissive_quad_matches_the_form_factor() {
     assert!(stats.counters.shadow_rays > 0 && stats.counters.paths == 8 * 8 * 256);
 }
 
+/// (b) A sphere light: irradiance straight below it is E = pi L sin^2(theta_max), so a
+/// plane of albedo 0.5 under a black sphere of radius 0.5 emitting L = 4, 2 units above, has
+/// radiance 0.5 * 4 / 16 = 0.125; within 2%. Exercises the cone sampling of spheres and its
+/// density in the MIS weights.
+#[test]
+fn a_plane_under_a_sphere_light_matches_l_pi_sin2() {
+    let dir = temp_dir();
+    write(dir.path(), "plane.obj", &square_obj(5.0, 0.0));
+    let scene = load(
+        dir.path(),
+        r#"
+[render]
+width = 8
+height = 8
+spp = 256
+max_depth = 4
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.5, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+height = 0.02
+
+[[material]]
+name = "matte"
+base_color = [0.5, 0.5, 0.5]
+
+[[material]]
+name = "bulb"
+base_color = [0.0, 0.0, 0.0]
+emission = [4.0, 4.0, 4.0]
+
+[[mesh]]
+file = "plane.obj"
+material = "matte"
+
+[[sphere]]
+center = [0.0, 2.0, 0.0]
+radius = 0.5
+material = "bulb"
+"#,
+    );
+    assert!(scene.lights.is_empty(), "a key light was added");
+    let (pixels, _) = render_with(scene, &PathTracer::default(), |_| {});
+    let expected = 0.125;
+    let m = mean(&pixels);
+    eprintln!("sphere-lit plane: mean {m:?}, expected {expected}");
+    for value in m {
+        assert!((value - expected).abs() < 0.02 * expected, "mean {value}");
+    }
+}
+
+/// Samples whose radiance overflows to infinity are counted and dropped: two facing quads
+/// emitting near the largest finite float light each other beyond it, and every pixel of
+/// the film stays finite.
+#[test]
+fn non_finite_samples_are_counted_and_never_reach_the_film() {
+    let dir = temp_dir();
+    write(dir.path(), "lamp.obj", &square_obj(1.0, 0.0));
+    let scene = load(
+        dir.path(),
+        r#"
+[render]
+width = 4
+height = 4
+spp = 4
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.5, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+height = 0.5
+
+[[material]]
+name = "blinding"
+base_color = [1.0, 1.0, 1.0]
+emission = [3.0e38, 3.0e38, 3.0e38]
+
+[[mesh]]
+file = "lamp.obj"
+material = "blinding"
+
+[[mesh]]
+file = "lamp.obj"
+material = "blinding"
+rotate = [180.0, 0.0, 0.0]
+translate = [0.0, 1.0, 0.0]
+"#,
+    );
+    let (pixels, stats) = render_with(scene, &PathTracer::default(), |_| {});
+    eprintln!(
+        "{} of {} samples dropped",
+        stats.counters.nonfinite_samples,
+        4 * 4 * 4
+    );
+    assert!(stats.counters.nonfinite_samples > 0, "no sample overflowed");
+    assert!(
+        pixels.iter().flatten().all(|v| v.is_finite()),
+        "a non-finite value reached the film"
+    );
+}
+
 /// (c) Light sampling alone, BSDF sampling alone and their combination estimate the same
 /// image: a plane lit by the quad, seen obliquely with a diffuse sphere on it.
 #[test]

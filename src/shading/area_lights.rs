@@ -99,7 +99,7 @@ impl AreaLight {
                 let point = b0 * v[0] + b1 * v[1] + (1.0 - b0 - b1) * v[2];
                 let to_light = point - p;
                 let distance2 = to_light.length_squared();
-                if !(distance2 > 0.0) || !distance2.is_finite() {
+                if distance2.is_nan() || distance2 <= 0.0 || !distance2.is_finite() {
                     return None;
                 }
                 let distance = distance2.sqrt();
@@ -160,7 +160,7 @@ impl AreaLight {
             AreaShape::Triangle { normal, area, .. } => {
                 let to_light = point - p;
                 let distance2 = to_light.length_squared();
-                if !(distance2 > 0.0) {
+                if distance2.is_nan() || distance2 <= 0.0 {
                     return 0.0;
                 }
                 let cos_light = -to_light.dot(normal) / distance2.sqrt();
@@ -232,7 +232,7 @@ impl AreaLights {
             }
         }
         for sphere in &scene.spheres {
-            if !emissive(sphere.material) || !(sphere.radius > 0.0) {
+            if !emissive(sphere.material) || sphere.radius.is_nan() || sphere.radius <= 0.0 {
                 out.sphere_light.push(None);
                 continue;
             }

@@ -7,7 +7,7 @@
 /// infinite chosen density (a delta) takes all the weight.
 #[inline]
 pub fn power_heuristic(pdf_chosen: f32, pdf_other: f32) -> f32 {
-    if !(pdf_chosen > 0.0) {
+    if pdf_chosen.is_nan() || pdf_chosen <= 0.0 {
         return 0.0;
     }
     if pdf_chosen.is_infinite() {

@@ -93,7 +93,7 @@ pub(super) fn sample_light(
             )
         }
     };
-    if wi.dot(point.ng) <= 0.0 || radiance.max_element() <= 0.0 || !(pdf > 0.0) {
+    if wi.dot(point.ng) <= 0.0 || radiance.max_element() <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
         return;
     }
     let bsdf = point.bsdf;
@@ -115,7 +115,8 @@ pub(super) fn sample_light(
         };
         point.throughput * f * radiance * (weight / light_pdf)
     };
-    if !(contribution.max_element() > 0.0) {
+    let largest = contribution.max_element();
+    if largest.is_nan() || largest <= 0.0 {
         return;
     }
     let tfar = match light_point {

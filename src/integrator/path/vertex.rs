@@ -208,7 +208,8 @@ pub(super) fn shade(
             throughput /= 1.0 - end;
         }
     }
-    if !(throughput.max_element() > 0.0) {
+    let largest = throughput.max_element();
+    if largest.is_nan() || largest <= 0.0 {
         return;
     }
     if !throughput.is_finite() {

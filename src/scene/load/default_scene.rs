@@ -46,9 +46,7 @@ static EMBEDDED: &[(&str, &[u8])] = &[
 /// a single grey sphere is returned with the error in `notes` rather than panicking.
 pub fn default_scene() -> SceneDescription {
     let files = Files::embedded("assets/scenes", EMBEDDED);
-    match toml_format::parse(SCENE_TEXT, &files, DEFAULT_SCENE_LABEL)
-        .and_then(|scene| super::finish(scene))
-    {
+    match toml_format::parse(SCENE_TEXT, &files, DEFAULT_SCENE_LABEL).and_then(super::finish) {
         Ok(scene) => scene,
         Err(e) => {
             let mut scene = SceneDescription {
