@@ -10,7 +10,7 @@ mod cli;
 
 // The library's modules at the root of the binary: `crate::render` in `src/cli` is
 // `conetrace::render`.
-use conetrace::{embree, film, footprint, integrator, render, scene, shading, texture, vct};
+use conetrace::{embree, film, footprint, integrator, render, scene, shading, texture};
 
 use clap::Parser;
 

@@ -7,7 +7,6 @@ use std::sync::{Arc, Mutex};
 
 use crate::film::AovSelection;
 use crate::footprint::LodStrategy;
-use crate::integrator::Whitted;
 use crate::render::{self, RenderControl, RenderOptions};
 use crate::texture::{FilterMode, FilterOptions, WrapMode};
 
@@ -325,8 +324,12 @@ pub unsafe extern "C" fn ct_render(
                     skip: None,
                     part: None,
                 };
-                render::render(&context, &Whitted, &control)
-                    .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))
+                crate::integrator::selection::render(
+                    &context,
+                    context.scene.settings.integrator,
+                    &control,
+                )
+                .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))
             })
         };
         let result = match &relay {

@@ -71,6 +71,11 @@ pub struct RenderArgs {
     /// [default: the scene's, else 0].
     #[arg(long)]
     pub seed: Option<u32>,
+    /// Integrator: whitted, path (Monte Carlo path tracing), vct (voxel cone tracing), or
+    /// auto (path when the scene has emissive geometry, rough materials or `[render] gi =
+    /// true`, else whitted) [default: the scene's, else auto].
+    #[arg(long, value_parser = ["whitted", "path", "vct", "auto"])]
+    pub integrator: Option<String>,
     /// Maximum number of reflection/refraction bounces, 0 or more [default: the scene's,
     /// else 8].
     #[arg(long, allow_negative_numbers = true)]
@@ -135,9 +140,6 @@ pub struct RenderArgs {
     /// quick low-resolution cost estimate.
     #[arg(long, value_name = "i/N")]
     pub part: Option<String>,
-    /// Integrator: whitted, or vct (voxel cone tracing) [default: the scene's, else whitted].
-    #[arg(long, value_parser = crate::integrator::selection::IntegratorKind::NAMES)]
-    pub integrator: Option<String>,
     /// Voxel cone tracing: voxels across the scene's longest side, 2 to 1024 [default: the
     /// scene's, else 128, halved until the voxel pyramid fits in 256 MiB].
     #[arg(long, allow_negative_numbers = true)]
@@ -172,7 +174,8 @@ pub fn filter_parser() -> impl clap::builder::TypedValueParser<Value = FilterMod
 }
 
 /// `--integrator`, `--vct-resolution` and `--vct-bounces` over the scene's `[render]`
-/// settings.
+/// settings (kept there, so a resumed or merged render is checked against them too: the
+/// signature covers the settings).
 fn apply_integrator_options(
     args: &RenderArgs,
     scene: &mut SceneDescription,
@@ -180,8 +183,8 @@ fn apply_integrator_options(
     let settings = &mut scene.settings;
     if let Some(name) = args.integrator.as_deref() {
         settings.integrator = name
-            .parse::<IntegratorKind>()
-            .map_err(CommandError::bad_input)?;
+            .parse()
+            .map_err(|e: selection::UnknownIntegrator| CommandError::bad_input(e.to_string()))?;
     }
     if let Some(resolution) = args.vct_resolution {
         settings.vct_resolution = Some(resolution);
@@ -194,13 +197,11 @@ fn apply_integrator_options(
 
 /// The integrator the scene's settings select (after [`apply_integrator_options`]), built
 /// for `context` (the voxel scene of vct; nothing for Whitted).
-fn select_integrator(context: &render::RenderContext) -> Result<SelectedIntegrator, CommandError> {
-    let settings = &context.scene.settings;
-    let vct = crate::vct::VctSettings {
-        resolution: settings.vct_resolution,
-        bounces: settings.vct_bounces,
-    };
-    selection::select(settings.integrator, context, &vct)
+fn select_integrator(
+    context: &render::RenderContext,
+    kind: IntegratorKind,
+) -> Result<SelectedIntegrator, CommandError> {
+    selection::select(kind, context)
         .map_err(|e| CommandError::bad_input(format!("{}: {e}", context.scene.source)))
 }
 
@@ -362,7 +363,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
         phases.prepare = preparing.elapsed().as_secs_f64();
-        let integrator = select_integrator(&context)?;
+        let resolution = selection::resolve(context.scene.settings.integrator, &context.scene);
+        let integrator = select_integrator(&context, resolution.kind)?;
         let part = split.resolve(&context, &integrator)?;
         let tiles = part.tiles(options.width, options.height);
         let bar = progress_bar(args.quiet, tiles.len());
@@ -376,6 +378,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         let result = render::render(&context, &integrator, &control);
         bar.finish_and_clear();
         let mut result = result.map_err(crate::cli::render_failed)?;
+        result.stats.integrator = Some(resolution.to_string());
         if let Some(vct) = integrator.vct_stats() {
             result.stats.counters.vct_voxels_built = vct.occupied_voxels;
             result.stats.vct = Some(vct.clone());

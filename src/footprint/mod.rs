@@ -11,7 +11,8 @@
 //! A footprint is created by the camera (`crate::camera::Camera::initial_footprint`), moved
 //! to each hit with [`Footprint::transfer`], turned into texture gradients there with
 //! [`Footprint::texture_gradients`], and carried onto secondary rays with
-//! [`Footprint::reflect`] or [`Footprint::refract`]. It knows nothing of textures or
+//! [`Footprint::reflect`] or [`Footprint::refract`], or widened by a rough bounce with
+//! [`Footprint::scatter`] (`bsdf_spread`). It knows nothing of textures or
 //! Embree: it reads the hit record (`crate::hit::SurfaceHit`) and returns st derivatives.
 //!
 //! Robustness contract: for any finite input (grazing hits down to |D.N| = 1e-7, degenerate
@@ -21,6 +22,7 @@
 //! (zero gradients); zero normals count as a head-on hit; total internal reflection in
 //! `refract` falls back to the reflected footprint.
 
+mod bsdf_spread;
 mod cone_envelope;
 mod curvature;
 mod distance;
@@ -36,6 +38,7 @@ mod strategy;
 
 use glam::Vec3;
 
+pub use bsdf_spread::{bsdf_spread_angle, DIFFUSE_SPREAD};
 pub use cone_envelope::ConeEnvelope;
 pub use curvature::{curvature_at, sphere_curvature, triangle_curvature};
 pub use distance::DistanceFootprint;

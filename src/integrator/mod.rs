@@ -2,13 +2,22 @@
 //!
 //! An integrator implements [`crate::render::Integrator`]: it turns a work tile into a
 //! [`crate::film::TileImage`] (colour plus the AOVs the film asked for). Today there are the
-//! Whitted ray tracer (seeds 001 and 004) and voxel cone tracing (seed 003, over Whitted's
-//! waves); a Monte Carlo path tracer plugs in beside them, reusing the same scene, tracer, footprints, BSDFs and lights
-//! ([`crate::shading`]) and film. Integrators depend on the render stage, never the reverse.
+//! Whitted ray tracer (seeds 001 and 004), a Monte Carlo path tracer ([`path`]) and voxel
+//! cone tracing ([`vct`], seed 003, over Whitted's waves), sharing the same scene, tracer,
+//! footprints, BSDFs and lights ([`crate::shading`]) and film. Integrators depend on the
+//! render stage, never the reverse. [`selection`] picks one for a scene (`--integrator`,
+//! `[render] integrator`) and says why; `camera_sample` and `texturing` hold what every
+//! integrator shares (camera rays, filtered texture lookups).
 
+mod camera_sample;
+pub mod path;
 pub mod selection;
+mod texturing;
+mod trace_wave;
 pub mod vct;
 pub mod whitted;
 
+pub use path::PathTracer;
+pub use selection::{IntegratorChoice, IntegratorKind, SelectedIntegrator};
 pub use vct::Vct;
 pub use whitted::Whitted;

@@ -1,52 +1,177 @@
-//! Which integrator renders: `--integrator` or the scene's `[render] integrator`, and the
-//! one place that builds it. Only the voxel cone tracer needs work before rendering (its
-//! voxel scene); a Whitted render builds nothing extra.
+//! Which integrator renders a scene, and why: `--integrator whitted|path|auto` and
+//! `[render] integrator = "..."` (the command line wins), with `auto` the default.
+//!
+//! `vct` (voxel cone tracing, seed 003) is only ever chosen by name.
+//!
+//! `auto` picks the path tracer when the scene calls for global illumination: emissive
+//! geometry (area lights), rough or glossy materials (a material with a metallic-roughness
+//! `roughness`; the classic Blinn-Phong highlight does not count, so classic ray-tracing
+//! scenes stay with Whitted), or `[render] gi = true`. Otherwise Whitted renders it.
+//!
+//! Only the voxel cone tracer needs work before rendering (its voxel scene, built by
+//! [`select`]); Whitted and the path tracer build nothing extra.
+//!
+//! [`SelectedIntegrator`] is the one integrator value every render goes through: it
+//! implements [`Integrator`] by handing each tile to the chosen one, so the render loop,
+//! split renders and their cost estimates stay generic. A new kind is a new arm in
+//! [`IntegratorKind`], [`SelectedIntegrator`] and [`SelectedState`].
+
+use std::fmt;
+use std::str::FromStr;
 
 use crate::film::{PixelRect, TileImage};
+use crate::integrator::path::{PathTracer, PathWaves};
 use crate::integrator::vct::Vct;
-use crate::integrator::whitted::Waves;
-use crate::integrator::Whitted;
+use crate::integrator::whitted::{Waves, Whitted};
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::Integrator;
+use crate::render::{Integrator, RenderControl, RenderError, RenderResult};
+use crate::scene::SceneDescription;
 use crate::vct::{build_voxel_scene, VctBuildStats, VctError, VctSettings};
 
-/// The integrators a render can select.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// A light-transport algorithm the renderer has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum IntegratorKind {
-    #[default]
     Whitted,
+    Path,
     Vct,
 }
 
 impl IntegratorKind {
-    pub const NAMES: [&'static str; 2] = ["whitted", "vct"];
-
     pub fn name(self) -> &'static str {
         match self {
             IntegratorKind::Whitted => "whitted",
+            IntegratorKind::Path => "path",
             IntegratorKind::Vct => "vct",
         }
     }
 }
 
-impl std::str::FromStr for IntegratorKind {
-    type Err = String;
+/// What a scene or the command line asks for: one integrator, or the scene's choice.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum IntegratorChoice {
+    #[default]
+    Auto,
+    Fixed(IntegratorKind),
+}
 
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "whitted" => Ok(IntegratorKind::Whitted),
-            "vct" => Ok(IntegratorKind::Vct),
-            other => Err(format!(
-                "unknown integrator '{other}' ({})",
-                IntegratorKind::NAMES.join(", ")
-            )),
+/// A name that is not an integrator.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown integrator '{0}' (expected whitted, path, vct or auto)")]
+pub struct UnknownIntegrator(pub String);
+
+impl FromStr for IntegratorChoice {
+    type Err = UnknownIntegrator;
+
+    fn from_str(name: &str) -> Result<Self, Self::Err> {
+        match name {
+            "auto" => Ok(IntegratorChoice::Auto),
+            "whitted" => Ok(IntegratorChoice::Fixed(IntegratorKind::Whitted)),
+            "path" => Ok(IntegratorChoice::Fixed(IntegratorKind::Path)),
+            "vct" => Ok(IntegratorChoice::Fixed(IntegratorKind::Vct)),
+            _ => Err(UnknownIntegrator(name.to_string())),
         }
     }
 }
 
-/// The selected integrator, ready to render.
+impl fmt::Display for IntegratorChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            IntegratorChoice::Auto => f.write_str("auto"),
+            IntegratorChoice::Fixed(kind) => f.write_str(kind.name()),
+        }
+    }
+}
+
+/// The integrator chosen for a scene and the reason, as the summary line and `--stats`
+/// print it ("path: emissive geometry (12 triangles)").
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Resolution {
+    pub kind: IntegratorKind,
+    pub reason: String,
+}
+
+impl fmt::Display for Resolution {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.kind.name(), self.reason)
+    }
+}
+
+/// The integrator for `scene` under `choice` (see the module doc), with the reason.
+pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution {
+    if let IntegratorChoice::Fixed(kind) = choice {
+        return Resolution {
+            kind,
+            reason: "requested".to_string(),
+        };
+    }
+    let mut reasons = Vec::new();
+    let emissive = |material: usize| {
+        scene
+            .materials
+            .get(material)
+            .is_some_and(|m| m.emission.max_element() > 0.0)
+    };
+    let triangles: usize = scene
+        .meshes
+        .iter()
+        .filter(|m| emissive(m.material))
+        .map(|m| m.triangles.len())
+        .sum();
+    let spheres = scene
+        .spheres
+        .iter()
+        .filter(|s| emissive(s.material))
+        .count();
+    let patches = scene
+        .patches
+        .iter()
+        .filter(|p| emissive(p.material))
+        .count();
+    let counted = [
+        (triangles, "triangle"),
+        (spheres, "sphere"),
+        (patches, "patch"),
+    ]
+    .iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!("{n} {what}{}", if *n == 1 { "" } else { "s" }))
+    .collect::<Vec<_>>();
+    if !counted.is_empty() {
+        reasons.push(format!("emissive geometry ({})", counted.join(", ")));
+    }
+    let rough: Vec<&str> = scene
+        .materials
+        .iter()
+        .filter(|m| m.roughness.is_some())
+        .map(|m| m.name.as_str())
+        .collect();
+    if !rough.is_empty() {
+        reasons.push(format!(
+            "rough or glossy materials ({} with roughness)",
+            rough.len()
+        ));
+    }
+    if scene.settings.gi {
+        reasons.push("[render] gi = true".to_string());
+    }
+    if reasons.is_empty() {
+        Resolution {
+            kind: IntegratorKind::Whitted,
+            reason: "no emissive geometry, rough materials or gi".to_string(),
+        }
+    } else {
+        Resolution {
+            kind: IntegratorKind::Path,
+            reason: reasons.join("; "),
+        }
+    }
+}
+
+/// The chosen integrator, with its settings from the scene.
+#[derive(Clone, Debug)]
 pub enum SelectedIntegrator {
     Whitted(Whitted),
+    Path(PathTracer),
     Vct(Vct),
 }
 
@@ -54,32 +179,44 @@ impl SelectedIntegrator {
     /// The voxel scene's build statistics (vct only).
     pub fn vct_stats(&self) -> Option<&VctBuildStats> {
         match self {
-            SelectedIntegrator::Whitted(_) => None,
             SelectedIntegrator::Vct(vct) => Some(&vct.voxels.stats),
+            _ => None,
         }
     }
 }
 
-/// Build the integrator `kind` for `context`: voxelise the scene for vct, nothing for
-/// Whitted.
-pub fn select(
-    kind: IntegratorKind,
-    context: &RenderContext,
-    vct: &VctSettings,
-) -> Result<SelectedIntegrator, VctError> {
+/// Build the integrator of `kind` for `context` with the settings its scene gives it:
+/// the voxel scene for vct (which can fail: a grid too large), nothing for the others.
+pub fn select(kind: IntegratorKind, context: &RenderContext) -> Result<SelectedIntegrator, VctError> {
+    let settings = &context.scene.settings;
     Ok(match kind {
         IntegratorKind::Whitted => SelectedIntegrator::Whitted(Whitted),
-        IntegratorKind::Vct => SelectedIntegrator::Vct(Vct::new(build_voxel_scene(context, vct)?)),
+        IntegratorKind::Path => SelectedIntegrator::Path(PathTracer::for_settings(settings)),
+        IntegratorKind::Vct => {
+            let vct = VctSettings {
+                resolution: settings.vct_resolution,
+                bounces: settings.vct_bounces,
+            };
+            SelectedIntegrator::Vct(Vct::new(build_voxel_scene(context, &vct)?))
+        }
     })
 }
 
-impl Integrator for SelectedIntegrator {
-    type ThreadState = Waves;
+/// The per-thread state of the chosen integrator.
+pub enum SelectedState {
+    /// Whitted's waves, also the voxel cone tracer's (it shades through Whitted's).
+    Whitted(Waves),
+    Path(PathWaves),
+}
 
-    fn thread_state(&self, context: &RenderContext) -> Waves {
+impl Integrator for SelectedIntegrator {
+    type ThreadState = SelectedState;
+
+    fn thread_state(&self, context: &RenderContext) -> SelectedState {
         match self {
-            SelectedIntegrator::Whitted(w) => w.thread_state(context),
-            SelectedIntegrator::Vct(v) => v.thread_state(context),
+            SelectedIntegrator::Whitted(i) => SelectedState::Whitted(i.thread_state(context)),
+            SelectedIntegrator::Path(i) => SelectedState::Path(i.thread_state(context)),
+            SelectedIntegrator::Vct(i) => SelectedState::Whitted(i.thread_state(context)),
         }
     }
 
@@ -89,11 +226,50 @@ impl Integrator for SelectedIntegrator {
         tile: PixelRect,
         image: &mut TileImage,
         worker: &mut WorkerState,
-        state: &mut Waves,
+        state: &mut SelectedState,
     ) {
-        match self {
-            SelectedIntegrator::Whitted(w) => w.render_tile(context, tile, image, worker, state),
-            SelectedIntegrator::Vct(v) => v.render_tile(context, tile, image, worker, state),
+        match (self, state) {
+            (SelectedIntegrator::Whitted(i), SelectedState::Whitted(s)) => {
+                i.render_tile(context, tile, image, worker, s)
+            }
+            (SelectedIntegrator::Path(i), SelectedState::Path(s)) => {
+                i.render_tile(context, tile, image, worker, s)
+            }
+            (SelectedIntegrator::Vct(i), SelectedState::Whitted(s)) => {
+                i.render_tile(context, tile, image, worker, s)
+            }
+            // A state is only ever made by its own integrator's `thread_state`.
+            (integrator, state) => {
+                *state = integrator.thread_state(context);
+                integrator.render_tile(context, tile, image, worker, state)
+            }
         }
     }
+}
+
+/// Why a render through [`render`] failed: building the integrator, or rendering.
+#[derive(Debug, thiserror::Error)]
+pub enum SelectedRenderError {
+    #[error(transparent)]
+    Build(#[from] VctError),
+    #[error(transparent)]
+    Render(#[from] RenderError),
+}
+
+/// Render `context` with the integrator `choice` resolves to for its scene; the statistics
+/// name the integrator and the reason (and the voxel scene's build, for vct).
+pub fn render(
+    context: &RenderContext,
+    choice: IntegratorChoice,
+    control: &RenderControl,
+) -> Result<RenderResult, SelectedRenderError> {
+    let resolution = resolve(choice, &context.scene);
+    let integrator = select(resolution.kind, context)?;
+    let mut result = crate::render::render(context, &integrator, control)?;
+    result.stats.integrator = Some(resolution.to_string());
+    if let Some(vct) = integrator.vct_stats() {
+        result.stats.counters.vct_voxels_built = vct.occupied_voxels;
+        result.stats.vct = Some(vct.clone());
+    }
+    Ok(result)
 }

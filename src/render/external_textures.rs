@@ -72,7 +72,12 @@ pub fn prepare_with_external(
         Environment::Color(_) => FilterOptions::default(),
     };
     let mean = environment_mean(&context.scene.environment, external.as_ref(), &wrap);
-    context.lights = SceneLights::new(&context.scene.lights, mean, context.lights.scene_radius);
+    context.lights = SceneLights::with_area_lights(
+        &context.scene.lights,
+        mean,
+        context.lights.scene_radius,
+        context.lights.area.clone(),
+    );
     context.external_textures = Some(external);
     Ok(context)
 }

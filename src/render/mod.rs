@@ -97,7 +97,12 @@ pub fn prepare_with_textures(
     let scene_radius = surfaces
         .bounds
         .map_or(0.0, |(lower, upper)| 0.5 * (upper - lower).length());
-    let lights = crate::shading::SceneLights::new(&scene.lights, environment_mean, scene_radius);
+    let lights = crate::shading::SceneLights::with_area_lights(
+        &scene.lights,
+        environment_mean,
+        scene_radius,
+        crate::shading::AreaLights::new(&scene),
+    );
     Ok(RenderContext {
         materials: prepared::MaterialTable::new(&scene.materials),
         surfaces,
@@ -347,6 +352,7 @@ pub fn render<I: Integrator>(
             })
             .collect(),
         vct: None,
+        integrator: None,
     };
     Ok(RenderResult {
         film,

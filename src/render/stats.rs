@@ -39,6 +39,13 @@ pub struct WorkCounters {
     pub vct_cones_traced: u64,
     /// Lookups of those cones in the voxel pyramid.
     pub vct_cone_steps: u64,
+    /// Path tracing: paths started (one per camera ray), bounces (rays a hit scattered),
+    /// paths ended by Russian roulette, and samples dropped because their radiance was not
+    /// finite (NaN or infinity never reach the film).
+    pub paths: u64,
+    pub path_bounces: u64,
+    pub roulette_terminations: u64,
+    pub nonfinite_samples: u64,
 }
 
 impl WorkCounters {
@@ -68,6 +75,10 @@ impl WorkCounters {
         self.vct_voxels_built += other.vct_voxels_built;
         self.vct_cones_traced += other.vct_cones_traced;
         self.vct_cone_steps += other.vct_cone_steps;
+        self.paths += other.paths;
+        self.path_bounces += other.path_bounces;
+        self.roulette_terminations += other.roulette_terminations;
+        self.nonfinite_samples += other.nonfinite_samples;
     }
 }
 
@@ -107,6 +118,9 @@ pub struct RenderStats {
     pub texture_memory: Vec<TextureMemory>,
     /// The voxel cone tracer's voxelisation: resolution, time and memory (`vct` only).
     pub vct: Option<crate::vct::VctBuildStats>,
+    /// The integrator that rendered and why it was chosen (e.g. "path: emissive geometry
+    /// (12 triangles)"); `None` when the caller rendered with an integrator directly.
+    pub integrator: Option<String>,
 }
 
 /// Seconds spent in each phase of a render, and in all of them.
@@ -170,6 +184,21 @@ impl RenderStats {
             c.refraction_rays,
             self.mrays_per_second
         );
+        if c.paths > 0 {
+            line.push_str(&format!(
+                "; {} paths, {} bounces, {} ended by roulette",
+                c.paths, c.path_bounces, c.roulette_terminations
+            ));
+            if c.nonfinite_samples > 0 {
+                line.push_str(&format!(
+                    ", {} non-finite samples dropped",
+                    c.nonfinite_samples
+                ));
+            }
+        }
+        if let Some(integrator) = &self.integrator {
+            line.push_str(&format!("; integrator {integrator}"));
+        }
         if !self.effects.is_empty() {
             let names: Vec<&str> = self.effects.iter().map(|e| e.effect.as_str()).collect();
             line.push_str(&format!("; effects: {}", names.join(", ")));

@@ -269,8 +269,15 @@ pub struct RenderSettings {
     pub fresnel: FresnelMode,
     /// The sampler's seed (`--seed` overrides it).
     pub seed: u32,
-    /// `[render] integrator` (`--integrator` overrides it).
-    pub integrator: crate::integrator::selection::IntegratorKind,
+    /// Which integrator renders the scene (`[render] integrator`, `--integrator` overrides
+    /// it); `auto` picks one from the scene (`crate::integrator::selection`).
+    pub integrator: crate::integrator::IntegratorChoice,
+    /// `[render] gi = true`: the scene asks for global illumination (`auto` picks the path
+    /// tracer).
+    pub gi: bool,
+    /// `[render] diffuse_bounces`: how many non-delta bounces a path-traced path may take
+    /// (`None`: as many as `max_depth` allows; 0 gives Whitted's image in expectation).
+    pub diffuse_bounces: Option<u32>,
     /// `[render] vct_resolution`: voxels across the scene's longest side (`None`: the
     /// default rule of `crate::vct::grid::default_resolution`).
     pub vct_resolution: Option<u32>,
@@ -290,7 +297,9 @@ impl Default for RenderSettings {
             exposure: 0.0,
             fresnel: FresnelMode::Exact,
             seed: 0,
-            integrator: crate::integrator::selection::IntegratorKind::Whitted,
+            integrator: crate::integrator::IntegratorChoice::Auto,
+            gi: false,
+            diffuse_bounces: None,
             vct_resolution: None,
             vct_bounces: 1,
         }

@@ -1,89 +1,73 @@
-//! Which light to sample: the scene's lights (punctual lights and the environment) and a
-//! choice of one of them per sample, with probability proportional to an estimate of its
-//! power (pbrt-v4's power light sampler, section 12.6.2).
+//! Which light to sample: the scene's lights (punctual lights, the environment and the
+//! area lights of emissive geometry) and a choice of one of them per sample, with
+//! probability proportional to an estimate of its power (pbrt-v4's power light sampler,
+//! section 12.6.2), through one alias table over all of them ([`super::AliasTable`]).
 //!
 //! Powers are compared by luminance (Rec. 709 weights): a point light's is `4 pi I`, a spot
 //! light's `2 pi (1 - cos theta) I` with the mean of its inner and outer angles, a
 //! directional light's `pi r^2 E` and the environment's `4 pi^2 r^2 L_mean` over a disk or
-//! sphere of the scene's bounding radius `r`. A light with no power is never chosen.
+//! sphere of the scene's bounding radius `r`, an area light's `pi A L`
+//! ([`super::AreaLight::power`]). A light with no power is never chosen.
 
 use std::f32::consts::PI;
 
 use glam::Vec3;
 
+use super::alias_table::AliasTable;
+use super::area_lights::{luminance, AreaLights};
 use super::environment_light::EnvironmentLight;
 use crate::scene::Light;
 
-/// Luminance of a linear Rec. 709 colour.
-#[inline]
-fn luminance(c: Vec3) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
-/// Chooses one of `n` items with fixed probabilities, from one uniform number.
+/// Chooses one of `n` items with fixed probabilities, from one uniform number (an alias
+/// table: constant time whatever the number of lights).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LightSelection {
-    /// Running sums of the normalised probabilities (the last is 1); empty when nothing can
-    /// be chosen.
-    cdf: Vec<f32>,
+    table: AliasTable,
 }
 
 impl LightSelection {
     /// Probabilities proportional to `weights` (negative and non-finite ones count as 0).
     pub fn from_weights(weights: &[f32]) -> LightSelection {
-        let clean = |w: f32| if w.is_finite() && w > 0.0 { w } else { 0.0 };
-        let total: f32 = weights.iter().map(|&w| clean(w)).sum();
-        if total <= 0.0 {
-            return LightSelection { cdf: Vec::new() };
+        LightSelection {
+            table: AliasTable::new(weights),
         }
-        let mut sum = 0.0;
-        let mut cdf: Vec<f32> = weights
-            .iter()
-            .map(|&w| {
-                sum += clean(w) / total;
-                sum
-            })
-            .collect();
-        // Rounding may leave the sum short of 1: the last item with a weight closes it, so an
-        // item without one keeps probability 0.
-        if let Some(last) = weights.iter().rposition(|&w| clean(w) > 0.0) {
-            for c in &mut cdf[last..] {
-                *c = 1.0;
-            }
-        }
-        LightSelection { cdf }
     }
 
     /// Probability of choosing item `index`.
+    #[inline]
     pub fn pmf(&self, index: usize) -> f32 {
-        match index {
-            _ if index >= self.cdf.len() => 0.0,
-            0 => self.cdf[0],
-            _ => self.cdf[index] - self.cdf[index - 1],
-        }
+        self.table.pmf(index)
     }
 
     /// The item the uniform number `u` in [0, 1) chooses, with its probability; `None`
     /// when no item can be chosen.
+    #[inline]
     pub fn select(&self, u: f32) -> Option<(usize, f32)> {
-        let index = self.cdf.partition_point(|&c| c <= u);
-        // Rounding can put u at or past the last sum: take the last item with a weight.
-        let index = if index < self.cdf.len() {
-            index
-        } else {
-            (0..self.cdf.len()).rev().find(|&i| self.pmf(i) > 0.0)?
-        };
-        Some((index, self.pmf(index)))
+        self.table.sample(u)
     }
 }
 
+/// One of the scene's lights, as [`SceneLights`] numbers them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightRef {
+    /// `scene.lights[i]`.
+    Punctual(usize),
+    Environment,
+    /// `SceneLights::area.lights[i]`.
+    Area(usize),
+}
+
 /// The lights an integrator samples: the scene's punctual lights (indices `0..n`, in the
-/// scene's order), then the environment (index `n`).
+/// scene's order), then the environment (index `n`), then the area lights (`n + 1 + i`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SceneLights {
     pub environment: EnvironmentLight,
-    /// One choice among the punctual lights and the environment, by power.
+    /// Emissive triangles and spheres.
+    pub area: AreaLights,
+    /// One choice among the punctual lights, the environment and the area lights, by power.
     pub selection: LightSelection,
+    /// Number of punctual lights (the environment's selection index).
+    pub punctual_count: usize,
     /// Radius of the scene's bounding sphere, over which lights at infinity deliver power.
     pub scene_radius: f32,
 }
@@ -92,17 +76,59 @@ impl SceneLights {
     /// The lights of a scene with punctual `lights`, an environment of mean radiance
     /// `environment_mean` and geometry within a sphere of `scene_radius`.
     pub fn new(lights: &[Light], environment_mean: Vec3, scene_radius: f32) -> SceneLights {
+        SceneLights::with_area_lights(
+            lights,
+            environment_mean,
+            scene_radius,
+            AreaLights::default(),
+        )
+    }
+
+    /// [`SceneLights::new`] with the scene's emissive geometry as area lights too.
+    pub fn with_area_lights(
+        lights: &[Light],
+        environment_mean: Vec3,
+        scene_radius: f32,
+        area: AreaLights,
+    ) -> SceneLights {
         let environment = EnvironmentLight {
             mean_radiance: environment_mean,
         };
         let r2 = scene_radius * scene_radius;
         let mut powers: Vec<f32> = lights.iter().map(|l| light_power(l, r2)).collect();
         powers.push(4.0 * PI * PI * r2 * luminance(environment_mean));
+        powers.extend(area.lights.iter().map(|l| l.power()));
         SceneLights {
             environment,
+            area,
             selection: LightSelection::from_weights(&powers),
+            punctual_count: lights.len(),
             scene_radius,
         }
+    }
+
+    /// The light the uniform number `u` chooses, with its probability.
+    #[inline]
+    pub fn choose(&self, u: f32) -> Option<(LightRef, f32)> {
+        let (index, pmf) = self.selection.select(u)?;
+        let n = self.punctual_count;
+        let light = match index {
+            i if i < n => LightRef::Punctual(i),
+            i if i == n => LightRef::Environment,
+            i => LightRef::Area(i - n - 1),
+        };
+        Some((light, pmf))
+    }
+
+    /// Probability that [`SceneLights::choose`] picks `light`.
+    #[inline]
+    pub fn pmf(&self, light: LightRef) -> f32 {
+        let n = self.punctual_count;
+        self.selection.pmf(match light {
+            LightRef::Punctual(i) => i,
+            LightRef::Environment => n,
+            LightRef::Area(i) => n + 1 + i,
+        })
     }
 }
 
@@ -153,8 +179,10 @@ mod tests {
             assert!((share - expected).abs() < 0.01, "{i}: {share}");
         }
         // The edges of [0, 1) choose lights with power.
-        assert_eq!(selection.select(0.0).map(|s| s.0), Some(0));
-        assert_eq!(selection.select(1.0).map(|s| s.0), Some(3));
+        for u in [0.0, 0.999_999, 1.0] {
+            let (i, p) = selection.select(u).expect("weights");
+            assert!(p > 0.0, "{u} chose {i}");
+        }
     }
 
     #[test]

@@ -24,6 +24,9 @@
 //! - [`lights`]: direction, distance and irradiance scale towards each punctual light, for
 //!   shadow rays (seed 001, "Shadow Rays"); punctual lights are delta lights.
 //! - [`environment_light`]: the environment as a light (mean radiance, direction sampling).
+//! - [`area_lights`]: emissive triangles and spheres as one-sided area lights (solid-angle
+//!   sampling of spheres, area sampling of triangles).
+//! - [`alias_table`]: Walker/Vose alias tables, choosing among many items in constant time.
 //! - [`light_selection`]: the scene's lights and the choice of one by power.
 //! - [`ray_offset`]: spawn points, hit points with a bound on their rounding error, and
 //!   ray origins moved just past that bound off the surface they start on (seed 001,
@@ -33,6 +36,8 @@
 //! towards the surface (the ray's travel direction), `wo`/`wi` point away from it.
 //! Nothing here traces rays, reads textures or allocates.
 
+pub mod alias_table;
+pub mod area_lights;
 pub mod beer;
 pub mod brdf;
 pub mod bsdf;
@@ -54,6 +59,8 @@ pub mod reflection;
 pub mod refraction;
 pub mod rough_dielectric;
 
+pub use alias_table::AliasTable;
+pub use area_lights::{AreaLight, AreaLightSample, AreaLights, AreaShape};
 pub use beer::{sigma_from_attenuation, transmittance};
 pub use brdf::OpaqueBsdf;
 pub use bsdf::{Bsdf, BsdfSample, Lobe};
@@ -61,7 +68,7 @@ pub use conductor::RoughConductor;
 pub use dielectric::{DielectricSplit, SmoothDielectric};
 pub use environment_light::{EnvironmentLight, EnvironmentSample};
 pub use fresnel::{fresnel, fresnel_dielectric, fresnel_schlick, DielectricBoundary};
-pub use light_selection::{LightSelection, SceneLights};
+pub use light_selection::{LightRef, LightSelection, SceneLights};
 pub use lights::{is_delta_light, light_position, pdf_li, sample_li, LightSample};
 pub use material_bsdf::{MaterialBsdf, OpaqueLobe};
 pub use metallic_roughness::MetallicRoughnessBsdf;

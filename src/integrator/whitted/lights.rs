@@ -5,8 +5,8 @@ use glam::Vec3;
 
 use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
+use crate::integrator::texturing::environment_lookup;
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::prepared::environment_radiance;
 use crate::shading::{self, Bsdf, OpaqueLobe, SpawnPoint};
 
 /// A shadow ray and the radiance it delivers if unoccluded.
@@ -29,27 +29,7 @@ pub(super) fn shade_miss(
     image: &mut TileImage,
     worker: &mut WorkerState,
 ) {
-    let effects = &context.effects;
-    let gradients = if effects.footprints {
-        let g = ray.footprint.environment_gradients(ray.direction);
-        [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
-    } else {
-        [0.0; 4]
-    };
-    if matches!(
-        context.scene.environment,
-        crate::scene::Environment::LatLong { .. }
-    ) {
-        worker.counters.texture_lookups += 1;
-    }
-    let radiance = environment_radiance(
-        &context.scene.environment,
-        &context.textures,
-        ray.direction,
-        gradients,
-        &context.texture_filters,
-        context.external_textures.as_deref(),
-    );
+    let radiance = environment_lookup(context, ray.direction, &ray.footprint, worker);
     add_radiance(image, ray.pixel, ray.throughput * radiance);
 }
 

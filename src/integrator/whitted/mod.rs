@@ -37,6 +37,7 @@ use glam::Vec3;
 use crate::film::sample_sum;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
+use crate::integrator::trace_wave::WaveRay;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
@@ -153,34 +154,24 @@ pub(crate) fn render_tile_with(
 /// Trace the current wave: camera waves as coherent 4x4 packets, later waves as incoherent
 /// ray streams (see `render::tracer`).
 fn trace_wave(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerState) {
-    waves.trace_rays.clear();
-    waves.trace_rays.extend(waves.current.iter().map(|ray| {
-        let (cone_width, cone_spread) = ray.footprint.cone_at_origin();
-        // Traced from `start`: the cone is as wide there as it has grown by then.
-        TraceRay {
-            origin: ray.origin + ray.direction * ray.start,
-            direction: ray.direction,
-            tfar: f32::INFINITY,
-            cone_width: cone_width + cone_spread * ray.start,
-            cone_spread,
-        }
-    }));
     let coherent = waves
         .current
         .first()
         .is_some_and(|r| r.kind == RayKind::Camera);
-    context.tracer.intersect(
-        &waves.trace_rays,
-        &mut waves.trace_hits,
+    let rays = waves.current.iter().map(|ray| WaveRay {
+        origin: ray.origin,
+        direction: ray.direction,
+        start: ray.start,
+        footprint: &ray.footprint,
+    });
+    crate::integrator::trace_wave::trace_wave(
+        context,
+        rays,
         coherent,
+        &mut waves.trace_rays,
+        &mut waves.trace_hits,
         &mut worker.counters,
     );
-    // Distances count from the ray's origin again.
-    for (hit, ray) in waves.trace_hits.iter_mut().zip(&waves.current) {
-        if ray.start > 0.0 && hit.is_hit() {
-            hit.t += ray.start;
-        }
-    }
 }
 
 fn shade_wave(

@@ -11,8 +11,9 @@ use super::spawn::Spawner;
 use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::hit::SurfaceHit;
+use crate::integrator::texturing::{self, LookupRay};
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::prepared::{binding_query, SurfaceDetail};
+use crate::render::prepared::SurfaceDetail;
 use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
 use crate::scene::Material;
@@ -71,12 +72,8 @@ pub(super) fn surface_detail(
     ray: &PathRay,
     hit: &TraceHit,
 ) -> SurfaceDetail {
-    let aov = ray.kind == RayKind::Camera && ray.first_sample && context.options.aovs.surface;
-    if aov || context.surfaces.is_textured(hit) {
-        SurfaceDetail::Texturing
-    } else {
-        SurfaceDetail::Geometry
-    }
+    let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
+    texturing::surface_detail(context, camera_first, hit)
 }
 
 /// Shade the hit of `ray` at `surface`: its AOVs, emission and ambient light, the shadow
@@ -175,8 +172,7 @@ pub(super) fn shade_hit(
     }
 }
 
-/// The material's albedo at the hit: base colour times its texture, filtered by the ray's
-/// footprint. Fills the first-lookup AOVs of the pixel.
+/// The material's albedo at the hit under the ray's footprint (`integrator::texturing`).
 pub(super) fn surface_albedo(
     context: &RenderContext,
     ray: &PathRay,
@@ -185,48 +181,11 @@ pub(super) fn surface_albedo(
     image: &mut TileImage,
     worker: &mut WorkerState,
 ) -> Vec3 {
-    let Some(binding) = &material.base_color_texture else {
-        return material.base_color;
+    let lookup = LookupRay {
+        direction: ray.direction,
+        footprint: &ray.footprint,
+        pixel: ray.pixel,
+        first_sample: ray.first_sample,
     };
-    let options = &context.options;
-    let filter = &context.texture_filters[binding.texture];
-    let gradients = if context.effects.footprints {
-        let g = ray
-            .footprint
-            .texture_gradients(ray.direction, surface, options.filter.max_aniso);
-        [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
-    } else {
-        [0.0; 4]
-    };
-    let query = binding_query(&binding.transform, surface.st, gradients);
-    let texture = &context.textures[binding.texture];
-    worker.counters.texture_lookups += 1;
-    let texel = match (
-        &context.external_textures,
-        worker.texture_tiles.get_mut(binding.texture),
-    ) {
-        (Some(external), _) => crate::render::external_textures::sample_external(
-            external.as_ref(),
-            binding.texture,
-            &query,
-            filter,
-        ),
-        (None, Some(tiles)) => texture.sample_recording(&query, filter, tiles),
-        (None, None) => texture.sample(&query, filter),
-    };
-    let pixel = ray.pixel as usize;
-    if ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel] {
-        image.lookup_done[pixel] = true;
-        if !image.tex.is_empty() {
-            image.tex[pixel] = [
-                query.s, query.t, query.dsdx, query.dtdx, query.dsdy, query.dtdy,
-            ];
-            image.texcolor[pixel] = [texel.x, texel.y, texel.z, 1.0];
-        }
-        if !image.lod.is_empty() {
-            image.lod[pixel] = texture.lod(&query, filter);
-            image.footprint[pixel] = ray.footprint.width();
-        }
-    }
-    material.base_color * texel.truncate()
+    texturing::surface_albedo(context, lookup, material, surface, image, worker)
 }

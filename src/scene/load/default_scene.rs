@@ -46,9 +46,7 @@ static EMBEDDED: &[(&str, &[u8])] = &[
 /// a single grey sphere is returned with the error in `notes` rather than panicking.
 pub fn default_scene() -> SceneDescription {
     let files = Files::embedded("assets/scenes", EMBEDDED);
-    match toml_format::parse(SCENE_TEXT, &files, DEFAULT_SCENE_LABEL)
-        .and_then(|scene| super::finish(scene, super::DefaultLights::WhenOtherwiseBlack))
-    {
+    match toml_format::parse(SCENE_TEXT, &files, DEFAULT_SCENE_LABEL).and_then(super::finish) {
         Ok(scene) => scene,
         Err(e) => {
             let mut scene = SceneDescription {
@@ -65,10 +63,7 @@ pub fn default_scene() -> SceneDescription {
                 )],
                 ..Default::default()
             };
-            super::framing::add_missing_camera_and_lights(
-                &mut scene,
-                super::framing::DefaultLights::WhenNoLights,
-            );
+            super::framing::add_missing_camera_and_lights(&mut scene);
             scene
         }
     }

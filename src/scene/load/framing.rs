@@ -46,33 +46,29 @@ pub fn frame_camera(scene: &SceneDescription, aspect: f32) -> CameraDesc {
     }
 }
 
-/// When a scene without lights gets the default key light.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DefaultLights {
-    /// Models rendered directly (OBJ, glTF): whenever they have no lights.
-    WhenNoLights,
-    /// TOML scenes describe their lighting: only when, without lights, nothing would be
-    /// visible (no emissive material and a black environment).
-    WhenOtherwiseBlack,
-}
-
-/// Whether anything lights the scene besides punctual lights.
+/// Whether anything lights the scene besides punctual lights: a non-black environment, or
+/// geometry (a mesh, sphere or patch) whose material emits.
 fn lit_without_lights(scene: &SceneDescription) -> bool {
     let environment = match &scene.environment {
         Environment::Color(c) => c.max_element() > 0.0,
         Environment::LatLong { intensity, .. } => *intensity > 0.0,
     };
-    environment
-        || scene
+    let emits = |material: usize| {
+        scene
             .materials
-            .iter()
-            .any(|m| m.emission.max_element() > 0.0)
+            .get(material)
+            .is_some_and(|m| m.emission.max_element() > 0.0)
+    };
+    environment
+        || scene.meshes.iter().any(|m| emits(m.material))
+        || scene.spheres.iter().any(|s| emits(s.material))
+        || scene.patches.iter().any(|p| emits(p.material))
 }
 
 /// Adds a framing camera when there is none and a key light (plus, when the environment is
-/// black, the grey-blue environment) when there are no lights and `lights` asks for one,
-/// noting each in `scene.notes`.
-pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription, lights: DefaultLights) {
+/// black, the grey-blue environment) when nothing lights the scene: no punctual light, no
+/// emissive geometry and a black environment. Notes each addition in `scene.notes`.
+pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription) {
     if scene.camera.is_none() {
         let aspect = scene.settings.width as f32 / scene.settings.height.max(1) as f32;
         scene.camera = Some(frame_camera(scene, aspect));
@@ -80,11 +76,7 @@ pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription, lights
             .notes
             .push("no camera: placed one to frame the bounds".into());
     }
-    let wanted = match lights {
-        DefaultLights::WhenNoLights => true,
-        DefaultLights::WhenOtherwiseBlack => !lit_without_lights(scene),
-    };
-    if scene.lights.is_empty() && wanted {
+    if scene.lights.is_empty() && !lit_without_lights(scene) {
         let (center, radius) = bounding_sphere(scene);
         let (eye, up) = scene
             .camera
@@ -159,7 +151,7 @@ mod tests {
     #[test]
     fn missing_camera_and_lights_are_added_with_notes() {
         let mut scene = one_sphere(Vec3::ZERO, 1.0);
-        add_missing_camera_and_lights(&mut scene, DefaultLights::WhenNoLights);
+        add_missing_camera_and_lights(&mut scene);
         assert!(scene.camera.is_some());
         assert_eq!(scene.lights.len(), 1);
         assert_eq!(scene.environment, Environment::Color(DEFAULT_ENVIRONMENT));
@@ -169,7 +161,30 @@ mod tests {
         };
         assert!(position.y > scene.camera.as_ref().unwrap().eye.y);
         // Nothing more is added the second time.
-        add_missing_camera_and_lights(&mut scene, DefaultLights::WhenNoLights);
+        add_missing_camera_and_lights(&mut scene);
         assert_eq!(scene.notes.len(), 2);
+    }
+
+    #[test]
+    fn emissive_geometry_or_an_environment_keeps_the_key_light_away() {
+        // Lit by an emissive sphere alone: no key light, no environment added.
+        let mut scene = one_sphere(Vec3::ZERO, 1.0);
+        scene.materials[0].emission = Vec3::splat(2.0);
+        add_missing_camera_and_lights(&mut scene);
+        assert!(scene.lights.is_empty());
+        assert_eq!(scene.environment, Environment::Color(Vec3::ZERO));
+        // Lit by the environment alone.
+        let mut scene = one_sphere(Vec3::ZERO, 1.0);
+        scene.environment = Environment::Color(Vec3::splat(0.5));
+        add_missing_camera_and_lights(&mut scene);
+        assert!(scene.lights.is_empty());
+        // An emissive material no geometry uses lights nothing: the key light comes.
+        let mut scene = one_sphere(Vec3::ZERO, 1.0);
+        scene.materials.push(Material {
+            emission: Vec3::ONE,
+            ..Material::default()
+        });
+        add_missing_camera_and_lights(&mut scene);
+        assert_eq!(scene.lights.len(), 1);
     }
 }

@@ -42,7 +42,7 @@ use std::path::Path;
 
 pub use default_scene::{default_scene, DEFAULT_SCENE_LABEL};
 pub use error::SceneError;
-pub use framing::{frame_camera, DefaultLights, FRAMING_FOV_DEGREES};
+pub use framing::{frame_camera, FRAMING_FOV_DEGREES};
 pub use validate::validate;
 
 use crate::scene::SceneDescription;
@@ -96,12 +96,7 @@ pub fn load_scene(path: &Path) -> Result<SceneDescription, SceneError> {
             scene
         }
     };
-    let lights = if format == Format::Toml {
-        DefaultLights::WhenOtherwiseBlack
-    } else {
-        DefaultLights::WhenNoLights
-    };
-    finish(scene, lights)
+    finish(scene)
 }
 
 /// Parses TOML scene text; relative file names resolve against `base_dir`, and messages name
@@ -111,10 +106,11 @@ pub fn load_toml_str(
     base_dir: &Path,
     source_label: &str,
 ) -> Result<SceneDescription, SceneError> {
-    finish(
-        toml_format::parse(text, &Files::disk(base_dir), source_label)?,
-        DefaultLights::WhenOtherwiseBlack,
-    )
+    finish(toml_format::parse(
+        text,
+        &Files::disk(base_dir),
+        source_label,
+    )?)
 }
 
 /// An OBJ or glTF file as a scene part (world-space meshes, materials, textures, lights,
@@ -131,11 +127,8 @@ fn load_part(files: &Files, path: &Path) -> Result<SceneDescription, SceneError>
 }
 
 /// Adds a missing camera and lights, then validates.
-fn finish(
-    mut scene: SceneDescription,
-    lights: DefaultLights,
-) -> Result<SceneDescription, SceneError> {
-    framing::add_missing_camera_and_lights(&mut scene, lights);
+fn finish(mut scene: SceneDescription) -> Result<SceneDescription, SceneError> {
+    framing::add_missing_camera_and_lights(&mut scene);
     validate(&scene)?;
     Ok(scene)
 }

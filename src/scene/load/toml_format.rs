@@ -127,6 +127,8 @@ struct RawRender {
     fresnel: Option<RawFresnel>,
     seed: Option<u32>,
     integrator: Option<Spanned<String>>,
+    gi: Option<bool>,
+    diffuse_bounces: Option<u32>,
     vct_resolution: Option<Spanned<u32>>,
     vct_bounces: Option<Spanned<u32>>,
 }
@@ -667,10 +669,17 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
         s.seed = seed;
     }
     if let Some(name) = &r.integrator {
-        s.integrator = name
-            .get_ref()
-            .parse()
-            .map_err(|e: String| loc.at(name, format!("render.integrator: {e}")))?;
+        s.integrator = name.get_ref().parse().map_err(
+            |e: crate::integrator::selection::UnknownIntegrator| {
+                loc.at(name, format!("render.integrator: {e}"))
+            },
+        )?;
+    }
+    if let Some(gi) = r.gi {
+        s.gi = gi;
+    }
+    if let Some(bounces) = r.diffuse_bounces {
+        s.diffuse_bounces = Some(bounces);
     }
     if let Some(n) = &r.vct_resolution {
         if !(2..=crate::vct::build::MAX_RESOLUTION).contains(n.get_ref()) {

@@ -1,0 +1,238 @@
+//! Unidirectional Monte Carlo path tracing with next-event estimation and multiple
+//! importance sampling, traced in waves (docs/path-tracing.md).
+//!
+//! The estimator (pbrt-v4, section 13.4): at every hit, one light is chosen by power
+//! ([`crate::shading::SceneLights`]) and a point on it sampled (next-event estimation, one
+//! shadow ray); then the material's BSDF ([`crate::shading::MaterialBsdf`], only through
+//! its `Bsdf` interface) samples the direction the path continues in. Light reaching the
+//! path by both strategies (area lights, the environment) is weighted by the power
+//! heuristic ([`mis`]); delta lights (point, spot, directional) are reached only by light
+//! sampling and delta lobes (mirror, smooth glass) only by BSDF sampling, so neither is
+//! weighted. Emission seen by the camera or through delta lobes is taken whole.
+//!
+//! After three bounces, Russian roulette ends a path with probability
+//! `max(0.05, 1 - max(throughput))` when its throughput has fallen below 1, and divides the
+//! survivors' throughput by the survival probability. `max_depth` bounds the number of
+//! bounces; light sampling still runs at the last hit, unweighted, as no BSDF ray
+//! continues from it to compete. Beer's law attenuates paths inside absorbing dielectrics as
+//! in Whitted.
+//!
+//! Every random number comes from the pixel's [`crate::sampler::PixelSampler`], which the
+//! path carries: after the camera's four dimensions, each hit draws seven in a fixed order
+//! (light choice, point on the light, BSDF lobe, BSDF direction, roulette), so an image is a
+//! pure function of the seed.
+//!
+//! Like Whitted, a tile is rendered breadth first: the camera rays of a sample form 16-wide
+//! packets, the shadow rays of a wave one occlusion stream, and the continuing paths the
+//! next wave, traced as an incoherent stream.
+//!
+//! Footprints follow every bounce: mirror and refraction bounces reflect or refract the
+//! ray's cone (or differential) as Whitted does; a non-delta bounce widens the cone by the
+//! BSDF spread heuristic of seed 000 ([`crate::footprint::bsdf_spread_angle`]), and
+//! differentials are replaced at the next hit by the camera's footprint there
+//! ([`crate::camera::Camera::approximate_dp_dxy`]). Every texture lookup is filtered by the
+//! footprint at its hit.
+//!
+//! Files: `vertex` (what a hit adds and where the path goes next), `next_event` (light
+//! sampling and its shadow rays), `mis` (the power heuristic).
+
+mod mis;
+mod next_event;
+mod vertex;
+
+use glam::Vec3;
+
+use crate::film::sample_sum;
+use crate::film::{PixelRect, TileImage};
+use crate::footprint::Footprint;
+use crate::integrator::camera_sample::for_each_camera_ray;
+use crate::integrator::trace_wave::{trace_wave, WaveRay};
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::stats::RayKind;
+use crate::render::tracer::{TraceHit, TraceRay};
+use crate::render::Integrator;
+use crate::sampler::PixelSampler;
+
+pub use mis::power_heuristic;
+use next_event::{trace_shadow_rays, ShadowRay};
+
+/// How direct light from area lights and the environment is estimated. Only
+/// [`LightStrategy::MultipleImportance`] is a renderer's choice; the other two exist to test
+/// that the three agree (each is unbiased on its own).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightStrategy {
+    /// Light sampling and BSDF sampling, weighted by the power heuristic.
+    #[default]
+    MultipleImportance,
+    /// Light sampling only: BSDF-sampled rays that reach a light it can sample add nothing.
+    LightSampling,
+    /// BSDF sampling only: light sampling is kept for delta lights alone, which no ray can
+    /// hit.
+    BsdfSampling,
+}
+
+/// The path tracer and its settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PathTracer {
+    /// How many non-delta (diffuse or glossy) bounces a path may take (`[render]
+    /// diffuse_bounces`); `u32::MAX` for no limit. With 0, paths follow only mirrors and
+    /// glass after the camera, and light reaches diffuse surfaces by light sampling alone:
+    /// Whitted's image in expectation.
+    pub diffuse_bounces: u32,
+    pub strategy: LightStrategy,
+}
+
+impl Default for PathTracer {
+    fn default() -> Self {
+        PathTracer {
+            diffuse_bounces: u32::MAX,
+            strategy: LightStrategy::MultipleImportance,
+        }
+    }
+}
+
+impl PathTracer {
+    /// The path tracer with a scene's own settings (`[render] diffuse_bounces`).
+    pub fn for_settings(settings: &crate::scene::RenderSettings) -> PathTracer {
+        PathTracer {
+            diffuse_bounces: settings.diffuse_bounces.unwrap_or(u32::MAX),
+            ..PathTracer::default()
+        }
+    }
+}
+
+/// A path in flight: the ray it continues along and what it carries from the camera.
+#[derive(Clone, Copy, Debug)]
+struct PathRay {
+    origin: Vec3,
+    direction: Vec3,
+    /// Where tracing starts along the ray (`shading::entry_distance` for camera rays).
+    start: f32,
+    throughput: Vec3,
+    footprint: Footprint,
+    /// Differentials only: the footprint is to be replaced at the next hit by the camera's
+    /// footprint there (after a non-delta bounce).
+    approximate_footprint: bool,
+    /// Index of the pixel inside the tile.
+    pixel: u32,
+    /// Bounces so far (0 for camera rays), and how many of them were non-delta.
+    depth: u32,
+    diffuse_depth: u32,
+    /// The density with which the BSDF chose this ray, for weighting the light it finds;
+    /// `None` for camera rays and delta bounces, whose light is taken whole.
+    bsdf_pdf: Option<f32>,
+    /// The hit this ray left (for the density of light sampling at the light it finds).
+    from: Vec3,
+    kind: RayKind,
+    /// Absorption coefficient of the medium the ray travels in (zero outside media).
+    sigma: Vec3,
+    first_sample: bool,
+    sampler: PixelSampler,
+}
+
+/// The path tracer's per-thread state: the buffers of a tile's waves, reused.
+#[derive(Default)]
+pub struct PathWaves {
+    current: Vec<PathRay>,
+    next: Vec<PathRay>,
+    trace_rays: Vec<TraceRay>,
+    trace_hits: Vec<TraceHit>,
+    shadows: Vec<ShadowRay>,
+    shadow_rays: Vec<TraceRay>,
+    shadow_blocked: Vec<bool>,
+}
+
+impl Integrator for PathTracer {
+    type ThreadState = PathWaves;
+
+    fn thread_state(&self, _context: &RenderContext) -> PathWaves {
+        PathWaves::default()
+    }
+
+    fn render_tile(
+        &self,
+        context: &RenderContext,
+        tile: PixelRect,
+        image: &mut TileImage,
+        worker: &mut WorkerState,
+        waves: &mut PathWaves,
+    ) {
+        let options = &context.options;
+        let spp = options.spp.max(1);
+        let samples = image.samples.clone().unwrap_or(0..spp);
+        let sample_count = samples.len() as u32;
+        for sample in samples {
+            waves.current.clear();
+            for_each_camera_ray(context, tile, sample, options.width, |ray| {
+                waves.current.push(PathRay {
+                    origin: ray.origin,
+                    direction: ray.direction,
+                    start: ray.start,
+                    throughput: Vec3::ONE,
+                    footprint: ray.footprint,
+                    approximate_footprint: false,
+                    pixel: ray.pixel,
+                    depth: 0,
+                    diffuse_depth: 0,
+                    bsdf_pdf: None,
+                    from: ray.origin,
+                    kind: RayKind::Camera,
+                    sigma: Vec3::ZERO,
+                    first_sample: sample == 0,
+                    sampler: ray.sampler,
+                })
+            });
+            let camera_rays = waves.current.len() as u64;
+            worker.counters.count_rays(RayKind::Camera, camera_rays);
+            worker.counters.paths += camera_rays;
+            while !waves.current.is_empty() {
+                let coherent = waves.current[0].kind == RayKind::Camera;
+                let rays = waves.current.iter().map(|ray| WaveRay {
+                    origin: ray.origin,
+                    direction: ray.direction,
+                    start: ray.start,
+                    footprint: &ray.footprint,
+                });
+                trace_wave(
+                    context,
+                    rays,
+                    coherent,
+                    &mut waves.trace_rays,
+                    &mut waves.trace_hits,
+                    &mut worker.counters,
+                );
+                waves.shadows.clear();
+                for index in 0..waves.current.len() {
+                    let ray = waves.current[index];
+                    let hit = waves.trace_hits[index];
+                    vertex::shade(self, context, ray, &hit, image, waves, worker);
+                }
+                trace_shadow_rays(context, waves, image, worker);
+                std::mem::swap(&mut waves.current, &mut waves.next);
+                waves.next.clear();
+            }
+            // The sample's radiance joins the exact sums (`film::sample_sum`); a sample whose
+            // radiance is not finite is counted and dropped.
+            for (sum, color) in image.color_sum.iter_mut().zip(image.color.iter_mut()) {
+                if color.iter().all(|c| c.is_finite()) {
+                    sample_sum::add_sample(sum, *color);
+                } else {
+                    worker.counters.nonfinite_samples += 1;
+                }
+                *color = [0.0; 3];
+            }
+        }
+        for (color, sum) in image.color.iter_mut().zip(&image.color_sum) {
+            *color = sum.map(|s| sample_sum::mean_of_sum(s, sample_count));
+        }
+        image.alpha.fill(1.0);
+    }
+}
+
+#[inline]
+fn add_radiance(image: &mut TileImage, pixel: u32, radiance: Vec3) {
+    let c = &mut image.color[pixel as usize];
+    c[0] += radiance.x;
+    c[1] += radiance.y;
+    c[2] += radiance.z;
+}

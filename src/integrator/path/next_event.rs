@@ -1,0 +1,169 @@
+//! Next-event estimation: at a hit, one light chosen by power, one point (or direction) on
+//! it, and the shadow ray that delivers its light if nothing blocks it, weighted against
+//! BSDF sampling by the power heuristic when the light has an area (or is the environment).
+
+use glam::{Vec2, Vec3};
+
+use super::mis::power_heuristic;
+use super::{add_radiance, LightStrategy, PathTracer, PathWaves};
+use crate::film::TileImage;
+use crate::footprint::Footprint;
+use crate::integrator::texturing::environment_lookup;
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::stats::RayKind;
+use crate::render::tracer::TraceRay;
+use crate::shading::{self, Bsdf, LightRef, MaterialBsdf};
+
+/// A shadow ray and the radiance it delivers to its pixel if unoccluded.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ShadowRay {
+    pub(super) origin: Vec3,
+    pub(super) direction: Vec3,
+    /// Where the ray stops short of the light (`shading::shadow_ray_end`), or infinity.
+    pub(super) tfar: f32,
+    pub(super) contribution: Vec3,
+    pub(super) pixel: u32,
+}
+
+/// The shading point light sampling starts from.
+pub(super) struct ShadingPoint<'a> {
+    /// Where shadow rays start: the hit's spawn point moved off the surface on the side of
+    /// `ng`.
+    pub(super) origin: Vec3,
+    /// Geometric normal on the viewer's side.
+    pub(super) ng: Vec3,
+    /// Shading normal on the viewer's side.
+    pub(super) ns: Vec3,
+    pub(super) wo: Vec3,
+    pub(super) bsdf: &'a MaterialBsdf,
+    pub(super) throughput: Vec3,
+    pub(super) footprint: &'a Footprint,
+    pub(super) pixel: u32,
+    /// True when no BSDF ray continues from this hit (the last bounce): light sampling then
+    /// stands alone and is not weighted.
+    pub(super) last: bool,
+}
+
+/// Choose a light with `u_light`, sample it with `u_point` and queue the shadow ray.
+pub(super) fn sample_light(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    point: &ShadingPoint,
+    u_light: f32,
+    u_point: Vec2,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) {
+    let lights = &context.lights;
+    let Some((light, pmf)) = lights.choose(u_light) else {
+        return;
+    };
+    let strategy = tracer.strategy;
+    // Delta lights always; lights with an area only when light sampling takes part.
+    let (wi, distance, light_point, radiance, pdf) = match light {
+        LightRef::Punctual(index) => {
+            let light = &context.scene.lights[index];
+            let sample = shading::sample_li(light, point.origin);
+            let position = shading::light_position(light);
+            let end = position.unwrap_or(point.origin);
+            (
+                sample.direction_to_light,
+                sample.distance,
+                position.map(|_| end),
+                sample.radiance_scale,
+                f32::INFINITY,
+            )
+        }
+        _ if strategy == LightStrategy::BsdfSampling => return,
+        LightRef::Environment => {
+            let sample = lights.environment.sample_li(u_point);
+            let radiance = environment_lookup(context, sample.wi, point.footprint, worker);
+            (sample.wi, f32::INFINITY, None, radiance, sample.pdf)
+        }
+        LightRef::Area(index) => {
+            let Some(sample) = lights.area.lights[index].sample(point.origin, u_point) else {
+                return;
+            };
+            (
+                sample.direction_to_light,
+                sample.distance,
+                Some(sample.point),
+                sample.radiance,
+                sample.pdf,
+            )
+        }
+    };
+    if wi.dot(point.ng) <= 0.0 || radiance.max_element() <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
+        return;
+    }
+    let bsdf = point.bsdf;
+    let cosine = point.ns.dot(wi).abs();
+    let f = bsdf.eval(point.wo, wi) * cosine;
+    if f.max_element() <= 0.0 {
+        return;
+    }
+    // Delta lights carry irradiance (no density); lights with an area radiance over a
+    // solid-angle density, weighted against the BSDF's density of the same direction.
+    let contribution = if pdf.is_infinite() {
+        point.throughput * f * radiance / pmf
+    } else {
+        let light_pdf = pmf * pdf;
+        let weight = if point.last || strategy == LightStrategy::LightSampling {
+            1.0
+        } else {
+            power_heuristic(light_pdf, bsdf.pdf(point.wo, wi))
+        };
+        point.throughput * f * radiance * (weight / light_pdf)
+    };
+    let largest = contribution.max_element();
+    if largest.is_nan() || largest <= 0.0 {
+        return;
+    }
+    let tfar = match light_point {
+        Some(end) => shading::shadow_ray_end(distance, end),
+        None => f32::INFINITY,
+    };
+    waves.shadows.push(ShadowRay {
+        origin: point.origin,
+        direction: wi,
+        tfar,
+        contribution,
+        pixel: point.pixel,
+    });
+}
+
+/// Trace the wave's shadow rays as one occlusion stream and add what reaches the lights.
+/// Any surface blocks a shadow ray (light through glass arrives by BSDF-sampled paths).
+pub(super) fn trace_shadow_rays(
+    context: &RenderContext,
+    waves: &mut PathWaves,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    if waves.shadows.is_empty() {
+        return;
+    }
+    worker
+        .counters
+        .count_rays(RayKind::Shadow, waves.shadows.len() as u64);
+    waves.shadow_rays.clear();
+    waves
+        .shadow_rays
+        .extend(waves.shadows.iter().map(|s| TraceRay {
+            origin: s.origin,
+            direction: s.direction,
+            tfar: s.tfar,
+            cone_width: 0.0,
+            cone_spread: 0.0,
+        }));
+    context.tracer.occluded(
+        &waves.shadow_rays,
+        &mut waves.shadow_blocked,
+        &mut worker.counters,
+    );
+    for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
+        if !blocked {
+            add_radiance(image, shadow.pixel, shadow.contribution);
+        }
+    }
+}

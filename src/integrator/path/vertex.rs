@@ -1,0 +1,275 @@
+//! One vertex of a path: what a ray finds where it ends (a surface or the environment), the
+//! light it adds there (emission, weighted against light sampling; light sampling itself),
+//! and the ray the BSDF continues the path with, or why the path ends.
+
+use glam::Vec3;
+
+use super::mis::power_heuristic;
+use super::next_event::{sample_light, ShadingPoint};
+use super::{add_radiance, LightStrategy, PathRay, PathTracer, PathWaves};
+use crate::film::TileImage;
+use crate::footprint::{bsdf_spread_angle, Footprint, LodStrategy, RayDifferential};
+use crate::integrator::texturing::{self, environment_lookup, LookupRay};
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::prepared::GeometryRef;
+use crate::render::stats::RayKind;
+use crate::render::tracer::TraceHit;
+use crate::shading::{self, area_lights::luminance, Bsdf, LightRef, MaterialBsdf};
+
+/// Bounces after which Russian roulette may end a path.
+const ROULETTE_AFTER: u32 = 3;
+/// Smallest probability with which roulette ends a path it applies to.
+const ROULETTE_MIN_END: f32 = 0.05;
+
+/// Shade where `ray` ends: the environment for a miss, else the hit surface.
+pub(super) fn shade(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    mut ray: PathRay,
+    hit: &TraceHit,
+    image: &mut TileImage,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) {
+    let lights = &context.lights;
+    if !hit.is_hit() {
+        let radiance = environment_lookup(context, ray.direction, &ray.footprint, worker);
+        let environment = LightRef::Environment;
+        let weight = found_light_weight(tracer, &ray, lights.pmf(environment), || {
+            lights.environment.pdf_li(ray.direction)
+        });
+        add_radiance(image, ray.pixel, ray.throughput * radiance * weight);
+        return;
+    }
+    let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
+    let detail = texturing::surface_detail(context, camera_first, hit);
+    let surface = context
+        .surfaces
+        .surface_hit(ray.origin, ray.direction, hit, detail);
+    let material = &context.scene.materials[surface.material as usize];
+    let pixel = ray.pixel as usize;
+    if camera_first && !image.depth.is_empty() {
+        image.depth[pixel] = surface.t * ray.direction.dot(context.camera_forward);
+        image.normal[pixel] = surface.shading_normal.to_array();
+        image.uv[pixel] = surface.st.to_array();
+    }
+    // Beer's law over the distance travelled inside the medium (seed 004).
+    if context.effects.absorption && ray.sigma != Vec3::ZERO {
+        ray.throughput *= shading::transmittance(ray.sigma, surface.t);
+        worker.counters.absorption_evaluations += 1;
+    }
+    if context.effects.footprints {
+        worker.counters.footprint_updates += 1;
+        if ray.approximate_footprint && ray.footprint.strategy() == LodStrategy::Differential {
+            let spp = context.options.spp;
+            let (dpdx, dpdy) =
+                context
+                    .camera
+                    .approximate_dp_dxy(surface.position, surface.geometric_normal, spp);
+            ray.footprint = Footprint::Differential(RayDifferential::parallel(dpdx, dpdy));
+        } else {
+            ray.footprint.transfer(ray.direction, &surface);
+        }
+    }
+    let lookup = LookupRay {
+        direction: ray.direction,
+        footprint: &ray.footprint,
+        pixel: ray.pixel,
+        first_sample: ray.first_sample,
+    };
+    let albedo = texturing::surface_albedo(context, lookup, material, &surface, image, worker);
+    if camera_first && !image.albedo.is_empty() {
+        image.albedo[pixel] = albedo.to_array();
+    }
+
+    // Emission, from the front side only (one-sided emitters, `shading::area_lights`).
+    if material.emission.max_element() > 0.0 && surface.is_front_face(ray.direction) {
+        let light = match context.surfaces.geometries[hit.geometry as usize] {
+            GeometryRef::Mesh(mesh) => lights.area.mesh_light(mesh, hit.primitive),
+            GeometryRef::Spheres => lights.area.sphere_light(hit.primitive as usize),
+            GeometryRef::Patches => None,
+        };
+        let weight = match light {
+            Some(index) => {
+                let pmf = lights.pmf(LightRef::Area(index));
+                found_light_weight(tracer, &ray, pmf, || {
+                    lights.area.lights[index].pdf(ray.from, surface.position)
+                })
+            }
+            // Emitters that are not lights are found by BSDF rays alone.
+            None => 1.0,
+        };
+        add_radiance(
+            image,
+            ray.pixel,
+            ray.throughput * material.emission * weight,
+        );
+    }
+
+    // The same seven dimensions at every vertex, whichever are used.
+    let u_light = ray.sampler.next_1d();
+    let u_light_point = ray.sampler.next_2d();
+    let u_lobe = ray.sampler.next_1d();
+    let u_direction = ray.sampler.next_2d();
+    let u_roulette = ray.sampler.next_1d();
+
+    let bsdf = MaterialBsdf::new(
+        material,
+        albedo,
+        ray.direction,
+        surface.geometric_normal,
+        surface.shading_normal,
+        context.effects.fresnel.then_some(context.options.fresnel),
+    );
+    let front = surface.is_front_face(ray.direction);
+    let (ng, ns) = if front {
+        (surface.geometric_normal, surface.shading_normal)
+    } else {
+        (-surface.geometric_normal, -surface.shading_normal)
+    };
+    let wo = -ray.direction;
+    let spawn = surface.spawn_point();
+    let continues = ray.depth < context.options.max_depth;
+
+    if bsdf_has_smooth_part(&bsdf, wo, ns) {
+        let point = ShadingPoint {
+            origin: spawn.offset_origin(ng),
+            ng,
+            ns,
+            wo,
+            bsdf: &bsdf,
+            throughput: ray.throughput,
+            footprint: &ray.footprint,
+            pixel: ray.pixel,
+            // No BSDF ray competes when none continues along a non-delta lobe.
+            last: !continues || ray.diffuse_depth >= tracer.diffuse_bounces,
+        };
+        sample_light(
+            tracer,
+            context,
+            &point,
+            u_light,
+            u_light_point,
+            waves,
+            worker,
+        );
+    }
+
+    if !continues {
+        return;
+    }
+    let Some(sample) = bsdf.sample(wo, u_lobe, u_direction) else {
+        return;
+    };
+    let delta = sample.lobe.is_delta();
+    if !delta && ray.diffuse_depth >= tracer.diffuse_bounces {
+        return;
+    }
+    let mut throughput = ray.throughput * sample.weight;
+    let wi = sample.wi;
+    let crosses = wi.dot(ng) < 0.0;
+    // Footprint of the continuing ray: mirror and refraction as in Whitted, a widened cone
+    // for a rough bounce (seed 000, "BSDF scattering").
+    let mut approximate_footprint = false;
+    let footprint = if !context.effects.footprints {
+        ray.footprint
+    } else if delta && !crosses {
+        worker.counters.footprint_updates += 1;
+        ray.footprint.reflect(ray.direction, &surface, wi)
+    } else if delta {
+        worker.counters.footprint_updates += 1;
+        let eta = bsdf.dielectric.split(ray.direction).boundary.eta;
+        ray.footprint.refract(ray.direction, &surface, eta, wi)
+    } else {
+        worker.counters.footprint_updates += 1;
+        approximate_footprint = true;
+        let f = bsdf.eval(wo, wi);
+        ray.footprint.scatter(bsdf_spread_angle(luminance(f)))
+    };
+    // Crossing the surface enters the material's medium (from the front) or leaves it.
+    let sigma = if crosses {
+        if front {
+            context.materials.sigma[surface.material as usize]
+        } else {
+            Vec3::ZERO
+        }
+    } else {
+        ray.sigma
+    };
+    let depth = ray.depth + 1;
+    if depth > ROULETTE_AFTER {
+        let largest = throughput.max_element();
+        if largest < 1.0 {
+            let end = (1.0 - largest).max(ROULETTE_MIN_END);
+            if u_roulette < end {
+                worker.counters.roulette_terminations += 1;
+                return;
+            }
+            throughput /= 1.0 - end;
+        }
+    }
+    let largest = throughput.max_element();
+    if largest.is_nan() || largest <= 0.0 {
+        return;
+    }
+    if !throughput.is_finite() {
+        worker.counters.nonfinite_samples += 1;
+        return;
+    }
+    let kind = if crosses {
+        RayKind::Refraction
+    } else {
+        RayKind::Reflection
+    };
+    worker.counters.count_rays(kind, 1);
+    worker.counters.path_bounces += 1;
+    waves.next.push(PathRay {
+        origin: spawn.offset_origin(if crosses { -ng } else { ng }),
+        direction: wi,
+        start: 0.0,
+        throughput,
+        footprint,
+        // After a delta bounce the footprint was rebuilt at this hit and carried on.
+        approximate_footprint,
+        pixel: ray.pixel,
+        depth,
+        diffuse_depth: ray.diffuse_depth + u32::from(!delta),
+        bsdf_pdf: (!delta).then_some(sample.pdf),
+        from: surface.position,
+        kind,
+        sigma,
+        first_sample: ray.first_sample,
+        sampler: ray.sampler,
+    });
+}
+
+/// The weight of light found by a ray (emission it hits, the environment it escapes to)
+/// from a light that light sampling chooses with probability `pmf` and then samples the
+/// ray's direction with density `light_pdf()`.
+#[inline]
+fn found_light_weight(
+    tracer: &PathTracer,
+    ray: &PathRay,
+    pmf: f32,
+    light_pdf: impl FnOnce() -> f32,
+) -> f32 {
+    let Some(bsdf_pdf) = ray.bsdf_pdf else {
+        // The camera or a delta bounce: light sampling cannot find this light.
+        return 1.0;
+    };
+    if pmf <= 0.0 {
+        return 1.0;
+    }
+    match tracer.strategy {
+        LightStrategy::BsdfSampling => 1.0,
+        LightStrategy::LightSampling => 0.0,
+        LightStrategy::MultipleImportance => power_heuristic(bsdf_pdf, pmf * light_pdf()),
+    }
+}
+
+/// Whether the BSDF has a non-delta part that light sampling can reach from `wo`: its
+/// density is positive for some direction above the surface (the normal is one).
+#[inline]
+fn bsdf_has_smooth_part(bsdf: &MaterialBsdf, wo: Vec3, ns: Vec3) -> bool {
+    bsdf.pdf(wo, ns) > 0.0 || bsdf.eval(wo, ns).max_element() > 0.0
+}

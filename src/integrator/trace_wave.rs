@@ -1,0 +1,53 @@
+//! Tracing one wave of rays, shared by the integrators: camera waves as coherent 4x4
+//! packets, later waves as incoherent ray streams (see `render::tracer`), each ray with its
+//! footprint's cone for alpha cut-out callbacks and traced from its start distance.
+
+use glam::Vec3;
+
+use crate::footprint::Footprint;
+use crate::render::stats::WorkCounters;
+use crate::render::tracer::{TraceHit, TraceRay};
+use crate::render::RenderContext;
+
+/// What tracing needs of a ray in flight.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct WaveRay<'a> {
+    pub origin: Vec3,
+    pub direction: Vec3,
+    /// Where tracing starts along the ray (0 for rays leaving a surface).
+    pub start: f32,
+    pub footprint: &'a Footprint,
+}
+
+/// Closest hits of `rays` into `hits`, with distances counted from each ray's origin;
+/// `trace_rays` is a reused buffer.
+pub(crate) fn trace_wave<'a>(
+    context: &RenderContext,
+    rays: impl ExactSizeIterator<Item = WaveRay<'a>> + Clone,
+    coherent: bool,
+    trace_rays: &mut Vec<TraceRay>,
+    hits: &mut Vec<TraceHit>,
+    counters: &mut WorkCounters,
+) {
+    trace_rays.clear();
+    trace_rays.extend(rays.clone().map(|ray| {
+        let (cone_width, cone_spread) = ray.footprint.cone_at_origin();
+        // Traced from `start`: the cone is as wide there as it has grown by then.
+        TraceRay {
+            origin: ray.origin + ray.direction * ray.start,
+            direction: ray.direction,
+            tfar: f32::INFINITY,
+            cone_width: cone_width + cone_spread * ray.start,
+            cone_spread,
+        }
+    }));
+    context
+        .tracer
+        .intersect(trace_rays, hits, coherent, counters);
+    // Distances count from the ray's origin again.
+    for (hit, ray) in hits.iter_mut().zip(rays) {
+        if ray.start > 0.0 && hit.is_hit() {
+            hit.t += ray.start;
+        }
+    }
+}

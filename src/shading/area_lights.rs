@@ -1,0 +1,369 @@
+//! Emissive geometry as lights: every triangle and sphere whose material has a non-zero
+//! `emission` is an area light an integrator can sample (next-event estimation) and find
+//! again when a sampled ray hits it (for multiple importance sampling).
+//!
+//! Emission is one-sided, as pbrt-v4's `DiffuseAreaLight` and Mitsuba 3's `area` emitter
+//! are by default: a triangle emits on the side its geometric normal points to (its
+//! winding, counter-clockwise seen from the front), a sphere outward. The emitted radiance
+//! is the material's constant `emission`.
+//!
+//! Sampling, for a shading point `p`:
+//! - a sphere seen from outside is sampled by the cone of directions it subtends,
+//!   uniformly in solid angle: `cos theta` uniform in `[cos theta_max, 1]` with
+//!   `sin^2 theta_max = r^2 / d^2`, density `1 / (2 pi (1 - cos theta_max))` (pbrt-v4,
+//!   section 6.2.4); from inside it sends no light (its emission faces out);
+//! - a triangle is sampled uniformly by area (pbrt-v4, section A.5.4: `b0 = 1 - sqrt(u0)`,
+//!   `b1 = u1 sqrt(u0)`), and the area density `1 / A` is turned into a solid-angle one,
+//!   `d^2 / (A |cos theta_l|)`, with `theta_l` the angle at the light.
+//!
+//! Power (for choosing a light in proportion to it): `luminance(L) * area * pi`, the flux of
+//! a one-sided Lambertian emitter.
+//!
+//! Meshes with an alpha cut-out are not made lights (their emitting area depends on the
+//! mask); rays that hit them still see their emission, unweighted, which stays unbiased as
+//! no light sample ever reaches them.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3};
+
+use super::bsdf::orthonormal_basis;
+use crate::scene::SceneDescription;
+
+/// Luminance of a linear Rec. 709 colour.
+#[inline]
+pub fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// The shape of one area light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AreaShape {
+    /// A triangle with its unit front normal and area.
+    Triangle {
+        p: [Vec3; 3],
+        normal: Vec3,
+        area: f32,
+    },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+    },
+}
+
+/// One emissive triangle or sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaLight {
+    pub shape: AreaShape,
+    /// Radiance emitted from the front side.
+    pub radiance: Vec3,
+}
+
+/// A point on an area light as seen from a shading point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaLightSample {
+    /// Unit direction from the shading point to the point on the light.
+    pub direction_to_light: Vec3,
+    /// Distance to that point.
+    pub distance: f32,
+    /// The point on the light (where shadow rays stop short of).
+    pub point: Vec3,
+    /// Radiance arriving along `direction_to_light` (zero from the back side).
+    pub radiance: Vec3,
+    /// Solid-angle density of the direction.
+    pub pdf: f32,
+}
+
+impl AreaLight {
+    /// Surface area.
+    pub fn area(&self) -> f32 {
+        match self.shape {
+            AreaShape::Triangle { area, .. } => area,
+            AreaShape::Sphere { radius, .. } => 4.0 * PI * radius * radius,
+        }
+    }
+
+    /// The emitted power by luminance, `luminance(L) * A * pi` (see the module doc).
+    pub fn power(&self) -> f32 {
+        luminance(self.radiance) * self.area() * PI
+    }
+
+    /// A direction towards the light from `p`, drawn from the uniform numbers `u`; `None`
+    /// when nothing of the light can be seen from `p` in that way (inside a sphere,
+    /// degenerate sample).
+    pub fn sample(&self, p: Vec3, u: Vec2) -> Option<AreaLightSample> {
+        match self.shape {
+            AreaShape::Triangle { p: v, normal, area } => {
+                let s = u.x.sqrt();
+                let (b0, b1) = (1.0 - s, u.y * s);
+                let point = b0 * v[0] + b1 * v[1] + (1.0 - b0 - b1) * v[2];
+                let to_light = point - p;
+                let distance2 = to_light.length_squared();
+                if distance2.is_nan() || distance2 <= 0.0 || !distance2.is_finite() {
+                    return None;
+                }
+                let distance = distance2.sqrt();
+                let wi = to_light / distance;
+                let cos_light = -wi.dot(normal);
+                if cos_light <= 0.0 {
+                    // The back of a one-sided emitter.
+                    return None;
+                }
+                let pdf = distance2 / (area * cos_light);
+                Some(AreaLightSample {
+                    direction_to_light: wi,
+                    distance,
+                    point,
+                    radiance: self.radiance,
+                    pdf,
+                })
+            }
+            AreaShape::Sphere { center, radius } => {
+                let to_center = center - p;
+                let d2 = to_center.length_squared();
+                let r2 = radius * radius;
+                if d2 <= r2 {
+                    return None;
+                }
+                let d = d2.sqrt();
+                let axis = to_center / d;
+                let sin2_max = r2 / d2;
+                let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+                // 1 - cos theta_max without cancellation for small spheres.
+                let one_minus_cos_max = sin2_max / (1.0 + cos_max);
+                let one_minus_cos = u.x * one_minus_cos_max;
+                let cos_theta = 1.0 - one_minus_cos;
+                let sin2_theta = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0);
+                let sin_theta = sin2_theta.sqrt();
+                let phi = 2.0 * PI * u.y;
+                let (t, b) = orthonormal_basis(axis);
+                let wi =
+                    (axis * cos_theta + (t * phi.cos() + b * phi.sin()) * sin_theta).normalize();
+                // Nearest intersection along wi: d cos - sqrt(r^2 - d^2 sin^2).
+                let root = (r2 - d2 * sin2_theta).max(0.0).sqrt();
+                let distance = (d * cos_theta - root).max(0.0);
+                Some(AreaLightSample {
+                    direction_to_light: wi,
+                    distance,
+                    point: p + wi * distance,
+                    radiance: self.radiance,
+                    pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
+                })
+            }
+        }
+    }
+
+    /// Solid-angle density with which [`AreaLight::sample`] picks the direction from `p`
+    /// that reaches the light at `point` (a hit on the light's front side).
+    pub fn pdf(&self, p: Vec3, point: Vec3) -> f32 {
+        match self.shape {
+            AreaShape::Triangle { normal, area, .. } => {
+                let to_light = point - p;
+                let distance2 = to_light.length_squared();
+                if distance2.is_nan() || distance2 <= 0.0 {
+                    return 0.0;
+                }
+                let cos_light = -to_light.dot(normal) / distance2.sqrt();
+                if cos_light <= 0.0 || area <= 0.0 {
+                    return 0.0;
+                }
+                distance2 / (area * cos_light)
+            }
+            AreaShape::Sphere { center, radius } => {
+                let d2 = (center - p).length_squared();
+                let r2 = radius * radius;
+                if d2 <= r2 {
+                    return 0.0;
+                }
+                let sin2_max = r2 / d2;
+                let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+                1.0 / (2.0 * PI * sin2_max / (1.0 + cos_max))
+            }
+        }
+    }
+}
+
+/// All area lights of a scene, and which light a hit on a mesh triangle or sphere is.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AreaLights {
+    pub lights: Vec<AreaLight>,
+    /// Per mesh (scene order): the light index of its first triangle when it emits.
+    /// Degenerate triangles keep their slot (with zero area, never chosen).
+    mesh_first: Vec<Option<u32>>,
+    /// Per sphere (scene order): its light index when it emits.
+    sphere_light: Vec<Option<u32>>,
+    /// Emissive triangles and spheres, for reports.
+    pub triangle_count: usize,
+    pub sphere_count: usize,
+}
+
+impl AreaLights {
+    /// The area lights of `scene` (see the module doc for which surfaces qualify).
+    pub fn new(scene: &SceneDescription) -> AreaLights {
+        let emissive = |material: usize| {
+            scene.materials.get(material).is_some_and(|m| {
+                m.emission.max_element() > 0.0 && m.emission.is_finite() && m.alpha_cutoff.is_none()
+            })
+        };
+        let mut out = AreaLights::default();
+        for mesh in &scene.meshes {
+            if !emissive(mesh.material) || mesh.triangles.is_empty() {
+                out.mesh_first.push(None);
+                continue;
+            }
+            let radiance = scene.materials[mesh.material].emission;
+            out.mesh_first.push(Some(out.lights.len() as u32));
+            for tri in &mesh.triangles {
+                let p = tri.map(|i| {
+                    mesh.positions
+                        .get(i as usize)
+                        .copied()
+                        .unwrap_or(Vec3::ZERO)
+                });
+                let cross = (p[1] - p[0]).cross(p[2] - p[0]);
+                let area = 0.5 * cross.length();
+                let area = if area.is_finite() { area } else { 0.0 };
+                let normal = cross.normalize_or(Vec3::Y);
+                out.lights.push(AreaLight {
+                    shape: AreaShape::Triangle { p, normal, area },
+                    radiance,
+                });
+                out.triangle_count += 1;
+            }
+        }
+        for sphere in &scene.spheres {
+            if !emissive(sphere.material) || sphere.radius.is_nan() || sphere.radius <= 0.0 {
+                out.sphere_light.push(None);
+                continue;
+            }
+            out.sphere_light.push(Some(out.lights.len() as u32));
+            out.lights.push(AreaLight {
+                shape: AreaShape::Sphere {
+                    center: sphere.center,
+                    radius: sphere.radius,
+                },
+                radiance: scene.materials[sphere.material].emission,
+            });
+            out.sphere_count += 1;
+        }
+        out
+    }
+
+    pub fn len(&self) -> usize {
+        self.lights.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.lights.is_empty()
+    }
+
+    /// The light a hit on triangle `primitive` of mesh `mesh` is, if it emits.
+    #[inline]
+    pub fn mesh_light(&self, mesh: usize, primitive: u32) -> Option<usize> {
+        let first = (*self.mesh_first.get(mesh)?)?;
+        Some(first as usize + primitive as usize)
+    }
+
+    /// The light sphere `sphere` is, if it emits.
+    #[inline]
+    pub fn sphere_light(&self, sphere: usize) -> Option<usize> {
+        self.sphere_light
+            .get(sphere)
+            .copied()
+            .flatten()
+            .map(|i| i as usize)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shading::bsdf::tests::Uniforms;
+
+    fn quad_triangle() -> AreaLight {
+        AreaLight {
+            shape: AreaShape::Triangle {
+                p: [
+                    Vec3::new(-1.0, 2.0, -1.0),
+                    Vec3::new(1.0, 2.0, 1.0),
+                    Vec3::new(1.0, 2.0, -1.0),
+                ],
+                normal: -Vec3::Y,
+                area: 2.0,
+            },
+            radiance: Vec3::ONE,
+        }
+    }
+
+    /// E = integral of L cos over the light's solid angle, estimated from light samples.
+    fn irradiance(light: &AreaLight, p: Vec3, n: Vec3, count: usize) -> f32 {
+        let mut u = Uniforms(3);
+        let mut sum = 0.0f64;
+        for _ in 0..count {
+            if let Some(s) = light.sample(p, u.vec2()) {
+                assert!(s.pdf > 0.0 && s.pdf.is_finite());
+                assert!((light.pdf(p, s.point) - s.pdf).abs() <= 2e-3 * s.pdf, "pdf");
+                sum += (s.radiance.x * s.direction_to_light.dot(n).max(0.0) / s.pdf) as f64;
+            }
+        }
+        (sum / count as f64) as f32
+    }
+
+    #[test]
+    fn sphere_light_irradiance_is_l_pi_sin2() {
+        // E = L pi sin^2(theta_max) for a surface facing a sphere light.
+        let light = AreaLight {
+            shape: AreaShape::Sphere {
+                center: Vec3::new(0.0, 3.0, 0.0),
+                radius: 1.0,
+            },
+            radiance: Vec3::splat(2.0),
+        };
+        let e = irradiance(&light, Vec3::ZERO, Vec3::Y, 50_000);
+        let expected = 2.0 * PI / 9.0;
+        assert!((e - expected).abs() < 2e-3 * expected, "{e} vs {expected}");
+        assert!(light
+            .sample(Vec3::new(0.0, 3.2, 0.0), Vec2::splat(0.5))
+            .is_none());
+    }
+
+    #[test]
+    fn triangle_light_samples_integrate_to_its_solid_angle() {
+        // The mean of 1/pdf over samples is the solid angle the triangle subtends, which
+        // Van Oosterom and Strackee's formula (1983) gives exactly.
+        let light = quad_triangle();
+        let p = Vec3::new(0.3, 0.0, 0.1);
+        let mut u = Uniforms(9);
+        let count = 100_000;
+        let estimate = (0..count)
+            .filter_map(|_| light.sample(p, u.vec2()))
+            .map(|s| 1.0 / s.pdf as f64)
+            .sum::<f64>()
+            / count as f64;
+        let AreaShape::Triangle { p: v, .. } = light.shape else {
+            unreachable!()
+        };
+        let [a, b, c] = v.map(|q| q - p);
+        let (la, lb, lc) = (a.length(), b.length(), c.length());
+        let numerator = a.dot(b.cross(c)).abs();
+        let denominator = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+        let exact = 2.0 * numerator.atan2(denominator) as f64;
+        assert!(
+            (estimate - exact).abs() < 0.01 * exact,
+            "{estimate} vs {exact}"
+        );
+    }
+
+    #[test]
+    fn the_back_of_a_triangle_light_is_dark() {
+        let light = quad_triangle();
+        assert!(light
+            .sample(Vec3::new(0.0, 3.0, 0.0), Vec2::splat(0.3))
+            .is_none());
+        assert_eq!(
+            light.pdf(Vec3::new(0.0, 3.0, 0.0), Vec3::new(0.5, 2.0, -0.5)),
+            0.0
+        );
+        assert!((light.power() - 2.0 * PI).abs() < 1e-5);
+    }
+}

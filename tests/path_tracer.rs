@@ -1,0 +1,710 @@
+//! The path tracer against known answers: a white furnace, a plane under an emissive quad,
+//! the three light strategies agreeing, Whitted's image when diffuse interreflection is off,
+//! the automatic choice of integrator, determinism, and coarser texture lookups after a
+//! diffuse bounce.
+
+mod common;
+
+use std::path::Path;
+use std::sync::Arc;
+
+use common::*;
+use conetrace::footprint::LodStrategy;
+use conetrace::integrator::path::{LightStrategy, PathTracer};
+use conetrace::integrator::selection::{self, IntegratorChoice, IntegratorKind};
+use conetrace::integrator::Whitted;
+use conetrace::render::{self, Integrator, RenderControl, RenderOptions, RenderStats};
+use conetrace::scene::load::load_toml_str;
+use conetrace::scene::SceneDescription;
+
+fn load(dir: &Path, text: &str) -> SceneDescription {
+    load_toml_str(text, dir, "test.toml").unwrap_or_else(|e| panic!("scene: {e}"))
+}
+
+/// Renders `scene` with `integrator`; returns the RGB of every pixel and the statistics.
+fn render_with<I: Integrator>(
+    scene: SceneDescription,
+    integrator: &I,
+    options: impl FnOnce(&mut RenderOptions),
+) -> (Vec<[f32; 3]>, RenderStats) {
+    let mut render_options = RenderOptions::from_settings(&scene.settings);
+    options(&mut render_options);
+    let context = render::prepare(Arc::new(scene), render_options).expect("prepare");
+    let result = render::render(&context, integrator, &RenderControl::default()).expect("render");
+    let film = &result.film;
+    let [r, g, b] = ["R", "G", "B"].map(|c| film.channel(c).expect("colour").to_vec());
+    let pixels = (0..r.len()).map(|i| [r[i], g[i], b[i]]).collect();
+    (pixels, result.stats)
+}
+
+fn mean(pixels: &[[f32; 3]]) -> [f64; 3] {
+    let mut sum = [0.0f64; 3];
+    for p in pixels {
+        for c in 0..3 {
+            sum[c] += p[c] as f64;
+        }
+    }
+    sum.map(|s| s / pixels.len() as f64)
+}
+
+/// Materials the white furnace holds to "reflects everything": one line each.
+const FURNACE_MATERIALS: &[(&str, &str)] = &[("lambert", "base_color = [1.0, 1.0, 1.0]")];
+
+/// (a) A white (albedo 1) sphere under a uniform environment of radiance 0.5 and no other
+/// light returns the environment: every pixel of a small orthographic view, all on the
+/// sphere, is 0.5 within 1% at 1024 spp.
+#[test]
+fn white_furnace_returns_the_environment() {
+    let dir = temp_dir();
+    for (name, material) in FURNACE_MATERIALS {
+        let scene = load(
+            dir.path(),
+            &format!(
+                r#"
+[render]
+width = 12
+height = 12
+spp = 1024
+max_depth = 16
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+height = 1.2
+
+[environment]
+color = [0.5, 0.5, 0.5]
+
+[[material]]
+name = "{name}"
+{material}
+
+[[sphere]]
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+material = "{name}"
+"#
+            ),
+        );
+        assert!(scene.lights.is_empty(), "{name}: a key light was added");
+        let (pixels, stats) = render_with(scene, &PathTracer::default(), |_| {});
+        let m = mean(&pixels);
+        for (c, value) in m.iter().enumerate() {
+            assert!(
+                (value - 0.5).abs() < 0.005,
+                "{name}: channel {c} mean {value} (expected 0.5)"
+            );
+        }
+        let worst = pixels
+            .iter()
+            .flat_map(|p| p.iter())
+            .map(|v| (v - 0.5).abs())
+            .fold(0.0f32, f32::max);
+        eprintln!("furnace {name}: mean {m:?}, worst pixel error {worst}");
+        assert!(worst < 0.05, "{name}: a pixel is {worst} off");
+        assert_eq!(stats.counters.nonfinite_samples, 0);
+    }
+}
+
+/// Irradiance fraction (form factor) from a differential area to a parallel rectangle
+/// `a` x `b` at height `h` whose corner is straight above it (Howell's catalogue, B-3).
+fn corner_form_factor(a: f64, b: f64, h: f64) -> f64 {
+    let (x, y) = (a / h, b / h);
+    let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+    (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
+}
+
+/// A diffuse plane of albedo 0.5 under a black, emissive 2x2 quad facing down 1 unit above
+/// it, seen between them by an orthographic camera over a 0.02-wide patch at the centre.
+fn quad_lit_plane(dir: &Path, width: u32, spp: u32) -> SceneDescription {
+    write(dir, "plane.obj", &square_obj(5.0, 0.0));
+    write(dir, "lamp.obj", &square_obj(1.0, 0.0));
+    load(
+        dir,
+        &format!(
+            r#"
+[render]
+width = {width}
+height = {width}
+spp = {spp}
+max_depth = 4
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.5, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+height = 0.02
+
+[[material]]
+name = "matte"
+base_color = [0.5, 0.5, 0.5]
+
+[[material]]
+name = "lamp"
+base_color = [0.0, 0.0, 0.0]
+emission = [2.0, 2.0, 2.0]
+
+[[mesh]]
+file = "plane.obj"
+material = "matte"
+
+[[mesh]]
+file = "lamp.obj"
+material = "lamp"
+rotate = [180.0, 0.0, 0.0]
+translate = [0.0, 1.0, 0.0]
+"#
+        ),
+    )
+}
+
+/// (b) Lit by an emissive quad alone (no key light): radiance = albedo / pi * E with
+/// E = pi L F, F the form factor of the quad from the plane's centre; within 2%.
+#[test]
+fn a_plane_under_an_emissive_quad_matches_the_form_factor() {
+    let dir = temp_dir();
+    let scene = quad_lit_plane(dir.path(), 8, 256);
+    assert!(scene.lights.is_empty(), "a key light was added");
+    let (pixels, stats) = render_with(scene, &PathTracer::default(), |_| {});
+    let form_factor = 4.0 * corner_form_factor(1.0, 1.0, 1.0);
+    let expected = 0.5 / std::f64::consts::PI * (std::f64::consts::PI * 2.0 * form_factor);
+    let m = mean(&pixels);
+    eprintln!("quad-lit plane: mean {m:?}, expected {expected}");
+    for value in m {
+        assert!(
+            (value - expected).abs() < 0.02 * expected,
+            "mean {value}, expected {expected}"
+        );
+    }
+    assert!(stats.counters.shadow_rays > 0 && stats.counters.paths == 8 * 8 * 256);
+}
+
+/// (b) A sphere light: irradiance straight below it is E = pi L sin^2(theta_max), so a
+/// plane of albedo 0.5 under a black sphere of radius 0.5 emitting L = 4, 2 units above, has
+/// radiance 0.5 * 4 / 16 = 0.125; within 2%. Exercises the cone sampling of spheres and its
+/// density in the MIS weights.
+#[test]
+fn a_plane_under_a_sphere_light_matches_l_pi_sin2() {
+    let dir = temp_dir();
+    write(dir.path(), "plane.obj", &square_obj(5.0, 0.0));
+    let scene = load(
+        dir.path(),
+        r#"
+[render]
+width = 8
+height = 8
+spp = 256
+max_depth = 4
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.5, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+height = 0.02
+
+[[material]]
+name = "matte"
+base_color = [0.5, 0.5, 0.5]
+
+[[material]]
+name = "bulb"
+base_color = [0.0, 0.0, 0.0]
+emission = [4.0, 4.0, 4.0]
+
+[[mesh]]
+file = "plane.obj"
+material = "matte"
+
+[[sphere]]
+center = [0.0, 2.0, 0.0]
+radius = 0.5
+material = "bulb"
+"#,
+    );
+    assert!(scene.lights.is_empty(), "a key light was added");
+    let (pixels, _) = render_with(scene, &PathTracer::default(), |_| {});
+    let expected = 0.125;
+    let m = mean(&pixels);
+    eprintln!("sphere-lit plane: mean {m:?}, expected {expected}");
+    for value in m {
+        assert!((value - expected).abs() < 0.02 * expected, "mean {value}");
+    }
+}
+
+/// Samples whose radiance overflows to infinity are counted and dropped: two facing quads
+/// emitting near the largest finite float light each other beyond it, and every pixel of
+/// the film stays finite.
+#[test]
+fn non_finite_samples_are_counted_and_never_reach_the_film() {
+    let dir = temp_dir();
+    write(dir.path(), "lamp.obj", &square_obj(1.0, 0.0));
+    let scene = load(
+        dir.path(),
+        r#"
+[render]
+width = 4
+height = 4
+spp = 4
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.5, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+height = 0.5
+
+[[material]]
+name = "blinding"
+base_color = [1.0, 1.0, 1.0]
+emission = [3.0e38, 3.0e38, 3.0e38]
+
+[[mesh]]
+file = "lamp.obj"
+material = "blinding"
+
+[[mesh]]
+file = "lamp.obj"
+material = "blinding"
+rotate = [180.0, 0.0, 0.0]
+translate = [0.0, 1.0, 0.0]
+"#,
+    );
+    let (pixels, stats) = render_with(scene, &PathTracer::default(), |_| {});
+    eprintln!(
+        "{} of {} samples dropped",
+        stats.counters.nonfinite_samples,
+        4 * 4 * 4
+    );
+    assert!(stats.counters.nonfinite_samples > 0, "no sample overflowed");
+    assert!(
+        pixels.iter().flatten().all(|v| v.is_finite()),
+        "a non-finite value reached the film"
+    );
+}
+
+/// (c) Light sampling alone, BSDF sampling alone and their combination estimate the same
+/// image: a plane lit by the quad, seen obliquely with a diffuse sphere on it.
+#[test]
+fn light_bsdf_and_mis_estimates_agree() {
+    let dir = temp_dir();
+    write(dir.path(), "plane.obj", &square_obj(5.0, 0.0));
+    write(dir.path(), "lamp.obj", &square_obj(0.8, 0.0));
+    let text = r#"
+[render]
+width = 24
+height = 16
+spp = 256
+max_depth = 3
+
+[camera]
+type = "pinhole"
+eye = [0.0, 1.2, 3.0]
+target = [0.0, 0.3, 0.0]
+fov = 50
+
+[environment]
+color = [0.05, 0.07, 0.1]
+
+[[material]]
+name = "matte"
+base_color = [0.6, 0.5, 0.4]
+
+[[material]]
+name = "ball"
+base_color = [0.3, 0.6, 0.3]
+specular = 0.3
+shininess = 20.0
+
+[[material]]
+name = "lamp"
+base_color = [0.0, 0.0, 0.0]
+emission = [4.0, 4.0, 4.0]
+
+[[mesh]]
+file = "plane.obj"
+material = "matte"
+
+[[sphere]]
+center = [0.0, 0.4, 0.0]
+radius = 0.4
+material = "ball"
+
+[[mesh]]
+file = "lamp.obj"
+material = "lamp"
+rotate = [180.0, 0.0, 0.0]
+translate = [0.0, 1.6, 0.0]
+"#;
+    let estimate = |strategy| {
+        let tracer = PathTracer {
+            strategy,
+            ..PathTracer::default()
+        };
+        render_with(load(dir.path(), text), &tracer, |_| {}).0
+    };
+    let mis = estimate(LightStrategy::MultipleImportance);
+    let light = estimate(LightStrategy::LightSampling);
+    let bsdf = estimate(LightStrategy::BsdfSampling);
+    let (m, l, b) = (mean(&mis), mean(&light), mean(&bsdf));
+    eprintln!("means: MIS {m:?}, light sampling {l:?}, BSDF sampling {b:?}");
+    for c in 0..3 {
+        assert!(
+            (m[c] - l[c]).abs() < 0.02 * m[c],
+            "light sampling: {l:?} vs {m:?}"
+        );
+        assert!(
+            (m[c] - b[c]).abs() < 0.03 * m[c],
+            "BSDF sampling: {b:?} vs {m:?}"
+        );
+    }
+}
+
+/// (d) A Whitted scene (point light, diffuse floor and spheres, a mirror sphere, black
+/// environment) rendered by the path tracer with no diffuse bounces gives Whitted's image
+/// in expectation.
+#[test]
+fn without_diffuse_bounces_the_path_tracer_gives_whitteds_image() {
+    let dir = temp_dir();
+    write(dir.path(), "plane.obj", &square_obj(6.0, 0.0));
+    let text = r#"
+[render]
+width = 32
+height = 18
+spp = 256
+max_depth = 4
+diffuse_bounces = 0
+
+[camera]
+type = "pinhole"
+eye = [0.0, 1.5, 5.0]
+target = [0.0, 0.6, 0.0]
+fov = 40
+
+[[light]]
+type = "point"
+position = [3.0, 6.0, 4.0]
+intensity = 120.0
+
+[[material]]
+name = "floor"
+base_color = [0.7, 0.7, 0.7]
+
+[[material]]
+name = "red"
+base_color = [0.8, 0.2, 0.15]
+specular = 0.2
+shininess = 40.0
+
+[[material]]
+name = "chrome"
+base_color = [0.5, 0.5, 0.5]
+mirror = 0.85
+
+[[mesh]]
+file = "plane.obj"
+material = "floor"
+
+[[sphere]]
+center = [-1.1, 0.7, 0.0]
+radius = 0.7
+material = "red"
+
+[[sphere]]
+center = [0.9, 0.7, 0.3]
+radius = 0.7
+material = "chrome"
+"#;
+    let scene = load(dir.path(), text);
+    assert_eq!(scene.settings.diffuse_bounces, Some(0));
+    let tracer = PathTracer::for_settings(&scene.settings);
+    assert_eq!(tracer.diffuse_bounces, 0);
+    let (path, _) = render_with(scene, &tracer, |_| {});
+    let (whitted, _) = render_with(load(dir.path(), text), &Whitted, |_| {});
+    let (mp, mw) = (mean(&path), mean(&whitted));
+    let mut squared = 0.0f64;
+    for (p, w) in path.iter().zip(&whitted) {
+        for c in 0..3 {
+            squared += ((p[c] - w[c]) as f64).powi(2);
+        }
+    }
+    let rmse = (squared / (3 * path.len()) as f64).sqrt();
+    let brightness = (mw[0] + mw[1] + mw[2]) / 3.0;
+    eprintln!("path {mp:?}, Whitted {mw:?}, per-pixel RMSE {rmse} (mean {brightness})");
+    for c in 0..3 {
+        assert!(
+            (mp[c] - mw[c]).abs() < 0.01 * mw[c],
+            "channel {c}: path {} vs Whitted {}",
+            mp[c],
+            mw[c]
+        );
+    }
+    assert!(rmse < 0.05 * brightness, "RMSE {rmse}");
+}
+
+/// (e) `auto` picks the path tracer for emissive geometry, rough materials and `gi = true`,
+/// and Whitted otherwise, each with its reason.
+#[test]
+fn auto_selection_names_the_integrator_and_why() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let load_file = |relative: &str| {
+        conetrace::scene::load::load_scene(&root.join(relative))
+            .unwrap_or_else(|e| panic!("{relative}: {e}"))
+    };
+    let cornell = selection::resolve(
+        IntegratorChoice::Auto,
+        &load_file("assets/scenes/cornell.toml"),
+    );
+    assert_eq!(cornell.kind, IntegratorKind::Path);
+    assert_eq!(cornell.to_string(), "path: emissive geometry (2 triangles)");
+
+    let matte = load_file("assets/scenes/bench/matte_lit.toml");
+    let whitted = selection::resolve(IntegratorChoice::Auto, &matte);
+    assert_eq!(whitted.kind, IntegratorKind::Whitted, "{whitted}");
+    assert_eq!(
+        whitted.to_string(),
+        "whitted: no emissive geometry, rough materials or gi"
+    );
+
+    let mut rough = matte.clone();
+    rough.materials[1].roughness = Some(0.4);
+    let chosen = selection::resolve(IntegratorChoice::Auto, &rough);
+    assert_eq!(
+        chosen.to_string(),
+        "path: rough or glossy materials (1 with roughness)"
+    );
+
+    let dir = temp_dir();
+    let gi = load(
+        dir.path(),
+        "[render]\ngi = true\n[[material]]\nname = \"m\"\n[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n",
+    );
+    assert_eq!(
+        selection::resolve(IntegratorChoice::Auto, &gi).to_string(),
+        "path: [render] gi = true"
+    );
+    let forced = selection::resolve(IntegratorChoice::Fixed(IntegratorKind::Whitted), &gi);
+    assert_eq!(forced.to_string(), "whitted: requested");
+    assert_eq!(
+        "path".parse(),
+        Ok(IntegratorChoice::Fixed(IntegratorKind::Path))
+    );
+    assert!("mlt".parse::<IntegratorChoice>().is_err());
+}
+
+/// (e) The command line prints the choice on the summary line and in `--stats`, and
+/// `--integrator` overrides it; an unknown `[render] integrator` is a one-line error.
+#[test]
+fn the_summary_line_and_stats_say_which_integrator() {
+    let dir = temp_dir();
+    let scene =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell.toml");
+    let scene = scene.to_str().expect("utf-8 path");
+    let out = run_in(
+        dir.path(),
+        &[
+            "render",
+            scene,
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--no-png",
+            "-o",
+            "c.exr",
+            "--stats",
+            "stats.json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let printed =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    assert!(
+        printed.contains("integrator path: emissive geometry (2 triangles)"),
+        "{printed}"
+    );
+    assert!(printed.contains("paths"), "{printed}");
+    let stats = std::fs::read_to_string(dir.path().join("stats.json")).expect("stats");
+    assert!(
+        stats.contains("\"integrator\": \"path: emissive geometry (2 triangles)\"")
+            || stats.contains("\"integrator\":\"path: emissive geometry (2 triangles)\""),
+        "{stats}"
+    );
+    assert!(stats.contains("roulette_terminations"), "{stats}");
+
+    let out = run_in(
+        dir.path(),
+        &[
+            "render",
+            scene,
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--no-png",
+            "-o",
+            "w.exr",
+            "--integrator",
+            "whitted",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let printed =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    assert!(
+        printed.contains("integrator whitted: requested"),
+        "{printed}"
+    );
+
+    write(dir.path(), "bad.toml", "[render]\nintegrator = \"mlt\"\n");
+    let out = run_in(dir.path(), &["render", "bad.toml", "-o", "bad.exr"]);
+    assert_eq!(out.status.code(), Some(2));
+    let message = String::from_utf8_lossy(&out.stderr);
+    assert!(message.contains("unknown integrator 'mlt'"), "{message}");
+    assert!(!dir.path().join("bad.exr").exists());
+}
+
+/// (f) Equal seeds give bit-identical images, whatever the thread count; another seed
+/// gives another image.
+#[test]
+fn a_seed_determines_the_image() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let scene = conetrace::scene::load::load_scene(&root.join("assets/scenes/cornell.toml"))
+        .expect("cornell");
+    let run = |seed: u32, threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            render_with(scene.clone(), &PathTracer::default(), |o| {
+                o.width = 24;
+                o.height = 24;
+                o.spp = 4;
+                o.seed = seed;
+            })
+            .0
+        })
+    };
+    let first = run(7, 1);
+    assert_eq!(first, run(7, 2), "the same seed gave another image");
+    assert_ne!(first, run(8, 1), "another seed gave the same image");
+}
+
+/// Seed 000's spread through a diffuse bounce: the texture lookups of rays that bounced off
+/// a diffuse ceiling onto a textured floor use coarser mip levels than the camera's own
+/// lookups of that floor from the same height.
+#[test]
+fn texture_lookups_after_a_diffuse_bounce_use_coarser_levels() {
+    let dir = temp_dir();
+    write(dir.path(), "plane.obj", &square_obj(4.0, 0.0));
+    let checker =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/textures/checker.png");
+    let scene = |look_up: bool| {
+        let (target, up) = if look_up {
+            ("[0.0, 1.0, 0.0]", "[0.0, 0.0, -1.0]")
+        } else {
+            ("[0.0, 0.0, 0.0]", "[0.0, 0.0, -1.0]")
+        };
+        load(
+            dir.path(),
+            &format!(
+                r#"
+[render]
+width = 32
+height = 32
+spp = 4
+max_depth = 1
+
+[camera]
+type = "pinhole"
+eye = [0.0, 0.5, 0.0]
+target = {target}
+up = {up}
+fov = 60
+
+[environment]
+color = [0.2, 0.2, 0.2]
+
+[[texture]]
+name = "checker"
+file = "{checker}"
+
+[[material]]
+name = "floor"
+base_color_texture = "checker"
+texture_scale = [4.0, 4.0]
+
+[[material]]
+name = "ceiling"
+base_color = [0.8, 0.8, 0.8]
+
+[[mesh]]
+file = "plane.obj"
+material = "floor"
+
+[[mesh]]
+file = "plane.obj"
+material = "ceiling"
+rotate = [180.0, 0.0, 0.0]
+translate = [0.0, 1.0, 0.0]
+"#,
+                checker = checker.display()
+            ),
+        )
+    };
+    let mean_level = |look_up: bool, lod: LodStrategy| {
+        let (_, stats) = render_with(scene(look_up), &PathTracer::default(), |o| {
+            o.count_texture_tiles = true;
+            o.lod = lod;
+        });
+        let usage = stats.texture_tiles.expect("tiles counted");
+        let levels = &usage.per_texture[0].1;
+        let (weighted, total) = levels
+            .iter()
+            .enumerate()
+            .fold((0.0, 0.0), |(w, t), (level, &n)| {
+                (w + level as f64 * n as f64, t + n as f64)
+            });
+        assert!(total > 0.0, "no lookups");
+        (weighted / total, stats.counters.texture_lookups)
+    };
+    for lod in [LodStrategy::Cone, LodStrategy::Cone1] {
+        let (camera_level, camera_lookups) = mean_level(false, lod);
+        let (bounce_level, bounce_lookups) = mean_level(true, lod);
+        eprintln!(
+            "{}: mean mip level: camera hits {camera_level:.2} ({camera_lookups} lookups), \
+             after a diffuse bounce {bounce_level:.2} ({bounce_lookups} lookups)",
+            lod.name()
+        );
+        assert!(camera_lookups > 0 && bounce_lookups > 0);
+        assert!(
+            bounce_level > camera_level + 1.0,
+            "{}: camera {camera_level}, bounce {bounce_level}",
+            lod.name()
+        );
+    }
+    // Differentials take the camera's footprint at the bounced hit (pbrt-v4's
+    // approximation): filtered like a camera hit at that distance, not point-sampled.
+    let (camera_level, _) = mean_level(false, LodStrategy::Differential);
+    let (bounce_level, _) = mean_level(true, LodStrategy::Differential);
+    eprintln!(
+        "differential: camera hits {camera_level:.2}, after a diffuse bounce {bounce_level:.2}"
+    );
+    assert!(
+        bounce_level > 1.0 && (bounce_level - camera_level).abs() < 1.0,
+        "differential: camera {camera_level}, bounce {bounce_level}"
+    );
+}
