@@ -17,6 +17,7 @@ pub mod part;
 pub mod patch_geometry;
 pub mod prepared;
 pub mod stats;
+pub mod surface_textures;
 pub mod tracer;
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};

@@ -179,6 +179,24 @@ pub struct Material {
     pub alpha: f32,
     /// Texture whose alpha channel gives coverage (glTF: the base-colour texture).
     pub alpha_texture: Option<TextureBinding>,
+    /// glTF 2.0 metallic-roughness model (its Appendix B): `Some(perceptual roughness)` in
+    /// [0, 1] selects it (GGX lobes, alpha = roughness^2); `None` keeps the classic
+    /// Lambert plus Blinn-Phong opaque lobe.
+    pub roughness: Option<f32>,
+    /// Metalness in [0, 1] of the metallic-roughness model (0 = dielectric over diffuse,
+    /// 1 = conductor with the base colour as its reflectance at normal incidence).
+    pub metallic: f32,
+    /// Linear texture whose blue channel scales `metallic` and green channel scales
+    /// `roughness` (glTF's `metallicRoughnessTexture`); read only by the metallic-roughness
+    /// model (`roughness: Some(_)`).
+    pub metallic_roughness_texture: Option<TextureBinding>,
+    /// Texture multiplying `emission` (sRGB colour, glTF's `emissiveTexture`).
+    pub emission_texture: Option<TextureBinding>,
+    /// Tangent-space normal map (linear, +X along increasing s, +Y along decreasing t, as
+    /// glTF and OpenGL-style maps store them); see `crate::shading::surface_inputs`.
+    pub normal_texture: Option<TextureBinding>,
+    /// Scale of the normal map's X and Y components (glTF's `normalTexture.scale`).
+    pub normal_scale: f32,
 }
 
 impl Default for Material {
@@ -198,6 +216,12 @@ impl Default for Material {
             alpha_cutoff: None,
             alpha: 1.0,
             alpha_texture: None,
+            roughness: None,
+            metallic: 0.0,
+            metallic_roughness_texture: None,
+            emission_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
         }
     }
 }

@@ -19,13 +19,16 @@
 //!   shadow rays (seed 001, "Shadow Rays"); punctual lights are delta lights.
 //! - [`environment_light`]: the environment as a light (mean radiance, direction sampling).
 //! - [`light_selection`]: the scene's lights and the choice of one by power.
+//! - [`surface_inputs`]: a material's albedo, alpha, metallic, roughness, emission and
+//!   normal-mapped shading normal at a hit, from its factors and the texels the caller
+//!   filtered (normal mapping in a tangent frame from dP/ds, dP/dt).
 //! - [`ray_offset`]: spawn points, hit points with a bound on their rounding error, and
 //!   ray origins moved just past that bound off the surface they start on (seed 001,
 //!   "self intersection"), at any scene scale and camera distance.
 //!
 //! Conventions: directions are unit `glam::Vec3`; an *incident* direction `d` points
 //! towards the surface (the ray's travel direction), `wo`/`wi` point away from it.
-//! Nothing here traces rays, reads textures or allocates.
+//! Nothing here traces rays, reads textures or allocates (texels are handed in).
 
 pub mod beer;
 pub mod brdf;
@@ -40,6 +43,7 @@ pub mod mirror;
 pub mod ray_offset;
 pub mod reflection;
 pub mod refraction;
+pub mod surface_inputs;
 
 pub use beer::{sigma_from_attenuation, transmittance};
 pub use brdf::OpaqueBsdf;

@@ -1,5 +1,6 @@
 //! Shading a hit: what the camera hit writes to the AOVs, absorption on the way in, the
-//! material's albedo under the ray's footprint, emission and ambient light, and which
+//! material's inputs (albedo, emission, normal-mapped normal) under the ray's footprint,
+//! emission and ambient light, and which
 //! secondary rays the material spawns (direct light in `lights`, mirror and dielectric rays
 //! in `spawn` and `dielectric`).
 
@@ -12,10 +13,12 @@ use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::hit::SurfaceHit;
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::prepared::{binding_query, SurfaceDetail};
+use crate::render::prepared::SurfaceDetail;
 use crate::render::stats::RayKind;
+use crate::render::surface_textures;
 use crate::render::tracer::TraceHit;
 use crate::scene::Material;
+use crate::shading::surface_inputs::{SurfaceInputs, TextureSlot};
 use crate::shading::{self, MaterialBsdf};
 
 /// Texture coordinates are needed for textured materials and for the camera hit's AOVs.
@@ -66,12 +69,16 @@ pub(super) fn shade_hit(
         worker.counters.footprint_updates += 1;
     }
 
-    let albedo = surface_albedo(context, &ray, material, surface, image, worker);
+    let inputs = surface_inputs(context, &ray, material, surface, image, worker);
+    let albedo = inputs.albedo;
     if ray.kind == RayKind::Camera && ray.first_sample && !image.albedo.is_empty() {
         image.albedo[pixel] = albedo.to_array();
+        if !image.normal.is_empty() {
+            image.normal[pixel] = inputs.shading_normal.to_array();
+        }
     }
 
-    let mut radiance = material.emission;
+    let mut radiance = inputs.emission;
     let spawn = surface.spawn_point();
     // The index-matched case (the `fresnel` effect is off when every medium has ior 1)
     // reflects nothing but total internal reflection.
@@ -80,7 +87,7 @@ pub(super) fn shade_hit(
         albedo,
         ray.direction,
         surface.geometric_normal,
-        surface.shading_normal,
+        inputs.shading_normal,
         effects.fresnel.then_some(options.fresnel),
     );
 
@@ -122,21 +129,24 @@ pub(super) fn shade_hit(
     }
 }
 
-/// The material's albedo at the hit: base colour times its texture, filtered by the ray's
-/// footprint. Fills the first-lookup AOVs of the pixel.
-pub(super) fn surface_albedo(
+/// The material's shading inputs at the hit (`crate::shading::surface_inputs`): albedo,
+/// emission and the normal-mapped shading normal, every texture filtered by the ray's
+/// footprint. The base-colour lookup fills the first-lookup AOVs of the pixel.
+pub(super) fn surface_inputs(
     context: &RenderContext,
     ray: &PathRay,
     material: &Material,
     surface: &SurfaceHit,
     image: &mut TileImage,
     worker: &mut WorkerState,
-) -> Vec3 {
-    let Some(binding) = &material.base_color_texture else {
-        return material.base_color;
-    };
+) -> SurfaceInputs {
+    if !surface_textures::reads_textures(material) {
+        // No texture is read: no footprint gradients either.
+        return shading::surface_inputs::surface_inputs(material, surface, false, |_, _| {
+            glam::Vec4::ONE
+        });
+    }
     let options = &context.options;
-    let filter = &context.texture_filters[binding.texture];
     let gradients = if context.effects.footprints {
         let g = ray
             .footprint
@@ -145,24 +155,25 @@ pub(super) fn surface_albedo(
     } else {
         [0.0; 4]
     };
-    let query = binding_query(&binding.transform, surface.st, gradients);
-    let texture = &context.textures[binding.texture];
-    worker.counters.texture_lookups += 1;
-    let texel = match (
-        &context.external_textures,
-        worker.texture_tiles.get_mut(binding.texture),
-    ) {
-        (Some(external), _) => crate::render::external_textures::sample_external(
-            external.as_ref(),
-            binding.texture,
-            &query,
-            filter,
-        ),
-        (None, Some(tiles)) => texture.sample_recording(&query, filter, tiles),
-        (None, None) => texture.sample(&query, filter),
-    };
     let pixel = ray.pixel as usize;
-    if ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel] {
+    let record = ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel];
+    let mut base_color_lookup = None;
+    let inputs = surface_textures::shading_inputs(
+        context,
+        material,
+        surface,
+        gradients,
+        false,
+        worker,
+        |slot, query, texel| {
+            if slot == TextureSlot::BaseColor {
+                base_color_lookup = Some((*query, texel));
+            }
+        },
+    );
+    if let (true, Some((query, texel)), Some(binding)) =
+        (record, base_color_lookup, &material.base_color_texture)
+    {
         image.lookup_done[pixel] = true;
         if !image.tex.is_empty() {
             image.tex[pixel] = [
@@ -171,9 +182,10 @@ pub(super) fn surface_albedo(
             image.texcolor[pixel] = [texel.x, texel.y, texel.z, 1.0];
         }
         if !image.lod.is_empty() {
-            image.lod[pixel] = texture.lod(&query, filter);
+            let filter = &context.texture_filters[binding.texture];
+            image.lod[pixel] = context.textures[binding.texture].lod(&query, filter);
             image.footprint[pixel] = ray.footprint.width();
         }
     }
-    material.base_color * texel.truncate()
+    inputs
 }
