@@ -6,16 +6,14 @@
 //! decoded: buffer-view and `data:` images become `TextureSource::Encoded`, file URIs
 //! `TextureSource::File`.
 //!
-//! Material mapping onto the Whitted model: base colour factor/texture (sRGB), emissive
-//! factor, `KHR_materials_transmission` factor,
-//! `KHR_materials_ior`, `KHR_materials_volume` attenuation colour/distance (Beer's law,
-//! seed 004), `KHR_texture_transform`, alpha mode MASK (BLEND is treated as MASK at 0.5)
-//! with the base-colour texture's alpha as a linear alpha texture. Metallic-roughness:
-//! a metallic factor >= 0.9 with roughness <= 0.1 becomes a mirror whose reflectivity is
-//! the largest base-colour component (the metal's normal-incidence reflectance) times the
-//! metallic factor, with the diffuse colour scaled by `1 - metallic`; otherwise the
-//! Blinn-Phong lobe gets weight `mix(0.04, max(base colour), metallic)` and exponent
-//! `2 / roughness^4 - 2` (clamped to [1, 10000]).
+//! Material mapping: base colour factor/texture (sRGB), the metallic-roughness model itself
+//! (`metallic`, `roughness: Some(..)`, factors defaulting to 1, and the linear
+//! metallic-roughness texture, B = metalness, G = roughness), emissive factor times
+//! `KHR_materials_emissive_strength` with the emissive texture (sRGB), the normal texture
+//! (linear) with its scale, `KHR_materials_transmission` factor, `KHR_materials_ior`,
+//! `KHR_materials_volume` attenuation colour/distance (Beer's law, seed 004),
+//! `KHR_texture_transform` on every texture, alpha mode MASK (BLEND is treated as MASK at
+//! 0.5) with the base-colour texture's alpha as a linear alpha texture.
 //! Texture coordinates: glTF's v points down, so `t = v` directly.
 
 use std::collections::HashMap;

@@ -6,6 +6,10 @@
 //! (values <= 0, which exporters write for "unset", mean 1.5), `d` / `Tr` transparency ->
 //! transmission weight, `map_d` alpha texture (linear, cut-out at 0.5), `illum 3` mirror
 //! (reflectivity = the largest `Ks` component, 1 when `Ks` is absent), `illum 4/6/7` glass.
+//! PBR extension (as Blender and three.js write it): `Pr` roughness, `Pm` metalness (either
+//! selects the metallic-roughness model), `map_Pr` + `map_Pm` naming one packed texture
+//! (green = roughness, blue = metalness), `map_Ke` emission texture (sRGB), `norm` /
+//! `map_Bump` / `bump` tangent-space normal map with `-bm` as its scale.
 //! OBJ texture coordinates have v pointing up; they are stored as `t = 1 - v`
 //! (OpenImageIO convention, t down).
 //!
