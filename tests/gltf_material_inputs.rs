@@ -15,7 +15,12 @@ use common::*;
 /// The quad [-1, 1]^2 at z = 0 facing +z, glTF uv (0, 0) at its top-left corner (-1, 1).
 fn quad_buffer() -> Vec<u8> {
     let mut bytes = Vec::new();
-    let positions = [[-1.0f32, 1.0, 0.0], [1.0, 1.0, 0.0], [1.0, -1.0, 0.0], [-1.0, -1.0, 0.0]];
+    let positions = [
+        [-1.0f32, 1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [-1.0, -1.0, 0.0],
+    ];
     let normals = [[0.0f32, 0.0, 1.0]; 4];
     let uvs = [[0.0f32, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
     for v in positions.iter().chain(&normals) {
@@ -58,7 +63,11 @@ fn write_quad_gltf(dir: &Path, material: serde_json::Value, images: &[&str]) {
             {"bufferView": 1, "byteOffset": 0, "componentType": 5123, "count": 6, "type": "SCALAR"}
         ]
     });
-    std::fs::write(dir.join("quad.gltf"), serde_json::to_vec_pretty(&json).unwrap()).unwrap();
+    std::fs::write(
+        dir.join("quad.gltf"),
+        serde_json::to_vec_pretty(&json).unwrap(),
+    )
+    .unwrap();
 }
 
 fn write_png(dir: &Path, name: &str, width: u32, texel: impl Fn(u32) -> [u8; 3]) {
@@ -72,8 +81,20 @@ fn render(dir: &Path, scene: &str) -> ExrImage {
     let out = run_in(
         dir,
         &[
-            "render", "scene.toml", "--width", "64", "--height", "64", "--spp", "1", "--aov",
-            "all", "--no-png", "--quiet", "--output", "out.exr",
+            "render",
+            "scene.toml",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--spp",
+            "1",
+            "--aov",
+            "all",
+            "--no-png",
+            "--quiet",
+            "--output",
+            "out.exr",
         ],
     );
     assert!(
@@ -84,7 +105,8 @@ fn render(dir: &Path, scene: &str) -> ExrImage {
     read_exr(&dir.join("out.exr"))
 }
 
-const CAMERA: &str = "[camera]\ntype = \"orthographic\"\neye = [0, 0, 3]\ntarget = [0, 0, 0]\nheight = 2\n\
+const CAMERA: &str =
+    "[camera]\ntype = \"orthographic\"\neye = [0, 0, 3]\ntarget = [0, 0, 0]\nheight = 2\n\
                       [[mesh]]\nfile = \"quad.gltf\"\n";
 
 /// The sRGB transfer function's inverse (IEC 61966-2-1).
@@ -103,7 +125,12 @@ fn emissive_texture_gives_factor_times_strength_times_texel() {
     let (left, right) = ([255u8, 128, 0], [0u8, 64, 255]);
     // Eight texels: the left four one colour, the right four another; pixels well inside
     // each half read one colour only.
-    write_png(dir.path(), "glow.png", 8, |x| if x < 4 { left } else { right });
+    write_png(
+        dir.path(),
+        "glow.png",
+        8,
+        |x| if x < 4 { left } else { right },
+    );
     let factor = [1.0f32, 0.5, 1.0];
     let strength = 3.0f32;
     write_quad_gltf(
@@ -144,7 +171,13 @@ fn normal_texture_tilts_the_shading_normal() {
     let angle = 30f32.to_radians();
     let encode = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
     let tilted = [encode(angle.sin()), 128, encode(angle.cos())];
-    write_png(dir.path(), "normals.png", 8, |x| if x < 4 { [128, 128, 255] } else { tilted });
+    write_png(dir.path(), "normals.png", 8, |x| {
+        if x < 4 {
+            [128, 128, 255]
+        } else {
+            tilted
+        }
+    });
     write_quad_gltf(
         dir.path(),
         serde_json::json!({
@@ -159,7 +192,8 @@ fn normal_texture_tilts_the_shading_normal() {
     );
     let image = render(dir.path(), &scene);
     let decode = |b: u8| 2.0 * f32::from(b) / 255.0 - 1.0;
-    let expected = glam::Vec3::new(decode(tilted[0]), decode(tilted[1]), decode(tilted[2])).normalize();
+    let expected =
+        glam::Vec3::new(decode(tilted[0]), decode(tilted[1]), decode(tilted[2])).normalize();
     let flat = glam::Vec3::new(decode(128), decode(128), decode(255)).normalize();
     let normal_at = |x: usize, y: usize| {
         glam::Vec3::new(
@@ -170,12 +204,21 @@ fn normal_texture_tilts_the_shading_normal() {
     };
     for y in [10, 32, 54] {
         let (left, right) = (normal_at(16, y), normal_at(48, y));
-        assert!((right - expected).length() < 2e-3, "tilted half: {right}, expected {expected}");
-        assert!((left - flat).length() < 2e-3, "flat half: {left}, expected {flat}");
+        assert!(
+            (right - expected).length() < 2e-3,
+            "tilted half: {right}, expected {expected}"
+        );
+        assert!(
+            (left - flat).length() < 2e-3,
+            "flat half: {left}, expected {flat}"
+        );
         let tilt = right.dot(glam::Vec3::Z).acos().to_degrees();
         assert!((tilt - 30.0).abs() < 0.5, "tilt {tilt} degrees");
         // The lit colour follows the bent normal: brighter where it faces the light.
         let (lit_left, lit_right) = (image.at("R", 16, y), image.at("R", 48, y));
-        assert!(lit_right > 1.05 * lit_left, "left {lit_left}, right {lit_right}");
+        assert!(
+            lit_right > 1.05 * lit_left,
+            "left {lit_left}, right {lit_right}"
+        );
     }
 }

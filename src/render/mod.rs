@@ -98,7 +98,14 @@ pub fn prepare_with_textures(
     let scene_radius = surfaces
         .bounds
         .map_or(0.0, |(lower, upper)| 0.5 * (upper - lower).length());
-    let lights = crate::shading::SceneLights::new(&scene.lights, environment_mean, scene_radius);
+    let mut lights =
+        crate::shading::SceneLights::new(&scene.lights, environment_mean, scene_radius);
+    // A lat-long environment is importance sampled (built once here; Whitted reads only the
+    // mean).
+    if let crate::scene::Environment::LatLong { texture, intensity } = scene.environment {
+        let map = crate::shading::EnvironmentMap::new(textures[texture].clone(), intensity);
+        lights = lights.with_environment_map(std::sync::Arc::new(map));
+    }
     Ok(RenderContext {
         materials: prepared::MaterialTable::new(&scene.materials),
         surfaces,

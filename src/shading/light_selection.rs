@@ -11,7 +11,7 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::environment_light::EnvironmentLight;
+use super::environment_light::{EnvironmentLight, EnvironmentMap};
 use crate::scene::Light;
 
 /// Luminance of a linear Rec. 709 colour.
@@ -92,9 +92,7 @@ impl SceneLights {
     /// The lights of a scene with punctual `lights`, an environment of mean radiance
     /// `environment_mean` and geometry within a sphere of `scene_radius`.
     pub fn new(lights: &[Light], environment_mean: Vec3, scene_radius: f32) -> SceneLights {
-        let environment = EnvironmentLight {
-            mean_radiance: environment_mean,
-        };
+        let environment = EnvironmentLight::constant(environment_mean);
         let r2 = scene_radius * scene_radius;
         let mut powers: Vec<f32> = lights.iter().map(|l| light_power(l, r2)).collect();
         powers.push(4.0 * PI * PI * r2 * luminance(environment_mean));
@@ -103,6 +101,13 @@ impl SceneLights {
             selection: LightSelection::from_weights(&powers),
             scene_radius,
         }
+    }
+
+    /// These lights with the environment importance sampled by `map` (a lat-long map's
+    /// distribution); its power and mean radiance stay as they were.
+    pub fn with_environment_map(mut self, map: std::sync::Arc<EnvironmentMap>) -> SceneLights {
+        self.environment = EnvironmentLight::lat_long(map, self.environment.mean_radiance);
+        self
     }
 }
 

@@ -17,7 +17,9 @@
 //! - [`material_bsdf`]: a scene material's lobes with their weights, as one BSDF.
 //! - [`lights`]: direction, distance and irradiance scale towards each punctual light, for
 //!   shadow rays (seed 001, "Shadow Rays"); punctual lights are delta lights.
-//! - [`environment_light`]: the environment as a light (mean radiance, direction sampling).
+//! - [`environment_light`]: the environment as a light (mean radiance, direction sampling,
+//!   importance sampled for lat-long maps).
+//! - [`distribution_2d`]: piecewise-constant 1D and 2D distributions sampled by inversion.
 //! - [`light_selection`]: the scene's lights and the choice of one by power.
 //! - [`surface_inputs`]: a material's albedo, alpha, metallic, roughness, emission and
 //!   normal-mapped shading normal at a hit, from its factors and the texels the caller
@@ -34,6 +36,7 @@ pub mod beer;
 pub mod brdf;
 pub mod bsdf;
 pub mod dielectric;
+pub mod distribution_2d;
 pub mod environment_light;
 pub mod fresnel;
 pub mod light_selection;
@@ -49,7 +52,7 @@ pub use beer::{sigma_from_attenuation, transmittance};
 pub use brdf::OpaqueBsdf;
 pub use bsdf::{Bsdf, BsdfSample, Lobe};
 pub use dielectric::{DielectricSplit, SmoothDielectric};
-pub use environment_light::{EnvironmentLight, EnvironmentSample};
+pub use environment_light::{EnvironmentLight, EnvironmentMap, EnvironmentSample};
 pub use fresnel::{fresnel, fresnel_dielectric, fresnel_schlick, DielectricBoundary};
 pub use light_selection::{LightSelection, SceneLights};
 pub use lights::{is_delta_light, light_position, pdf_li, sample_li, LightSample};
