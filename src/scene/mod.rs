@@ -190,6 +190,12 @@ pub struct Material {
     /// `roughness` (glTF's `metallicRoughnessTexture`); read only by the metallic-roughness
     /// model (`roughness: Some(_)`).
     pub metallic_roughness_texture: Option<TextureBinding>,
+    /// Separate single-channel maps of the metallic-roughness model (MTL's `map_Pr` and
+    /// `map_Pm`, greyscale images): the green channel of `roughness_texture` scales
+    /// `roughness`, the blue channel of `metallic_texture` scales `metallic` (for a grey
+    /// image every channel holds the value).
+    pub roughness_texture: Option<TextureBinding>,
+    pub metallic_texture: Option<TextureBinding>,
     /// Texture multiplying `emission` (sRGB colour, glTF's `emissiveTexture`).
     pub emission_texture: Option<TextureBinding>,
     /// Tangent-space normal map (linear, +X along increasing s, +Y along decreasing t, as
@@ -219,6 +225,8 @@ impl Default for Material {
             roughness: None,
             metallic: 0.0,
             metallic_roughness_texture: None,
+            roughness_texture: None,
+            metallic_texture: None,
             emission_texture: None,
             normal_texture: None,
             normal_scale: 1.0,

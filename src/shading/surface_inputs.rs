@@ -9,7 +9,8 @@
 //! - alpha = alpha factor x alpha texture (A);
 //! - metallic = factor x metallic-roughness texture's blue channel, roughness = factor x its
 //!   green channel (glTF 2.0, section 3.9.2), the texture read only by the metallic-roughness
-//!   model (`roughness: Some(_)`);
+//!   model (`roughness: Some(_)`); separate roughness and metalness maps (MTL's greyscale
+//!   `map_Pr`, `map_Pm`) multiply in their green and blue channels the same way;
 //! - emission = emissive factor (times `KHR_materials_emissive_strength`, folded in by the
 //!   loader) x emission texture (RGB);
 //! - normal: the normal texture's texel `c` gives the tangent-space normal
@@ -28,6 +29,10 @@ pub enum TextureSlot {
     BaseColor,
     Alpha,
     MetallicRoughness,
+    /// The separate roughness map (green channel).
+    Roughness,
+    /// The separate metalness map (blue channel).
+    Metallic,
     Emission,
     Normal,
 }
@@ -67,10 +72,20 @@ pub fn surface_inputs(
         _ => material.alpha,
     };
     let (mut metallic, mut roughness) = (material.metallic, material.roughness);
-    if let (Some(r), Some(binding)) = (roughness, &material.metallic_roughness_texture) {
-        let texel = sample(TextureSlot::MetallicRoughness, binding);
-        metallic *= texel.z;
-        roughness = Some(r * texel.y);
+    if let Some(r) = roughness {
+        let mut r = r;
+        if let Some(binding) = &material.metallic_roughness_texture {
+            let texel = sample(TextureSlot::MetallicRoughness, binding);
+            metallic *= texel.z;
+            r *= texel.y;
+        }
+        if let Some(binding) = &material.roughness_texture {
+            r *= sample(TextureSlot::Roughness, binding).y;
+        }
+        if let Some(binding) = &material.metallic_texture {
+            metallic *= sample(TextureSlot::Metallic, binding).z;
+        }
+        roughness = Some(r);
     }
     // A black emissive factor emits nothing whatever the texture says: no lookup.
     let emission = match &material.emission_texture {
@@ -290,6 +305,17 @@ mod tests {
         };
         let (inputs, slots) = inputs_with(&material, Vec4::new(0.9, 0.25, 0.6, 1.0));
         assert_eq!(slots, [TextureSlot::MetallicRoughness]);
+        assert!((inputs.metallic - 0.3).abs() < 1e-6);
+        assert!((inputs.roughness.unwrap() - 0.2).abs() < 1e-6);
+        // Separate greyscale maps multiply in the same channels.
+        let separate = Material {
+            metallic_roughness_texture: None,
+            roughness_texture: binding(1),
+            metallic_texture: binding(2),
+            ..material.clone()
+        };
+        let (inputs, slots) = inputs_with(&separate, Vec4::new(0.9, 0.25, 0.6, 1.0));
+        assert_eq!(slots, [TextureSlot::Roughness, TextureSlot::Metallic]);
         assert!((inputs.metallic - 0.3).abs() < 1e-6);
         assert!((inputs.roughness.unwrap() - 0.2).abs() < 1e-6);
         // The classic model does not read it.

@@ -113,6 +113,8 @@ pub(crate) fn append(
             rebase(&mut material.base_color_texture);
             rebase(&mut material.alpha_texture);
             rebase(&mut material.metallic_roughness_texture);
+            rebase(&mut material.roughness_texture);
+            rebase(&mut material.metallic_texture);
             rebase(&mut material.emission_texture);
             rebase(&mut material.normal_texture);
             scene.materials.push(material);

@@ -7,8 +7,8 @@
 //! transmission weight, `map_d` alpha texture (linear, cut-out at 0.5), `illum 3` mirror
 //! (reflectivity = the largest `Ks` component, 1 when `Ks` is absent), `illum 4/6/7` glass.
 //! PBR extension (as Blender and three.js write it): `Pr` roughness, `Pm` metalness (either
-//! selects the metallic-roughness model), `map_Pr` + `map_Pm` naming one packed texture
-//! (green = roughness, blue = metalness), `map_Ke` emission texture (sRGB), `norm` /
+//! selects the metallic-roughness model), `map_Pr` and `map_Pm` greyscale maps (or one
+//! packed texture when they name the same file: green = roughness, blue = metalness), `map_Ke` emission texture (sRGB), `norm` /
 //! `map_Bump` / `bump` tangent-space normal map with `-bm` as its scale.
 //! OBJ texture coordinates have v pointing up; they are stored as `t = 1 - v`
 //! (OpenImageIO convention, t down).
@@ -71,7 +71,7 @@ pub(crate) fn load_obj(files: &Files, path: &Path) -> Result<SceneDescription, S
 
     // Without any readable library `tobj` reports the open failure, already noted.
     for (m, origin) in materials.unwrap_or_default().iter().zip(&prepared.origins) {
-        let material = convert_material(m, origin, &local, &mut part.textures, &mut part.notes)?;
+        let material = convert_material(m, origin, &local, &mut part.textures)?;
         part.materials.push(material);
     }
 
@@ -560,7 +560,6 @@ fn convert_material(
     origin: &MaterialOrigin,
     files: &Files,
     textures: &mut Vec<TextureDesc>,
-    notes: &mut Vec<String>,
 ) -> Result<Material, SceneError> {
     let at = |keyword: &str, message: String| {
         SceneError::invalid(
@@ -643,23 +642,23 @@ fn convert_material(
         let default_metallic = if metallic_map.is_some() { 1.0 } else { 0.0 };
         material.metallic = number("Pm").unwrap_or(default_metallic);
         match (roughness_map, metallic_map) {
+            // One file for both: glTF's packing (green = roughness, blue = metalness).
             (Some(r), Some(m)) if texture_file(r) == texture_file(m) => {
                 let index = add_texture(files, textures, r, ColorSpace::Linear)
                     .map_err(|e| at("map_Pr", e))?;
                 material.metallic_roughness_texture = bind(index);
             }
-            (None, None) => {}
             (r, m) => {
-                let statements: Vec<String> = [("map_Pr", r), ("map_Pm", m)]
-                    .into_iter()
-                    .filter_map(|(k, v)| Some(format!("{k} {}", v?)))
-                    .collect();
-                notes.push(format!(
-                    "{}: line {}: '{}' not read: roughness and metalness maps are read as one packed texture (map_Pr and map_Pm naming the same file, green = roughness, blue = metalness); the factors apply alone",
-                    origin.file,
-                    origin.line_of(if r.is_some() { "map_Pr" } else { "map_Pm" }),
-                    statements.join("', '")
-                ));
+                if let Some(r) = r {
+                    let index = add_texture(files, textures, r, ColorSpace::Linear)
+                        .map_err(|e| at("map_Pr", e))?;
+                    material.roughness_texture = bind(index);
+                }
+                if let Some(m) = m {
+                    let index = add_texture(files, textures, m, ColorSpace::Linear)
+                        .map_err(|e| at("map_Pm", e))?;
+                    material.metallic_texture = bind(index);
+                }
             }
         }
     }
@@ -860,22 +859,22 @@ mod tests {
             ("normals.png", ColorSpace::Linear)
         );
 
-        // `norm`, a lone roughness map (noted, not read), and map_Ke without Ke.
+        // `norm`, separate greyscale maps, and map_Ke without Ke.
         write(
             dir.path(),
             "quad.mtl",
-            "newmtl red\nmap_Pr orm.png\nmap_Ke glow.png\nnorm normals.png\n",
+            "newmtl red\nmap_Pr orm.png\nmap_Pm glow.png\nmap_Ke glow.png\nnorm normals.png\n",
         );
         let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap();
         let m = &part.materials[0];
-        assert_eq!((m.roughness, m.metallic), (Some(1.0), 0.0));
+        assert_eq!((m.roughness, m.metallic), (Some(1.0), 1.0));
         assert!(m.metallic_roughness_texture.is_none());
-        assert!(
-            part.notes
-                .iter()
-                .any(|n| n.contains("line 2: 'map_Pr orm.png' not read")),
-            "{:?}",
-            part.notes
+        let texture = |b: &Option<TextureBinding>| &part.textures[b.as_ref().unwrap().texture];
+        assert_eq!(texture(&m.roughness_texture).name, "orm.png");
+        let metal = texture(&m.metallic_texture);
+        assert_eq!(
+            (metal.name.as_str(), metal.color_space),
+            ("glow.png", ColorSpace::Linear)
         );
         assert_eq!(m.emission, Vec3::ONE);
         assert_eq!(m.normal_scale, 1.0);
@@ -903,6 +902,10 @@ mod tests {
             (
                 "newmtl red\nnorm missing_normals.png\n",
                 "missing_normals.png",
+            ),
+            (
+                "newmtl red\nPm 1\nmap_Pm missing_metal.png\n",
+                "line 3: texture 'missing_metal.png'",
             ),
         ] {
             write(dir.path(), "quad.mtl", mtl);

@@ -832,6 +832,8 @@ fn clamp_lat_long_poles(scene: &mut SceneDescription, wrap_t_written: &[bool]) {
             &m.base_color_texture,
             &m.alpha_texture,
             &m.metallic_roughness_texture,
+            &m.roughness_texture,
+            &m.metallic_texture,
             &m.emission_texture,
             &m.normal_texture,
         ]

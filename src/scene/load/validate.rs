@@ -309,6 +309,8 @@ fn check_material(m: &Material, texture_count: usize) -> Result<(), String> {
         ("base_color_texture", &m.base_color_texture),
         ("alpha_texture", &m.alpha_texture),
         ("metallic_roughness_texture", &m.metallic_roughness_texture),
+        ("roughness_texture", &m.roughness_texture),
+        ("metallic_texture", &m.metallic_texture),
         ("emission_texture", &m.emission_texture),
         ("normal_texture", &m.normal_texture),
     ] {
