@@ -1,5 +1,5 @@
 //! Filtered texture lookups at a hit or towards the environment, shared by the integrators:
-//! the material's albedo under a ray's footprint (filling the first-lookup AOVs of its
+//! the material's shading inputs under a ray's footprint (filling the first-lookup AOVs of its
 //! pixel) and the environment's radiance in a direction.
 
 use glam::Vec3;
@@ -8,9 +8,11 @@ use crate::film::TileImage;
 use crate::footprint::Footprint;
 use crate::hit::SurfaceHit;
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::prepared::{binding_query, environment_radiance, SurfaceDetail};
+use crate::render::prepared::{environment_radiance, SurfaceDetail};
+use crate::render::surface_textures;
 use crate::render::tracer::TraceHit;
 use crate::scene::Material;
+use crate::shading::surface_inputs::{SurfaceInputs, TextureSlot};
 
 /// The ray a lookup is made for: its direction and footprint (already at the hit), its
 /// pixel in the tile, and whether it belongs to the pixel's first sample (which writes
@@ -38,21 +40,25 @@ pub(crate) fn surface_detail(
     }
 }
 
-/// The material's albedo at the hit: base colour times its texture, filtered by the ray's
-/// footprint. Fills the first-lookup AOVs of the pixel.
-pub(crate) fn surface_albedo(
+/// The material's shading inputs at the hit (`crate::shading::surface_inputs`): albedo,
+/// metallic, roughness, emission and the normal-mapped shading normal, every texture
+/// filtered by the ray's footprint. The base-colour lookup fills the first-lookup AOVs of
+/// the pixel.
+pub(crate) fn surface_inputs(
     context: &RenderContext,
     ray: LookupRay,
     material: &Material,
     surface: &SurfaceHit,
     image: &mut TileImage,
     worker: &mut WorkerState,
-) -> Vec3 {
-    let Some(binding) = &material.base_color_texture else {
-        return material.base_color;
-    };
+) -> SurfaceInputs {
+    if !surface_textures::reads_textures(material) {
+        // No texture is read: no footprint gradients either.
+        return crate::shading::surface_inputs::surface_inputs(material, surface, false, |_, _| {
+            glam::Vec4::ONE
+        });
+    }
     let options = &context.options;
-    let filter = &context.texture_filters[binding.texture];
     let gradients = if context.effects.footprints {
         let g = ray
             .footprint
@@ -61,24 +67,25 @@ pub(crate) fn surface_albedo(
     } else {
         [0.0; 4]
     };
-    let query = binding_query(&binding.transform, surface.st, gradients);
-    let texture = &context.textures[binding.texture];
-    worker.counters.texture_lookups += 1;
-    let texel = match (
-        &context.external_textures,
-        worker.texture_tiles.get_mut(binding.texture),
-    ) {
-        (Some(external), _) => crate::render::external_textures::sample_external(
-            external.as_ref(),
-            binding.texture,
-            &query,
-            filter,
-        ),
-        (None, Some(tiles)) => texture.sample_recording(&query, filter, tiles),
-        (None, None) => texture.sample(&query, filter),
-    };
     let pixel = ray.pixel as usize;
-    if ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel] {
+    let record = ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel];
+    let mut base_color_lookup = None;
+    let inputs = surface_textures::shading_inputs(
+        context,
+        material,
+        surface,
+        gradients,
+        false,
+        worker,
+        |slot, query, texel| {
+            if slot == TextureSlot::BaseColor {
+                base_color_lookup = Some((*query, texel));
+            }
+        },
+    );
+    if let (true, Some((query, texel)), Some(binding)) =
+        (record, base_color_lookup, &material.base_color_texture)
+    {
         image.lookup_done[pixel] = true;
         if !image.tex.is_empty() {
             image.tex[pixel] = [
@@ -87,11 +94,12 @@ pub(crate) fn surface_albedo(
             image.texcolor[pixel] = [texel.x, texel.y, texel.z, 1.0];
         }
         if !image.lod.is_empty() {
-            image.lod[pixel] = texture.lod(&query, filter);
+            let filter = &context.texture_filters[binding.texture];
+            image.lod[pixel] = context.textures[binding.texture].lod(&query, filter);
             image.footprint[pixel] = ray.footprint.width();
         }
     }
-    material.base_color * texel.truncate()
+    inputs
 }
 
 /// The environment's radiance in `direction`, filtered by `footprint`'s spread.

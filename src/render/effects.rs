@@ -157,6 +157,14 @@ impl EffectSet {
                     "ray footprints",
                     format!("material '{}' has a base-colour texture", m.name),
                 );
+            } else if let Some(m) =
+                materials().find(|m| crate::render::surface_textures::reads_textures(m))
+            {
+                set.footprints = true;
+                because(
+                    "ray footprints",
+                    format!("material '{}' has a texture", m.name),
+                );
             } else if env_texture {
                 set.footprints = true;
                 because(

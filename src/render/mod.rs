@@ -17,6 +17,7 @@ pub mod part;
 pub mod patch_geometry;
 pub mod prepared;
 pub mod stats;
+pub mod surface_textures;
 pub mod tracer;
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -97,12 +98,18 @@ pub fn prepare_with_textures(
     let scene_radius = surfaces
         .bounds
         .map_or(0.0, |(lower, upper)| 0.5 * (upper - lower).length());
-    let lights = crate::shading::SceneLights::with_area_lights(
+    let mut lights = crate::shading::SceneLights::with_area_lights(
         &scene.lights,
         environment_mean,
         scene_radius,
         crate::shading::AreaLights::new(&scene),
     );
+    // A lat-long environment is importance sampled (built once here; Whitted reads only the
+    // mean).
+    if let crate::scene::Environment::LatLong { texture, intensity } = scene.environment {
+        let map = crate::shading::EnvironmentMap::new(textures[texture].clone(), intensity);
+        lights = lights.with_environment_map(std::sync::Arc::new(map));
+    }
     Ok(RenderContext {
         materials: prepared::MaterialTable::new(&scene.materials),
         surfaces,

@@ -107,7 +107,7 @@ impl SurfaceLookup {
         let textured_materials = scene
             .materials
             .iter()
-            .map(|m| m.base_color_texture.is_some())
+            .map(crate::render::surface_textures::reads_textures)
             .collect();
         let bounds = scene.bounds();
         SurfaceLookup {

@@ -186,6 +186,23 @@ pub struct Material {
     /// Metalness in [0, 1] of the metallic-roughness model (0 = dielectric over diffuse,
     /// 1 = conductor with the base colour as its reflectance at normal incidence).
     pub metallic: f32,
+    /// Linear texture whose blue channel scales `metallic` and green channel scales
+    /// `roughness` (glTF's `metallicRoughnessTexture`); read only by the metallic-roughness
+    /// model (`roughness: Some(_)`).
+    pub metallic_roughness_texture: Option<TextureBinding>,
+    /// Separate single-channel maps of the metallic-roughness model (MTL's `map_Pr` and
+    /// `map_Pm`, greyscale images): the green channel of `roughness_texture` scales
+    /// `roughness`, the blue channel of `metallic_texture` scales `metallic` (for a grey
+    /// image every channel holds the value).
+    pub roughness_texture: Option<TextureBinding>,
+    pub metallic_texture: Option<TextureBinding>,
+    /// Texture multiplying `emission` (sRGB colour, glTF's `emissiveTexture`).
+    pub emission_texture: Option<TextureBinding>,
+    /// Tangent-space normal map (linear, +X along increasing s, +Y along decreasing t, as
+    /// glTF and OpenGL-style maps store them); see `crate::shading::surface_inputs`.
+    pub normal_texture: Option<TextureBinding>,
+    /// Scale of the normal map's X and Y components (glTF's `normalTexture.scale`).
+    pub normal_scale: f32,
 }
 
 impl Default for Material {
@@ -207,6 +224,12 @@ impl Default for Material {
             alpha_texture: None,
             roughness: None,
             metallic: 0.0,
+            metallic_roughness_texture: None,
+            roughness_texture: None,
+            metallic_texture: None,
+            emission_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
         }
     }
 }

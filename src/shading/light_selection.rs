@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use super::alias_table::AliasTable;
 use super::area_lights::{luminance, AreaLights};
-use super::environment_light::EnvironmentLight;
+use super::environment_light::{EnvironmentLight, EnvironmentMap};
 use crate::scene::Light;
 
 /// Chooses one of `n` items with fixed probabilities, from one uniform number (an alias
@@ -91,9 +91,7 @@ impl SceneLights {
         scene_radius: f32,
         area: AreaLights,
     ) -> SceneLights {
-        let environment = EnvironmentLight {
-            mean_radiance: environment_mean,
-        };
+        let environment = EnvironmentLight::constant(environment_mean);
         let r2 = scene_radius * scene_radius;
         let mut powers: Vec<f32> = lights.iter().map(|l| light_power(l, r2)).collect();
         powers.push(4.0 * PI * PI * r2 * luminance(environment_mean));
@@ -129,6 +127,13 @@ impl SceneLights {
             LightRef::Environment => n,
             LightRef::Area(i) => n + 1 + i,
         })
+    }
+
+    /// These lights with the environment importance sampled by `map` (a lat-long map's
+    /// distribution); its power and mean radiance stay as they were.
+    pub fn with_environment_map(mut self, map: std::sync::Arc<EnvironmentMap>) -> SceneLights {
+        self.environment = EnvironmentLight::lat_long(map, self.environment.mean_radiance);
+        self
     }
 }
 

@@ -26,6 +26,7 @@ use super::dielectric::SmoothDielectric;
 use super::metallic_roughness::MetallicRoughnessBsdf;
 use super::mirror::SmoothMirror;
 use super::rough_dielectric::RoughDielectric;
+use super::surface_inputs::SurfaceInputs;
 use crate::scene::{FresnelMode, Material};
 
 /// Below this perceptual roughness a transmissive material keeps the smooth (delta)
@@ -83,6 +84,14 @@ impl Bsdf for OpaqueLobe {
     }
 }
 
+/// What the opaque lobe takes from the hit: the (textured) albedo, roughness and metallic.
+#[derive(Clone, Copy, Debug)]
+struct LobeInputs {
+    albedo: Vec3,
+    roughness: Option<f32>,
+    metallic: f32,
+}
+
 /// A material's lobes at one hit, with their weights.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MaterialBsdf {
@@ -109,6 +118,52 @@ impl MaterialBsdf {
         outward_shading: Vec3,
         fresnel: Option<FresnelMode>,
     ) -> MaterialBsdf {
+        let inputs = LobeInputs {
+            albedo,
+            roughness: material.roughness,
+            metallic: material.metallic,
+        };
+        MaterialBsdf::with_inputs(material, inputs, d, outward_geometric, outward_shading, fresnel)
+    }
+
+    /// [`MaterialBsdf::new`] with the (textured) shading inputs of the hit
+    /// (`crate::shading::surface_inputs`): its albedo, roughness, metallic and normal-mapped
+    /// shading normal.
+    pub fn from_surface_inputs(
+        material: &Material,
+        inputs: &SurfaceInputs,
+        d: Vec3,
+        outward_geometric: Vec3,
+        fresnel: Option<FresnelMode>,
+    ) -> MaterialBsdf {
+        let lobe = LobeInputs {
+            albedo: inputs.albedo,
+            roughness: inputs.roughness,
+            metallic: inputs.metallic,
+        };
+        MaterialBsdf::with_inputs(
+            material,
+            lobe,
+            d,
+            outward_geometric,
+            inputs.shading_normal,
+            fresnel,
+        )
+    }
+
+    fn with_inputs(
+        material: &Material,
+        inputs: LobeInputs,
+        d: Vec3,
+        outward_geometric: Vec3,
+        outward_shading: Vec3,
+        fresnel: Option<FresnelMode>,
+    ) -> MaterialBsdf {
+        let LobeInputs {
+            albedo,
+            roughness,
+            metallic,
+        } = inputs;
         // The viewer's side decides which way the normals face (the geometric normal's rule,
         // as for dielectric boundaries).
         let (ng, ns) = if d.dot(outward_geometric) < 0.0 {
@@ -116,7 +171,7 @@ impl MaterialBsdf {
         } else {
             (-outward_geometric, -outward_shading)
         };
-        let opaque = match material.roughness {
+        let opaque = match roughness {
             None => OpaqueLobe::Classic(OpaqueBsdf {
                 n: ns,
                 albedo,
@@ -127,10 +182,10 @@ impl MaterialBsdf {
                 ns,
                 albedo,
                 roughness,
-                material.metallic,
+                metallic,
             )),
         };
-        let rough_dielectric = match material.roughness {
+        let rough_dielectric = match roughness {
             Some(roughness)
                 if material.transmission > 0.0
                     && roughness >= ROUGH_DIELECTRIC_MIN_ROUGHNESS

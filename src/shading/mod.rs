@@ -27,14 +27,20 @@
 //! - [`area_lights`]: emissive triangles and spheres as one-sided area lights (solid-angle
 //!   sampling of spheres, area sampling of triangles).
 //! - [`alias_table`]: Walker/Vose alias tables, choosing among many items in constant time.
+//! - [`environment_light`]: the environment as a light (mean radiance, direction sampling,
+//!   importance sampled for lat-long maps).
+//! - [`distribution_2d`]: piecewise-constant 1D and 2D distributions sampled by inversion.
 //! - [`light_selection`]: the scene's lights and the choice of one by power.
+//! - [`surface_inputs`]: a material's albedo, alpha, metallic, roughness, emission and
+//!   normal-mapped shading normal at a hit, from its factors and the texels the caller
+//!   filtered (normal mapping in a tangent frame from dP/ds, dP/dt).
 //! - [`ray_offset`]: spawn points, hit points with a bound on their rounding error, and
 //!   ray origins moved just past that bound off the surface they start on (seed 001,
 //!   "self intersection"), at any scene scale and camera distance.
 //!
 //! Conventions: directions are unit `glam::Vec3`; an *incident* direction `d` points
 //! towards the surface (the ray's travel direction), `wo`/`wi` point away from it.
-//! Nothing here traces rays, reads textures or allocates.
+//! Nothing here traces rays, reads textures or allocates (texels are handed in).
 
 pub mod alias_table;
 pub mod area_lights;
@@ -45,6 +51,7 @@ pub mod bsdf;
 mod bsdf_properties;
 pub mod conductor;
 pub mod dielectric;
+pub mod distribution_2d;
 pub mod environment_light;
 pub mod frame;
 pub mod fresnel;
@@ -58,6 +65,7 @@ pub mod ray_offset;
 pub mod reflection;
 pub mod refraction;
 pub mod rough_dielectric;
+pub mod surface_inputs;
 
 pub use alias_table::AliasTable;
 pub use area_lights::{AreaLight, AreaLightSample, AreaLights, AreaShape};
@@ -66,7 +74,7 @@ pub use brdf::OpaqueBsdf;
 pub use bsdf::{Bsdf, BsdfSample, Lobe};
 pub use conductor::RoughConductor;
 pub use dielectric::{DielectricSplit, SmoothDielectric};
-pub use environment_light::{EnvironmentLight, EnvironmentSample};
+pub use environment_light::{EnvironmentLight, EnvironmentMap, EnvironmentSample};
 pub use fresnel::{fresnel, fresnel_dielectric, fresnel_schlick, DielectricBoundary};
 pub use light_selection::{LightRef, LightSelection, SceneLights};
 pub use lights::{is_delta_light, light_position, pdf_li, sample_li, LightSample};

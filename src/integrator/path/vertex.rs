@@ -77,13 +77,16 @@ pub(super) fn shade(
         pixel: ray.pixel,
         first_sample: ray.first_sample,
     };
-    let albedo = texturing::surface_albedo(context, lookup, material, &surface, image, worker);
+    let inputs = texturing::surface_inputs(context, lookup, material, &surface, image, worker);
     if camera_first && !image.albedo.is_empty() {
-        image.albedo[pixel] = albedo.to_array();
+        image.albedo[pixel] = inputs.albedo.to_array();
+        if !image.normal.is_empty() {
+            image.normal[pixel] = inputs.shading_normal.to_array();
+        }
     }
 
     // Emission, from the front side only (one-sided emitters, `shading::area_lights`).
-    if material.emission.max_element() > 0.0 && surface.is_front_face(ray.direction) {
+    if inputs.emission.max_element() > 0.0 && surface.is_front_face(ray.direction) {
         let light = match context.surfaces.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(mesh) => lights.area.mesh_light(mesh, hit.primitive),
             GeometryRef::Spheres => lights.area.sphere_light(hit.primitive as usize),
@@ -102,7 +105,7 @@ pub(super) fn shade(
         add_radiance(
             image,
             ray.pixel,
-            ray.throughput * material.emission * weight,
+            ray.throughput * inputs.emission * weight,
         );
     }
 
@@ -113,19 +116,18 @@ pub(super) fn shade(
     let u_direction = ray.sampler.next_2d();
     let u_roulette = ray.sampler.next_1d();
 
-    let bsdf = MaterialBsdf::new(
+    let bsdf = MaterialBsdf::from_surface_inputs(
         material,
-        albedo,
+        &inputs,
         ray.direction,
         surface.geometric_normal,
-        surface.shading_normal,
         context.effects.fresnel.then_some(context.options.fresnel),
     );
     let front = surface.is_front_face(ray.direction);
     let (ng, ns) = if front {
-        (surface.geometric_normal, surface.shading_normal)
+        (surface.geometric_normal, inputs.shading_normal)
     } else {
-        (-surface.geometric_normal, -surface.shading_normal)
+        (-surface.geometric_normal, -inputs.shading_normal)
     };
     let wo = -ray.direction;
     let spawn = surface.spawn_point();

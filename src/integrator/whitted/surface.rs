@@ -1,5 +1,6 @@
 //! Shading a hit: what the camera hit writes to the AOVs, absorption on the way in, the
-//! material's albedo under the ray's footprint, emission and ambient light, and which
+//! material's inputs (albedo, emission, normal-mapped normal) under the ray's footprint,
+//! emission and ambient light, and which
 //! secondary rays the material spawns (direct light in `lights`, mirror and dielectric rays
 //! in `spawn` and `dielectric`).
 
@@ -17,6 +18,7 @@ use crate::render::prepared::SurfaceDetail;
 use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
 use crate::scene::Material;
+use crate::shading::surface_inputs::SurfaceInputs;
 use crate::shading::{self, MaterialBsdf, OpaqueLobe};
 
 /// A hit's opaque lobe, as the light beyond the punctual lights' shadow rays sees it.
@@ -110,21 +112,24 @@ pub(super) fn shade_hit(
         worker.counters.footprint_updates += 1;
     }
 
-    let albedo = surface_albedo(context, &ray, material, surface, image, worker);
+    let inputs = surface_inputs(context, &ray, material, surface, image, worker);
+    let albedo = inputs.albedo;
     if ray.kind == RayKind::Camera && ray.first_sample && !image.albedo.is_empty() {
         image.albedo[pixel] = albedo.to_array();
+        if !image.normal.is_empty() {
+            image.normal[pixel] = inputs.shading_normal.to_array();
+        }
     }
 
-    let mut radiance = material.emission;
+    let mut radiance = inputs.emission;
     let spawn = surface.spawn_point();
     // The index-matched case (the `fresnel` effect is off when every medium has ior 1)
     // reflects nothing but total internal reflection.
-    let bsdf = MaterialBsdf::new(
+    let bsdf = MaterialBsdf::from_surface_inputs(
         material,
-        albedo,
+        &inputs,
         ray.direction,
         surface.geometric_normal,
-        surface.shading_normal,
         effects.fresnel.then_some(options.fresnel),
     );
 
@@ -172,20 +177,22 @@ pub(super) fn shade_hit(
     }
 }
 
-/// The material's albedo at the hit under the ray's footprint (`integrator::texturing`).
-pub(super) fn surface_albedo(
+/// The material's shading inputs at the hit (`crate::shading::surface_inputs`): albedo,
+/// emission and the normal-mapped shading normal, every texture filtered by the ray's
+/// footprint. The base-colour lookup fills the first-lookup AOVs of the pixel.
+pub(super) fn surface_inputs(
     context: &RenderContext,
     ray: &PathRay,
     material: &Material,
     surface: &SurfaceHit,
     image: &mut TileImage,
     worker: &mut WorkerState,
-) -> Vec3 {
+) -> SurfaceInputs {
     let lookup = LookupRay {
         direction: ray.direction,
         footprint: &ray.footprint,
         pixel: ray.pixel,
         first_sample: ray.first_sample,
     };
-    texturing::surface_albedo(context, lookup, material, surface, image, worker)
+    texturing::surface_inputs(context, lookup, material, surface, image, worker)
 }

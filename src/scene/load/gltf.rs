@@ -6,16 +6,14 @@
 //! decoded: buffer-view and `data:` images become `TextureSource::Encoded`, file URIs
 //! `TextureSource::File`.
 //!
-//! Material mapping onto the Whitted model: base colour factor/texture (sRGB), emissive
-//! factor, `KHR_materials_transmission` factor,
-//! `KHR_materials_ior`, `KHR_materials_volume` attenuation colour/distance (Beer's law,
-//! seed 004), `KHR_texture_transform`, alpha mode MASK (BLEND is treated as MASK at 0.5)
-//! with the base-colour texture's alpha as a linear alpha texture. Metallic-roughness:
-//! a metallic factor >= 0.9 with roughness <= 0.1 becomes a mirror whose reflectivity is
-//! the largest base-colour component (the metal's normal-incidence reflectance) times the
-//! metallic factor, with the diffuse colour scaled by `1 - metallic`; otherwise the
-//! Blinn-Phong lobe gets weight `mix(0.04, max(base colour), metallic)` and exponent
-//! `2 / roughness^4 - 2` (clamped to [1, 10000]).
+//! Material mapping: base colour factor/texture (sRGB), the metallic-roughness model itself
+//! (`metallic`, `roughness: Some(..)`, factors defaulting to 1, and the linear
+//! metallic-roughness texture, B = metalness, G = roughness), emissive factor times
+//! `KHR_materials_emissive_strength` with the emissive texture (sRGB), the normal texture
+//! (linear) with its scale, `KHR_materials_transmission` factor, `KHR_materials_ior`,
+//! `KHR_materials_volume` attenuation colour/distance (Beer's law, seed 004),
+//! `KHR_texture_transform` on every texture, alpha mode MASK (BLEND is treated as MASK at
+//! 0.5) with the base-colour texture's alpha as a linear alpha texture.
 //! Texture coordinates: glTF's v points down, so `t = v` directly.
 
 use std::collections::HashMap;
@@ -592,17 +590,22 @@ impl Loader<'_> {
             alpha: factor[3],
             ..Material::default()
         };
-        let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
-        let reflectance = material.base_color.max_element();
-        if metallic >= 0.9 && roughness <= 0.1 {
-            material.mirror = (reflectance * metallic).clamp(0.0, 1.0);
-            material.base_color *= 1.0 - metallic;
-        } else {
-            material.specular = (0.04 + (reflectance - 0.04) * metallic).clamp(0.0, 1.0);
-            let r4 = roughness.max(1e-3).powi(4);
-            material.shininess = (2.0 / r4 - 2.0).clamp(1.0, 10000.0);
+        // The metallic-roughness model itself (glTF 2.0, Appendix B); the factors default to
+        // 1 when `pbrMetallicRoughness` leaves them out.
+        material.metallic = pbr.metallic_factor();
+        material.roughness = Some(pbr.roughness_factor());
+        if let Some(info) = pbr.metallic_roughness_texture() {
+            material.metallic_roughness_texture = Some(self.binding(&info, ColorSpace::Linear)?);
         }
-        material.emission = Vec3::from(m.emissive_factor());
+        // KHR_materials_emissive_strength scales the emissive factor beyond [0, 1].
+        material.emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+        if let Some(info) = m.emissive_texture() {
+            material.emission_texture = Some(self.binding(&info, ColorSpace::Srgb)?);
+        }
+        if let Some(normal) = m.normal_texture() {
+            material.normal_texture = Some(self.normal_binding(&normal)?);
+            material.normal_scale = normal.scale();
+        }
         if let Some(t) = m.transmission() {
             material.transmission = t.transmission_factor();
         }
@@ -666,6 +669,43 @@ impl Loader<'_> {
             ));
         }
         let texture = self.texture(&info.texture(), color_space)?;
+        Ok(TextureBinding { texture, transform })
+    }
+
+    /// The binding of a `normalTexture` (linear data). Its `KHR_texture_transform`, which the
+    /// `gltf` crate exposes on colour textures only, is read from the extension's JSON.
+    fn normal_binding(
+        &mut self,
+        normal: &gltf::material::NormalTexture,
+    ) -> Result<TextureBinding, String> {
+        let mut transform = Affine2::IDENTITY;
+        let mut tex_coord = normal.tex_coord();
+        if let Some(t) = normal.extension_value("KHR_texture_transform") {
+            let pair = |key: &str, default: [f32; 2]| {
+                t.get(key).and_then(|v| v.as_array()).map_or(default, |a| {
+                    let get = |i: usize, d: f32| {
+                        a.get(i).and_then(|x| x.as_f64()).map_or(d, |x| x as f32)
+                    };
+                    [get(0, default[0]), get(1, default[1])]
+                })
+            };
+            let rotation = t.get("rotation").and_then(|v| v.as_f64()).unwrap_or(0.0) as f32;
+            transform = texture_transform(
+                pair("offset", [0.0, 0.0]),
+                rotation,
+                pair("scale", [1.0, 1.0]),
+            );
+            if let Some(tc) = t.get("texCoord").and_then(|v| v.as_u64()) {
+                tex_coord = tc as u32;
+            }
+        }
+        if tex_coord != 0 {
+            self.part.notes.push(format!(
+                "{}: a texture uses TEXCOORD_{tex_coord}; only TEXCOORD_0 is read",
+                self.label
+            ));
+        }
+        let texture = self.texture(&normal.texture(), ColorSpace::Linear)?;
         Ok(TextureBinding { texture, transform })
     }
 
@@ -853,6 +893,21 @@ fn check_material_ranges(m: &gltf::Material) -> Result<(), String> {
     for (key, value) in scalars {
         if !unit(value) {
             return Err(format!("{what}: {key} {value} must lie in [0, 1]"));
+        }
+    }
+    if let Some(strength) = m.emissive_strength() {
+        if !(strength >= 0.0 && strength.is_finite()) {
+            return Err(format!(
+                "{what}: KHR_materials_emissive_strength.emissiveStrength {strength} must be a finite number >= 0"
+            ));
+        }
+    }
+    if let Some(normal) = m.normal_texture() {
+        if !normal.scale().is_finite() {
+            return Err(format!(
+                "{what}: normalTexture.scale {} must be finite",
+                normal.scale()
+            ));
         }
     }
     if let Some(cutoff) = m.alpha_cutoff() {
@@ -1157,18 +1212,116 @@ mod tests {
     }
 
     #[test]
-    fn shiny_metals_become_mirrors() {
+    fn metallic_roughness_factors_select_the_model() {
+        // Factors left out of pbrMetallicRoughness default to 1 (glTF 2.0, material schema).
         let part = synthetic(
             |j| {
-                j["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = 1.0.into();
-                j["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = 0.05.into();
+                let pbr = j["materials"][0]["pbrMetallicRoughness"]
+                    .as_object_mut()
+                    .unwrap();
+                pbr.remove("metallicFactor");
             },
             TRIANGLE,
         )
         .unwrap();
         let m = &part.materials[0];
-        assert_eq!(m.mirror, 0.7);
-        assert_eq!(m.base_color, Vec3::ZERO);
+        assert_eq!((m.metallic, m.roughness), (1.0, Some(1.0)));
+        assert_eq!(m.base_color, Vec3::new(0.5, 0.6, 0.7), "no longer scaled");
+        assert_eq!((m.mirror, m.specular), (0.0, 0.0));
+        let part = synthetic(
+            |j| {
+                let pbr = &mut j["materials"][0]["pbrMetallicRoughness"];
+                pbr["metallicFactor"] = 0.25.into();
+                pbr["roughnessFactor"] = 0.5.into();
+            },
+            TRIANGLE,
+        )
+        .unwrap();
+        let m = &part.materials[0];
+        assert_eq!((m.metallic, m.roughness), (0.25, Some(0.5)));
+        assert!(m.metallic_roughness_texture.is_none() && m.normal_texture.is_none());
+    }
+
+    #[test]
+    fn textured_inputs_are_bound_with_their_colour_spaces() {
+        let part = synthetic(
+            |j| {
+                j["extensionsUsed"]
+                    .as_array_mut()
+                    .unwrap()
+                    .push("KHR_materials_emissive_strength".into());
+                let image = j["images"][0].clone();
+                j["images"].as_array_mut().unwrap().push(image);
+                j["textures"] = serde_json::json!([{"source": 0, "sampler": 0}, {"source": 1}]);
+                let m = &mut j["materials"][0];
+                m["pbrMetallicRoughness"]["metallicRoughnessTexture"] =
+                    serde_json::json!({"index": 1});
+                m["emissiveTexture"] = serde_json::json!({"index": 0});
+                m["normalTexture"] = serde_json::json!({"index": 1, "scale": 0.5,
+                    "extensions": {"KHR_texture_transform": {"scale": [3, 3]}}});
+                m["extensions"]["KHR_materials_emissive_strength"] =
+                    serde_json::json!({"emissiveStrength": 8.0});
+            },
+            TRIANGLE,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let m = &part.materials[0];
+        assert_eq!(m.emission, Vec3::new(0.1, 0.2, 0.3) * 8.0);
+        assert_eq!(m.normal_scale, 0.5);
+        let space =
+            |b: &Option<TextureBinding>| part.textures[b.as_ref().unwrap().texture].color_space;
+        assert_eq!(space(&m.metallic_roughness_texture), ColorSpace::Linear);
+        assert_eq!(space(&m.normal_texture), ColorSpace::Linear);
+        assert_eq!(space(&m.emission_texture), ColorSpace::Srgb);
+        // The same image as data (metallic-roughness, normal) is one texture.
+        assert_eq!(
+            m.metallic_roughness_texture.as_ref().unwrap().texture,
+            m.normal_texture.as_ref().unwrap().texture
+        );
+        let normal = m.normal_texture.as_ref().unwrap();
+        assert_eq!(
+            normal.transform.transform_point2(Vec2::ONE),
+            Vec2::splat(3.0)
+        );
+    }
+
+    #[test]
+    fn bad_textured_input_values_are_errors() {
+        type Edit = Box<dyn FnOnce(&mut serde_json::Value)>;
+        let cases: Vec<(Edit, &str)> = vec![
+            (
+                Box::new(|j| {
+                    j["materials"][0]["extensions"]["KHR_materials_emissive_strength"] =
+                        serde_json::json!({"emissiveStrength": -1.0})
+                }),
+                "emissiveStrength -1 must be a finite number >= 0",
+            ),
+            (
+                Box::new(|j| {
+                    j["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = 1.5.into()
+                }),
+                "roughnessFactor 1.5 must lie in [0, 1]",
+            ),
+            (
+                Box::new(|j| {
+                    j["images"]
+                        .as_array_mut()
+                        .unwrap()
+                        .push(serde_json::json!({"uri": "no_such_normals.png"}));
+                    j["textures"]
+                        .as_array_mut()
+                        .unwrap()
+                        .push(serde_json::json!({"source": 1}));
+                    j["materials"][0]["normalTexture"] = serde_json::json!({"index": 1});
+                }),
+                "no_such_normals.png",
+            ),
+        ];
+        for (edit, expected) in cases {
+            let e = synthetic(edit, TRIANGLE).unwrap_err().to_string();
+            assert!(e.contains("synthetic.gltf") && e.contains(expected), "{e}");
+            assert_eq!(e.lines().count(), 1, "{e}");
+        }
     }
 
     #[test]

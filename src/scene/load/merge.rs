@@ -112,6 +112,11 @@ pub(crate) fn append(
         for mut material in part.materials {
             rebase(&mut material.base_color_texture);
             rebase(&mut material.alpha_texture);
+            rebase(&mut material.metallic_roughness_texture);
+            rebase(&mut material.roughness_texture);
+            rebase(&mut material.metallic_texture);
+            rebase(&mut material.emission_texture);
+            rebase(&mut material.normal_texture);
             scene.materials.push(material);
         }
     }

@@ -6,6 +6,10 @@
 //! (values <= 0, which exporters write for "unset", mean 1.5), `d` / `Tr` transparency ->
 //! transmission weight, `map_d` alpha texture (linear, cut-out at 0.5), `illum 3` mirror
 //! (reflectivity = the largest `Ks` component, 1 when `Ks` is absent), `illum 4/6/7` glass.
+//! PBR extension (as Blender and three.js write it): `Pr` roughness, `Pm` metalness (either
+//! selects the metallic-roughness model), `map_Pr` and `map_Pm` greyscale maps (or one
+//! packed texture when they name the same file: green = roughness, blue = metalness), `map_Ke` emission texture (sRGB), `norm` /
+//! `map_Bump` / `bump` tangent-space normal map with `-bm` as its scale.
 //! OBJ texture coordinates have v pointing up; they are stored as `t = 1 - v`
 //! (OpenImageIO convention, t down).
 //!
@@ -412,6 +416,26 @@ fn prepare_mtl(
             "Ns" if rest.parse::<f32>().is_ok_and(|x| x < 0.0) => {
                 return Err(at(number, format!("Ns {rest} is negative")));
             }
+            "Pr" | "Pm" => {
+                let value = rest
+                    .split_whitespace()
+                    .next()
+                    .and_then(|v| v.parse::<f32>().ok());
+                if !value.is_some_and(|v| (0.0..=1.0).contains(&v)) {
+                    return Err(at(
+                        number,
+                        format!(
+                            "'{}': {keyword} must be a number in [0, 1]",
+                            excerpt(line, 60)
+                        ),
+                    ));
+                }
+            }
+            "map_Bump" | "map_bump" | "bump" | "norm" => {
+                if let Err(message) = bump_multiplier(rest) {
+                    return Err(at(number, format!("'{}': {message}", excerpt(line, 60))));
+                }
+            }
             "Tr" => {
                 let readable = rest
                     .split_whitespace()
@@ -596,7 +620,106 @@ fn convert_material(
         });
         material.alpha_cutoff = Some(0.5);
     }
+    let param = |key: &str| m.unknown_param.get(key).map(String::as_str);
+    let number =
+        |key: &str| param(key).and_then(|v| v.split_whitespace().next()?.parse::<f32>().ok());
+    let bind = |index: usize| {
+        Some(TextureBinding {
+            texture: index,
+            transform: Affine2::IDENTITY,
+        })
+    };
+    // The PBR extension of MTL (`Pr`, `Pm`, `map_Pr`, `map_Pm`, as Blender and three.js
+    // write them) selects the metallic-roughness model.
+    let (roughness_map, metallic_map) = (param("map_Pr"), param("map_Pm"));
+    if number("Pr").is_some()
+        || number("Pm").is_some()
+        || roughness_map.is_some()
+        || metallic_map.is_some()
+    {
+        material.roughness = Some(number("Pr").unwrap_or(1.0));
+        // Without `Pm`, a metalness map gives the metalness by itself (factor 1).
+        let default_metallic = if metallic_map.is_some() { 1.0 } else { 0.0 };
+        material.metallic = number("Pm").unwrap_or(default_metallic);
+        match (roughness_map, metallic_map) {
+            // One file for both: glTF's packing (green = roughness, blue = metalness).
+            (Some(r), Some(m)) if texture_file(r) == texture_file(m) => {
+                let index = add_texture(files, textures, r, ColorSpace::Linear)
+                    .map_err(|e| at("map_Pr", e))?;
+                material.metallic_roughness_texture = bind(index);
+            }
+            (r, m) => {
+                if let Some(r) = r {
+                    let index = add_texture(files, textures, r, ColorSpace::Linear)
+                        .map_err(|e| at("map_Pr", e))?;
+                    material.roughness_texture = bind(index);
+                }
+                if let Some(m) = m {
+                    let index = add_texture(files, textures, m, ColorSpace::Linear)
+                        .map_err(|e| at("map_Pm", e))?;
+                    material.metallic_texture = bind(index);
+                }
+            }
+        }
+    }
+    if let Some(file) = param("map_Ke") {
+        let index =
+            add_texture(files, textures, file, ColorSpace::Srgb).map_err(|e| at("map_Ke", e))?;
+        material.emission_texture = bind(index);
+        // The texture gives the emission by itself unless `Ke` scales it.
+        if m.emissive.is_none() {
+            material.emission = Vec3::ONE;
+        }
+    }
+    // Tangent-space normal maps: `norm` (the PBR extension), and `map_Bump`/`bump`, which
+    // Blender's exporter writes for a Normal Map node's image with its strength as `-bm`.
+    let normal = match (param("norm"), &m.normal_texture) {
+        (Some(statement), _) => Some(("norm", statement)),
+        (None, Some(statement)) => Some((
+            if origin.statement_lines.contains_key("bump") {
+                "bump"
+            } else {
+                "map_Bump"
+            },
+            statement.as_str(),
+        )),
+        (None, None) => None,
+    };
+    if let Some((keyword, statement)) = normal {
+        let keyword = if keyword == "map_Bump" && origin.statement_lines.contains_key("map_bump") {
+            "map_bump"
+        } else {
+            keyword
+        };
+        material.normal_scale = bump_multiplier(statement).map_err(|e| at(keyword, e))?;
+        let index = add_texture(files, textures, statement, ColorSpace::Linear)
+            .map_err(|e| at(keyword, e))?;
+        material.normal_texture = bind(index);
+    }
     Ok(material)
+}
+
+/// The file name of an MTL map statement: its last word, with `\\` read as `/`.
+fn texture_file(statement: &str) -> String {
+    statement
+        .split_whitespace()
+        .last()
+        .unwrap_or(statement)
+        .replace('\\', "/")
+}
+
+/// The `-bm` multiplier of a bump or normal map statement (1 when absent).
+fn bump_multiplier(statement: &str) -> Result<f32, String> {
+    let mut words = statement.split_whitespace();
+    while let Some(word) = words.next() {
+        if word == "-bm" {
+            return match words.next().map(str::parse::<f32>) {
+                Some(Ok(value)) if value.is_finite() => Ok(value),
+                _ => Err("-bm needs a finite number".to_owned()),
+            };
+        }
+    }
+    Ok(1.0)
 }
 
 /// Adds (or reuses) a texture for an MTL map statement. Options such as `-s 1 1 1` before
@@ -608,11 +731,7 @@ fn add_texture(
     statement: &str,
     color_space: ColorSpace,
 ) -> Result<usize, String> {
-    let name = statement
-        .split_whitespace()
-        .last()
-        .unwrap_or(statement)
-        .replace('\\', "/");
+    let name = texture_file(statement);
     if let Some(i) = textures
         .iter()
         .position(|t| t.name == name && t.color_space == color_space)
@@ -703,6 +822,99 @@ mod tests {
             "{:?}",
             part.notes
         );
+    }
+
+    #[test]
+    fn pbr_statements_map_onto_the_metallic_roughness_model() {
+        let dir = tempfile::tempdir().unwrap();
+        write(dir.path(), "quad.obj", QUAD);
+        write(
+            dir.path(),
+            "quad.mtl",
+            "newmtl red\nKd 1 0 0\nPr 0.4\nPm 0.8\nmap_Pr orm.png\nmap_Pm orm.png\n\
+             Ke 2 2 2\nmap_Ke glow.png\nmap_Bump -bm 0.5 normals.png\n",
+        );
+        for file in ["orm.png", "glow.png", "normals.png"] {
+            write(dir.path(), file, "not decoded here");
+        }
+        let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap();
+        let m = &part.materials[0];
+        assert_eq!((m.roughness, m.metallic), (Some(0.4), 0.8));
+        assert_eq!(m.emission, Vec3::splat(2.0));
+        assert_eq!(m.normal_scale, 0.5);
+        let texture = |b: &Option<TextureBinding>| &part.textures[b.as_ref().unwrap().texture];
+        let orm = texture(&m.metallic_roughness_texture);
+        assert_eq!(
+            (orm.name.as_str(), orm.color_space),
+            ("orm.png", ColorSpace::Linear)
+        );
+        let glow = texture(&m.emission_texture);
+        assert_eq!(
+            (glow.name.as_str(), glow.color_space),
+            ("glow.png", ColorSpace::Srgb)
+        );
+        let normals = texture(&m.normal_texture);
+        assert_eq!(
+            (normals.name.as_str(), normals.color_space),
+            ("normals.png", ColorSpace::Linear)
+        );
+
+        // `norm`, separate greyscale maps, and map_Ke without Ke.
+        write(
+            dir.path(),
+            "quad.mtl",
+            "newmtl red\nmap_Pr orm.png\nmap_Pm glow.png\nmap_Ke glow.png\nnorm normals.png\n",
+        );
+        let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap();
+        let m = &part.materials[0];
+        assert_eq!((m.roughness, m.metallic), (Some(1.0), 1.0));
+        assert!(m.metallic_roughness_texture.is_none());
+        let texture = |b: &Option<TextureBinding>| &part.textures[b.as_ref().unwrap().texture];
+        assert_eq!(texture(&m.roughness_texture).name, "orm.png");
+        let metal = texture(&m.metallic_texture);
+        assert_eq!(
+            (metal.name.as_str(), metal.color_space),
+            ("glow.png", ColorSpace::Linear)
+        );
+        assert_eq!(m.emission, Vec3::ONE);
+        assert_eq!(m.normal_scale, 1.0);
+        assert!(m.normal_texture.is_some());
+    }
+
+    #[test]
+    fn bad_pbr_statements_are_errors_at_their_line() {
+        let dir = tempfile::tempdir().unwrap();
+        write(dir.path(), "quad.obj", QUAD);
+        for (mtl, expected) in [
+            (
+                "newmtl red\nPr 1.5\n",
+                "quad.mtl: line 2: 'Pr 1.5': Pr must be a number in [0, 1]",
+            ),
+            (
+                "newmtl red\nPm x\n",
+                "quad.mtl: line 2: 'Pm x': Pm must be a number in [0, 1]",
+            ),
+            (
+                "newmtl red\nKd 1 1 1\nmap_Bump -bm nan n.png\n",
+                "line 3: 'map_Bump -bm nan n.png': -bm needs a finite number",
+            ),
+            ("newmtl red\nmap_Ke missing_glow.png\n", "missing_glow.png"),
+            (
+                "newmtl red\nnorm missing_normals.png\n",
+                "missing_normals.png",
+            ),
+            (
+                "newmtl red\nPm 1\nmap_Pm missing_metal.png\n",
+                "line 3: texture 'missing_metal.png'",
+            ),
+        ] {
+            write(dir.path(), "quad.mtl", mtl);
+            let err = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj"))
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(expected) && err.contains("quad.mtl"), "{err}");
+            assert_eq!(err.lines().count(), 1, "{err}");
+        }
     }
 
     #[test]

@@ -260,6 +260,10 @@ struct RawMaterial {
     // Plain f64 (not Num), so a nan is reported with the material's name.
     roughness: Option<Spanned<f64>>,
     metallic: Option<Spanned<f64>>,
+    metallic_roughness_texture: Option<Spanned<String>>,
+    emission_texture: Option<Spanned<String>>,
+    normal_texture: Option<Spanned<String>>,
+    normal_scale: Option<Spanned<Num>>,
 }
 
 #[derive(Deserialize)]
@@ -528,6 +532,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             unit_weight(loc, &mut cutoff, &m.alpha_cutoff, "alpha_cutoff")?;
             material.alpha_cutoff = Some(cutoff);
         }
+        textured_inputs(loc, &scene.textures, &texture, m, transform, &mut material)?;
         scene.materials.push(material);
         material_names.insert(name, scene.materials.len() - 1);
     }
@@ -615,6 +620,58 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
         scene.lights.push(light_desc(light, loc)?);
     }
     Ok(scene)
+}
+
+/// The keys of a material's textured inputs (metallic-roughness, emission, normal map), all
+/// with the material's texture transform. Data textures (metallic-roughness, normal) must be
+/// declared linear; the metallic-roughness texture belongs to the metallic-roughness model
+/// and needs `roughness`.
+fn textured_inputs(
+    loc: &Located,
+    textures: &[TextureDesc],
+    texture: &dyn Fn(&Spanned<String>) -> Result<usize, SceneError>,
+    m: &RawMaterial,
+    transform: Affine2,
+    material: &mut Material,
+) -> Result<(), SceneError> {
+    let linear = |t: &Spanned<String>, key: &str| {
+        let index = texture(t)?;
+        if textures[index].color_space != ColorSpace::Linear {
+            return Err(loc.at(
+                t,
+                format!(
+                    "{key} '{}' must be declared with color_space = \"linear\"",
+                    t.get_ref()
+                ),
+            ));
+        }
+        Ok(TextureBinding {
+            texture: index,
+            transform,
+        })
+    };
+    if let Some(t) = &m.metallic_roughness_texture {
+        if material.roughness.is_none() {
+            return Err(loc.at(
+                t,
+                "metallic_roughness_texture needs roughness (the metallic-roughness model)",
+            ));
+        }
+        material.metallic_roughness_texture = Some(linear(t, "metallic_roughness_texture")?);
+    }
+    if let Some(t) = &m.emission_texture {
+        material.emission_texture = Some(TextureBinding {
+            texture: texture(t)?,
+            transform,
+        });
+    }
+    if let Some(t) = &m.normal_texture {
+        material.normal_texture = Some(linear(t, "normal_texture")?);
+    }
+    if let Some(scale) = &m.normal_scale {
+        material.normal_scale = scale.get_ref().0;
+    }
+    Ok(())
 }
 
 /// `texture_scale`, `texture_offset`, `texture_rotation` as `T * R * S` applied to st:
@@ -829,10 +886,18 @@ fn clamp_lat_long_poles(scene: &mut SceneDescription, wrap_t_written: &[bool]) {
         return;
     }
     let used_by_materials = scene.materials.iter().any(|m| {
-        [&m.base_color_texture, &m.alpha_texture]
-            .into_iter()
-            .flatten()
-            .any(|binding| binding.texture == *texture)
+        [
+            &m.base_color_texture,
+            &m.alpha_texture,
+            &m.metallic_roughness_texture,
+            &m.roughness_texture,
+            &m.metallic_texture,
+            &m.emission_texture,
+            &m.normal_texture,
+        ]
+        .into_iter()
+        .flatten()
+        .any(|binding| binding.texture == *texture)
     });
     if used_by_materials {
         let mut own = scene.textures[*texture].clone();
@@ -1049,6 +1114,46 @@ material = "glass"
         assert!(e.contains("fisheye"), "{e}");
         let e = err("[render]\ntonemap = 'aces'\n");
         assert!(e.starts_with("s.toml:2:") && e.contains("aces"), "{e}");
+    }
+
+    #[test]
+    fn textured_input_keys() {
+        let dir = tempfile::tempdir().unwrap();
+        for f in ["glow.png", "n.png"] {
+            std::fs::write(dir.path().join(f), b"x").unwrap();
+        }
+        let textures = "[[texture]]\nname = 'glow'\nfile = 'glow.png'\n\
+                        [[texture]]\nname = 'n'\nfile = 'n.png'\ncolor_space = 'linear'\n";
+        let text = format!(
+            "{textures}[[material]]\nname = 'm'\nemission = [2, 2, 2]\nemission_texture = 'glow'\n\
+             normal_texture = 'n'\nnormal_scale = 0.25\ntexture_scale = [2, 2]\n"
+        );
+        let s = parse(&text, &Files::disk(dir.path()), "s.toml").unwrap_or_else(|e| panic!("{e}"));
+        let m = &s.materials[0];
+        assert_eq!(m.emission_texture.as_ref().unwrap().texture, 0);
+        let normal = m.normal_texture.as_ref().unwrap();
+        assert_eq!(normal.texture, 1);
+        assert_eq!(
+            normal.transform.transform_point2(Vec2::ONE),
+            Vec2::splat(2.0)
+        );
+        assert_eq!(m.normal_scale, 0.25);
+        for (material, expected) in [
+            (
+                "normal_texture = 'glow'",
+                "s.toml:10:18: normal_texture 'glow' must be declared with color_space = \"linear\"",
+            ),
+            (
+                "metallic_roughness_texture = 'n'",
+                "s.toml:10:30: metallic_roughness_texture needs roughness",
+            ),
+            ("normal_scale = nan", "s.toml:10:"),
+            ("emission_texture = 'nothere'", "unknown texture 'nothere'"),
+        ] {
+            let text = format!("{textures}[[material]]\nname = 'm'\n{material}\n");
+            let e = parse(&text, &Files::disk(dir.path()), "s.toml").unwrap_err().to_string();
+            assert!(e.contains(expected), "{e}");
+        }
     }
 
     #[test]

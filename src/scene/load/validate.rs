@@ -289,6 +289,7 @@ fn check_material(m: &Material, texture_count: usize) -> Result<(), String> {
             return Err(format!("{what}: {name} {value} must lie in [0, 1]"));
         }
     }
+    finite(m.normal_scale, &format!("{what} normal_scale"))?;
     if m.shininess < 0.0 {
         return Err(format!("{what}: shininess {} must be >= 0", m.shininess));
     }
@@ -307,6 +308,11 @@ fn check_material(m: &Material, texture_count: usize) -> Result<(), String> {
     for (slot, binding) in [
         ("base_color_texture", &m.base_color_texture),
         ("alpha_texture", &m.alpha_texture),
+        ("metallic_roughness_texture", &m.metallic_roughness_texture),
+        ("roughness_texture", &m.roughness_texture),
+        ("metallic_texture", &m.metallic_texture),
+        ("emission_texture", &m.emission_texture),
+        ("normal_texture", &m.normal_texture),
     ] {
         if let Some(TextureBinding { texture, transform }) = binding {
             if *texture >= texture_count {

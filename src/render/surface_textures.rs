@@ -1,0 +1,78 @@
+//! A material's textures read at a hit, filtered over the ray's footprint: the one lookup
+//! every integrator uses for the base colour, metallic-roughness, emission and normal
+//! textures, combined into shading inputs by `crate::shading::surface_inputs`.
+//!
+//! Each binding is looked up with the same texture gradients (the footprint's at the hit,
+//! mapped through the binding's transform) and the same filter options as the base colour,
+//! from the render's own textures or from an external texture system when one serves them.
+
+use glam::{Vec2, Vec4};
+
+use crate::hit::SurfaceHit;
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::prepared::binding_query;
+use crate::scene::{Material, TextureBinding};
+use crate::shading::surface_inputs::{surface_inputs, SurfaceInputs, TextureSlot};
+use crate::texture::TextureQuery;
+
+/// The filtered texel of `binding` at texture coordinates `st` with the footprint's
+/// gradients `[ds/dx, dt/dx, ds/dy, dt/dy]` (zero for a point sample of level 0), with the
+/// query it used. Counts the lookup and records its texture tiles when they are counted.
+pub fn sample_binding(
+    context: &RenderContext,
+    binding: &TextureBinding,
+    st: Vec2,
+    gradients: [f32; 4],
+    worker: &mut WorkerState,
+) -> (TextureQuery, Vec4) {
+    let filter = &context.texture_filters[binding.texture];
+    let query = binding_query(&binding.transform, st, gradients);
+    let texture = &context.textures[binding.texture];
+    worker.counters.texture_lookups += 1;
+    let texel = match (
+        &context.external_textures,
+        worker.texture_tiles.get_mut(binding.texture),
+    ) {
+        (Some(external), _) => crate::render::external_textures::sample_external(
+            external.as_ref(),
+            binding.texture,
+            &query,
+            filter,
+        ),
+        (None, Some(tiles)) => texture.sample_recording(&query, filter, tiles),
+        (None, None) => texture.sample(&query, filter),
+    };
+    (query, texel)
+}
+
+/// The shading inputs of `material` at `surface`, every texture filtered with the
+/// footprint's `gradients` (see [`sample_binding`]). `observe` sees each lookup (slot, query,
+/// texel), e.g. to fill the texture AOVs; `with_alpha` as in
+/// [`surface_inputs`](crate::shading::surface_inputs::surface_inputs).
+pub fn shading_inputs(
+    context: &RenderContext,
+    material: &Material,
+    surface: &SurfaceHit,
+    gradients: [f32; 4],
+    with_alpha: bool,
+    worker: &mut WorkerState,
+    mut observe: impl FnMut(TextureSlot, &TextureQuery, Vec4),
+) -> SurfaceInputs {
+    surface_inputs(material, surface, with_alpha, |slot, binding| {
+        let (query, texel) = sample_binding(context, binding, surface.st, gradients, worker);
+        observe(slot, &query, texel);
+        texel
+    })
+}
+
+/// Whether shading `material` reads any texture (so hits need texture coordinates and
+/// dP/ds, dP/dt, and lookups need the footprint's gradients).
+pub fn reads_textures(material: &Material) -> bool {
+    material.base_color_texture.is_some()
+        || (material.roughness.is_some()
+            && (material.metallic_roughness_texture.is_some()
+                || material.roughness_texture.is_some()
+                || material.metallic_texture.is_some()))
+        || (material.emission_texture.is_some() && material.emission != glam::Vec3::ZERO)
+        || material.normal_texture.is_some()
+}
