@@ -33,6 +33,10 @@ pub struct WorkCounters {
     /// Shadow-ray segments traced as closest-hit queries to walk through transmissive
     /// occluders (with opaque occluders only, shadow rays are any-hit occlusion queries).
     pub shadow_walk_queries: u64,
+    /// Segments (camera, secondary, shadow, escaping) whose fog was evaluated.
+    pub fog_segments: u64,
+    /// Fog volumes those segments crossed (the closed-form depth ran for each).
+    pub fog_volume_crossings: u64,
 }
 
 impl WorkCounters {
@@ -59,6 +63,8 @@ impl WorkCounters {
         self.filter_callbacks += other.filter_callbacks;
         self.absorption_evaluations += other.absorption_evaluations;
         self.shadow_walk_queries += other.shadow_walk_queries;
+        self.fog_segments += other.fog_segments;
+        self.fog_volume_crossings += other.fog_volume_crossings;
     }
 }
 

@@ -35,6 +35,8 @@ pub struct SceneDescription {
     /// converted to bicubic Bezier patches ([`patch`]).
     pub patches: Vec<patch::BezierPatch>,
     pub environment: Environment,
+    /// Fog volumes (`[[fog]]`), with their exact optical depth in `crate::medium`.
+    pub fog: Vec<crate::medium::FogVolume>,
     pub settings: RenderSettings,
     /// Things the loader decided on the user's behalf ("camera placed to frame the bounds",
     /// "no lights: default light and environment added"); printed in the summary line.
@@ -260,6 +262,8 @@ pub struct RenderSettings {
     pub fresnel: FresnelMode,
     /// The sampler's seed (`--seed` overrides it).
     pub seed: u32,
+    /// How fog's optical depth becomes the blend towards its colour (`[render] fog_model`).
+    pub fog_model: crate::medium::FogModel,
 }
 
 impl Default for RenderSettings {
@@ -274,6 +278,7 @@ impl Default for RenderSettings {
             exposure: 0.0,
             fresnel: FresnelMode::Exact,
             seed: 0,
+            fog_model: crate::medium::FogModel::Exact,
         }
     }
 }

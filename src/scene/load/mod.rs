@@ -29,6 +29,7 @@ mod default_scene;
 mod error;
 mod files;
 mod framing;
+mod fog;
 mod gltf;
 mod merge;
 mod obj;

@@ -112,6 +112,8 @@ struct RawScene {
     bezier_triangle: Vec<super::patches::RawBezierTriangle>,
     #[serde(default)]
     patch_file: Vec<super::patches::RawPatchFile>,
+    #[serde(default)]
+    fog: Vec<Spanned<super::fog::RawFog>>,
 }
 
 #[derive(Deserialize)]
@@ -126,6 +128,14 @@ struct RawRender {
     exposure: Option<Num>,
     fresnel: Option<RawFresnel>,
     seed: Option<u32>,
+    fog_model: Option<RawFogModel>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "kebab-case")]
+enum RawFogModel {
+    Exact,
+    LinearBlend,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -585,6 +595,10 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
     for light in &raw.light {
         scene.lights.push(light_desc(light, loc)?);
     }
+    for fog in &raw.fog {
+        let volume = super::fog::fog_volume(fog.get_ref()).map_err(|e| loc.at(fog, e))?;
+        scene.fog.push(volume);
+    }
     Ok(scene)
 }
 
@@ -638,6 +652,12 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
     }
     if let Some(seed) = r.seed {
         s.seed = seed;
+    }
+    if let Some(model) = r.fog_model {
+        s.fog_model = match model {
+            RawFogModel::Exact => crate::medium::FogModel::Exact,
+            RawFogModel::LinearBlend => crate::medium::FogModel::LinearBlend,
+        };
     }
     Ok(s)
 }
