@@ -162,3 +162,53 @@ pub(super) fn gltf_fog(extras: Option<&serde_json::value::RawValue>) -> Result<V
         .map(|(i, r)| fog_volume(r).map_err(|e| format!("extras.fog[{i}]: {e}")))
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::value::RawValue;
+
+    fn extras(json: &str) -> Result<Vec<FogVolume>, String> {
+        let raw = RawValue::from_string(json.to_owned()).unwrap();
+        gltf_fog(Some(&raw))
+    }
+
+    #[test]
+    fn gltf_extras_carry_the_toml_keys() {
+        let fog = extras(
+            r#"{"author": "someone", "fog": [
+                {"density": "exponential", "sigma": 0.1, "height": 2, "falloff": 0.5,
+                 "color": [0.5, 0.6, 0.7], "bounds": {"min": [-1, 0, -1], "max": [1, 3, 1]}},
+                {"density": "constant", "sigma": 0.02, "g": -0.3}
+            ]}"#,
+        )
+        .unwrap();
+        assert_eq!(fog.len(), 2);
+        assert_eq!(
+            fog[0].density,
+            Density::Exponential(ExponentialDensity {
+                // Scene numbers are f32, as everywhere in the scene description.
+                sigma: f64::from(0.1f32),
+                height: 2.0,
+                falloff: 0.5
+            })
+        );
+        assert_eq!(fog[0].color, Vec3::new(0.5, 0.6, 0.7));
+        assert_eq!(fog[1].g, -0.3);
+        assert_eq!(fog[1].color, DEFAULT_FOG_COLOR);
+        // Extras without fog are someone else's business.
+        assert_eq!(extras(r#"{"author": "someone"}"#).unwrap(), Vec::new());
+        assert_eq!(gltf_fog(None).unwrap(), Vec::new());
+    }
+
+    #[test]
+    fn bad_gltf_fog_names_the_entry() {
+        let e = extras(r#"{"fog": [{"density": "constant", "sigma": 1}, {"density": "linear", "sigma": 1, "plane": [0, 0, 0, 1]}]}"#)
+            .unwrap_err();
+        assert!(e.starts_with("extras.fog[1]: ") && e.contains("zero normal"), "{e}");
+        let e = extras(r#"{"fog": [{"density": "constant", "sigma": -1}]}"#).unwrap_err();
+        assert!(e.contains("sigma = -1 must be >= 0"), "{e}");
+        let e = extras(r#"{"fog": {"density": "constant"}}"#).unwrap_err();
+        assert!(e.starts_with("extras.fog: "), "{e}");
+    }
+}
