@@ -93,13 +93,17 @@ fn constant_fog_attenuates_a_camera_ray_by_exp_minus_sigma_d() {
 fn the_linear_blend_model_is_the_seeds_clamped_amount() {
     let dir = temp_dir();
     let fog = "[[fog]]\ndensity = \"constant\"\nsigma = 0.1\ncolor = [0.2, 0.4, 0.6]\n";
-    let scene = emissive_floor_scene(5.0, fog).replace("spp = 1", "spp = 1\nfog_model = \"linear-blend\"");
+    let scene =
+        emissive_floor_scene(5.0, fog).replace("spp = 1", "spp = 1\nfog_model = \"linear-blend\"");
     let (image, _) = render(dir.path(), &scene, &[]);
     // Seed 004: fog amount min(1, 0.1 * 5) = 0.5 blended towards the colour.
     for (channel, c) in ["R", "G", "B"].into_iter().zip([0.2f32, 0.4, 0.6]) {
         let expected = 0.5 + 0.5 * c;
         for &v in image.channel(channel) {
-            assert!((v - expected).abs() < 1e-6, "{channel} = {v}, expected {expected}");
+            assert!(
+                (v - expected).abs() < 1e-6,
+                "{channel} = {v}, expected {expected}"
+            );
         }
     }
 }
@@ -109,7 +113,8 @@ fn linear_fog_below_a_plane_matches_its_triangle() {
     let dir = temp_dir();
     // Fog below y = 2, growing by 0.3 per unit of depth (the plane is normalised: [0, 2, 0,
     // -4] is the same plane). From y = 5 down to 0: integral of 0.3 (2 - y) over [0, 2] = 0.6.
-    let fog = "[[fog]]\ndensity = \"linear\"\nsigma = 0.3\nplane = [0, 2, 0, -4]\ncolor = [1, 0, 0]\n";
+    let fog =
+        "[[fog]]\ndensity = \"linear\"\nsigma = 0.3\nplane = [0, 2, 0, -4]\ncolor = [1, 0, 0]\n";
     let (image, _) = render(dir.path(), &emissive_floor_scene(5.0, fog), &[]);
     assert_blend(&image, 0.6, [1.0, 0.0, 0.0], "linear fog");
 }
@@ -200,7 +205,10 @@ material = "matte"
     for (c, f) in clear.channel("R").iter().zip(fogged.channel("R")) {
         assert!(*c > 0.0);
         let ratio = f64::from(*f) / f64::from(*c);
-        assert!((ratio - expected).abs() < 2e-6, "ratio {ratio}, expected {expected}");
+        assert!(
+            (ratio - expected).abs() < 2e-6,
+            "ratio {ratio}, expected {expected}"
+        );
     }
     // 25 camera segments (no crossing) and 25 shadow segments (crossing).
     assert_eq!(stats["counters"]["fog_segments"], 50);
@@ -216,7 +224,11 @@ fn a_scene_without_fog_does_no_fog_work() {
     let effects = stats["effects"].as_array().expect("effects");
     assert!(effects.iter().all(|e| e["effect"] != "fog"), "{effects:?}");
     // Forced on, the general path evaluates every segment (and finds no volume).
-    let (_, forced) = render(dir.path(), &emissive_floor_scene(5.0, ""), &["--all-effects"]);
+    let (_, forced) = render(
+        dir.path(),
+        &emissive_floor_scene(5.0, ""),
+        &["--all-effects"],
+    );
     assert!(forced["counters"]["fog_segments"].as_u64().unwrap() >= 25);
     assert_eq!(forced["counters"]["fog_volume_crossings"], 0);
 }
@@ -245,13 +257,17 @@ plane = [0, 4, 0, -8]
 albedo = [0.9, 0.9, 0.9]
 "#,
     );
-    let scene =
-        conetrace::scene::load::load_toml_str(&text, dir.path(), "s.toml").expect("parses");
+    let scene = conetrace::scene::load::load_toml_str(&text, dir.path(), "s.toml").expect("parses");
     assert_eq!(scene.fog.len(), 2);
     let height = &scene.fog[0];
     assert_eq!(height.density.kind(), "exponential");
     assert_eq!(height.color, glam::Vec3::new(0.7, 0.75, 0.8));
-    assert!((height.albedo - glam::Vec3::new(0.9, 0.8, 0.7)).abs().max_element() < 1e-6);
+    assert!(
+        (height.albedo - glam::Vec3::new(0.9, 0.8, 0.7))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
     assert_eq!(height.g, 0.6);
     let bounds = height.bounds.expect("a box");
     assert_eq!(bounds.max, glam::DVec3::new(5.0, 3.0, 5.0));
@@ -268,23 +284,50 @@ fn bad_fog_parameters_exit_2_with_one_line_naming_the_file() {
     let dir = temp_dir();
     write(dir.path(), "floor.obj", &square_obj(1.0, 0.0));
     let cases = [
-        ("density = \"constant\"\nsigma = -0.1", "sigma = -0.1 must be >= 0"),
+        (
+            "density = \"constant\"\nsigma = -0.1",
+            "sigma = -0.1 must be >= 0",
+        ),
         ("density = \"constant\"\nsigma = nan", "not finite"),
-        ("density = \"linear\"\nsigma = 1\nplane = [0, 0, 0, 1]", "zero normal"),
+        (
+            "density = \"linear\"\nsigma = 1\nplane = [0, 0, 0, 1]",
+            "zero normal",
+        ),
         ("density = \"linear\"\nsigma = 1", "needs plane"),
         ("density = \"exponential\"\nsigma = 1", "needs falloff"),
-        ("density = \"constant\"\nsigma = 1\nfalloff = 2", "does not apply to constant fog"),
-        ("density = \"constant\"\nsigma = 1\nbounds = { min = [0, 2, 0], max = [1, 1, 1] }", "exceeds max"),
-        ("density = \"constant\"\nsigma = 1\ng = 1", "g = 1 must lie in (-1, 1)"),
-        ("density = \"constant\"\nsigma = 1\nalbedo = [1.5, 0, 0]", "must lie in [0, 1]"),
-        ("density = \"constant\"\nsigma = 1\nalbedo = [1, 1, 1]\nabsorption = [0, 0, 0]", "give one"),
+        (
+            "density = \"constant\"\nsigma = 1\nfalloff = 2",
+            "does not apply to constant fog",
+        ),
+        (
+            "density = \"constant\"\nsigma = 1\nbounds = { min = [0, 2, 0], max = [1, 1, 1] }",
+            "exceeds max",
+        ),
+        (
+            "density = \"constant\"\nsigma = 1\ng = 1",
+            "g = 1 must lie in (-1, 1)",
+        ),
+        (
+            "density = \"constant\"\nsigma = 1\nalbedo = [1.5, 0, 0]",
+            "must lie in [0, 1]",
+        ),
+        (
+            "density = \"constant\"\nsigma = 1\nalbedo = [1, 1, 1]\nabsorption = [0, 0, 0]",
+            "give one",
+        ),
         ("density = \"fractal\"\nsigma = 1", "fractal"),
-        ("density = \"constant\"\nsigma = 1\ncolour = [1, 1, 1]", "colour"),
+        (
+            "density = \"constant\"\nsigma = 1\ncolour = [1, 1, 1]",
+            "colour",
+        ),
     ];
     for (table, message) in cases {
         let text = emissive_floor_scene(5.0, &format!("[[fog]]\n{table}\n"));
         write(dir.path(), "bad.toml", &text);
-        let out = run_in(dir.path(), &["render", "bad.toml", "-o", "bad.exr", "--quiet"]);
+        let out = run_in(
+            dir.path(),
+            &["render", "bad.toml", "-o", "bad.exr", "--quiet"],
+        );
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{table}: {stderr}");
         assert_eq!(stderr.trim().lines().count(), 1, "{table}: {stderr}");
@@ -292,6 +335,9 @@ fn bad_fog_parameters_exit_2_with_one_line_naming_the_file() {
             stderr.contains("bad.toml") && stderr.contains(message),
             "{table}: expected '{message}' in: {stderr}"
         );
-        assert!(!dir.path().join("bad.exr").exists(), "{table}: an image was written");
+        assert!(
+            !dir.path().join("bad.exr").exists(),
+            "{table}: an image was written"
+        );
     }
 }

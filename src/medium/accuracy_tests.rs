@@ -38,7 +38,8 @@ fn adaptive_simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tolerance: f64, nois
         let left = simpson(fa, flm, fm, a, m);
         let right = simpson(fm, frm, fb, m, b);
         let delta = left + right - whole;
-        let settled = delta.abs() <= 15.0 * eps || delta.abs() <= noise * (left.abs() + right.abs());
+        let settled =
+            delta.abs() <= 15.0 * eps || delta.abs() <= noise * (left.abs() + right.abs());
         if depth == 0 || settled || m <= a || m >= b {
             return left + right + delta / 15.0;
         }
@@ -48,8 +49,30 @@ fn adaptive_simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tolerance: f64, nois
     let (fa, fb, fm) = (f(a), f(b), f(0.5 * (a + b)));
     let whole = simpson(fa, fm, fb, a, b);
     // A first pass fixes the scale the tolerance is relative to.
-    let rough = recurse(f, a, b, fa, fm, fb, whole, whole.abs() * 1e-6 + 1e-300, 1e-6, 30);
-    recurse(f, a, b, fa, fm, fb, whole, rough.abs() * tolerance + 1e-300, noise, 60)
+    let rough = recurse(
+        f,
+        a,
+        b,
+        fa,
+        fm,
+        fb,
+        whole,
+        whole.abs() * 1e-6 + 1e-300,
+        1e-6,
+        30,
+    );
+    recurse(
+        f,
+        a,
+        b,
+        fa,
+        fm,
+        fb,
+        whole,
+        rough.abs() * tolerance + 1e-300,
+        noise,
+        60,
+    )
 }
 
 /// Deterministic xorshift64* numbers.
@@ -99,13 +122,7 @@ fn density_along(density: &Density, line: &Line, t: f64) -> f64 {
 }
 
 /// The relative error of `closed` against the quadrature of the density over `[t0, t1]`.
-fn relative_error(
-    density: &Density,
-    line: &Line,
-    t0: f64,
-    t1: f64,
-    noise: f64,
-) -> (f64, f64, f64) {
+fn relative_error(density: &Density, line: &Line, t0: f64, t1: f64, noise: f64) -> (f64, f64, f64) {
     let closed = density.optical_depth(line, t0, t1);
     let reference = adaptive_simpson(&|t| density_along(density, line, t), t0, t1, 1e-14, noise);
     let error = if closed == reference {
@@ -126,16 +143,24 @@ fn worst_over(
     let mut count = 0;
     for (density, line, t0, t1) in cases {
         let (error, closed, reference) = relative_error(&density, &line, t0, t1, noise);
-        assert!(closed.is_finite() && closed >= 0.0, "{density:?} {line:?} {t0} {t1}: {closed}");
+        assert!(
+            closed.is_finite() && closed >= 0.0,
+            "{density:?} {line:?} {t0} {t1}: {closed}"
+        );
         if error > worst.0 || error.is_nan() {
             worst = (
                 error,
-                format!("{density:?} {line:?} [{t0}, {t1}]: closed {closed:e} quadrature {reference:e}"),
+                format!(
+                    "{density:?} {line:?} [{t0}, {t1}]: closed {closed:e} quadrature {reference:e}"
+                ),
             );
         }
         count += 1;
     }
-    println!("{name}: worst relative error {:.3e} over {count} segments ({})", worst.0, worst.1);
+    println!(
+        "{name}: worst relative error {:.3e} over {count} segments ({})",
+        worst.0, worst.1
+    );
     worst.0
 }
 
@@ -158,7 +183,11 @@ fn random_segments(seed: u64, n: usize, max_length: f64) -> Vec<(Line, f64, f64)
     (0..n)
         .map(|_| {
             let line = Line {
-                origin: DVec3::new(r.range(-10.0, 10.0), r.range(-10.0, 10.0), r.range(-10.0, 10.0)),
+                origin: DVec3::new(
+                    r.range(-10.0, 10.0),
+                    r.range(-10.0, 10.0),
+                    r.range(-10.0, 10.0),
+                ),
                 direction: r.direction(),
             };
             let t0 = r.range(0.0, 5.0);
@@ -180,7 +209,14 @@ const LARGE_COORDINATE_TOLERANCE: f64 = 1e-8;
 fn constant_density_matches_quadrature() {
     let cases = random_segments(1, 300, 1e6)
         .into_iter()
-        .map(|(line, t0, t1)| (Density::Constant(ConstantDensity { sigma: 0.04 }), line, t0, t1));
+        .map(|(line, t0, t1)| {
+            (
+                Density::Constant(ConstantDensity { sigma: 0.04 }),
+                line,
+                t0,
+                t1,
+            )
+        });
     assert!(worst_over("constant", ORDINARY_NOISE, cases) < TOLERANCE);
 }
 
@@ -190,7 +226,12 @@ fn linear_density_matches_quadrature_on_random_segments() {
     let cases: Vec<_> = random_segments(3, 400, 1e6)
         .into_iter()
         .map(|(line, t0, t1)| {
-            let plane = [r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-5.0, 5.0)];
+            let plane = [
+                r.range(-1.0, 1.0),
+                r.range(-1.0, 1.0),
+                r.range(-1.0, 1.0),
+                r.range(-5.0, 5.0),
+            ];
             (linear(r.log_range(1e-3, 1.0), plane), line, t0, t1)
         })
         .collect();
@@ -203,7 +244,14 @@ fn linear_density_stays_accurate_where_it_is_delicate() {
     let fog = linear(0.5, plane);
     let mut cases = Vec::new();
     // Parallel to the plane, inside and outside, and nearly parallel (the crossing far away).
-    for (y, dy) in [(1.0, 0.0), (3.0, 0.0), (1.0, 1e-12), (1.0, -1e-12), (2.0, 1e-9), (1.999_999, 1e-7)] {
+    for (y, dy) in [
+        (1.0, 0.0),
+        (3.0, 0.0),
+        (1.0, 1e-12),
+        (1.0, -1e-12),
+        (2.0, 1e-9),
+        (1.999_999, 1e-7),
+    ] {
         let line = Line {
             origin: DVec3::new(0.0, y, 0.0),
             direction: DVec3::new(1.0, dy, 0.0).normalize(),
@@ -213,7 +261,13 @@ fn linear_density_stays_accurate_where_it_is_delicate() {
         }
     }
     // Crossing the plane (the clamp inside the segment), from either side, at shallow angles.
-    for (y, dy) in [(0.0, 1.0), (4.0, -1.0), (1.9, 0.001), (2.1, -0.001), (2.0 - 1e-9, 1e-6)] {
+    for (y, dy) in [
+        (0.0, 1.0),
+        (4.0, -1.0),
+        (1.9, 0.001),
+        (2.1, -0.001),
+        (2.0 - 1e-9, 1e-6),
+    ] {
         let line = Line {
             origin: DVec3::new(0.0, y, 0.0),
             direction: DVec3::new(1.0, dy, 0.0).normalize(),
@@ -300,7 +354,11 @@ fn exponential_density_stays_accurate_where_it_is_delicate() {
         large.push((far, tilted, 0.0, 50.0));
     }
     assert!(worst_over("exponential, delicate", ORDINARY_NOISE, cases) < TOLERANCE);
-    let worst = worst_over("exponential, large coordinates", LARGE_COORDINATE_NOISE, large);
+    let worst = worst_over(
+        "exponential, large coordinates",
+        LARGE_COORDINATE_NOISE,
+        large,
+    );
     assert!(worst < LARGE_COORDINATE_TOLERANCE);
 }
 
@@ -333,9 +391,18 @@ fn inverses_match_bisection() {
             }),
             1 => linear(
                 r.log_range(1e-3, 1.0),
-                [r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-5.0, 5.0)],
+                [
+                    r.range(-1.0, 1.0),
+                    r.range(-1.0, 1.0),
+                    r.range(-1.0, 1.0),
+                    r.range(-5.0, 5.0),
+                ],
             ),
-            _ => exponential(r.log_range(1e-3, 1.0), r.range(-5.0, 5.0), r.log_range(1e-3, 2.0)),
+            _ => exponential(
+                r.log_range(1e-3, 1.0),
+                r.range(-5.0, 5.0),
+                r.log_range(1e-3, 2.0),
+            ),
         };
         // As above: keep the exponential's dynamic range within e^100.
         let t1 = match density {
@@ -349,7 +416,10 @@ fn inverses_match_bisection() {
             continue;
         }
         // Beyond the total: never reached.
-        assert_eq!(density.distance_at_optical_depth(&line, t0, t1, total * 1.001 + 1e-300), None);
+        assert_eq!(
+            density.distance_at_optical_depth(&line, t0, t1, total * 1.001 + 1e-300),
+            None
+        );
         let tau = total * r.range(0.01, 0.99);
         let t = density
             .distance_at_optical_depth(&line, t0, t1, tau)
@@ -357,7 +427,10 @@ fn inverses_match_bisection() {
         let reference = bisect(&density, &line, t0, t1, tau);
         let error = (t - reference).abs() / (t1 - t0);
         worst[i % 3] = worst[i % 3].max(error);
-        assert!(error < 1e-9, "{density:?} {line:?} [{t0}, {t1}]: {t} vs {reference}");
+        assert!(
+            error < 1e-9,
+            "{density:?} {line:?} [{t0}, {t1}]: {t} vs {reference}"
+        );
     }
     println!(
         "inverse vs bisection: worst error / segment length: constant {:.3e}, linear {:.3e}, exponential {:.3e}",
@@ -377,7 +450,10 @@ fn depths_to_infinity_are_the_limits() {
     // sigma e^{falloff height} / (falloff * w.y)
     let expected = 0.3 * 0.5f64.exp() / (0.5 * 0.8);
     let tau = fog.optical_depth(&up, 0.0, f64::INFINITY);
-    assert!((tau - expected).abs() <= 1e-15 * expected, "{tau} {expected}");
+    assert!(
+        (tau - expected).abs() <= 1e-15 * expected,
+        "{tau} {expected}"
+    );
     let plane = linear(0.5, [0.0, 1.0, 0.0, -2.0]);
     // Leaves the fog at t = 2.5: 0.5 * 2.5 * (2 + 0) / 2.
     assert!((plane.optical_depth(&up, 0.0, f64::INFINITY) - 1.25).abs() < 1e-15);

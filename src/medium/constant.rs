@@ -46,7 +46,10 @@ mod tests {
         let fog = ConstantDensity { sigma: 0.04 };
         assert_eq!(fog.optical_depth(2.0, 12.0), 0.04 * 10.0);
         assert_eq!(fog.optical_depth(0.0, f64::INFINITY), f64::INFINITY);
-        assert_eq!(ConstantDensity { sigma: 0.0 }.optical_depth(0.0, f64::INFINITY), 0.0);
+        assert_eq!(
+            ConstantDensity { sigma: 0.0 }.optical_depth(0.0, f64::INFINITY),
+            0.0
+        );
         let t = fog.distance_at_optical_depth(2.0, 100.0, 0.4).unwrap();
         assert!((t - 12.0).abs() < 1e-12);
         assert_eq!(fog.distance_at_optical_depth(2.0, 5.0, 0.4), None);

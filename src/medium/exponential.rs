@@ -152,7 +152,10 @@ mod tests {
         // G(y) = -sigma/falloff exp(-falloff (y - height)); G(5) - G(1).
         let expected = 0.3 / 0.5 * (1.0 - (-2.0f64).exp());
         let tau = fog.optical_depth(&up, 0.0, 4.0);
-        assert!((tau - expected).abs() <= 1e-15 * expected, "{tau} {expected}");
+        assert!(
+            (tau - expected).abs() <= 1e-15 * expected,
+            "{tau} {expected}"
+        );
         // Upwards to infinity: sigma / falloff.
         let to_infinity = fog.optical_depth(&up, 0.0, f64::INFINITY);
         assert!((to_infinity - 0.6).abs() < 1e-15);
@@ -173,9 +176,14 @@ mod tests {
         };
         let tau = fog.optical_depth(&down, 0.0, 3000.0);
         let expected = 0.3 / 0.5 * (1.0 - (-1500.0f64).exp()) * 0.5f64.exp();
-        assert!((tau - expected).abs() <= 1e-13 * expected, "{tau} {expected}");
+        assert!(
+            (tau - expected).abs() <= 1e-13 * expected,
+            "{tau} {expected}"
+        );
         // The inverse from a start where the density underflows to zero.
-        let t = fog.distance_at_optical_depth(&down, 0.0, 3000.0, 0.5).unwrap();
+        let t = fog
+            .distance_at_optical_depth(&down, 0.0, 3000.0, 0.5)
+            .unwrap();
         let back = fog.optical_depth(&down, 0.0, t);
         assert!((back - 0.5).abs() < 1e-9, "{t} {back}");
     }
@@ -187,8 +195,13 @@ mod tests {
             origin: DVec3::new(0.0, 1.0, 0.0),
             direction: DVec3::new(0.6, 0.8, 0.0),
         };
-        assert_eq!(fog.distance_at_optical_depth(&up, 0.0, f64::INFINITY, 0.8), None);
-        let t = fog.distance_at_optical_depth(&up, 0.0, f64::INFINITY, 0.5).unwrap();
+        assert_eq!(
+            fog.distance_at_optical_depth(&up, 0.0, f64::INFINITY, 0.8),
+            None
+        );
+        let t = fog
+            .distance_at_optical_depth(&up, 0.0, f64::INFINITY, 0.5)
+            .unwrap();
         assert!((fog.optical_depth(&up, 0.0, t) - 0.5).abs() < 1e-14);
     }
 }

@@ -200,7 +200,10 @@ mod tests {
             direction: DVec3::X,
         };
         assert_eq!(fog.optical_depth(&inside, 0.0, 8.0), 0.25 * 1.0 * 8.0);
-        assert_eq!(fog.optical_depth(&inside, 0.0, f64::INFINITY), f64::INFINITY);
+        assert_eq!(
+            fog.optical_depth(&inside, 0.0, f64::INFINITY),
+            f64::INFINITY
+        );
         let above = Line {
             origin: DVec3::new(0.0, 3.0, 0.0),
             direction: DVec3::X,
@@ -216,15 +219,22 @@ mod tests {
             direction: DVec3::NEG_Y,
         };
         // Enters at t = 2; depth 0.5 * s^2 / 2 = 1 at s = 2.
-        let t = fog.distance_at_optical_depth(&down, 0.0, 10.0, 1.0).unwrap();
+        let t = fog
+            .distance_at_optical_depth(&down, 0.0, 10.0, 1.0)
+            .unwrap();
         assert!((t - 4.0).abs() < 1e-12, "{t}");
         let up = Line {
             origin: DVec3::ZERO,
             direction: DVec3::Y,
         };
         // Total depth to infinity is 1: more is never reached.
-        assert_eq!(fog.distance_at_optical_depth(&up, 0.0, f64::INFINITY, 1.5), None);
-        let t = fog.distance_at_optical_depth(&up, 0.0, f64::INFINITY, 0.75).unwrap();
+        assert_eq!(
+            fog.distance_at_optical_depth(&up, 0.0, f64::INFINITY, 1.5),
+            None
+        );
+        let t = fog
+            .distance_at_optical_depth(&up, 0.0, f64::INFINITY, 0.75)
+            .unwrap();
         assert!((fog.optical_depth(&up, 0.0, t) - 0.75).abs() < 1e-12);
     }
 }

@@ -23,7 +23,7 @@ impl Line {
     pub fn from_ray(origin: Vec3, direction: Vec3) -> Option<(Line, f64)> {
         let d = direction.as_dvec3();
         let length = d.length();
-        if !(length > 0.0 && length.is_finite()) || !origin.is_finite() {
+        if !(length > 0.0 && length.is_finite() && origin.is_finite()) {
             return None;
         }
         Some((

@@ -229,7 +229,10 @@ mod tests {
     /// density: with two constant volumes, P(no collision before t) = exp(-(s1 + s2) t).
     #[test]
     fn free_flight_through_two_volumes_has_the_summed_transmittance() {
-        let volumes = [constant(0.2, Vec3::ONE, None), constant(0.3, Vec3::ONE, None)];
+        let volumes = [
+            constant(0.2, Vec3::ONE, None),
+            constant(0.3, Vec3::ONE, None),
+        ];
         let line = Line {
             origin: DVec3::ZERO,
             direction: DVec3::X,

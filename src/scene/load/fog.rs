@@ -69,7 +69,11 @@ pub(super) fn fog_volume(raw: &RawFog) -> Result<FogVolume, String> {
     };
     only_for(raw.plane.is_some(), "plane", RawDensityKind::Linear)?;
     only_for(raw.height.is_some(), "height", RawDensityKind::Exponential)?;
-    only_for(raw.falloff.is_some(), "falloff", RawDensityKind::Exponential)?;
+    only_for(
+        raw.falloff.is_some(),
+        "falloff",
+        RawDensityKind::Exponential,
+    )?;
     let density = match raw.density {
         RawDensityKind::Constant => Density::Constant(ConstantDensity { sigma }),
         RawDensityKind::Linear => {
@@ -125,7 +129,9 @@ pub(super) fn fog_volume(raw: &RawFog) -> Result<FogVolume, String> {
     };
     let albedo = match (raw.albedo, raw.absorption) {
         (Some(_), Some(_)) => {
-            return Err("fog albedo and absorption are two ways of saying the same thing: give one".into())
+            return Err(
+                "fog albedo and absorption are two ways of saying the same thing: give one".into(),
+            )
         }
         (Some(a), None) => unit(v3(a), "albedo")?,
         (None, Some(a)) => Vec3::ONE - unit(v3(a), "absorption")?,
@@ -146,7 +152,9 @@ pub(super) fn fog_volume(raw: &RawFog) -> Result<FogVolume, String> {
 
 /// The fog volumes in a glTF file's root `extras` (`{"fog": [{...}, ...]}`); other extras
 /// are left alone.
-pub(super) fn gltf_fog(extras: Option<&serde_json::value::RawValue>) -> Result<Vec<FogVolume>, String> {
+pub(super) fn gltf_fog(
+    extras: Option<&serde_json::value::RawValue>,
+) -> Result<Vec<FogVolume>, String> {
     let Some(extras) = extras else {
         return Ok(Vec::new());
     };
@@ -205,7 +213,10 @@ mod tests {
     fn bad_gltf_fog_names_the_entry() {
         let e = extras(r#"{"fog": [{"density": "constant", "sigma": 1}, {"density": "linear", "sigma": 1, "plane": [0, 0, 0, 1]}]}"#)
             .unwrap_err();
-        assert!(e.starts_with("extras.fog[1]: ") && e.contains("zero normal"), "{e}");
+        assert!(
+            e.starts_with("extras.fog[1]: ") && e.contains("zero normal"),
+            "{e}"
+        );
         let e = extras(r#"{"fog": [{"density": "constant", "sigma": -1}]}"#).unwrap_err();
         assert!(e.contains("sigma = -1 must be >= 0"), "{e}");
         let e = extras(r#"{"fog": {"density": "constant"}}"#).unwrap_err();

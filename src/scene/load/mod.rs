@@ -28,8 +28,8 @@
 mod default_scene;
 mod error;
 mod files;
-mod framing;
 mod fog;
+mod framing;
 mod gltf;
 mod merge;
 mod obj;
