@@ -341,3 +341,73 @@ fn bad_fog_parameters_exit_2_with_one_line_naming_the_file() {
         );
     }
 }
+
+/// A one-triangle glTF whose root `extras` carry `fog` (JSON text of the array).
+fn gltf_with_fog(fog: &str) -> String {
+    format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  "extras": {{"author": "a test", "fog": {fog}}},
+  "buffers": [{{"byteLength": 36, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                  "min": [0, 0, 0], "max": [1, 1, 0]}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+  "nodes": [{{"mesh": 0}}],
+  "scenes": [{{"nodes": [0]}}],
+  "scene": 0
+}}"#
+    )
+}
+
+#[test]
+fn gltf_files_bring_fog_through_extras() {
+    let dir = temp_dir();
+    let path = write(
+        dir.path(),
+        "fog.gltf",
+        &gltf_with_fog(
+            r#"[{"density": "linear", "sigma": 0.5, "plane": [0, 1, 0, -2], "color": [0.1, 0.2, 0.3]}]"#,
+        ),
+    );
+    let scene = conetrace::scene::load::load_scene(&path).expect("loads");
+    assert_eq!(scene.fog.len(), 1);
+    assert_eq!(scene.fog[0].density.kind(), "linear");
+    assert_eq!(scene.fog[0].color, glam::Vec3::new(0.1, 0.2, 0.3));
+    // Placed by a TOML scene without a transform the fog comes along; with one, a note says
+    // it was left out.
+    let toml = |placement: &str| {
+        format!("[[mesh]]\nfile = \"fog.gltf\"\n{placement}\n[[light]]\ntype = \"point\"\nposition = [0, 3, 3]\n")
+    };
+    let placed = conetrace::scene::load::load_toml_str(&toml(""), dir.path(), "s.toml").unwrap();
+    assert_eq!(placed.fog.len(), 1);
+    let moved =
+        conetrace::scene::load::load_toml_str(&toml("translate = [1, 0, 0]"), dir.path(), "s.toml")
+            .unwrap();
+    assert!(moved.fog.is_empty());
+    assert!(
+        moved.notes.iter().any(|n| n.contains("fog volume(s)")),
+        "{:?}",
+        moved.notes
+    );
+    // A bad entry: exit 2, one line naming the file and the entry.
+    write(
+        dir.path(),
+        "bad.gltf",
+        &gltf_with_fog(
+            r#"[{"density": "constant", "sigma": 0.1}, {"density": "constant", "sigma": -3}]"#,
+        ),
+    );
+    let out = run_in(
+        dir.path(),
+        &["render", "bad.gltf", "-o", "bad.exr", "--quiet"],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("bad.gltf")
+            && stderr.contains("extras.fog[1]: fog sigma = -3 must be >= 0"),
+        "{stderr}"
+    );
+}

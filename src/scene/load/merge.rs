@@ -144,10 +144,10 @@ pub(crate) fn append(
         }
     }
     // Fog from a glTF's extras is in the file's world space: kept as it is when the part is
-    // the scene itself or placed without a transform; a placed part's fog is left out (a
+    // the scene itself or placed with the identity; a moved part's fog is left out (a
     // rotated box is no longer a box) and a note says so.
     if !part.fog.is_empty() {
-        if transform.is_none() {
+        if transform.is_none_or(|t| t.matrix == Affine3A::IDENTITY) {
             scene.fog.extend(part.fog);
         } else {
             scene.notes.push(format!(
