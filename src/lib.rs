@@ -22,6 +22,7 @@ pub mod film;
 pub mod footprint;
 pub mod hit;
 pub mod integrator;
+pub mod medium;
 pub mod render;
 pub mod sampler;
 pub mod scene;

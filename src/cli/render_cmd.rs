@@ -379,6 +379,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         bar.finish_and_clear();
         let mut result = result.map_err(crate::cli::render_failed)?;
         result.stats.integrator = Some(resolution.to_string());
+        let unsupported = selection::unsupported_effects(resolution.kind, &context.scene);
+        result.stats.notes.extend(unsupported);
         if let Some(vct) = integrator.vct_stats() {
             result.stats.counters.vct_voxels_built = vct.occupied_voxels;
             result.stats.vct = Some(vct.clone());

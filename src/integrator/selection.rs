@@ -167,6 +167,21 @@ pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution
     }
 }
 
+/// What the integrator of `kind` leaves out of `scene`, one note each (the summary line and
+/// `--stats` print them): today, fog under the path tracer and the voxel cone tracer, which
+/// render as if the fog were not there.
+pub fn unsupported_effects(kind: IntegratorKind, scene: &SceneDescription) -> Vec<String> {
+    let mut notes = Vec::new();
+    if kind != IntegratorKind::Whitted && !scene.fog.is_empty() {
+        notes.push(format!(
+            "{}: fog is not simulated by this integrator (rendered without it; \
+             --integrator whitted renders it)",
+            kind.name()
+        ));
+    }
+    notes
+}
+
 /// The chosen integrator, with its settings from the scene.
 #[derive(Clone, Debug)]
 pub enum SelectedIntegrator {
@@ -267,6 +282,10 @@ pub fn render(
     let integrator = select(resolution.kind, context)?;
     let mut result = crate::render::render(context, &integrator, control)?;
     result.stats.integrator = Some(resolution.to_string());
+    result
+        .stats
+        .notes
+        .extend(unsupported_effects(resolution.kind, &context.scene));
     if let Some(vct) = integrator.vct_stats() {
         result.stats.counters.vct_voxels_built = vct.occupied_voxels;
         result.stats.vct = Some(vct.clone());

@@ -35,6 +35,8 @@ pub struct EffectSet {
     pub environment: bool,
     /// Thin-lens depth of field (lens sampling).
     pub depth_of_field: bool,
+    /// Fog volumes: every segment attenuated and blended by its exact optical depth.
+    pub fog: bool,
 }
 
 impl EffectSet {
@@ -51,6 +53,7 @@ impl EffectSet {
             alpha_cutout: true,
             environment: true,
             depth_of_field: true,
+            fog: true,
         }
     }
 
@@ -226,6 +229,18 @@ impl EffectSet {
                 }
             }
         }
+        if let Some(volume) = scene.fog.iter().find(|v| v.density.sigma() > 0.0) {
+            set.fog = true;
+            because(
+                "fog",
+                format!(
+                    "{} fog volume(s), e.g. {} fog with sigma {}",
+                    scene.fog.len(),
+                    volume.density.kind(),
+                    volume.density.sigma()
+                ),
+            );
+        }
         (set, reasons)
     }
 
@@ -280,11 +295,12 @@ impl EffectSet {
             self.alpha_cutout,
             self.environment,
             self.depth_of_field,
+            self.fog,
         ]
     }
 
     fn from_flags(flags: [bool; EFFECT_NAMES.len()]) -> EffectSet {
-        let [shadows, transmissive_shadows, mirror_reflection, refraction, fresnel, absorption, footprints, alpha_cutout, environment, depth_of_field] =
+        let [shadows, transmissive_shadows, mirror_reflection, refraction, fresnel, absorption, footprints, alpha_cutout, environment, depth_of_field, fog] =
             flags;
         EffectSet {
             shadows,
@@ -297,12 +313,13 @@ impl EffectSet {
             alpha_cutout,
             environment,
             depth_of_field,
+            fog,
         }
     }
 }
 
 /// The effects' names, as the summary line and `--stats` print them.
-const EFFECT_NAMES: [&str; 10] = [
+const EFFECT_NAMES: [&str; 11] = [
     "shadows",
     "transmissive shadows",
     "mirror reflection",
@@ -313,6 +330,7 @@ const EFFECT_NAMES: [&str; 10] = [
     "alpha cut-out",
     "environment light",
     "depth of field",
+    "fog",
 ];
 
 fn light_kind(light: &crate::scene::Light) -> &'static str {

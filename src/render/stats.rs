@@ -46,6 +46,10 @@ pub struct WorkCounters {
     pub path_bounces: u64,
     pub roulette_terminations: u64,
     pub nonfinite_samples: u64,
+    /// Segments (camera, secondary, shadow, escaping) whose fog was evaluated.
+    pub fog_segments: u64,
+    /// Fog volumes those segments crossed (the closed-form depth ran for each).
+    pub fog_volume_crossings: u64,
 }
 
 impl WorkCounters {
@@ -79,6 +83,8 @@ impl WorkCounters {
         self.path_bounces += other.path_bounces;
         self.roulette_terminations += other.roulette_terminations;
         self.nonfinite_samples += other.nonfinite_samples;
+        self.fog_segments += other.fog_segments;
+        self.fog_volume_crossings += other.fog_volume_crossings;
     }
 }
 

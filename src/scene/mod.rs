@@ -35,6 +35,8 @@ pub struct SceneDescription {
     /// converted to bicubic Bezier patches ([`patch`]).
     pub patches: Vec<patch::BezierPatch>,
     pub environment: Environment,
+    /// Fog volumes (`[[fog]]`), with their exact optical depth in `crate::medium`.
+    pub fog: Vec<crate::medium::FogVolume>,
     pub settings: RenderSettings,
     /// Things the loader decided on the user's behalf ("camera placed to frame the bounds",
     /// "no lights: default light and environment added"); printed in the summary line.
@@ -306,6 +308,8 @@ pub struct RenderSettings {
     pub vct_resolution: Option<u32>,
     /// `[render] vct_bounces`: bounces held by the voxels (1: direct light only).
     pub vct_bounces: u32,
+    /// How fog's optical depth becomes the blend towards its colour (`[render] fog_model`).
+    pub fog_model: crate::medium::FogModel,
 }
 
 impl Default for RenderSettings {
@@ -325,6 +329,7 @@ impl Default for RenderSettings {
             diffuse_bounces: None,
             vct_resolution: None,
             vct_bounces: 1,
+            fog_model: crate::medium::FogModel::Exact,
         }
     }
 }

@@ -30,6 +30,14 @@ pub(super) fn shade_miss(
     worker: &mut WorkerState,
 ) {
     let radiance = environment_lookup(context, ray.direction, &ray.footprint, worker);
+    let effects = &context.effects;
+    if effects.fog {
+        // Fogged up to the last volume's exit: an escaping ray's depth to infinity.
+        let mut fogged = *ray;
+        super::fog::fog_ray_segment(context, &mut fogged, f32::INFINITY, image, worker);
+        add_radiance(image, ray.pixel, fogged.throughput * radiance);
+        return;
+    }
     add_radiance(image, ray.pixel, ray.throughput * radiance);
 }
 

@@ -23,10 +23,12 @@
 //! The files follow the stages of a wave: `camera_rays` (the first wave), `surface` (shading
 //! a hit), `lights` (the environment and the shadow rays of punctual lights), `spawn` and
 //! `dielectric` (the secondary rays of mirrors and dielectric boundaries) and `shadow_walk`
-//! (tracing the shadow rays, through transmissive occluders too).
+//! (tracing the shadow rays, through transmissive occluders too); `fog` attenuates and
+//! blends every segment through the scene's fog volumes.
 
 mod camera_rays;
 mod dielectric;
+mod fog;
 mod lights;
 mod shadow_walk;
 mod spawn;

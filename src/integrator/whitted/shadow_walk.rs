@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::lights::shadow_tfar;
+use super::lights::{shadow_tfar, ShadowRay};
 use super::{add_radiance, Waves};
 use crate::film::TileImage;
 use crate::render::context::{RenderContext, WorkerState};
@@ -61,7 +61,7 @@ pub(super) fn trace_shadows(
         );
         for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
             if !blocked {
-                add_radiance(image, shadow.pixel, shadow.contribution);
+                add_radiance(image, shadow.pixel, delivered(context, shadow, worker));
             }
         }
         return;
@@ -162,7 +162,27 @@ pub(super) fn trace_shadows(
     }
     for (shadow, s) in waves.shadows.iter().zip(&walk.strength) {
         if s.max_element() > 0.0 {
-            add_radiance(image, shadow.pixel, shadow.contribution * *s);
+            add_radiance(image, shadow.pixel, delivered(context, shadow, worker) * *s);
         }
+    }
+}
+
+/// What an unblocked shadow ray delivers: its contribution, times the fog's transmittance
+/// along the whole shadow segment when the scene has fog (evaluated only for rays that
+/// reach their light, and once for a walk through transmissive occluders, whose pieces lie
+/// on one line).
+#[inline]
+fn delivered(context: &RenderContext, shadow: &ShadowRay, worker: &mut WorkerState) -> Vec3 {
+    if context.effects.fog {
+        let t = super::fog::shadow_transmittance(
+            context,
+            shadow.origin,
+            shadow.direction,
+            shadow.tfar,
+            worker,
+        );
+        shadow.contribution * t
+    } else {
+        shadow.contribution
     }
 }

@@ -102,6 +102,10 @@ pub(super) fn shade_hit(
         }
     }
 
+    // Fog between the ray's origin and the hit (seed 004, analytic fog density).
+    if effects.fog {
+        super::fog::fog_ray_segment(context, &mut ray, surface.t, image, worker);
+    }
     // Beer's law over the distance travelled inside the medium (seed 004).
     if effects.absorption && ray.sigma != Vec3::ZERO {
         ray.throughput *= shading::transmittance(ray.sigma, surface.t);

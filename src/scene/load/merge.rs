@@ -148,6 +148,20 @@ pub(crate) fn append(
             scene.camera = Some(camera);
         }
     }
+    // Fog from a glTF's extras is in the file's world space: kept as it is when the part is
+    // the scene itself or placed with the identity; a moved part's fog is left out (a
+    // rotated box is no longer a box) and a note says so.
+    if !part.fog.is_empty() {
+        if transform.is_none_or(|t| t.matrix == Affine3A::IDENTITY) {
+            scene.fog.extend(part.fog);
+        } else {
+            scene.notes.push(format!(
+                "{} fog volume(s) of '{}' left out: placed parts carry no fog",
+                part.fog.len(),
+                part.source
+            ));
+        }
+    }
     scene.notes.extend(part.notes);
 }
 

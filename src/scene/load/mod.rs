@@ -28,6 +28,7 @@
 mod default_scene;
 mod error;
 mod files;
+mod fog;
 mod framing;
 mod gltf;
 mod merge;

@@ -112,6 +112,8 @@ struct RawScene {
     bezier_triangle: Vec<super::patches::RawBezierTriangle>,
     #[serde(default)]
     patch_file: Vec<super::patches::RawPatchFile>,
+    #[serde(default)]
+    fog: Vec<Spanned<super::fog::RawFog>>,
 }
 
 #[derive(Deserialize)]
@@ -131,6 +133,14 @@ struct RawRender {
     diffuse_bounces: Option<u32>,
     vct_resolution: Option<Spanned<u32>>,
     vct_bounces: Option<Spanned<u32>>,
+    fog_model: Option<RawFogModel>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "kebab-case")]
+enum RawFogModel {
+    Exact,
+    LinearBlend,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -619,6 +629,10 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
     for light in &raw.light {
         scene.lights.push(light_desc(light, loc)?);
     }
+    for fog in &raw.fog {
+        let volume = super::fog::fog_volume(fog.get_ref()).map_err(|e| loc.at(fog, e))?;
+        scene.fog.push(volume);
+    }
     Ok(scene)
 }
 
@@ -753,6 +767,12 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
             return Err(loc.at(n, "render.vct_bounces must be between 1 and 8"));
         }
         s.vct_bounces = *n.get_ref();
+    }
+    if let Some(model) = r.fog_model {
+        s.fog_model = match model {
+            RawFogModel::Exact => crate::medium::FogModel::Exact,
+            RawFogModel::LinearBlend => crate::medium::FogModel::LinearBlend,
+        };
     }
     Ok(s)
 }
