@@ -135,6 +135,12 @@ pub struct RenderArgs {
     /// quick low-resolution cost estimate.
     #[arg(long, value_name = "i/N")]
     pub part: Option<String>,
+    /// Render progressively for this many seconds: passes of samples (1, 1, 2, 4, ...), the
+    /// outputs rewritten after each; --spp is then an upper bound, and without it the render
+    /// runs until the time is up (`cli::progressive`).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true,
+          conflicts_with_all = ["resume", "region", "samples", "part"])]
+    pub time_limit: Option<f64>,
 }
 
 /// `--patch-mode`'s values.
@@ -161,7 +167,7 @@ pub fn filter_parser() -> impl clap::builder::TypedValueParser<Value = FilterMod
 }
 
 /// Set by the Ctrl-C / SIGTERM handler; render workers stop taking new tiles.
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+pub(crate) static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
 /// Load the scene named by `args` (or the default one), with a camera.
 pub fn load(args: &RenderArgs) -> Result<SceneDescription, CommandError> {
@@ -249,7 +255,7 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
     })
 }
 
-fn tonemap(args: &RenderArgs, scene: &SceneDescription) -> Result<ToneMap, CommandError> {
+pub(crate) fn tonemap(args: &RenderArgs, scene: &SceneDescription) -> Result<ToneMap, CommandError> {
     match args.tonemap.as_deref() {
         None => Ok(scene.settings.tonemap),
         Some("clamp") => Ok(ToneMap::Clamp),
@@ -261,6 +267,9 @@ fn tonemap(args: &RenderArgs, scene: &SceneDescription) -> Result<ToneMap, Comma
 }
 
 pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
+    if let Some(seconds) = args.time_limit {
+        return crate::cli::progressive::run(args, seconds);
+    }
     // Outputs are checked before anything is loaded or rendered: a bad path costs nothing.
     let outputs = OutputPlan::from_args(args)?;
     let started = Instant::now();
@@ -565,7 +574,7 @@ fn requested_split(
 /// Decodes the scene's textures one by one, showing which one while large files load, and
 /// returns each with the digest of its encoded bytes (for the render's signature), so every
 /// texture file is read once.
-fn decode_textures(
+pub(crate) fn decode_textures(
     scene: &SceneDescription,
     quiet: bool,
 ) -> Result<(Vec<Arc<crate::texture::Texture>>, Vec<String>), CommandError> {
@@ -608,7 +617,7 @@ fn decode_textures(
 }
 
 /// Stages a text file (the statistics) into `set`.
-fn stage_text(set: &mut OutputSet, path: &Path, text: &str) -> Result<(), film::OutputError> {
+pub(crate) fn stage_text(set: &mut OutputSet, path: &Path, text: &str) -> Result<(), film::OutputError> {
     set.stage(path, |w| {
         use std::io::Write;
         w.write_all(text.as_bytes())
