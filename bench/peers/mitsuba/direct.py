@@ -149,7 +149,7 @@ def conetrace_floor(binary, width, height, threads, repeat):
     rays traced with nothing shaded seconds), medians of `repeat` runs."""
     command = [binary, "bench", "render", SCENE_TOML, "--width", str(width), "--height",
                str(height), "--max-depth", "0", "--threads", str(threads), "--quiet",
-               "--no-png", "--repeat", str(repeat)]
+               "--repeat", str(repeat)]
     done = subprocess.run(command, capture_output=True, text=True)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed: {done.stderr.strip()}")
