@@ -38,8 +38,8 @@ fn start(dir: &Path, args: &[&str]) -> Child {
 
 /// The samples per pixel an output holds, from its header.
 fn samples_of(path: &Path) -> (Film, u32) {
-    let (film, attributes) = read_exr(path)
-        .unwrap_or_else(|e| panic!("{} is not a complete EXR: {e}", path.display()));
+    let (film, attributes) =
+        read_exr(path).unwrap_or_else(|e| panic!("{} is not a complete EXR: {e}", path.display()));
     let samples = attributes
         .strings
         .get("conetrace.progressive.samples")
@@ -130,8 +130,7 @@ fn a_time_limited_render_rewrites_complete_images_while_it_converges() {
     );
     assert!(dir.path().join("p.png").exists());
     let stats: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("p.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("p.json")).unwrap()).unwrap();
     let progressive = &stats["progressive"];
     assert_eq!(progressive["samples"], final_samples);
     assert_eq!(stats["spp"], final_samples);
@@ -166,7 +165,8 @@ fn a_progressive_render_that_reaches_spp_equals_the_one_shot_render() {
     );
     assert!(out.status.success(), "{out:?}");
     assert!(
-        String::from_utf8_lossy(&out.stdout).contains("4 passes, 8 spp reached, stopped by samples"),
+        String::from_utf8_lossy(&out.stdout)
+            .contains("4 passes, 8 spp reached, stopped by samples"),
         "{out:?}"
     );
     let out = run_in(dir.path(), &args("one.exr", &["--spp", "8"]));

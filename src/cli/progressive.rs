@@ -261,7 +261,9 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
         }
         // The pass must also leave time to write its outputs, as long as the last write.
         let fits = seconds_per_sample.map(|per_sample| {
-            let left = deadline.saturating_duration_since(Instant::now()).as_secs_f64();
+            let left = deadline
+                .saturating_duration_since(Instant::now())
+                .as_secs_f64();
             ((left - last_write_seconds).max(0.0) / per_sample.max(1e-12)).floor() as u64
         });
         let samples = next_pass(accumulated.samples, bound, fits);

@@ -255,7 +255,10 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
     })
 }
 
-pub(crate) fn tonemap(args: &RenderArgs, scene: &SceneDescription) -> Result<ToneMap, CommandError> {
+pub(crate) fn tonemap(
+    args: &RenderArgs,
+    scene: &SceneDescription,
+) -> Result<ToneMap, CommandError> {
     match args.tonemap.as_deref() {
         None => Ok(scene.settings.tonemap),
         Some("clamp") => Ok(ToneMap::Clamp),
@@ -617,7 +620,11 @@ pub(crate) fn decode_textures(
 }
 
 /// Stages a text file (the statistics) into `set`.
-pub(crate) fn stage_text(set: &mut OutputSet, path: &Path, text: &str) -> Result<(), film::OutputError> {
+pub(crate) fn stage_text(
+    set: &mut OutputSet,
+    path: &Path,
+    text: &str,
+) -> Result<(), film::OutputError> {
     set.stage(path, |w| {
         use std::io::Write;
         w.write_all(text.as_bytes())
