@@ -11,6 +11,7 @@ pub mod bench_textures;
 pub mod merge;
 pub mod outputs;
 pub mod patch_mode;
+pub mod progressive;
 pub mod render_cmd;
 pub mod resume;
 pub mod sample_texture;

@@ -148,6 +148,12 @@ pub struct RenderArgs {
     /// [default: the scene's, else 1].
     #[arg(long, allow_negative_numbers = true)]
     pub vct_bounces: Option<u32>,
+    /// Render progressively for this many seconds: passes of samples (1, 1, 2, 4, ...), the
+    /// outputs rewritten after each; --spp is then an upper bound, and without it the render
+    /// runs until the time is up (`cli::progressive`).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true,
+          conflicts_with_all = ["resume", "region", "samples", "part"])]
+    pub time_limit: Option<f64>,
 }
 
 /// `--patch-mode`'s values.
@@ -176,7 +182,7 @@ pub fn filter_parser() -> impl clap::builder::TypedValueParser<Value = FilterMod
 /// `--integrator`, `--vct-resolution` and `--vct-bounces` over the scene's `[render]`
 /// settings (kept there, so a resumed or merged render is checked against them too: the
 /// signature covers the settings).
-fn apply_integrator_options(
+pub(crate) fn apply_integrator_options(
     args: &RenderArgs,
     scene: &mut SceneDescription,
 ) -> Result<(), CommandError> {
@@ -197,7 +203,7 @@ fn apply_integrator_options(
 
 /// The integrator the scene's settings select (after [`apply_integrator_options`]), built
 /// for `context` (the voxel scene of vct; nothing for Whitted).
-fn select_integrator(
+pub(crate) fn select_integrator(
     context: &render::RenderContext,
     kind: IntegratorKind,
 ) -> Result<SelectedIntegrator, CommandError> {
@@ -206,7 +212,7 @@ fn select_integrator(
 }
 
 /// Set by the Ctrl-C / SIGTERM handler; render workers stop taking new tiles.
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+pub(crate) static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
 /// Load the scene named by `args` (or the default one), with a camera.
 pub fn load(args: &RenderArgs) -> Result<SceneDescription, CommandError> {
@@ -294,7 +300,10 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
     })
 }
 
-fn tonemap(args: &RenderArgs, scene: &SceneDescription) -> Result<ToneMap, CommandError> {
+pub(crate) fn tonemap(
+    args: &RenderArgs,
+    scene: &SceneDescription,
+) -> Result<ToneMap, CommandError> {
     match args.tonemap.as_deref() {
         None => Ok(scene.settings.tonemap),
         Some("clamp") => Ok(ToneMap::Clamp),
@@ -306,6 +315,9 @@ fn tonemap(args: &RenderArgs, scene: &SceneDescription) -> Result<ToneMap, Comma
 }
 
 pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
+    if let Some(seconds) = args.time_limit {
+        return crate::cli::progressive::run(args, seconds);
+    }
     // Outputs are checked before anything is loaded or rendered: a bad path costs nothing.
     let outputs = OutputPlan::from_args(args)?;
     let started = Instant::now();
@@ -628,7 +640,7 @@ fn requested_split(
 /// Decodes the scene's textures one by one, showing which one while large files load, and
 /// returns each with the digest of its encoded bytes (for the render's signature), so every
 /// texture file is read once.
-fn decode_textures(
+pub(crate) fn decode_textures(
     scene: &SceneDescription,
     quiet: bool,
 ) -> Result<(Vec<Arc<crate::texture::Texture>>, Vec<String>), CommandError> {
@@ -671,7 +683,11 @@ fn decode_textures(
 }
 
 /// Stages a text file (the statistics) into `set`.
-fn stage_text(set: &mut OutputSet, path: &Path, text: &str) -> Result<(), film::OutputError> {
+pub(crate) fn stage_text(
+    set: &mut OutputSet,
+    path: &Path,
+    text: &str,
+) -> Result<(), film::OutputError> {
     set.stage(path, |w| {
         use std::io::Write;
         w.write_all(text.as_bytes())

@@ -4,6 +4,7 @@
 #
 #   bash bench/peers/mitsuba/run.sh [run.py options, e.g. --max-spp 1024]
 #   bash bench/peers/mitsuba/run.sh sampler [sampler.py options]   (samplers at equal N)
+#   bash bench/peers/mitsuba/run.sh direct [direct.py options]     (direct lighting)
 #
 # Installs (only what is missing): Debian's libllvm19 (Mitsuba's llvm_ad_rgb variant JIT-
 # compiles with it), python3-venv, python3-openimageio and python3-numpy (reading EXRs),
@@ -54,6 +55,9 @@ fi
 script="$here/run.py"
 if [ "${1:-}" = "sampler" ]; then
     script="$here/sampler.py"
+    shift
+elif [ "${1:-}" = "direct" ]; then
+    script="$here/direct.py"
     shift
 fi
 exec "$venv/bin/python" "$script" --conetrace "$binary" --work "$cache/work" "$@"

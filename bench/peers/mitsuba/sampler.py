@@ -102,6 +102,7 @@ def main():
         image, seconds = conetrace_render(args.conetrace, os.path.join(work, f"ours_{spp}.exr"),
                                           spp, 0, threads)
         rows.append(dict(renderer="conetrace", sampler="owen-sobol", spp=spp, seconds=seconds,
+                         row_mse=((image - truth) ** 2).mean(axis=(1, 2)),
                          **peers.errors(image, truth, mask)))
         peers.log(f"conetrace {spp} spp: RMSE {rows[-1]['rmse_all']:.5f}")
         for sampler in ("multijitter", "independent"):
@@ -111,6 +112,7 @@ def main():
             seconds = time.perf_counter() - start
             rendered = scene.sensors()[0].sampler().sample_count()
             rows.append(dict(renderer="mitsuba", sampler=sampler, spp=rendered, seconds=seconds,
+                             row_mse=((image - truth) ** 2).mean(axis=(1, 2)),
                              **peers.errors(image, truth, mask)))
             peers.log(f"mitsuba {sampler} {rendered} spp: RMSE {rows[-1]['rmse_all']:.5f}")
     with open("/proc/loadavg") as f:
@@ -160,7 +162,25 @@ def main():
             f"{ours['rmse_all'] / theirs['rmse_all']:.3f} | {ours['rmse_far']:.5f} | "
             f"{theirs['rmse_far']:.5f} | {independent['rmse_all']:.5f} |")
     lines += ["", "ratio = conetrace RMSE / Mitsuba multijitter RMSE (<= 1: ours is at most "
-              "Mitsuba's).", "", "## All runs", "",
+              "Mitsuba's).", ""]
+    # Where the difference lies: the same ratio over bands of image rows (top = grazing,
+    # where a pixel covers many texels along the view; bottom = near, a few texels).
+    bands = [(0, 20), (20, 40), (40, 80), (80, 160), (160, 320), (320, args.height)]
+    bands = [(a, min(b, args.height)) for a, b in bands if a < args.height]
+    lines += ["RMSE ratio conetrace / Mitsuba multijitter by band of image rows (and the "
+              "band's conetrace RMSE):", "",
+              "| spp | " + " | ".join(f"rows {a}-{b - 1}" for a, b in bands) + " |",
+              "|---|" + "---|" * len(bands)]
+    for spp in counts:
+        ours = find("conetrace", "owen-sobol", spp)
+        theirs = next(r for r in rows if r["renderer"] == "mitsuba"
+                      and r["sampler"] == "multijitter" and r["spp"] >= spp)
+        cells = []
+        for a, b in bands:
+            o, t = ours["row_mse"][a:b].mean(), theirs["row_mse"][a:b].mean()
+            cells.append(f"{np.sqrt(o / t):.3f} ({np.sqrt(o):.5f})")
+        lines.append(f"| {spp} | " + " | ".join(cells) + " |")
+    lines += ["", "## All runs", "",
               "| renderer | sampler | spp | seconds | RMSE | PSNR dB | far RMSE |",
               "|---|---|---|---|---|---|---|"]
     for r in rows:
