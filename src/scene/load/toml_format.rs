@@ -112,6 +112,8 @@ struct RawScene {
     bezier_triangle: Vec<super::patches::RawBezierTriangle>,
     #[serde(default)]
     patch_file: Vec<super::patches::RawPatchFile>,
+    #[serde(default)]
+    height_patch: Vec<super::patches::RawHeightPatch>,
 }
 
 #[derive(Deserialize)]
@@ -542,6 +544,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
         loc,
         &mut material,
     )?;
+    super::patches::build_height_patches(&mut scene, &raw.height_patch, loc, &mut material)?;
 
     for m in &raw.mesh {
         let placement = Placement {
