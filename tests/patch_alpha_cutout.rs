@@ -139,13 +139,13 @@ fn holes_in_patches_let_camera_and_shadow_rays_through() {
         let (a, b, c) = (rgb(lit), rgb(shaded), rgb(frame));
         eprintln!("{mode}: lit wall {a:?}, shaded wall {b:?}, card {c:?}");
         assert!(
-            a[2] > 0.3 && a[0] < 0.02,
+            a[2] > 0.2 && a[0] < 0.02,
             "{mode}: the wall behind the hole, lit through it, is {a:?}"
         );
         assert!(
             b[0] < 0.02 && b[2] < 0.1 * a[2],
             "{mode}: the wall behind the hole in the frame's shadow is {b:?}"
         );
-        assert!(c[0] > 0.3 && c[2] < 0.02, "{mode}: the card's frame is {c:?}");
+        assert!(c[0] > 0.2 && c[2] < 0.02, "{mode}: the card's frame is {c:?}");
     }
 }
