@@ -10,13 +10,14 @@ use std::path::{Path, PathBuf};
 use common::*;
 
 fn asset(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes")
+        .join(name)
 }
 
 /// The CSV's rows as `(mode, parameter, rmse, triangles)`.
 fn rows(path: &Path) -> Vec<(String, String, f64, u64)> {
-    let text = std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
     let column = |name: &str| {

@@ -146,6 +146,9 @@ fn holes_in_patches_let_camera_and_shadow_rays_through() {
             b[0] < 0.02 && b[2] < 0.1 * a[2],
             "{mode}: the wall behind the hole in the frame's shadow is {b:?}"
         );
-        assert!(c[0] > 0.2 && c[2] < 0.02, "{mode}: the card's frame is {c:?}");
+        assert!(
+            c[0] > 0.2 && c[2] < 0.02,
+            "{mode}: the card's frame is {c:?}"
+        );
     }
 }

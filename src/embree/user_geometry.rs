@@ -31,8 +31,8 @@ use super::ffi;
 use super::filter::{AlphaFilter, FilterCandidate};
 use super::geometry::GeometryRecord;
 use super::packet::{
-    DIR_X, DIR_Y, DIR_Z, GEOM_ID, ID, INST_ID, NG_X, NG_Y, NG_Z, ORG_X, ORG_Y, ORG_Z, PRIM_ID, TFAR,
-    TNEAR, U, V,
+    DIR_X, DIR_Y, DIR_Z, GEOM_ID, ID, INST_ID, NG_X, NG_Y, NG_Z, ORG_X, ORG_Y, ORG_Z, PRIM_ID,
+    TFAR, TNEAR, U, V,
 };
 use super::scene::{Bounds, SceneBuilder};
 

@@ -18,8 +18,8 @@ use glam::{DVec3, Vec2, Vec3};
 use crate::embree::{Bounds, UserGeometry, UserHit, UserRay};
 use crate::hit::{CurvedFrame, Patch, SurfaceHit};
 use crate::render::tracer::TraceHit;
-use crate::scene::patch::intersect::{geometric_normal, PatchIntersector, PatchRay};
 use crate::scene::patch::height::HeightPatch;
+use crate::scene::patch::intersect::{geometric_normal, PatchIntersector, PatchRay};
 use crate::scene::patch::{control_f64, evaluate, BezierPatch};
 use crate::shading::ray_offset::SpawnPoint;
 

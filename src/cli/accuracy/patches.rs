@@ -198,8 +198,7 @@ fn variants(scene: &SceneDescription) -> Vec<Variant> {
         for bound in TESSELLATION_BOUNDS {
             let mut tessellated = (*exact).clone();
             let first_new_mesh = tessellated.meshes.len();
-            let report =
-                tessellate_all(&mut tessellated.patches, &mut tessellated.meshes, bound);
+            let report = tessellate_all(&mut tessellated.patches, &mut tessellated.meshes, bound);
             let geometry_bytes = tessellated.meshes[first_new_mesh..]
                 .iter()
                 .map(|mesh| {
@@ -387,7 +386,9 @@ pub fn csv(report: &PatchReport) -> String {
             "{},{},{},{},{},{:.6},{:.6},{},{:.6},{},{:.6},{},{}\n",
             report.name,
             row.kind.mode(),
-            row.kind.parameter().map_or(String::new(), |b| b.to_string()),
+            row.kind
+                .parameter()
+                .map_or(String::new(), |b| b.to_string()),
             row.triangles,
             row.geometry_bytes,
             row.build_seconds,
@@ -472,10 +473,14 @@ fn draw_panel(
         .iter()
         .map(|(_, p)| p.0)
         .chain(std::iter::once(exact_seconds).filter(|t| *t > 0.0 && t.is_finite()));
-    let (t_low, t_high) = times.fold((f64::INFINITY, 0.0f64), |(lo, hi), t| (lo.min(t), hi.max(t)));
+    let (t_low, t_high) = times.fold((f64::INFINITY, 0.0f64), |(lo, hi), t| {
+        (lo.min(t), hi.max(t))
+    });
     let (e_low, e_high) = positive
         .iter()
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, p)| (lo.min(p.1), hi.max(p.1)));
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, p)| {
+            (lo.min(p.1), hi.max(p.1))
+        });
     let x_range = t_low / 1.6..t_high * 1.6;
     let y_range = e_low / 1.6..e_high * 1.6;
     let mut builder = ChartBuilder::on(area);
@@ -488,8 +493,14 @@ fn draw_panel(
     }
     let mut chart = builder
         .build_cartesian_2d(
-            x_range.clone().log_scale().with_key_points(log_ticks(&x_range)),
-            y_range.clone().log_scale().with_key_points(log_ticks(&y_range)),
+            x_range
+                .clone()
+                .log_scale()
+                .with_key_points(log_ticks(&x_range)),
+            y_range
+                .clone()
+                .log_scale()
+                .with_key_points(log_ticks(&y_range)),
         )
         .map_err(drawing_error)?;
     let mut mesh = chart.configure_mesh();
@@ -522,7 +533,10 @@ fn draw_panel(
     }
     let front: Vec<(f64, f64)> = pareto_front(points).iter().map(|&i| points[i]).collect();
     chart
-        .draw_series(LineSeries::new(front, ShapeStyle::from(&RED).stroke_width(2)))
+        .draw_series(LineSeries::new(
+            front,
+            ShapeStyle::from(&RED).stroke_width(2),
+        ))
         .map_err(drawing_error)?;
     for (index, point) in positive {
         chart
@@ -565,7 +579,11 @@ pub fn draw_plot(report: &PatchReport, labels: bool) -> Result<Vec<u8>, String> 
     let flip: Vec<(f64, f64)> = tessellated
         .iter()
         .map(|r| {
-            let e = if textured { r.textured_error.unwrap_or(r.error) } else { r.error };
+            let e = if textured {
+                r.textured_error.unwrap_or(r.error)
+            } else {
+                r.error
+            };
             (r.total_seconds(), e.flip)
         })
         .collect();
@@ -587,7 +605,11 @@ pub fn draw_plot(report: &PatchReport, labels: bool) -> Result<Vec<u8>, String> 
 }
 
 /// Writes the four files of one scene.
-fn write_outputs(out: &Path, report: &PatchReport, images: &[DisplayImage]) -> Result<(), CommandError> {
+fn write_outputs(
+    out: &Path,
+    report: &PatchReport,
+    images: &[DisplayImage],
+) -> Result<(), CommandError> {
     let labels = font::labels_available();
     let stem = format!("{}_patches", report.name);
     files::write_text(&out.join(format!("{stem}.csv")), &csv(report))?;

@@ -380,7 +380,10 @@ mod tests {
     fn bad_height_patches_are_refused_with_their_place() {
         let e = parse_here("[[height_patch]]\nmin = [0, 0]\nmax = [1, 1]\nheights = [1, 2]\n")
             .unwrap_err();
-        assert!(e.starts_with("t.toml:4:11: a height patch needs 16 heights, not 2"), "{e}");
+        assert!(
+            e.starts_with("t.toml:4:11: a height patch needs 16 heights, not 2"),
+            "{e}"
+        );
         let e = parse_here(&format!(
             "[[height_patch]]\nmin = [0, 0]\nmax = [0, 1]\nheights = {HEIGHTS}\n"
         ))
@@ -390,6 +393,9 @@ mod tests {
             "[[height_patch]]\nmin = [0, 0]\nmax = [1, 1]\nheights = {HEIGHTS}\nmarch_step = 0\n"
         ))
         .unwrap_err();
-        assert!(e.contains("march_step 0 must be a positive distance"), "{e}");
+        assert!(
+            e.contains("march_step 0 must be a positive distance"),
+            "{e}"
+        );
     }
 }

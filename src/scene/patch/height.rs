@@ -101,7 +101,11 @@ impl HeightPatch {
     /// The box containing the patch.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let low = self.heights.iter().copied().fold(f32::INFINITY, f32::min);
-        let high = self.heights.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let high = self
+            .heights
+            .iter()
+            .copied()
+            .fold(f32::NEG_INFINITY, f32::max);
         (
             Vec3::new(self.min.x, low, self.min.y),
             Vec3::new(self.max.x, high, self.max.y),
@@ -166,12 +170,8 @@ impl HeightPatch {
             return None;
         }
         let (low, high) = self.bounds();
-        let (t0, t1) = super::hull_tree::ray_box(
-            ray.origin,
-            ray.direction,
-            low.as_dvec3(),
-            high.as_dvec3(),
-        )?;
+        let (t0, t1) =
+            super::hull_tree::ray_box(ray.origin, ray.direction, low.as_dvec3(), high.as_dvec3())?;
         let (start, end) = (t0.max(ray.tnear), t1.min(ray.tfar));
         if !(start <= end) {
             return None;
@@ -287,7 +287,10 @@ mod tests {
             let p = bezier.evaluate(u, v).position;
             let x = -2.0 + 4.0 * u;
             let z = -1.5 + 3.0 * v;
-            assert!((p.x - x).abs() < 1e-6 && (p.z - z).abs() < 1e-6, "{p} at ({u}, {v})");
+            assert!(
+                (p.x - x).abs() < 1e-6 && (p.z - z).abs() < 1e-6,
+                "{p} at ({u}, {v})"
+            );
             assert!((p.y - patch.height(u, v).0).abs() < 1e-6);
         }
     }

@@ -228,6 +228,10 @@ mod tests {
         assert_eq!((t0, t1), (4.0, 6.0));
         assert!(ray_box(DVec3::new(2.0, 0.0, 5.0), DVec3::NEG_Z, lo, hi).is_none());
         let (t0, t1) = ray_box(DVec3::new(1.0, 1.0, 5.0), DVec3::NEG_Z, lo, hi).unwrap();
-        assert_eq!((t0, t1), (4.0, 6.0), "a ray along the box's edge touches it");
+        assert_eq!(
+            (t0, t1),
+            (4.0, 6.0),
+            "a ray along the box's edge touches it"
+        );
     }
 }

@@ -263,9 +263,19 @@ pub fn geometric_normal(control: &[DVec3; 16], u: f64, v: f64) -> DVec3 {
 fn position_and_tangents(c: &[DVec3; 16], u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
     let (s, t) = (1.0 - u, 1.0 - v);
     let bu = [s * s * s, 3.0 * u * s * s, 3.0 * u * u * s, u * u * u];
-    let du = [-3.0 * s * s, 3.0 * s * s - 6.0 * u * s, 6.0 * u * s - 3.0 * u * u, 3.0 * u * u];
+    let du = [
+        -3.0 * s * s,
+        3.0 * s * s - 6.0 * u * s,
+        6.0 * u * s - 3.0 * u * u,
+        3.0 * u * u,
+    ];
     let bv = [t * t * t, 3.0 * v * t * t, 3.0 * v * v * t, v * v * v];
-    let dv = [-3.0 * t * t, 3.0 * t * t - 6.0 * v * t, 6.0 * v * t - 3.0 * v * v, 3.0 * v * v];
+    let dv = [
+        -3.0 * t * t,
+        3.0 * t * t - 6.0 * v * t,
+        6.0 * v * t - 3.0 * v * v,
+        3.0 * v * v,
+    ];
     let (mut position, mut dpdu, mut dpdv) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
     for j in 0..4 {
         // Each row's curve in u and its u-derivative, then the sums over rows in v.
