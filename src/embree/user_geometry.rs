@@ -15,7 +15,10 @@
 //! panicking alpha filter). A panic in the bounds callback, which runs during commit, gives
 //! the primitive empty bounds, so it is never hit.
 //!
-//! User geometries run no filter callbacks (alpha cut-outs are for triangle meshes).
+//! Alpha cut-outs: Embree runs no filter functions for user geometries, so a user geometry
+//! given an alpha test ([`SceneBuilder::set_user_alpha_filter`]) runs it itself on each
+//! candidate hit ([`UserGeometry::intersect_accepting`]); a panic in the test is caught
+//! like one in the intersection.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
@@ -25,10 +28,11 @@ use glam::Vec3;
 use super::context::TraceContext;
 use super::error::EmbreeError;
 use super::ffi;
+use super::filter::{AlphaFilter, FilterCandidate};
 use super::geometry::GeometryRecord;
 use super::packet::{
-    DIR_X, DIR_Y, DIR_Z, GEOM_ID, INST_ID, NG_X, NG_Y, NG_Z, ORG_X, ORG_Y, ORG_Z, PRIM_ID, TFAR,
-    TNEAR, U, V,
+    DIR_X, DIR_Y, DIR_Z, GEOM_ID, ID, INST_ID, NG_X, NG_Y, NG_Z, ORG_X, ORG_Y, ORG_Z, PRIM_ID,
+    TFAR, TNEAR, U, V,
 };
 use super::scene::{Bounds, SceneBuilder};
 
@@ -63,6 +67,22 @@ pub trait UserGeometry: Send + Sync {
     /// The hit of `ray` with primitive `primitive`: the closest, or with `any_hit` (shadow
     /// rays) any hit in `(tnear, tfar)`.
     fn intersect(&self, primitive: u32, ray: &UserRay, any_hit: bool) -> Option<UserHit>;
+
+    /// As [`UserGeometry::intersect`], reporting only a hit that `accept` (the geometry's
+    /// alpha test, see [`SceneBuilder::set_user_alpha_filter`]) keeps: a rejected hit lets
+    /// the ray through to whatever the primitive holds behind it. The default tests the
+    /// closest hit only, which is right for primitives a ray meets at most once; others
+    /// (curved patches) search on behind a rejected hit.
+    fn intersect_accepting(
+        &self,
+        primitive: u32,
+        ray: &UserRay,
+        any_hit: bool,
+        accept: &mut dyn FnMut(&UserHit) -> bool,
+    ) -> Option<UserHit> {
+        self.intersect(primitive, ray, any_hit)
+            .filter(|hit| accept(hit))
+    }
 }
 
 impl SceneBuilder {
@@ -100,6 +120,26 @@ impl SceneBuilder {
         }
         self.device.check("rtcSetGeometryIntersectFunction")?;
         Ok(id)
+    }
+
+    /// Gives user geometry `geom_id` an alpha test: its intersect and occluded callbacks
+    /// hand every candidate hit to `filter` (as a [`FilterCandidate`] with the hit's t, u,
+    /// v and the ray's payload, as Embree's filter functions do for triangles) and report
+    /// only the hits it keeps. Embree runs no filter functions of its own for user
+    /// geometries, so none is installed. `geom_id` must be a user geometry
+    /// ([`EmbreeError::UnknownGeometry`] otherwise).
+    pub fn set_user_alpha_filter(
+        &mut self,
+        geom_id: u32,
+        filter: AlphaFilter,
+    ) -> Result<(), EmbreeError> {
+        let (_, record) = self.geometry_mut(geom_id)?;
+        if record.user.is_none() {
+            // Not a user geometry: its callbacks would never run the test.
+            return Err(EmbreeError::UnknownGeometry { geom_id });
+        }
+        record.filter = Some(filter);
+        Ok(())
     }
 }
 
@@ -210,6 +250,7 @@ unsafe fn run_lanes(
     let get = |row: usize, lane: usize| f32::from_bits(unsafe { *rows.add(row * n + lane) });
     let set = |row: usize, lane: usize, value: u32| unsafe { *rows.add(row * n + lane) = value };
     let inst_id = unsafe { (*context).instID[0] };
+    let ray_id = |lane: usize| unsafe { *rows.add(ID * n + lane) };
     for (lane, &mask) in valid.iter().enumerate() {
         if mask == 0 {
             continue;
@@ -223,8 +264,26 @@ unsafe fn run_lanes(
         if ray.tnear.is_nan() || ray.tfar.is_nan() || ray.tnear > ray.tfar {
             continue; // an occluded lane (tfar = -inf) or an empty interval
         }
-        let hit = match catch_unwind(AssertUnwindSafe(|| {
-            geometry.intersect(prim_id, &ray, occlusion)
+        let hit = match catch_unwind(AssertUnwindSafe(|| match record.filter.as_ref() {
+            None => geometry.intersect(prim_id, &ray, occlusion),
+            Some(filter) => {
+                let id = ray_id(lane);
+                let mut accept = |hit: &UserHit| {
+                    filter(&FilterCandidate {
+                        origin: ray.origin,
+                        direction: ray.direction,
+                        t: hit.t,
+                        u: hit.u,
+                        v: hit.v,
+                        prim_id,
+                        geom_id: record.index,
+                        lane: id,
+                        payload: trace.payload(id),
+                        occlusion,
+                    })
+                };
+                geometry.intersect_accepting(prim_id, &ray, occlusion, &mut accept)
+            }
         })) {
             Ok(hit) => hit,
             Err(payload) => {

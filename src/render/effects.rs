@@ -85,6 +85,11 @@ impl EffectSet {
                     *u = true;
                 }
             }
+            for patch in &scene.height_patches {
+                if let Some(u) = used.get_mut(patch.material) {
+                    *u = true;
+                }
+            }
             used
         };
         let materials = || {
@@ -199,6 +204,25 @@ impl EffectSet {
                 "alpha cut-out",
                 format!(
                     "material '{}' has an alpha texture and cutoff {}",
+                    m.name,
+                    m.alpha_cutoff.unwrap_or_default()
+                ),
+            );
+        } else if let Some(m) = scene
+            .patches
+            .iter()
+            .map(|p| p.material)
+            .chain(scene.height_patches.iter().map(|p| p.material))
+            .filter_map(|index| scene.materials.get(index))
+            .find(|m| m.alpha_cutoff.is_some() && m.alpha_texture.is_some())
+        {
+            // Curved patches always have texture coordinates: their alpha test runs in
+            // their user geometry's callbacks.
+            set.alpha_cutout = true;
+            because(
+                "alpha cut-out",
+                format!(
+                    "material '{}' (on curved patches) has an alpha texture and cutoff {}",
                     m.name,
                     m.alpha_cutoff.unwrap_or_default()
                 ),

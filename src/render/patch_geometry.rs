@@ -6,6 +6,9 @@
 //! contains the patch) and its intersections are `crate::scene::patch::intersect`'s. A scene
 //! without patches has no user geometry at all, so triangle-only scenes pay nothing.
 //!
+//! Height patches (`crate::scene::patch::height`) form a second user geometry, traced by
+//! marching; a hit on one is rebuilt from the same surface as a Bezier patch.
+//!
 //! A hit is rebuilt from the patch itself at the hit's (u, v): the position, the normal
 //! `P_u x P_v` (from just inside a collapsed edge), and the exact first and second
 //! derivatives that footprints use (`crate::footprint`, "Curved patches").
@@ -15,6 +18,7 @@ use glam::{DVec3, Vec2, Vec3};
 use crate::embree::{Bounds, UserGeometry, UserHit, UserRay};
 use crate::hit::{CurvedFrame, Patch, SurfaceHit};
 use crate::render::tracer::TraceHit;
+use crate::scene::patch::height::HeightPatch;
 use crate::scene::patch::intersect::{geometric_normal, PatchIntersector, PatchRay};
 use crate::scene::patch::{control_f64, evaluate, BezierPatch};
 use crate::shading::ray_offset::SpawnPoint;
@@ -53,15 +57,91 @@ impl UserGeometry for PatchGeometry {
     }
 
     fn intersect(&self, primitive: u32, ray: &UserRay, any_hit: bool) -> Option<UserHit> {
+        self.intersect_accepting(primitive, ray, any_hit, &mut |_| true)
+    }
+
+    fn intersect_accepting(
+        &self,
+        primitive: u32,
+        ray: &UserRay,
+        any_hit: bool,
+        accept: &mut dyn FnMut(&UserHit) -> bool,
+    ) -> Option<UserHit> {
         let query = PatchRay {
             origin: ray.origin.as_dvec3(),
             direction: ray.direction.as_dvec3(),
             tnear: f64::from(ray.tnear),
             tfar: f64::from(ray.tfar),
         };
-        let hit = self.intersectors[primitive as usize].intersect(&query, any_hit)?;
+        // The alpha test sees the hit as it will be reported (f32).
+        let mut accept_root = |t: f64, u: f64, v: f64| {
+            accept(&UserHit {
+                t: t as f32,
+                u: u as f32,
+                v: v as f32,
+                normal: Vec3::ZERO,
+            })
+        };
+        let hit = self.intersectors[primitive as usize].intersect_accepting(
+            &query,
+            any_hit,
+            &mut accept_root,
+        )?;
         let t = hit.t as f32;
         // Rounding t to f32 must not move it out of the ray's interval.
+        (t > ray.tnear && t < ray.tfar).then_some(UserHit {
+            t,
+            u: hit.u as f32,
+            v: hit.v as f32,
+            normal: hit.normal.as_vec3(),
+        })
+    }
+}
+
+/// The scene's height patches as Embree user primitives, traced by ray marching
+/// (`crate::scene::patch::height`); a hit's (u, v) are the patch's.
+pub struct HeightPatchGeometry {
+    pub patches: Vec<HeightPatch>,
+}
+
+impl UserGeometry for HeightPatchGeometry {
+    fn primitive_count(&self) -> u32 {
+        self.patches.len() as u32
+    }
+
+    fn bounds(&self, primitive: u32) -> Bounds {
+        let (lower, upper) = self.patches[primitive as usize].bounds();
+        Bounds { lower, upper }
+    }
+
+    fn intersect(&self, primitive: u32, ray: &UserRay, any_hit: bool) -> Option<UserHit> {
+        self.intersect_accepting(primitive, ray, any_hit, &mut |_| true)
+    }
+
+    /// Marching finds crossings in order, so the first is also what a shadow ray needs.
+    fn intersect_accepting(
+        &self,
+        primitive: u32,
+        ray: &UserRay,
+        _any_hit: bool,
+        accept: &mut dyn FnMut(&UserHit) -> bool,
+    ) -> Option<UserHit> {
+        let query = PatchRay {
+            origin: ray.origin.as_dvec3(),
+            direction: ray.direction.as_dvec3(),
+            tnear: f64::from(ray.tnear),
+            tfar: f64::from(ray.tfar),
+        };
+        let mut accept_root = |t: f64, u: f64, v: f64| {
+            accept(&UserHit {
+                t: t as f32,
+                u: u as f32,
+                v: v as f32,
+                normal: Vec3::ZERO,
+            })
+        };
+        let hit = self.patches[primitive as usize].march_accepting(&query, &mut accept_root)?;
+        let t = hit.t as f32;
         (t > ray.tnear && t < ray.tfar).then_some(UserHit {
             t,
             u: hit.u as f32,

@@ -20,6 +20,9 @@ pub enum GeometryRef {
     /// All curved patches live in one user geometry; the primitive id indexes
     /// `SceneDescription::patches`.
     Patches,
+    /// All height patches live in one user geometry traced by marching; the primitive id
+    /// indexes `SceneDescription::height_patches`.
+    HeightPatches,
 }
 
 /// Per-material values the integrator needs on every hit, computed once.
@@ -125,6 +128,9 @@ impl SurfaceLookup {
             GeometryRef::Mesh(index) => self.scene.meshes[index].material,
             GeometryRef::Spheres => self.scene.spheres[hit.primitive as usize].material,
             GeometryRef::Patches => self.scene.patches[hit.primitive as usize].material,
+            GeometryRef::HeightPatches => {
+                self.scene.height_patches[hit.primitive as usize].material
+            }
         };
         self.textured_materials[material]
     }
@@ -231,6 +237,12 @@ impl SurfaceLookup {
             }
             GeometryRef::Patches => crate::render::patch_geometry::patch_surface_hit(
                 &self.scene.patches[hit.primitive as usize],
+                hit,
+                texturing,
+            ),
+            // The marched hit's (u, v) are those of the same surface as a Bezier patch.
+            GeometryRef::HeightPatches => crate::render::patch_geometry::patch_surface_hit(
+                &self.scene.height_patches[hit.primitive as usize].to_bezier(),
                 hit,
                 texturing,
             ),

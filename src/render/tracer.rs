@@ -229,10 +229,33 @@ impl Tracer {
         }
         if !scene.patches.is_empty() {
             let patches = crate::render::patch_geometry::PatchGeometry::new(&scene.patches);
-            builder
+            let id = builder
                 .add_user_geometry(Arc::new(patches))
                 .map_err(embree_error)?;
             geometries.push(GeometryRef::Patches);
+            if let Some(filter) =
+                patch_alpha_filter(scene, &scene.patches, textures, options, settings)
+            {
+                builder
+                    .set_user_alpha_filter(id, filter)
+                    .map_err(embree_error)?;
+            }
+        }
+        if !scene.height_patches.is_empty() {
+            let marched = crate::render::patch_geometry::HeightPatchGeometry {
+                patches: scene.height_patches.clone(),
+            };
+            let id = builder
+                .add_user_geometry(Arc::new(marched))
+                .map_err(embree_error)?;
+            geometries.push(GeometryRef::HeightPatches);
+            let as_bezier: Vec<_> = scene.height_patches.iter().map(|p| p.to_bezier()).collect();
+            if let Some(filter) = patch_alpha_filter(scene, &as_bezier, textures, options, settings)
+            {
+                builder
+                    .set_user_alpha_filter(id, filter)
+                    .map_err(embree_error)?;
+            }
         }
         let committed = builder.commit().map_err(embree_error)?;
         Ok((
@@ -502,6 +525,74 @@ fn alpha_filter(
         let threshold = cutoff + (ray_threshold(candidate) - cutoff) * blend;
         alpha >= threshold
     })
+}
+
+/// The alpha test of a user geometry of curved patches (`patches[prim_id]`), or `None` when
+/// no patch's material has an alpha cut-off or the render runs no alpha tests. As for
+/// meshes ([`alpha_filter`]): a cut-off over a constant alpha keeps or drops the patch; an
+/// alpha texture is filtered at the hit's (s, t) over the ray cone's footprint, mapped to
+/// texture space by the patch's own texel density at (u, v), `|st_u x st_v| / |P_u x P_v|`.
+fn patch_alpha_filter(
+    scene: &Arc<SceneDescription>,
+    patches: &[crate::scene::patch::BezierPatch],
+    textures: &[Arc<Texture>],
+    options: &RenderOptions,
+    settings: TracerSettings,
+) -> Option<crate::embree::AlphaFilter> {
+    let cut = |p: &crate::scene::patch::BezierPatch| scene.materials[p.material].alpha_cutoff;
+    if settings.alpha_tests == AlphaTests::Off || !patches.iter().any(|p| cut(p).is_some()) {
+        return None;
+    }
+    let patches: Vec<crate::scene::patch::BezierPatch> = patches.to_vec();
+    let scene = scene.clone();
+    let textures: Vec<Arc<Texture>> = textures.to_vec();
+    let filters = crate::render::prepared::texture_filters(&scene, &options.filter);
+    Some(Arc::new(move |candidate: &FilterCandidate| {
+        FILTER_CALLS.with(|c| c.set(c.get() + 1));
+        let Some(patch) = patches.get(candidate.prim_id as usize) else {
+            return true;
+        };
+        let material = &scene.materials[patch.material];
+        let Some(cutoff) = material.alpha_cutoff else {
+            return true;
+        };
+        let Some(binding) = &material.alpha_texture else {
+            return material.alpha >= cutoff;
+        };
+        let texture = &textures[binding.texture];
+        let (u, v) = (candidate.u.clamp(0.0, 1.0), candidate.v.clamp(0.0, 1.0));
+        let point = patch.evaluate(f64::from(u), f64::from(v));
+        let (st, dstdu, dstdv) = patch.st(u, v);
+        let linear = binding.transform.matrix2;
+        let st_area = (linear * dstdu).perp_dot(linear * dstdv).abs();
+        let world_area = point.dpdu.cross(point.dpdv).length() as f32;
+        let width =
+            (candidate.payload.cone_width + candidate.payload.cone_spread * candidate.t).abs();
+        let st_width = if world_area > 0.0 && world_area.is_finite() {
+            width * (st_area / world_area).sqrt()
+        } else {
+            0.0
+        };
+        let st_width = if st_width.is_finite() { st_width } else { 0.0 };
+        let st = binding.transform.transform_point2(st);
+        let query = TextureQuery {
+            s: st.x,
+            t: st.y,
+            dsdx: st_width,
+            dtdx: 0.0,
+            dsdy: 0.0,
+            dtdy: st_width,
+        };
+        let filter = FilterOptions {
+            filter: FilterMode::Trilinear,
+            ..filters[binding.texture]
+        };
+        let alpha = texture.sample(&query, &filter).w * material.alpha;
+        let texels = (texture.width() as f32) * (texture.height() as f32);
+        let blend = ((st_width * st_width * texels - 1.0) / 3.0).clamp(0.0, 1.0);
+        let threshold = cutoff + (ray_threshold(candidate) - cutoff) * blend;
+        alpha >= threshold
+    }))
 }
 
 /// The alpha test of a mesh without a textured cut-out, as the general path runs it on

@@ -34,6 +34,8 @@ pub struct SceneDescription {
     /// Curved surfaces (Bezier, Hermite and Lagrange rectangles, Bezier triangles), all
     /// converted to bicubic Bezier patches ([`patch`]).
     pub patches: Vec<patch::BezierPatch>,
+    /// Height fields `y = H(x, z)` traced by ray marching ([`patch::height`]).
+    pub height_patches: Vec<patch::height::HeightPatch>,
     pub environment: Environment,
     /// Fog volumes (`[[fog]]`), with their exact optical depth in `crate::medium`.
     pub fog: Vec<crate::medium::FogVolume>,
@@ -350,6 +352,11 @@ impl SceneDescription {
             hi = hi.max(sphere.center + Vec3::splat(sphere.radius));
         }
         for patch in &self.patches {
+            let (plo, phi) = patch.bounds();
+            lo = lo.min(plo);
+            hi = hi.max(phi);
+        }
+        for patch in &self.height_patches {
             let (plo, phi) = patch.bounds();
             lo = lo.min(plo);
             hi = hi.max(phi);

@@ -33,6 +33,7 @@ pub mod font;
 pub mod index;
 pub mod methods;
 pub mod metrics;
+pub mod patches;
 pub mod plot;
 pub mod report;
 
@@ -98,6 +99,22 @@ pub struct AccuracyArgs {
     /// Do not print progress lines.
     #[arg(long)]
     pub quiet: bool,
+    /// What to measure: texture footprints and filters (the default), or curved patches
+    /// traced exactly against their tessellations ([`patches`]).
+    #[arg(long, value_enum, default_value_t = AccuracyMode::Footprints)]
+    pub mode: AccuracyMode,
+    /// Samples per pixel of every render of `--mode patches` (exact and tessellated alike).
+    #[arg(long, default_value_t = 4)]
+    pub patch_spp: u32,
+}
+
+/// The measurements `conetrace accuracy` can make.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AccuracyMode {
+    /// Footprint strategies and texture filters against supersampling.
+    Footprints,
+    /// Exact patch intersection against tessellation at several error bounds.
+    Patches,
 }
 
 /// A scene to measure, loaded and checked, with the options every method starts from.
@@ -461,6 +478,9 @@ fn write_scene_outputs(out: &Path, measurement: &SceneMeasurement) -> Result<(),
 
 /// Measures every scene and writes its files, then the index; see the module docs.
 pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
+    if args.mode == AccuracyMode::Patches {
+        return patches::run(args);
+    }
     if args.runs == 0 {
         return Err(CommandError::bad_input("--runs must be at least 1"));
     }

@@ -90,7 +90,7 @@ pub(super) fn shade(
         let light = match context.surfaces.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(mesh) => lights.area.mesh_light(mesh, hit.primitive),
             GeometryRef::Spheres => lights.area.sphere_light(hit.primitive as usize),
-            GeometryRef::Patches => None,
+            GeometryRef::Patches | GeometryRef::HeightPatches => None,
         };
         let weight = match light {
             Some(index) => {

@@ -19,6 +19,7 @@ use crate::scene::patch::basis::{
     elevate_to_bicubic, hermite_to_bezier, lagrange_to_bezier, triangle_to_bezier,
 };
 use crate::scene::patch::bpt::parse_bpt;
+use crate::scene::patch::height::HeightPatch;
 use crate::scene::patch::BezierPatch;
 use crate::scene::SceneDescription;
 
@@ -64,6 +65,36 @@ pub(super) struct RawPatchFile {
     rotate: Option<V3>,
     scale: Option<Spanned<Scale>>,
 }
+
+/// How a `[[height_patch]]` is traced.
+#[derive(Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum RawHeightTrace {
+    /// Ray marching at `march_step` (`crate::scene::patch::height`).
+    #[default]
+    March,
+    /// The same surface as a bicubic Bezier patch, traced exactly.
+    Exact,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawHeightPatch {
+    /// `[x0, z0]`, the corner at u = v = 0.
+    min: Spanned<[Num; 2]>,
+    /// `[x1, z1]`, the corner at u = v = 1.
+    max: [Num; 2],
+    /// 16 heights, row by row (x fastest).
+    heights: Spanned<Vec<Num>>,
+    /// Sample spacing of the march, world units (default [`DEFAULT_MARCH_STEP`]).
+    march_step: Option<Num>,
+    #[serde(default)]
+    trace: RawHeightTrace,
+    material: Option<Spanned<String>>,
+}
+
+/// A height patch's march step when the scene gives none, world units.
+pub const DEFAULT_MARCH_STEP: f32 = 0.01;
 
 /// Resolves a material name (or the default material) to its index.
 pub(super) type MaterialLookup<'m> =
@@ -217,6 +248,48 @@ pub(super) fn build_patches(
     Ok(())
 }
 
+/// Adds the `[[height_patch]]` surfaces to `scene`: marched ones to `height_patches`, exact
+/// ones to `patches` as the same surface in Bezier form.
+pub(super) fn build_height_patches(
+    scene: &mut SceneDescription,
+    raw_patches: &[RawHeightPatch],
+    loc: &Located,
+    material: &mut MaterialLookup,
+) -> Result<(), SceneError> {
+    for raw in raw_patches {
+        let heights: [f32; 16] = raw
+            .heights
+            .get_ref()
+            .iter()
+            .map(|h| h.0)
+            .collect::<Vec<f32>>()
+            .try_into()
+            .map_err(|given: Vec<f32>| {
+                loc.at(
+                    &raw.heights,
+                    format!("a height patch needs 16 heights, not {}", given.len()),
+                )
+            })?;
+        let (min, max) = (raw.min.get_ref(), &raw.max);
+        let (x0, z0, x1, z1) = (min[0].0, min[1].0, max[0].0, max[1].0);
+        let patch = HeightPatch {
+            min: Vec2::new(x0, z0),
+            max: Vec2::new(x1, z1),
+            heights,
+            material: material(scene, &raw.material)?,
+            march_step: raw.march_step.as_ref().map_or(DEFAULT_MARCH_STEP, |s| s.0),
+        };
+        if let Some(problem) = patch.problem() {
+            return Err(loc.at(&raw.min, format!("height patch: {problem}")));
+        }
+        match raw.trace {
+            RawHeightTrace::March => scene.height_patches.push(patch),
+            RawHeightTrace::Exact => scene.patches.push(patch.to_bezier()),
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use crate::scene::load::files::Files;
@@ -284,5 +357,45 @@ mod tests {
         assert!(e.contains("unknown variant"), "{e}");
         let e = parse_here("[[patch_file]]\nfile = 'missing.bpt'\n").unwrap_err();
         assert!(e.contains("cannot read patch file"), "{e}");
+    }
+
+    const HEIGHTS: &str = "[0,1,2,3, 0,1,2,3, 0,1,2,3, 0,1,2,3]";
+
+    #[test]
+    fn height_patches_load_marched_or_exact() {
+        let text = format!("[[height_patch]]\nmin = [-1, -2]\nmax = [1, 2]\nheights = {HEIGHTS}\n");
+        let scene = parse_here(&text).unwrap();
+        assert_eq!(scene.height_patches.len(), 1);
+        assert!(scene.patches.is_empty());
+        let patch = &scene.height_patches[0];
+        assert_eq!(patch.march_step, super::DEFAULT_MARCH_STEP);
+        assert_eq!(patch.heights[7], 3.0);
+        let exact = format!("{text}trace = 'exact'\nmarch_step = 0.5\n");
+        let scene = parse_here(&exact).unwrap();
+        assert!(scene.height_patches.is_empty());
+        assert_eq!(scene.patches[0].control[15], glam::Vec3::new(1.0, 3.0, 2.0));
+    }
+
+    #[test]
+    fn bad_height_patches_are_refused_with_their_place() {
+        let e = parse_here("[[height_patch]]\nmin = [0, 0]\nmax = [1, 1]\nheights = [1, 2]\n")
+            .unwrap_err();
+        assert!(
+            e.starts_with("t.toml:4:11: a height patch needs 16 heights, not 2"),
+            "{e}"
+        );
+        let e = parse_here(&format!(
+            "[[height_patch]]\nmin = [0, 0]\nmax = [0, 1]\nheights = {HEIGHTS}\n"
+        ))
+        .unwrap_err();
+        assert!(e.contains("is empty"), "{e}");
+        let e = parse_here(&format!(
+            "[[height_patch]]\nmin = [0, 0]\nmax = [1, 1]\nheights = {HEIGHTS}\nmarch_step = 0\n"
+        ))
+        .unwrap_err();
+        assert!(
+            e.contains("march_step 0 must be a positive distance"),
+            "{e}"
+        );
     }
 }

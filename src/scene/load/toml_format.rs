@@ -114,6 +114,7 @@ struct RawScene {
     patch_file: Vec<super::patches::RawPatchFile>,
     #[serde(default)]
     fog: Vec<Spanned<super::fog::RawFog>>,
+    height_patch: Vec<super::patches::RawHeightPatch>,
 }
 
 #[derive(Deserialize)]
@@ -586,6 +587,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
         loc,
         &mut material,
     )?;
+    super::patches::build_height_patches(&mut scene, &raw.height_patch, loc, &mut material)?;
 
     for m in &raw.mesh {
         let placement = Placement {

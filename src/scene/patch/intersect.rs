@@ -12,6 +12,12 @@
 //! sub-patch, Newton iteration on the full patch's `f` (2x2 Jacobian `[f_u f_v]`) finds the
 //! root (Martin et al. 2000 seed Newton the same way, from a tessellation).
 //!
+//! The splits down to nearly bilinear sub-patches do not depend on the ray, so they are made
+//! once per patch ([`super::hull_tree`]); a ray walks that hierarchy's world-space boxes and
+//! starts the search above at each leaf it crosses (the leaf's box in the ray's frame, then
+//! Newton, then further splits where Newton leads away), instead of splitting the whole
+//! patch again.
+//!
 //! Tolerances (all in f64): a root is accepted when `|f|` is below
 //! [`DISTANCE_TOLERANCE`] times the patch's extent (the distance from the ray to the
 //! surface point) and the last Newton step is below [`PARAMETER_TOLERANCE`] in u and v, with
@@ -26,6 +32,7 @@
 
 use glam::{DVec2, DVec3, Vec3};
 
+use super::hull_tree::{ray_box, HullContent, HullLeaf, HullTree};
 use super::{control_f64, evaluate};
 
 /// Newton stops when its step is below this in u and v.
@@ -36,7 +43,7 @@ pub const DISTANCE_TOLERANCE: f64 = 1e-9;
 pub const MAX_DEPTH: u32 = 14;
 /// A sub-patch is handed to Newton once its control points are within this fraction of its
 /// size from the bilinear patch through its corners.
-const FLATNESS: f64 = 0.05;
+pub(super) const FLATNESS: f64 = 0.05;
 const NEWTON_ITERATIONS: u32 = 24;
 
 /// A ray in f64: `origin + t direction` for `t` in `(tnear, tfar)`.
@@ -59,11 +66,13 @@ pub struct PatchHit {
     pub normal: DVec3,
 }
 
-/// A patch ready for intersection: its control points in f64 and its size.
+/// A patch ready for intersection: its control points in f64, its size, and its
+/// subdivision hierarchy (built once, walked by every ray).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PatchIntersector {
     control: [DVec3; 16],
     extent: f64,
+    tree: HullTree,
 }
 
 /// Control net of a sub-patch in the ray's frame (x, y across the ray, z = t along it),
@@ -89,7 +98,7 @@ fn split_curve(p: [DVec3; 4]) -> ([DVec3; 4], [DVec3; 4]) {
     ([p[0], p01, a, m], [m, b, p23, p[3]])
 }
 
-fn split_u(net: &[DVec3; 16]) -> ([DVec3; 16], [DVec3; 16]) {
+pub(super) fn split_u(net: &[DVec3; 16]) -> ([DVec3; 16], [DVec3; 16]) {
     let (mut left, mut right) = ([DVec3::ZERO; 16], [DVec3::ZERO; 16]);
     for j in 0..4 {
         let (l, r) = split_curve([net[4 * j], net[4 * j + 1], net[4 * j + 2], net[4 * j + 3]]);
@@ -99,7 +108,7 @@ fn split_u(net: &[DVec3; 16]) -> ([DVec3; 16], [DVec3; 16]) {
     (left, right)
 }
 
-fn split_v(net: &[DVec3; 16]) -> ([DVec3; 16], [DVec3; 16]) {
+pub(super) fn split_v(net: &[DVec3; 16]) -> ([DVec3; 16], [DVec3; 16]) {
     let (mut low, mut high) = ([DVec3::ZERO; 16], [DVec3::ZERO; 16]);
     for i in 0..4 {
         let (l, r) = split_curve([net[i], net[4 + i], net[8 + i], net[12 + i]]);
@@ -111,7 +120,7 @@ fn split_v(net: &[DVec3; 16]) -> ([DVec3; 16], [DVec3; 16]) {
     (low, high)
 }
 
-fn bounds(net: &[DVec3; 16]) -> (DVec3, DVec3) {
+pub(super) fn net_bounds(net: &[DVec3; 16]) -> (DVec3, DVec3) {
     let mut lo = net[0];
     let mut hi = net[0];
     for p in &net[1..] {
@@ -122,7 +131,7 @@ fn bounds(net: &[DVec3; 16]) -> (DVec3, DVec3) {
 }
 
 /// Largest distance of a control point from the bilinear patch through the corners.
-fn bilinear_deviation(net: &[DVec3; 16]) -> f64 {
+pub(super) fn bilinear_deviation(net: &[DVec3; 16]) -> f64 {
     let (c00, c30, c03, c33) = (net[0], net[3], net[12], net[15]);
     let mut worst: f64 = 0.0;
     for j in 0..4 {
@@ -141,11 +150,18 @@ fn bilinear_deviation(net: &[DVec3; 16]) -> f64 {
 impl PatchIntersector {
     pub fn new(control: &[Vec3; 16]) -> PatchIntersector {
         let control = control_f64(control);
-        let (lo, hi) = bounds(&control);
+        let (lo, hi) = net_bounds(&control);
+        let extent = (hi - lo).max_element().max(f64::MIN_POSITIVE);
         PatchIntersector {
+            tree: HullTree::build(&control, DISTANCE_TOLERANCE * extent),
             control,
-            extent: (hi - lo).max_element().max(f64::MIN_POSITIVE),
+            extent,
         }
+    }
+
+    /// Memory of the subdivision hierarchy, in bytes.
+    pub fn hierarchy_bytes(&self) -> usize {
+        self.tree.bytes()
     }
 
     /// The largest side of the control points' box.
@@ -155,6 +171,18 @@ impl PatchIntersector {
 
     /// The closest hit of `ray` (or, with `any_hit`, the first found), if any.
     pub fn intersect(&self, ray: &PatchRay, any_hit: bool) -> Option<PatchHit> {
+        self.intersect_accepting(ray, any_hit, &mut |_, _, _| true)
+    }
+
+    /// As [`PatchIntersector::intersect`], counting only roots `(t, u, v)` that `accept`
+    /// keeps (an alpha cut-out): a rejected root is passed over and the search goes on
+    /// behind it.
+    pub fn intersect_accepting(
+        &self,
+        ray: &PatchRay,
+        any_hit: bool,
+        accept: &mut dyn FnMut(f64, f64, f64) -> bool,
+    ) -> Option<PatchHit> {
         let length = ray.direction.length();
         if !(length > 0.0 && length.is_finite() && ray.origin.is_finite()) {
             return None;
@@ -166,25 +194,38 @@ impl PatchIntersector {
             let q = p - ray.origin;
             DVec3::new(n1.dot(q), n2.dot(q), dir.dot(q) / length)
         };
-        let net = self.control.map(to_frame);
         let mut search = Search {
-            frame: &net,
+            frame: [DVec3::ZERO; 16],
+            framed: false,
             tnear: ray.tnear,
             best: None,
             tbest: ray.tfar,
             any_hit,
             tolerance: DISTANCE_TOLERANCE * self.extent,
+            accept,
         };
-        search.visit(
-            Node {
-                net,
-                u0: 0.0,
-                u1: 1.0,
-                v0: 0.0,
-                v1: 1.0,
-            },
-            0,
-        );
+        // The hierarchy stands in for the splits above its leaves; each leaf the ray's
+        // world-space walk reaches goes on in the ray's frame as the search always did.
+        let mut leaf_search = |search: &mut Search, leaf: &HullLeaf| {
+            // Newton needs the whole patch in the ray's frame: made once, at the first leaf
+            // (rays that reach none never need it).
+            if !search.framed {
+                search.frame = self.control.map(to_frame);
+                search.framed = true;
+            }
+            search.visit(
+                Node {
+                    net: leaf.net.map(to_frame),
+                    u0: leaf.u0,
+                    u1: leaf.u1,
+                    v0: leaf.v0,
+                    v1: leaf.v1,
+                },
+                leaf.depth,
+                Some(leaf.flat),
+            )
+        };
+        search.walk(&self.tree, 0, ray, &mut leaf_search);
         let (t, u, v) = search.best?;
         Some(PatchHit {
             t,
@@ -216,14 +257,49 @@ pub fn geometric_normal(control: &[DVec3; 16], u: f64, v: f64) -> DVec3 {
     DVec3::ZERO
 }
 
+/// Position, `dP/du` and `dP/dv` of the bicubic patch `c` at `(u, v)`: what Newton needs,
+/// without the second derivatives of [`evaluate`].
+#[inline]
+fn position_and_tangents(c: &[DVec3; 16], u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+    let (s, t) = (1.0 - u, 1.0 - v);
+    let bu = [s * s * s, 3.0 * u * s * s, 3.0 * u * u * s, u * u * u];
+    let du = [
+        -3.0 * s * s,
+        3.0 * s * s - 6.0 * u * s,
+        6.0 * u * s - 3.0 * u * u,
+        3.0 * u * u,
+    ];
+    let bv = [t * t * t, 3.0 * v * t * t, 3.0 * v * v * t, v * v * v];
+    let dv = [
+        -3.0 * t * t,
+        3.0 * t * t - 6.0 * v * t,
+        6.0 * v * t - 3.0 * v * v,
+        3.0 * v * v,
+    ];
+    let (mut position, mut dpdu, mut dpdv) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+    for j in 0..4 {
+        // Each row's curve in u and its u-derivative, then the sums over rows in v.
+        let row = &c[4 * j..4 * j + 4];
+        let curve = row[0] * bu[0] + row[1] * bu[1] + row[2] * bu[2] + row[3] * bu[3];
+        let tangent = row[0] * du[0] + row[1] * du[1] + row[2] * du[2] + row[3] * du[3];
+        position += curve * bv[j];
+        dpdv += curve * dv[j];
+        dpdu += tangent * bv[j];
+    }
+    (position, dpdu, dpdv)
+}
+
 struct Search<'a> {
-    /// The whole patch in the ray's frame, for Newton.
-    frame: &'a [DVec3; 16],
+    /// The whole patch in the ray's frame, for Newton (once `framed`).
+    frame: [DVec3; 16],
+    framed: bool,
     tnear: f64,
     tbest: f64,
     best: Option<(f64, f64, f64)>,
     any_hit: bool,
     tolerance: f64,
+    /// Whether a root counts (an alpha test); see [`PatchIntersector::intersect_accepting`].
+    accept: &'a mut dyn FnMut(f64, f64, f64) -> bool,
 }
 
 impl Search<'_> {
@@ -231,11 +307,53 @@ impl Search<'_> {
         self.any_hit && self.best.is_some()
     }
 
-    fn visit(&mut self, node: Node, depth: u32) {
+    /// Walks the hierarchy from node `index`, nearest box first, skipping boxes the ray
+    /// misses or reaches only beyond the closest hit so far; calls `at_leaf` at each leaf.
+    fn walk(
+        &mut self,
+        tree: &HullTree,
+        index: u32,
+        ray: &PatchRay,
+        at_leaf: &mut impl FnMut(&mut Self, &HullLeaf),
+    ) {
         if self.done() {
             return;
         }
-        let (lo, hi) = bounds(&node.net);
+        match tree.nodes[index as usize].content {
+            HullContent::Leaf { index } => at_leaf(self, &tree.leaves[index as usize]),
+            HullContent::Split { first } => {
+                let mut order = [(0.0, 0u32); 4];
+                let mut count = 0;
+                for child in first..first + 4 {
+                    let node = &tree.nodes[child as usize];
+                    let Some((t0, t1)) = ray_box(ray.origin, ray.direction, node.lower, node.upper)
+                    else {
+                        continue;
+                    };
+                    if t1 < self.tnear || t0 > self.tbest {
+                        continue;
+                    }
+                    order[count] = (t0, child);
+                    count += 1;
+                }
+                order[..count].sort_by(|a, b| a.0.total_cmp(&b.0));
+                for &(t0, child) in &order[..count] {
+                    if t0 > self.tbest {
+                        break;
+                    }
+                    self.walk(tree, child, ray, at_leaf);
+                }
+            }
+        }
+    }
+
+    /// Searches sub-patch `node` (`depth` splits from the whole patch); `flat` is its
+    /// flatness when already known (a hierarchy leaf's).
+    fn visit(&mut self, node: Node, depth: u32, flat: Option<bool>) {
+        if self.done() {
+            return;
+        }
+        let (lo, hi) = net_bounds(&node.net);
         // The ray is the 2D origin of the frame; depth is z.
         let slack = self.tolerance;
         if lo.x > slack || hi.x < -slack || lo.y > slack || hi.y < -slack {
@@ -245,7 +363,7 @@ impl Search<'_> {
             return;
         }
         let size = (hi - lo).truncate().max_element().max(hi.z - lo.z);
-        let flat = bilinear_deviation(&node.net) <= FLATNESS * size;
+        let flat = flat.unwrap_or_else(|| bilinear_deviation(&node.net) <= FLATNESS * size);
         let leaf = depth >= MAX_DEPTH || size <= self.tolerance;
         // A flat sub-patch is settled when Newton finds its root; otherwise (Newton led
         // away, e.g. across a collapsed edge to the mirror-image parameters) it is split on.
@@ -260,7 +378,7 @@ impl Search<'_> {
         let vm = 0.5 * (node.v0 + node.v1);
         let (ll, lh) = split_v(&left);
         let (rl, rh) = split_v(&right);
-        let mut children = [
+        let children = [
             Node {
                 net: ll,
                 u0: node.u0,
@@ -290,11 +408,13 @@ impl Search<'_> {
                 v1: node.v1,
             },
         ];
-        // Nearest first, so later children are pruned by the closest hit.
-        let near = |n: &Node| n.net.iter().fold(f64::INFINITY, |a, p| a.min(p.z));
-        children.sort_by(|a, b| near(a).total_cmp(&near(b)));
-        for child in children {
-            self.visit(child, depth + 1);
+        // Nearest first, so later children are pruned by the closest hit (sorting indices,
+        // not the nets).
+        let near = children.map(|n| n.net.iter().fold(f64::INFINITY, |a, p| a.min(p.z)));
+        let mut order = [0usize, 1, 2, 3];
+        order.sort_unstable_by(|&a, &b| near[a].total_cmp(&near[b]));
+        for index in order {
+            self.visit(children[index], depth + 1, None);
         }
     }
 
@@ -309,9 +429,9 @@ impl Search<'_> {
         let reach_u = 2.0 * (node.u1 - node.u0);
         let reach_v = 2.0 * (node.v1 - node.v0);
         for _ in 0..NEWTON_ITERATIONS {
-            let p = evaluate(self.frame, u, v);
-            let f = DVec2::new(p.position.x, p.position.y);
-            let (a, b, c, d) = (p.dpdu.x, p.dpdv.x, p.dpdu.y, p.dpdv.y);
+            let (position, dpdu, dpdv) = position_and_tangents(&self.frame, u, v);
+            let f = DVec2::new(position.x, position.y);
+            let (a, b, c, d) = (dpdu.x, dpdv.x, dpdu.y, dpdv.y);
             let det = a * d - b * c;
             if det == 0.0 || !det.is_finite() {
                 return false;
@@ -338,13 +458,13 @@ impl Search<'_> {
             return false;
         }
         let (u, v) = (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
-        let p = evaluate(self.frame, u, v).position;
+        let p = position_and_tangents(&self.frame, u, v).0;
         let miss = p.x.hypot(p.y);
         if miss.is_nan() || miss > self.tolerance {
             return false;
         }
         let t = p.z;
-        if t > self.tnear && t < self.tbest && t.is_finite() {
+        if t > self.tnear && t < self.tbest && t.is_finite() && (self.accept)(t, u, v) {
             self.tbest = t;
             self.best = Some((t, u, v));
         }

@@ -18,6 +18,8 @@
 
 pub mod basis;
 pub mod bpt;
+pub mod height;
+pub mod hull_tree;
 pub mod intersect;
 pub mod tessellate;
 
