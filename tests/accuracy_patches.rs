@@ -45,6 +45,23 @@ fn rows(path: &Path) -> Vec<(String, String, f64, u64)> {
         .collect()
 }
 
+/// The numbers of one CSV column, row by row.
+fn column_values(path: &Path, name: &str) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    let index = header
+        .iter()
+        .position(|h| *h == name)
+        .unwrap_or_else(|| panic!("no column {name} in {header:?}"));
+    lines
+        .map(|line| {
+            let cells: Vec<&str> = line.split(',').collect();
+            cells[index].parse().expect("a number")
+        })
+        .collect()
+}
+
 /// Each error at most the one before it (up to `slack`), and the last well below the first.
 fn assert_falls(what: &str, errors: &[f64], slack: f64) {
     for pair in errors.windows(2) {
@@ -82,6 +99,8 @@ fn patch_accuracy_rows_exist_and_error_falls_as_the_bound_tightens() {
             "54",
             "--patch-spp",
             "2",
+            "--patch-reference-spp",
+            "16",
             "--runs",
             "1",
             "--threads",
@@ -121,6 +140,16 @@ fn patch_accuracy_rows_exist_and_error_falls_as_the_bound_tightens() {
     );
     let errors: Vec<f64> = teapot[1..].iter().map(|r| r.2).collect();
     assert_falls("teapot tessellation", &errors, 1e-3);
+
+    // Against the high-sample reference the exact row shows the noise of 2 spp alone, and the
+    // coarsest tessellation adds its geometric error to it.
+    let reference = column_values(&out.join("teapot_mirror_patches.csv"), "rmse_reference");
+    eprintln!("teapot against the reference: {reference:?}");
+    assert!(reference[0] > 0.0, "2 spp differ from 16 spp: {reference:?}");
+    assert!(
+        reference[1] > reference[0],
+        "E=0.1 is further from the reference than exact: {reference:?}"
+    );
 
     let height = rows(&out.join("height_patch_patches.csv"));
     eprintln!("height patch: {height:?}");

@@ -106,6 +106,10 @@ pub struct AccuracyArgs {
     /// Samples per pixel of every render of `--mode patches` (exact and tessellated alike).
     #[arg(long, default_value_t = 4)]
     pub patch_spp: u32,
+    /// Samples per pixel of `--mode patches`' high-sample exact reference (another seed),
+    /// against which every row's total error (geometry plus noise) is also measured.
+    #[arg(long, default_value_t = 64)]
+    pub patch_reference_spp: u32,
 }
 
 /// The measurements `conetrace accuracy` can make.

@@ -8,9 +8,12 @@
 //! tessellated (`--patch-mode tessellate`) and, when it has height patches, once per step
 //! of [`MARCH_STEPS`] with those marched; all at `--patch-spp` samples per pixel with the
 //! same seed, so the camera rays are the same and the only difference is the surface: each
-//! image is compared with the exact one (RMSE and FLIP of display values, [`super::metrics::compare`], over all pixels and
-//! over the textured ones). The exact row's error is 0 by definition; the plot draws its
-//! time as a vertical line.
+//! image is compared with the exact one (RMSE and FLIP of display values,
+//! [`super::metrics::compare`], over all pixels and over the textured ones): the surface's
+//! own error, with the sampling noise cancelled. The exact row's error is 0 by definition;
+//! the plot draws its time as a vertical line. Every row is also compared with a high-sample
+//! exact reference (`--patch-reference-spp`, another seed): the total error a user sees at
+//! `--patch-spp`, geometry plus noise, where the exact row shows the noise alone.
 //!
 //! Cost: `build` is the tessellation plus the scene's preparation (Embree's BVH and the
 //! render tables), `render` the median of `--runs` timed renders (interleaved across rows,
@@ -119,6 +122,8 @@ pub struct PatchRow {
     pub error: ErrorMetrics,
     /// The same over the textured pixels (`None` when no pixel is textured).
     pub textured_error: Option<ErrorMetrics>,
+    /// Error against the high-sample exact reference over all pixels (geometry plus noise).
+    pub reference_error: ErrorMetrics,
 }
 
 impl PatchRow {
@@ -136,6 +141,8 @@ pub struct PatchReport {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
+    /// Samples per pixel of the exact reference.
+    pub reference_spp: u32,
     pub runs: usize,
     pub threads: usize,
     pub textured_pixels: usize,
@@ -292,6 +299,23 @@ fn measure(
     let mask_render =
         render::render(&mask_context, &Whitted, &control).map_err(crate::cli::render_failed)?;
 
+    // The high-sample exact reference, drawn with another seed.
+    let reference_options = RenderOptions {
+        spp: args.patch_reference_spp,
+        seed: super::methods::ground_truth_seed(options.seed),
+        ..options.clone()
+    };
+    let reference_context = render::prepare_with_textures(
+        variants[0].scene.clone(),
+        reference_options,
+        textures.clone(),
+    )
+    .map_err(|e| CommandError::bad_input(e.to_string()))?;
+    let reference = render::render(&reference_context, &Whitted, &control)
+        .map_err(crate::cli::render_failed)?;
+    let reference = display(&reference)?;
+    drop(reference_context);
+
     let mut first = Vec::with_capacity(contexts.len());
     for context in &contexts {
         first.push(render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?);
@@ -315,6 +339,7 @@ fn measure(
     let mut rows = Vec::with_capacity(variants.len());
     for (index, variant) in variants.iter().enumerate() {
         let comparison = metrics::compare(&images[0], &images[index], &mask);
+        let against_reference = metrics::compare(&reference, &images[index], &mask);
         rows.push(PatchRow {
             label: variant.label.clone(),
             kind: variant.kind,
@@ -326,6 +351,7 @@ fn measure(
             rays: first[index].stats.counters.total_rays(),
             error: comparison.all,
             textured_error: comparison.masked,
+            reference_error: against_reference.all,
         });
         say(format!(
             "{}: RMSE {:.5}, {} triangles, build {:.3} s, render {:.3} s",
@@ -356,6 +382,7 @@ fn measure(
             width,
             height,
             spp: options.spp,
+            reference_spp: args.patch_reference_spp,
             runs: args.runs,
             threads: rayon::current_num_threads(),
             textured_pixels: mask.iter().filter(|&&m| m).count(),
@@ -368,7 +395,7 @@ fn measure(
 
 /// The CSV header; one line per [`PatchRow`] follows.
 pub const CSV_HEADER: &str = "scene,mode,bound_or_step,triangles,geometry_bytes,build_seconds,\
-render_seconds,rays,rmse,psnr_db,flip,rmse_textured,flip_textured";
+render_seconds,rays,rmse,psnr_db,flip,rmse_textured,flip_textured,rmse_reference,flip_reference";
 
 fn optional(value: Option<f64>, decimals: usize) -> String {
     match value {
@@ -383,7 +410,7 @@ pub fn csv(report: &PatchReport) -> String {
     let mut text = format!("{CSV_HEADER}\n");
     for row in &report.rows {
         text.push_str(&format!(
-            "{},{},{},{},{},{:.6},{:.6},{},{:.6},{},{:.6},{},{}\n",
+            "{},{},{},{},{},{:.6},{:.6},{},{:.6},{},{:.6},{},{},{:.6},{:.6}\n",
             report.name,
             row.kind.mode(),
             row.kind
@@ -399,6 +426,8 @@ pub fn csv(report: &PatchReport) -> String {
             row.error.flip,
             optional(row.textured_error.map(|e| e.rmse), 6),
             optional(row.textured_error.map(|e| e.flip), 6),
+            row.reference_error.rmse,
+            row.reference_error.flip,
         ));
     }
     text
@@ -408,9 +437,10 @@ pub fn csv(report: &PatchReport) -> String {
 pub fn markdown(report: &PatchReport) -> String {
     let mut text = format!(
         "`{}` ({}), {}x{}, {} spp, {} threads; error against the exact render (same samples; \
-         {} textured pixels); render time the median of {} runs.\n\n\
-         | mode | triangles | geometry memory | build s | render s | RMSE | FLIP | RMSE textured | FLIP textured |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
+         {} textured pixels) and against an exact reference of {} spp (another seed: geometry \
+         plus noise); render time the median of {} runs.\n\n\
+         | mode | triangles | geometry memory | build s | render s | RMSE | FLIP | RMSE textured | FLIP textured | RMSE vs reference | FLIP vs reference |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
         report.name,
         report.source,
         report.width,
@@ -418,11 +448,12 @@ pub fn markdown(report: &PatchReport) -> String {
         report.spp,
         report.threads,
         report.textured_pixels,
+        report.reference_spp,
         report.runs,
     );
     for row in &report.rows {
         text.push_str(&format!(
-            "| {} | {} | {:.1} KB | {:.3} | {:.3} | {:.5} | {:.4} | {} | {} |\n",
+            "| {} | {} | {:.1} KB | {:.3} | {:.3} | {:.5} | {:.4} | {} | {} | {:.5} | {:.4} |\n",
             row.label,
             row.triangles,
             row.geometry_bytes as f64 / 1024.0,
@@ -432,6 +463,8 @@ pub fn markdown(report: &PatchReport) -> String {
             row.error.flip,
             optional(row.textured_error.map(|e| e.rmse), 5),
             optional(row.textured_error.map(|e| e.flip), 4),
+            row.reference_error.rmse,
+            row.reference_error.flip,
         ));
     }
     text
@@ -648,6 +681,11 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
     }
     if args.patch_spp == 0 {
         return Err(CommandError::bad_input("--patch-spp must be at least 1"));
+    }
+    if args.patch_reference_spp == 0 {
+        return Err(CommandError::bad_input(
+            "--patch-reference-spp must be at least 1",
+        ));
     }
     let mut setups = Vec::new();
     for path in scene_paths(args) {

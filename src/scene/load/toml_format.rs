@@ -114,6 +114,7 @@ struct RawScene {
     patch_file: Vec<super::patches::RawPatchFile>,
     #[serde(default)]
     fog: Vec<Spanned<super::fog::RawFog>>,
+    #[serde(default)]
     height_patch: Vec<super::patches::RawHeightPatch>,
 }
 
