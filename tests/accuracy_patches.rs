@@ -145,7 +145,10 @@ fn patch_accuracy_rows_exist_and_error_falls_as_the_bound_tightens() {
     // coarsest tessellation adds its geometric error to it.
     let reference = column_values(&out.join("teapot_mirror_patches.csv"), "rmse_reference");
     eprintln!("teapot against the reference: {reference:?}");
-    assert!(reference[0] > 0.0, "2 spp differ from 16 spp: {reference:?}");
+    assert!(
+        reference[0] > 0.0,
+        "2 spp differ from 16 spp: {reference:?}"
+    );
     assert!(
         reference[1] > reference[0],
         "E=0.1 is further from the reference than exact: {reference:?}"

@@ -420,7 +420,11 @@ fn gltf_files_bring_fog_through_extras() {
 fn the_path_tracer_says_it_leaves_fog_out() {
     let dir = temp_dir();
     let fog = "[[fog]]\ndensity = \"constant\"\nsigma = 0.1\ncolor = [0.5, 0.5, 0.5]\n";
-    let (_, stats) = render(dir.path(), &emissive_floor_scene(1.0, fog), &["--integrator", "path"]);
+    let (_, stats) = render(
+        dir.path(),
+        &emissive_floor_scene(1.0, fog),
+        &["--integrator", "path"],
+    );
     let notes = stats["notes"].to_string();
     assert!(
         notes.contains("fog is not simulated by this integrator"),

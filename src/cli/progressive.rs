@@ -312,9 +312,10 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
 
         let mut stats = result.stats;
         stats.integrator = Some(resolution.to_string());
-        stats
-            .notes
-            .extend(selection::unsupported_effects(resolution.kind, &context.scene));
+        stats.notes.extend(selection::unsupported_effects(
+            resolution.kind,
+            &context.scene,
+        ));
         stats.counters = counters.clone();
         stats.seconds = render_seconds;
         stats.spp = accumulated.samples;

@@ -202,7 +202,10 @@ impl SelectedIntegrator {
 
 /// Build the integrator of `kind` for `context` with the settings its scene gives it:
 /// the voxel scene for vct (which can fail: a grid too large), nothing for the others.
-pub fn select(kind: IntegratorKind, context: &RenderContext) -> Result<SelectedIntegrator, VctError> {
+pub fn select(
+    kind: IntegratorKind,
+    context: &RenderContext,
+) -> Result<SelectedIntegrator, VctError> {
     let settings = &context.scene.settings;
     Ok(match kind {
         IntegratorKind::Whitted => SelectedIntegrator::Whitted(Whitted),

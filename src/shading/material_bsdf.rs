@@ -123,7 +123,14 @@ impl MaterialBsdf {
             roughness: material.roughness,
             metallic: material.metallic,
         };
-        MaterialBsdf::with_inputs(material, inputs, d, outward_geometric, outward_shading, fresnel)
+        MaterialBsdf::with_inputs(
+            material,
+            inputs,
+            d,
+            outward_geometric,
+            outward_shading,
+            fresnel,
+        )
     }
 
     /// [`MaterialBsdf::new`] with the (textured) shading inputs of the hit
@@ -179,10 +186,7 @@ impl MaterialBsdf {
                 shininess: material.shininess,
             }),
             Some(roughness) => OpaqueLobe::MetallicRoughness(MetallicRoughnessBsdf::new(
-                ns,
-                albedo,
-                roughness,
-                metallic,
+                ns, albedo, roughness, metallic,
             )),
         };
         let rough_dielectric = match roughness {

@@ -102,11 +102,7 @@ pub(super) fn shade(
             // Emitters that are not lights are found by BSDF rays alone.
             None => 1.0,
         };
-        add_radiance(
-            image,
-            ray.pixel,
-            ray.throughput * inputs.emission * weight,
-        );
+        add_radiance(image, ray.pixel, ray.throughput * inputs.emission * weight);
     }
 
     // The same seven dimensions at every vertex, whichever are used.

@@ -19,9 +19,9 @@ use crate::film::{PixelRect, TileImage};
 use crate::integrator::whitted::{render_tile_with, IndirectLight, IndirectQuery, Waves};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::Integrator;
+use crate::shading::OpaqueLobe;
 use crate::vct::cone::{gather_diffuse, trace_cone, CONE_START, STEP_FRACTION};
 use crate::vct::VoxelScene;
-use crate::shading::OpaqueLobe;
 
 pub use glossy::specular_cone_aperture;
 
