@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use crate::footprint::Footprint;
-use crate::render::stats::WorkCounters;
+use crate::render::stats::{RayKind, WorkCounters};
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::RenderContext;
 
@@ -50,4 +50,22 @@ pub(crate) fn trace_wave<'a>(
             hit.t += ray.start;
         }
     }
+}
+
+/// A wave's shadow segments `(origin, direction, tfar)` as occlusion rays in `trace_rays` (a
+/// reused buffer), counted as shadow rays; shadow rays carry no cone.
+pub(crate) fn shadow_trace_rays(
+    segments: impl ExactSizeIterator<Item = (Vec3, Vec3, f32)>,
+    trace_rays: &mut Vec<TraceRay>,
+    counters: &mut WorkCounters,
+) {
+    counters.count_rays(RayKind::Shadow, segments.len() as u64);
+    trace_rays.clear();
+    trace_rays.extend(segments.map(|(origin, direction, tfar)| TraceRay {
+        origin,
+        direction,
+        tfar,
+        cone_width: 0.0,
+        cone_spread: 0.0,
+    }));
 }

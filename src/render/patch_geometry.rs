@@ -67,35 +67,48 @@ impl UserGeometry for PatchGeometry {
         any_hit: bool,
         accept: &mut dyn FnMut(&UserHit) -> bool,
     ) -> Option<UserHit> {
-        let query = PatchRay {
-            origin: ray.origin.as_dvec3(),
-            direction: ray.direction.as_dvec3(),
-            tnear: f64::from(ray.tnear),
-            tfar: f64::from(ray.tfar),
-        };
-        // The alpha test sees the hit as it will be reported (f32).
-        let mut accept_root = |t: f64, u: f64, v: f64| {
-            accept(&UserHit {
-                t: t as f32,
-                u: u as f32,
-                v: v as f32,
-                normal: Vec3::ZERO,
-            })
-        };
+        let query = patch_ray(ray);
+        let mut accept_root = |t: f64, u: f64, v: f64| accept(&candidate_hit(t, u, v));
         let hit = self.intersectors[primitive as usize].intersect_accepting(
             &query,
             any_hit,
             &mut accept_root,
         )?;
-        let t = hit.t as f32;
-        // Rounding t to f32 must not move it out of the ray's interval.
-        (t > ray.tnear && t < ray.tfar).then_some(UserHit {
-            t,
-            u: hit.u as f32,
-            v: hit.v as f32,
-            normal: hit.normal.as_vec3(),
-        })
+        reported_hit(ray, hit.t, hit.u, hit.v, hit.normal)
     }
+}
+
+/// An Embree user ray in the f64 form the patch intersectors take.
+fn patch_ray(ray: &UserRay) -> PatchRay {
+    PatchRay {
+        origin: ray.origin.as_dvec3(),
+        direction: ray.direction.as_dvec3(),
+        tnear: f64::from(ray.tnear),
+        tfar: f64::from(ray.tfar),
+    }
+}
+
+/// A root as the alpha test sees it: the hit as it will be reported (f32), before its normal
+/// is known.
+fn candidate_hit(t: f64, u: f64, v: f64) -> UserHit {
+    UserHit {
+        t: t as f32,
+        u: u as f32,
+        v: v as f32,
+        normal: Vec3::ZERO,
+    }
+}
+
+/// The hit reported to Embree, or `None` when rounding t to f32 moved it out of the ray's
+/// interval.
+fn reported_hit(ray: &UserRay, t: f64, u: f64, v: f64, normal: DVec3) -> Option<UserHit> {
+    let t = t as f32;
+    (t > ray.tnear && t < ray.tfar).then_some(UserHit {
+        t,
+        u: u as f32,
+        v: v as f32,
+        normal: normal.as_vec3(),
+    })
 }
 
 /// The scene's height patches as Embree user primitives, traced by ray marching
@@ -126,28 +139,10 @@ impl UserGeometry for HeightPatchGeometry {
         _any_hit: bool,
         accept: &mut dyn FnMut(&UserHit) -> bool,
     ) -> Option<UserHit> {
-        let query = PatchRay {
-            origin: ray.origin.as_dvec3(),
-            direction: ray.direction.as_dvec3(),
-            tnear: f64::from(ray.tnear),
-            tfar: f64::from(ray.tfar),
-        };
-        let mut accept_root = |t: f64, u: f64, v: f64| {
-            accept(&UserHit {
-                t: t as f32,
-                u: u as f32,
-                v: v as f32,
-                normal: Vec3::ZERO,
-            })
-        };
+        let query = patch_ray(ray);
+        let mut accept_root = |t: f64, u: f64, v: f64| accept(&candidate_hit(t, u, v));
         let hit = self.patches[primitive as usize].march_accepting(&query, &mut accept_root)?;
-        let t = hit.t as f32;
-        (t > ray.tnear && t < ray.tfar).then_some(UserHit {
-            t,
-            u: hit.u as f32,
-            v: hit.v as f32,
-            normal: hit.normal.as_vec3(),
-        })
+        reported_hit(ray, hit.t, hit.u, hit.v, hit.normal)
     }
 }
 

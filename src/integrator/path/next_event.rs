@@ -9,9 +9,8 @@ use super::{add_radiance, LightStrategy, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::footprint::Footprint;
 use crate::integrator::texturing::environment_lookup;
+use crate::integrator::trace_wave::shadow_trace_rays;
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::stats::RayKind;
-use crate::render::tracer::TraceRay;
 use crate::shading::{self, Bsdf, LightRef, MaterialBsdf};
 
 /// A shadow ray and the radiance it delivers to its pixel if unoccluded.
@@ -143,19 +142,14 @@ pub(super) fn trace_shadow_rays(
     if waves.shadows.is_empty() {
         return;
     }
-    worker
-        .counters
-        .count_rays(RayKind::Shadow, waves.shadows.len() as u64);
-    waves.shadow_rays.clear();
-    waves
-        .shadow_rays
-        .extend(waves.shadows.iter().map(|s| TraceRay {
-            origin: s.origin,
-            direction: s.direction,
-            tfar: s.tfar,
-            cone_width: 0.0,
-            cone_spread: 0.0,
-        }));
+    shadow_trace_rays(
+        waves
+            .shadows
+            .iter()
+            .map(|s| (s.origin, s.direction, s.tfar)),
+        &mut waves.shadow_rays,
+        &mut worker.counters,
+    );
     context.tracer.occluded(
         &waves.shadow_rays,
         &mut waves.shadow_blocked,

@@ -7,6 +7,7 @@ use glam::Vec3;
 use super::lights::{shadow_tfar, ShadowRay};
 use super::{add_radiance, Waves};
 use crate::film::TileImage;
+use crate::integrator::trace_wave::shadow_trace_rays;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::SurfaceDetail;
 use crate::render::stats::RayKind;
@@ -40,19 +41,14 @@ pub(super) fn trace_shadows(
     if waves.shadows.is_empty() {
         return;
     }
-    worker
-        .counters
-        .count_rays(RayKind::Shadow, waves.shadows.len() as u64);
-    waves.shadow_rays.clear();
-    waves
-        .shadow_rays
-        .extend(waves.shadows.iter().map(|s| TraceRay {
-            origin: s.origin,
-            direction: s.direction,
-            tfar: s.tfar,
-            cone_width: 0.0,
-            cone_spread: 0.0,
-        }));
+    shadow_trace_rays(
+        waves
+            .shadows
+            .iter()
+            .map(|s| (s.origin, s.direction, s.tfar)),
+        &mut waves.shadow_rays,
+        &mut worker.counters,
+    );
     if !context.effects.transmissive_shadows {
         context.tracer.occluded(
             &waves.shadow_rays,
