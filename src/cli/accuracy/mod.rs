@@ -31,6 +31,7 @@ pub mod crop;
 pub mod files;
 pub mod font;
 pub mod index;
+pub mod lighting;
 pub mod methods;
 pub mod metrics;
 pub mod patches;
@@ -99,8 +100,9 @@ pub struct AccuracyArgs {
     /// Do not print progress lines.
     #[arg(long)]
     pub quiet: bool,
-    /// What to measure: texture footprints and filters (the default), or curved patches
-    /// traced exactly against their tessellations ([`patches`]).
+    /// What to measure: texture footprints and filters (the default), curved patches
+    /// traced exactly against their tessellations ([`patches`]), or light transport against
+    /// a path-traced ground truth ([`lighting`]).
     #[arg(long, value_enum, default_value_t = AccuracyMode::Footprints)]
     pub mode: AccuracyMode,
     /// Samples per pixel of every render of `--mode patches` (exact and tessellated alike).
@@ -110,6 +112,24 @@ pub struct AccuracyArgs {
     /// against which every row's total error (geometry plus noise) is also measured.
     #[arg(long, default_value_t = 64)]
     pub patch_reference_spp: u32,
+    /// `--mode lighting`: pixels on the longer side of every render (the other side follows
+    /// the scene's aspect ratio; `--width`/`--height` do not apply to this mode).
+    #[arg(long, default_value_t = 128)]
+    pub lighting_size: u32,
+    /// `--mode lighting`: samples per pixel of the path-traced ground truth (another seed).
+    #[arg(long, default_value_t = 1024)]
+    pub lighting_reference_spp: u32,
+    /// `--mode lighting`: the path tracer's rows, samples per pixel (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = [1, 4, 16, 64, 256])]
+    pub lighting_path_spp: Vec<u32>,
+    /// `--mode lighting`: the voxel cone tracer's rows, grid resolutions (comma-separated);
+    /// each is measured with 1 and with 2 bounces held by the voxels.
+    #[arg(long, value_delimiter = ',', default_values_t = [32, 64, 128, 256])]
+    pub lighting_vct_resolutions: Vec<u32>,
+    /// `--mode lighting`: samples per pixel of the Whitted and vct rows (they only
+    /// antialias: both are deterministic per sample).
+    #[arg(long, default_value_t = 4)]
+    pub lighting_spp: u32,
 }
 
 /// The measurements `conetrace accuracy` can make.
@@ -119,6 +139,8 @@ pub enum AccuracyMode {
     Footprints,
     /// Exact patch intersection against tessellation at several error bounds.
     Patches,
+    /// Whitted, path tracing and voxel cone tracing against a path-traced ground truth.
+    Lighting,
 }
 
 /// A scene to measure, loaded and checked, with the options every method starts from.
@@ -484,6 +506,9 @@ fn write_scene_outputs(out: &Path, measurement: &SceneMeasurement) -> Result<(),
 pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
     if args.mode == AccuracyMode::Patches {
         return patches::run(args);
+    }
+    if args.mode == AccuracyMode::Lighting {
+        return lighting::run(args);
     }
     if args.runs == 0 {
         return Err(CommandError::bad_input("--runs must be at least 1"));
