@@ -312,6 +312,7 @@ pub fn render<I: Integrator>(
     let counters = total.counters;
     let texture_tiles = count_texture_tiles.then(|| TextureTileUsage {
         total: total.texture_tiles.iter().map(|t| t.count()).sum(),
+        touches: total.texture_tiles.iter().map(|t| t.touches()).sum(),
         per_texture: (0..texture_count)
             .map(|i| {
                 (
