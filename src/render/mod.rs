@@ -102,7 +102,7 @@ pub fn prepare_with_textures(
         &scene.lights,
         environment_mean,
         scene_radius,
-        crate::shading::AreaLights::new(&scene),
+        crate::shading::AreaLights::new(&scene, &textures),
     );
     // A lat-long environment is importance sampled (built once here; Whitted reads only the
     // mean).
