@@ -471,4 +471,66 @@ mod tests {
         );
         assert!((light.power() - 2.0 * PI).abs() < 1e-5);
     }
+
+    /// A scene with one emissive triangle whose material has an emission texture, black in
+    /// its left half (s < 0.5) and white in its right half, and the decoded texture.
+    fn textured_triangle_scene() -> (SceneDescription, Vec<std::sync::Arc<Texture>>) {
+        use crate::scene::{Material, TextureBinding, TextureDesc, TextureSource, TriangleMesh};
+        let texels = vec![[0.0, 0.0, 0.0, 1.0], [1.0, 1.0, 1.0, 1.0]];
+        let texture = Texture::from_rgba_f32(2, 1, texels).expect("texture");
+        let scene = SceneDescription {
+            textures: vec![TextureDesc {
+                name: "half".to_string(),
+                source: TextureSource::File("half.png".into()),
+                color_space: crate::texture::ColorSpace::Linear,
+                wrap_s: crate::texture::WrapMode::Clamp,
+                wrap_t: crate::texture::WrapMode::Clamp,
+            }],
+            materials: vec![Material {
+                emission: Vec3::splat(2.0),
+                emission_texture: Some(TextureBinding {
+                    texture: 0,
+                    transform: glam::Affine2::IDENTITY,
+                }),
+                ..Material::default()
+            }],
+            meshes: vec![TriangleMesh {
+                positions: vec![
+                    Vec3::new(0.0, 1.0, 0.0),
+                    Vec3::new(1.0, 1.0, 0.0),
+                    Vec3::new(0.0, 1.0, 1.0),
+                ],
+                st: vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)],
+                triangles: vec![[0, 1, 2]],
+                material: 0,
+                ..TriangleMesh::default()
+            }],
+            ..SceneDescription::default()
+        };
+        (scene, vec![std::sync::Arc::new(texture)])
+    }
+
+    #[test]
+    fn a_textured_light_has_the_texture_mean_in_its_power_and_st_at_its_samples() {
+        let (scene, textures) = textured_triangle_scene();
+        let lights = AreaLights::new(&scene, &textures);
+        assert_eq!(lights.len(), 1);
+        let light = lights.lights[0];
+        let textured = light.textured.expect("textured");
+        assert_eq!(textured.mean, Vec3::splat(0.5));
+        // L = 2 x mean 0.5 over a triangle of area 0.5, one-sided: 1 * 0.5 * pi.
+        assert!((light.power() - 0.5 * PI).abs() < 1e-5, "{}", light.power());
+        // Without the texture, the power of the factor alone.
+        let (mut plain, _) = textured_triangle_scene();
+        plain.materials[0].emission_texture = None;
+        let plain = AreaLights::new(&plain, &[]).lights[0];
+        assert!(plain.textured.is_none());
+        assert!((plain.power() - PI).abs() < 1e-5);
+        // A sample's st is the corners' st interpolated at its point (here st = (x, z)).
+        let mut u = Uniforms(5);
+        for _ in 0..100 {
+            let s = light.sample(Vec3::ZERO, u.vec2()).expect("the front faces the origin");
+            assert!((s.st - Vec2::new(s.point.x, s.point.z)).length() < 1e-5, "{s:?}");
+        }
+    }
 }
