@@ -17,8 +17,7 @@ use conetrace::scene::SceneDescription;
 use conetrace::texture::FilterMode;
 
 fn textured_scene() -> SceneDescription {
-    let path =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/path_textured.toml");
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/path_textured.toml");
     load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
@@ -69,8 +68,7 @@ fn table_rows(text: &str) -> Vec<TableRow> {
 #[test]
 fn cone_footprints_touch_fewer_fine_tiles_than_mip0_under_path() {
     let dir = temp_dir();
-    let scene =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/path_textured.toml");
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/path_textured.toml");
     let table = dir.path().join("tiles.md");
     let output = run_in(
         dir.path(),
@@ -103,7 +101,11 @@ fn cone_footprints_touch_fewer_fine_tiles_than_mip0_under_path() {
     let rows = table_rows(&text);
     assert_eq!(rows.len(), 6, "{text}");
     for row in &rows {
-        assert!(row.lookups > 0 && row.unique > 0, "{}: nothing counted", row.lod);
+        assert!(
+            row.lookups > 0 && row.unique > 0,
+            "{}: nothing counted",
+            row.lod
+        );
         assert!(row.touches >= row.unique && row.unique >= row.level0);
     }
     let mip0 = rows.iter().find(|r| r.lod == "mip0").expect("a mip0 row");

@@ -397,7 +397,7 @@ pub unsafe extern "C" fn ct_render(
                     part: None,
                 };
                 crate::integrator::selection::render(&context, integrator, &control)
-                .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))
+                    .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))
             })
         };
         let result = match &relay {

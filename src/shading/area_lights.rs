@@ -299,9 +299,8 @@ impl AreaLights {
                 let area = 0.5 * cross.length();
                 let area = if area.is_finite() { area } else { 0.0 };
                 let normal = cross.normalize_or(Vec3::Y);
-                let corner_st = (!mesh.st.is_empty()).then(|| {
-                    tri.map(|i| mesh.st.get(i as usize).copied().unwrap_or(Vec2::ZERO))
-                });
+                let corner_st = (!mesh.st.is_empty())
+                    .then(|| tri.map(|i| mesh.st.get(i as usize).copied().unwrap_or(Vec2::ZERO)));
                 out.lights.push(AreaLight {
                     shape: AreaShape::Triangle { p, normal, area },
                     radiance,
@@ -500,7 +499,11 @@ mod tests {
                     Vec3::new(1.0, 1.0, 0.0),
                     Vec3::new(0.0, 1.0, 1.0),
                 ],
-                st: vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)],
+                st: vec![
+                    Vec2::new(0.0, 0.0),
+                    Vec2::new(1.0, 0.0),
+                    Vec2::new(0.0, 1.0),
+                ],
                 triangles: vec![[0, 1, 2]],
                 material: 0,
                 ..TriangleMesh::default()
@@ -529,8 +532,13 @@ mod tests {
         // A sample's st is the corners' st interpolated at its point (here st = (x, z)).
         let mut u = Uniforms(5);
         for _ in 0..100 {
-            let s = light.sample(Vec3::ZERO, u.vec2()).expect("the front faces the origin");
-            assert!((s.st - Vec2::new(s.point.x, s.point.z)).length() < 1e-5, "{s:?}");
+            let s = light
+                .sample(Vec3::ZERO, u.vec2())
+                .expect("the front faces the origin");
+            assert!(
+                (s.st - Vec2::new(s.point.x, s.point.z)).length() < 1e-5,
+                "{s:?}"
+            );
         }
     }
 }
