@@ -70,6 +70,23 @@
 // AOV flag: add `lod` and `footprint`.
 #define CT_AOV_LOD 2
 
+// Integrator: the scene's `[render] integrator` (`auto` unless the scene names one); the
+// default, and what callers built before the `integrator` field get.
+#define CT_INTEGRATOR_SCENE 0
+
+// Integrator: the path tracer when the scene calls for global illumination (emissive
+// geometry, rough materials, `[render] gi`), Whitted otherwise.
+#define CT_INTEGRATOR_AUTO 1
+
+// Integrator: Whitted ray tracing.
+#define CT_INTEGRATOR_WHITTED 2
+
+// Integrator: the unidirectional path tracer.
+#define CT_INTEGRATOR_PATH 3
+
+// Integrator: voxel cone tracing.
+#define CT_INTEGRATOR_VCT 4
+
 // 8-bit colour texels are sRGB-encoded and decoded to linear on load.
 #define CT_COLOR_SPACE_SRGB 0
 
@@ -175,6 +192,9 @@ typedef int32_t (*CtTextureFn)(const struct CtTextureRequest *request,
                                void *user_data);
 
 // How to render. Fill it with `ct_render_options_init`, then change fields.
+//
+// Fields are only ever appended. A caller built against an older header passes its smaller
+// `struct_size`, and the fields it does not know keep their defaults.
 typedef struct CtRenderOptions {
   // `sizeof(CtRenderOptions)`, set by `ct_render_options_init`.
   uint32_t struct_size;
@@ -210,6 +230,9 @@ typedef struct CtRenderOptions {
   // estimated above it fails with `CT_ERROR_OUT_OF_MEMORY` before allocating anything
   // large. 0 = the memory the system reports available (no limit where it reports none).
   uint64_t max_memory;
+  // Integrator (`CT_INTEGRATOR_*`). Appended last: a caller whose `struct_size` ends before
+  // it gets `CT_INTEGRATOR_SCENE`.
+  uint32_t integrator;
 } CtRenderOptions;
 
 // A loaded scene. `id == 0` is the null handle.
@@ -358,9 +381,9 @@ enum CtStatus ct_image_write_png(struct CtImage image, const char *path);
 enum CtStatus ct_image_free(struct CtImage image);
 
 // Fills `*options` with the defaults (the scene's size, spp and depth; cone footprints; aniso
-// filter, max_aniso 16; all cores; no callbacks). `struct_size` must be
-// `sizeof(CtRenderOptions)`: a caller built against another version of the header gets
-// `CT_ERROR_STRUCT_SIZE` and nothing is written.
+// filter, max_aniso 16; all cores; no callbacks; the scene's integrator). `struct_size` must
+// be `sizeof(CtRenderOptions)` of this header or of an earlier one (then only that many
+// bytes are written); any other size gets `CT_ERROR_STRUCT_SIZE` and nothing is written.
 //
 // Thread safety: any thread.
 //

@@ -469,7 +469,8 @@ fn scenes_that_do_not_parse_give_a_scene_error() {
 fn options_with_a_wrong_size_or_bad_values_are_rejected() {
     let scene = default_scene();
     let mut options = small_options();
-    options.struct_size -= 8;
+    // Neither today's size nor an earlier header's (which ends before `integrator`).
+    options.struct_size -= 4;
     let mut image = CtImage::default();
     let status = unsafe { ct_render(scene, &options, &mut image) };
     assert_eq!(status, CtStatus::CT_ERROR_STRUCT_SIZE);
@@ -1165,3 +1166,130 @@ fn an_image_larger_than_memory_is_refused_not_aborted() {
     assert_eq!(status, CtStatus::CT_ERROR_NULL_POINTER);
     ct_scene_free(scene);
 }
+
+// ---- The integrator, chosen through the options. ----
+
+/// A floor lit only by an emissive quad above it (no lights, black environment), whose
+/// `[render] integrator` is Whitted: Whitted sees the quad but does not light the floor with
+/// it, the path tracer does.
+fn emissive_quad_scene(dir: &Path) -> CtScene {
+    common::write(dir, "floor.obj", &common::square_obj(3.0, 0.0));
+    common::write(dir, "lamp.obj", &common::square_obj(0.5, 0.0));
+    let text = CString::new(
+        r#"
+[render]
+width = 32
+height = 24
+spp = 16
+integrator = "whitted"
+
+[camera]
+type = "pinhole"
+eye = [0.0, 2.0, 4.0]
+target = [0.0, 0.0, 0.0]
+fov = 50
+
+[[material]]
+name = "floor"
+base_color = [0.7, 0.7, 0.7]
+
+[[material]]
+name = "lamp"
+base_color = [0.0, 0.0, 0.0]
+emission = [5.0, 5.0, 5.0]
+
+[[mesh]]
+file = "floor.obj"
+material = "floor"
+
+[[mesh]]
+file = "lamp.obj"
+material = "lamp"
+rotate = [180.0, 0.0, 0.0]
+translate = [0.0, 1.5, 0.0]
+"#,
+    )
+    .unwrap();
+    let base = CString::new(dir.display().to_string()).unwrap();
+    let label = CString::new("emissive.toml").unwrap();
+    let mut scene = CtScene::default();
+    let status = unsafe {
+        ct_scene_load_toml_string(text.as_ptr(), base.as_ptr(), label.as_ptr(), &mut scene)
+    };
+    assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
+    scene
+}
+
+/// Mean of the R channel of `scene` rendered with `options`.
+fn mean_red(scene: CtScene, options: &CtRenderOptions) -> f64 {
+    let mut image = CtImage::default();
+    let status = unsafe { ct_render(scene, options, &mut image) };
+    assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
+    let red = image_plane(image, "R");
+    assert_eq!(ct_image_free(image), CtStatus::CT_OK);
+    red.iter().map(|&v| f64::from(v)).sum::<f64>() / red.len() as f64
+}
+
+#[test]
+fn the_integrator_is_chosen_through_the_options() {
+    let dir = common::temp_dir();
+    let scene = emissive_quad_scene(dir.path());
+    let with = |integrator: u32| {
+        let mut options = small_options();
+        options.integrator = integrator;
+        mean_red(scene, &options)
+    };
+    let default = small_options();
+    assert_eq!(default.integrator, CT_INTEGRATOR_SCENE);
+    let scene_choice = mean_red(scene, &default);
+    let whitted = with(CT_INTEGRATOR_WHITTED);
+    let path = with(CT_INTEGRATOR_PATH);
+    let auto = with(CT_INTEGRATOR_AUTO);
+    eprintln!(
+        "mean R: scene's choice (whitted) {scene_choice}, whitted {whitted}, path {path}, \
+         auto {auto}"
+    );
+    // The floor is lit only by the path tracer: its image is much brighter.
+    assert!(path > 1.5 * whitted, "path {path} vs whitted {whitted}");
+    assert_eq!(scene_choice, whitted, "the scene asks for Whitted");
+    // Auto picks the path tracer for emissive geometry (same seed: the same image).
+    assert_eq!(auto, path);
+
+    let mut options = small_options();
+    options.integrator = 99;
+    let mut image = CtImage::default();
+    assert_eq!(
+        unsafe { ct_render(scene, &options, &mut image) },
+        CtStatus::CT_ERROR_INVALID_ARGUMENT
+    );
+    assert!(last_error().contains("integrator"), "{}", last_error());
+
+    // A caller built against the header before `integrator` existed: its struct ends at the
+    // field, and it renders with the scene's integrator.
+    let earlier_size = std::mem::offset_of!(CtRenderOptions, integrator);
+    let mut earlier = std::mem::MaybeUninit::<CtRenderOptions>::uninit();
+    // Bytes past the earlier struct hold garbage the library must not read.
+    unsafe {
+        std::ptr::write_bytes(earlier.as_mut_ptr().cast::<u8>(), 0xAB, size_of_options());
+        assert_eq!(
+            ct_render_options_init(earlier.as_mut_ptr(), earlier_size),
+            CtStatus::CT_OK,
+            "{}",
+            last_error()
+        );
+    }
+    let mut earlier = unsafe { earlier.assume_init() };
+    assert_eq!(earlier.struct_size as usize, earlier_size);
+    assert_eq!(earlier.integrator, 0xABAB_ABAB, "init wrote past the earlier size");
+    earlier.width = 64;
+    earlier.height = 48;
+    earlier.threads = 2;
+    earlier.integrator = CT_INTEGRATOR_PATH; // past its struct_size: ignored
+    assert_eq!(mean_red(scene, &earlier), whitted);
+    assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
+}
+
+fn size_of_options() -> usize {
+    std::mem::size_of::<CtRenderOptions>()
+}
+

@@ -97,6 +97,40 @@ pub(crate) unsafe fn write_out<T>(out: *mut T, value: T, argument: &str) -> Resu
     Ok(())
 }
 
+/// [`read_sized`] for an options struct that has grown by appending fields: also accepts the
+/// sizes of `earlier_sizes` (each a prefix of today's struct, as written by a caller built
+/// against an older header), whose missing trailing fields keep their values in `defaults`.
+///
+/// # Safety
+/// `ptr` is NULL or points to at least `struct_size` readable bytes (its first field).
+pub(crate) unsafe fn read_sized_or_earlier<T: Copy>(
+    ptr: *const T,
+    argument: &str,
+    earlier_sizes: &[usize],
+    defaults: T,
+) -> Result<T, CapiError> {
+    if ptr.is_null() {
+        return Err(CapiError::null(argument));
+    }
+    // SAFETY: as in `read_sized`, the first field is the u32 `struct_size`.
+    let size = unsafe { ptr.cast::<u32>().read_unaligned() } as usize;
+    if size == std::mem::size_of::<T>() || !earlier_sizes.contains(&size) {
+        // SAFETY: the caller's contract; `read_sized` checks the size again.
+        return unsafe { read_sized(ptr, argument) };
+    }
+    let mut value = defaults;
+    // SAFETY: the caller says `size` bytes are readable; `size` is an earlier size, smaller
+    // than `T`, so it fits in `value`.
+    unsafe {
+        std::ptr::copy_nonoverlapping(
+            ptr.cast::<u8>(),
+            (&mut value as *mut T).cast::<u8>(),
+            size.min(std::mem::size_of::<T>()),
+        )
+    };
+    Ok(value)
+}
+
 /// Checks an out-pointer for NULL before any work is done.
 pub(crate) fn require_out<T>(out: *mut T, argument: &str) -> Result<(), CapiError> {
     if out.is_null() {

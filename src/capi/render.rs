@@ -7,6 +7,7 @@ use std::sync::{Arc, Mutex};
 
 use crate::film::AovSelection;
 use crate::footprint::LodStrategy;
+use crate::integrator::selection::{IntegratorChoice, IntegratorKind};
 use crate::render::{self, RenderControl, RenderOptions};
 use crate::texture::{FilterMode, FilterOptions, WrapMode};
 
@@ -16,7 +17,7 @@ use super::callbacks::{
 };
 use super::errors::{guard, CapiError, CtStatus};
 use super::handles::{self, CtImage, CtScene, ImageObject, Object};
-use super::{read_sized, require_out};
+use super::{read_sized_or_earlier, require_out};
 
 /// Level of detail: every lookup samples mip level 0.
 pub const CT_LOD_MIP0: u32 = 0;
@@ -54,7 +55,23 @@ pub const CT_AOV_FOOTPRINT: u32 = 1;
 /// AOV flag: add `lod` and `footprint`.
 pub const CT_AOV_LOD: u32 = 2;
 
+/// Integrator: the scene's `[render] integrator` (`auto` unless the scene names one); the
+/// default, and what callers built before the `integrator` field get.
+pub const CT_INTEGRATOR_SCENE: u32 = 0;
+/// Integrator: the path tracer when the scene calls for global illumination (emissive
+/// geometry, rough materials, `[render] gi`), Whitted otherwise.
+pub const CT_INTEGRATOR_AUTO: u32 = 1;
+/// Integrator: Whitted ray tracing.
+pub const CT_INTEGRATOR_WHITTED: u32 = 2;
+/// Integrator: the unidirectional path tracer.
+pub const CT_INTEGRATOR_PATH: u32 = 3;
+/// Integrator: voxel cone tracing.
+pub const CT_INTEGRATOR_VCT: u32 = 4;
+
 /// How to render. Fill it with `ct_render_options_init`, then change fields.
+///
+/// Fields are only ever appended. A caller built against an older header passes its smaller
+/// `struct_size`, and the fields it does not know keep their defaults.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CtRenderOptions {
@@ -92,7 +109,13 @@ pub struct CtRenderOptions {
     /// estimated above it fails with `CT_ERROR_OUT_OF_MEMORY` before allocating anything
     /// large. 0 = the memory the system reports available (no limit where it reports none).
     pub max_memory: u64,
+    /// Integrator (`CT_INTEGRATOR_*`). Appended last: a caller whose `struct_size` ends before
+    /// it gets `CT_INTEGRATOR_SCENE`.
+    pub integrator: u32,
 }
+
+/// `struct_size` of `CtRenderOptions` before `integrator` was appended: still accepted.
+const OPTIONS_SIZE_BEFORE_INTEGRATOR: usize = std::mem::offset_of!(CtRenderOptions, integrator);
 
 impl CtRenderOptions {
     fn defaults() -> CtRenderOptions {
@@ -112,8 +135,29 @@ impl CtRenderOptions {
             progress_user_data: std::ptr::null_mut(),
             texture_callback: None,
             texture_user_data: std::ptr::null_mut(),
+            integrator: CT_INTEGRATOR_SCENE,
         }
     }
+}
+
+/// The integrator choice of `code` over the scene's `settings` (`CT_INTEGRATOR_SCENE`: the
+/// scene's own).
+fn integrator_from_code(
+    code: u32,
+    settings: &crate::scene::RenderSettings,
+) -> Result<IntegratorChoice, CapiError> {
+    Ok(match code {
+        CT_INTEGRATOR_SCENE => settings.integrator,
+        CT_INTEGRATOR_AUTO => IntegratorChoice::Auto,
+        CT_INTEGRATOR_WHITTED => IntegratorChoice::Fixed(IntegratorKind::Whitted),
+        CT_INTEGRATOR_PATH => IntegratorChoice::Fixed(IntegratorKind::Path),
+        CT_INTEGRATOR_VCT => IntegratorChoice::Fixed(IntegratorKind::Vct),
+        _ => {
+            return Err(CapiError::invalid(format!(
+                "unknown integrator {code} (CT_INTEGRATOR_*)"
+            )))
+        }
+    })
 }
 
 pub(crate) fn filter_code(filter: FilterMode) -> u32 {
@@ -190,9 +234,9 @@ fn lod_from_code(code: u32) -> Result<LodStrategy, CapiError> {
 }
 
 /// Fills `*options` with the defaults (the scene's size, spp and depth; cone footprints; aniso
-/// filter, max_aniso 16; all cores; no callbacks). `struct_size` must be
-/// `sizeof(CtRenderOptions)`: a caller built against another version of the header gets
-/// `CT_ERROR_STRUCT_SIZE` and nothing is written.
+/// filter, max_aniso 16; all cores; no callbacks; the scene's integrator). `struct_size` must
+/// be `sizeof(CtRenderOptions)` of this header or of an earlier one (then only that many
+/// bytes are written); any other size gets `CT_ERROR_STRUCT_SIZE` and nothing is written.
 ///
 /// Thread safety: any thread.
 ///
@@ -206,14 +250,34 @@ pub unsafe extern "C" fn ct_render_options_init(
     guard(|| {
         require_out(options, "options")?;
         let expected = std::mem::size_of::<CtRenderOptions>();
-        if struct_size != expected {
+        if struct_size == expected {
+            // SAFETY: non-null and `expected` bytes writable by contract.
+            unsafe { options.write_unaligned(CtRenderOptions::defaults()) };
+            return Ok(CtStatus::CT_OK);
+        }
+        if struct_size != OPTIONS_SIZE_BEFORE_INTEGRATOR {
             return Err(CapiError::new(
                 CtStatus::CT_ERROR_STRUCT_SIZE,
-                format!("options: struct_size is {struct_size}, this library expects {expected}"),
+                format!(
+                    "options: struct_size is {struct_size}, this library expects {expected} \
+                     (or {OPTIONS_SIZE_BEFORE_INTEGRATOR} from an earlier header)"
+                ),
             ));
         }
-        // SAFETY: non-null and `expected` bytes writable by contract.
-        unsafe { options.write_unaligned(CtRenderOptions::defaults()) };
+        // An earlier caller's struct: its own fields only.
+        let defaults = CtRenderOptions {
+            struct_size: struct_size as u32,
+            ..CtRenderOptions::defaults()
+        };
+        // SAFETY: non-null and `struct_size` bytes writable by contract; `defaults` is a
+        // whole struct, larger than `struct_size`.
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                (&defaults as *const CtRenderOptions).cast::<u8>(),
+                options.cast::<u8>(),
+                struct_size,
+            )
+        };
         Ok(CtStatus::CT_OK)
     })
 }
@@ -248,11 +312,19 @@ pub unsafe extern "C" fn ct_render(
             CtRenderOptions::defaults()
         } else {
             // SAFETY: caller's contract.
-            unsafe { read_sized(options, "options") }?
+            unsafe {
+                read_sized_or_earlier(
+                    options,
+                    "options",
+                    &[OPTIONS_SIZE_BEFORE_INTEGRATOR],
+                    CtRenderOptions::defaults(),
+                )
+            }?
         };
         let object = handles::scene(scene)?;
         let scene = object.scene.clone();
         let render_options = render_options(&c_options, &scene)?;
+        let integrator = integrator_from_code(c_options.integrator, &scene.settings)?;
         // Refused before the film or any texture is allocated. A texture whose header cannot
         // be read is left to the preparation below, which reports it with its role.
         if let Ok(estimate) = memory_estimate(&c_options, &scene, &render_options) {
@@ -324,12 +396,8 @@ pub unsafe extern "C" fn ct_render(
                     skip: None,
                     part: None,
                 };
-                crate::integrator::selection::render(
-                    &context,
-                    context.scene.settings.integrator,
-                    &control,
-                )
-                .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))
+                crate::integrator::selection::render(&context, integrator, &control)
+                    .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))
             })
         };
         let result = match &relay {
@@ -416,7 +484,14 @@ pub unsafe extern "C" fn ct_render_memory_estimate(
             CtRenderOptions::defaults()
         } else {
             // SAFETY: caller's contract.
-            unsafe { read_sized(options, "options") }?
+            unsafe {
+                read_sized_or_earlier(
+                    options,
+                    "options",
+                    &[OPTIONS_SIZE_BEFORE_INTEGRATOR],
+                    CtRenderOptions::defaults(),
+                )
+            }?
         };
         let object = handles::scene(scene)?;
         let render_options = render_options(&c_options, &object.scene)?;

@@ -8,6 +8,7 @@ pub mod bench_effects;
 pub mod bench_render;
 pub mod bench_scale_out;
 pub mod bench_textures;
+pub mod bench_tiles;
 pub mod merge;
 pub mod outputs;
 pub mod patch_mode;
@@ -88,6 +89,9 @@ pub enum BenchCommand {
     /// Predicted wall time of a render split over 1 to 1,000 Slurm tasks, from per-tile
     /// costs measured here (docs/scale-out.md).
     ScaleOut(bench_scale_out::BenchScaleOutArgs),
+    /// Texture tiles (64x64) each level-of-detail strategy touches on one scene, at every
+    /// bounce of the integrator (path by default), and the render time of each.
+    Tiles(bench_tiles::BenchTilesArgs),
 }
 
 /// A render whose ray traversal failed: an internal failure (exit status 1) with the
@@ -127,6 +131,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Merge(args) => merge::run(&args),
         Command::Bench(BenchCommand::Effects(args)) => bench_effects::run(&args),
         Command::Bench(BenchCommand::ScaleOut(args)) => bench_scale_out::run(&args),
+        Command::Bench(BenchCommand::Tiles(args)) => bench_tiles::run(&args),
         Command::Bench(BenchCommand::Textures(args)) => {
             bench_textures::run(&args).map_err(CommandError::bad_input)
         }

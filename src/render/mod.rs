@@ -102,7 +102,7 @@ pub fn prepare_with_textures(
         &scene.lights,
         environment_mean,
         scene_radius,
-        crate::shading::AreaLights::new(&scene),
+        crate::shading::AreaLights::new(&scene, &textures),
     );
     // A lat-long environment is importance sampled (built once here; Whitted reads only the
     // mean).
@@ -312,6 +312,7 @@ pub fn render<I: Integrator>(
     let counters = total.counters;
     let texture_tiles = count_texture_tiles.then(|| TextureTileUsage {
         total: total.texture_tiles.iter().map(|t| t.count()).sum(),
+        touches: total.texture_tiles.iter().map(|t| t.touches()).sum(),
         per_texture: (0..texture_count)
             .map(|i| {
                 (

@@ -93,6 +93,9 @@ impl WorkCounters {
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct TextureTileUsage {
     pub total: u64,
+    /// Tile touches: for every lookup, the distinct tiles it read, summed over lookups (the
+    /// tile requests a demand-loaded texture cache would serve).
+    pub touches: u64,
     /// One entry per texture, in scene order: `(name, tiles per mip level)`.
     pub per_texture: Vec<(String, Vec<u64>)>,
 }

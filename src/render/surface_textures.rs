@@ -45,6 +45,37 @@ pub fn sample_binding(
     (query, texel)
 }
 
+/// The radiance an area light emits at texture coordinates `st` (from its front side): its
+/// emission factor, times its material's emission texture read at level 0 with a bilinear
+/// point lookup (zero gradients) when it has one.
+///
+/// Next-event estimation reads it at the sampled point and a BSDF-sampled ray that hits the
+/// light at the hit, so the two halves of multiple importance sampling weigh the same
+/// radiance. Level 0 rather than a footprint: a light sample has no ray cone of its own, and
+/// the cone that would reach the point (the shading point's, widened by the BSDF spread
+/// there, out to the light) differs from the BSDF-sampled ray's, so filtered values would
+/// make the two strategies estimate two different blurs of the texture. Emission seen by
+/// the camera or through mirrors and glass, which light sampling cannot reach, stays
+/// filtered by the ray's footprint.
+pub fn area_light_radiance(
+    context: &RenderContext,
+    light: &crate::shading::AreaLight,
+    st: Vec2,
+    worker: &mut WorkerState,
+) -> glam::Vec3 {
+    let binding = light
+        .textured
+        .and_then(|t| context.scene.materials.get(t.material as usize))
+        .and_then(|material| material.emission_texture.as_ref());
+    match binding {
+        Some(binding) => {
+            let (_, texel) = sample_binding(context, binding, st, [0.0; 4], worker);
+            light.radiance * texel.truncate()
+        }
+        None => light.radiance,
+    }
+}
+
 /// The shading inputs of `material` at `surface`, every texture filtered with the
 /// footprint's `gradients` (see [`sample_binding`]). `observe` sees each lookup (slot, query,
 /// texel), e.g. to fill the texture AOVs; `with_alpha` as in

@@ -5,7 +5,14 @@
 //! Emission is one-sided, as pbrt-v4's `DiffuseAreaLight` and Mitsuba 3's `area` emitter
 //! are by default: a triangle emits on the side its geometric normal points to (its
 //! winding, counter-clockwise seen from the front), a sphere outward. The emitted radiance
-//! is the material's constant `emission`.
+//! is the material's `emission` factor, times its emission texture where it has one.
+//!
+//! Textured emitters: a sample carries the texture coordinates of its point (the triangle's
+//! st interpolated with the sample's barycentrics, or the sphere's lat-long st of the point,
+//! as `render::prepared` computes them for a hit), and the integrator looks the texture up
+//! there (`render::surface_textures::area_light_radiance`), the same way for a light sample
+//! and for a BSDF-sampled ray that hits the light, so both halves of multiple importance
+//! sampling estimate the same emitted radiance.
 //!
 //! Sampling, for a shading point `p`:
 //! - a sphere seen from outside is sampled by the cone of directions it subtends,
@@ -17,7 +24,10 @@
 //!   `d^2 / (A |cos theta_l|)`, with `theta_l` the angle at the light.
 //!
 //! Power (for choosing a light in proportion to it): `luminance(L) * area * pi`, the flux of
-//! a one-sided Lambertian emitter.
+//! a one-sided Lambertian emitter, with `L` the emission factor times the mean of the
+//! emission texture's level 0 for a textured emitter (the mean over the whole texture, not
+//! over the part the triangle maps: choosing a light by an approximate power only changes
+//! the variance, never the expectation).
 //!
 //! Meshes with an alpha cut-out are not made lights (their emitting area depends on the
 //! mask); rays that hit them still see their emission, unweighted, which stays unbiased as
@@ -29,6 +39,7 @@ use glam::{Vec2, Vec3};
 
 use super::bsdf::orthonormal_basis;
 use crate::scene::SceneDescription;
+use crate::texture::Texture;
 
 /// Luminance of a linear Rec. 709 colour.
 #[inline]
@@ -55,8 +66,23 @@ pub enum AreaShape {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AreaLight {
     pub shape: AreaShape,
-    /// Radiance emitted from the front side.
+    /// Radiance emitted from the front side: the material's emission factor, to be
+    /// multiplied by the emission texture at the point when [`AreaLight::textured`] is set.
     pub radiance: Vec3,
+    /// The emission texture, when the material has one.
+    pub textured: Option<TexturedEmission>,
+}
+
+/// Where an area light's emission texture is looked up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexturedEmission {
+    /// The light's material (whose `emission_texture` binding is looked up).
+    pub material: u32,
+    /// A triangle's texture coordinates at its three corners (`None`: the mesh has none,
+    /// and the texture is read at st = 0 as for a hit); unused for spheres.
+    pub corner_st: Option<[Vec2; 3]>,
+    /// Mean RGB of the texture's level 0, for the light's power.
+    pub mean: Vec3,
 }
 
 /// A point on an area light as seen from a shading point.
@@ -72,6 +98,8 @@ pub struct AreaLightSample {
     pub radiance: Vec3,
     /// Solid-angle density of the direction.
     pub pdf: f32,
+    /// Texture coordinates of the point (zero when the light is not textured).
+    pub st: Vec2,
 }
 
 impl AreaLight {
@@ -83,9 +111,29 @@ impl AreaLight {
         }
     }
 
-    /// The emitted power by luminance, `luminance(L) * A * pi` (see the module doc).
+    /// The emitted power by luminance, `luminance(L) * A * pi`, with `L` the factor times
+    /// the texture's mean for a textured light (see the module doc).
     pub fn power(&self) -> f32 {
-        luminance(self.radiance) * self.area() * PI
+        let mean = self.textured.map_or(Vec3::ONE, |t| t.mean);
+        luminance(self.radiance * mean) * self.area() * PI
+    }
+
+    /// Texture coordinates of the point with barycentrics `(b0, b1)` of a triangle light
+    /// (`b0 p0 + b1 p1 + (1 - b0 - b1) p2`), or of the point `point` of a sphere light:
+    /// those a hit at the same point gets (`render::prepared`). Zero for an untextured light.
+    fn st_at(&self, b0: f32, b1: f32, point: Vec3) -> Vec2 {
+        let Some(textured) = self.textured else {
+            return Vec2::ZERO;
+        };
+        match self.shape {
+            AreaShape::Triangle { .. } => textured.corner_st.map_or(Vec2::ZERO, |t| {
+                t[0] * b0 + t[1] * b1 + t[2] * (1.0 - b0 - b1)
+            }),
+            AreaShape::Sphere { center, radius } => {
+                let normal = ((point - center) / radius).normalize_or(Vec3::Y);
+                crate::footprint::lat_long_frame(normal, radius).0
+            }
+        }
     }
 
     /// A direction towards the light from `p`, drawn from the uniform numbers `u`; `None`
@@ -116,6 +164,7 @@ impl AreaLight {
                     point,
                     radiance: self.radiance,
                     pdf,
+                    st: self.st_at(b0, b1, point),
                 })
             }
             AreaShape::Sphere { center, radius } => {
@@ -142,12 +191,14 @@ impl AreaLight {
                 // Nearest intersection along wi: d cos - sqrt(r^2 - d^2 sin^2).
                 let root = (r2 - d2 * sin2_theta).max(0.0).sqrt();
                 let distance = (d * cos_theta - root).max(0.0);
+                let point = p + wi * distance;
                 Some(AreaLightSample {
                     direction_to_light: wi,
                     distance,
-                    point: p + wi * distance,
+                    point,
                     radiance: self.radiance,
                     pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
+                    st: self.st_at(0.0, 0.0, point),
                 })
             }
         }
@@ -198,8 +249,31 @@ pub struct AreaLights {
 }
 
 impl AreaLights {
-    /// The area lights of `scene` (see the module doc for which surfaces qualify).
-    pub fn new(scene: &SceneDescription) -> AreaLights {
+    /// The area lights of `scene` (see the module doc for which surfaces qualify), with the
+    /// scene's decoded `textures` (for the mean of emission textures; a texture missing
+    /// from them, e.g. one an external texture system serves, counts with mean 1).
+    pub fn new(scene: &SceneDescription, textures: &[std::sync::Arc<Texture>]) -> AreaLights {
+        // The mean of each emission texture, computed once per texture.
+        let mut means: Vec<Option<Vec3>> = vec![None; scene.textures.len()];
+        let mut textured = |material: usize| {
+            let binding = scene.materials[material].emission_texture.as_ref()?;
+            let mean = match means.get_mut(binding.texture) {
+                Some(Some(mean)) => *mean,
+                Some(slot) => {
+                    let mean = textures
+                        .get(binding.texture)
+                        .map_or(Vec3::ONE, |t| level0_mean(t));
+                    *slot = Some(mean);
+                    mean
+                }
+                None => Vec3::ONE,
+            };
+            Some(TexturedEmission {
+                material: material as u32,
+                corner_st: None,
+                mean,
+            })
+        };
         let emissive = |material: usize| {
             scene.materials.get(material).is_some_and(|m| {
                 m.emission.max_element() > 0.0 && m.emission.is_finite() && m.alpha_cutoff.is_none()
@@ -212,6 +286,7 @@ impl AreaLights {
                 continue;
             }
             let radiance = scene.materials[mesh.material].emission;
+            let texture = textured(mesh.material);
             out.mesh_first.push(Some(out.lights.len() as u32));
             for tri in &mesh.triangles {
                 let p = tri.map(|i| {
@@ -224,9 +299,12 @@ impl AreaLights {
                 let area = 0.5 * cross.length();
                 let area = if area.is_finite() { area } else { 0.0 };
                 let normal = cross.normalize_or(Vec3::Y);
+                let corner_st = (!mesh.st.is_empty())
+                    .then(|| tri.map(|i| mesh.st.get(i as usize).copied().unwrap_or(Vec2::ZERO)));
                 out.lights.push(AreaLight {
                     shape: AreaShape::Triangle { p, normal, area },
                     radiance,
+                    textured: texture.map(|t| TexturedEmission { corner_st, ..t }),
                 });
                 out.triangle_count += 1;
             }
@@ -243,6 +321,7 @@ impl AreaLights {
                     radius: sphere.radius,
                 },
                 radiance: scene.materials[sphere.material].emission,
+                textured: textured(sphere.material),
             });
             out.sphere_count += 1;
         }
@@ -275,6 +354,29 @@ impl AreaLights {
     }
 }
 
+/// Mean RGB of a texture's level 0 (accumulated in f64).
+fn level0_mean(texture: &Texture) -> Vec3 {
+    let Some(level) = texture.pyramid().levels.first() else {
+        return Vec3::ONE;
+    };
+    let (width, height) = (level.width as usize, level.height as usize);
+    let mut sum = [0.0f64; 3];
+    for y in 0..height {
+        for x in 0..width {
+            let texel = level.texel(x, y);
+            for c in 0..3 {
+                sum[c] += f64::from(texel[c]);
+            }
+        }
+    }
+    let n = (width * height).max(1) as f64;
+    Vec3::new(
+        (sum[0] / n) as f32,
+        (sum[1] / n) as f32,
+        (sum[2] / n) as f32,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -292,6 +394,7 @@ mod tests {
                 area: 2.0,
             },
             radiance: Vec3::ONE,
+            textured: None,
         }
     }
 
@@ -318,6 +421,7 @@ mod tests {
                 radius: 1.0,
             },
             radiance: Vec3::splat(2.0),
+            textured: None,
         };
         let e = irradiance(&light, Vec3::ZERO, Vec3::Y, 50_000);
         let expected = 2.0 * PI / 9.0;
@@ -365,5 +469,76 @@ mod tests {
             0.0
         );
         assert!((light.power() - 2.0 * PI).abs() < 1e-5);
+    }
+
+    /// A scene with one emissive triangle whose material has an emission texture, black in
+    /// its left half (s < 0.5) and white in its right half, and the decoded texture.
+    fn textured_triangle_scene() -> (SceneDescription, Vec<std::sync::Arc<Texture>>) {
+        use crate::scene::{Material, TextureBinding, TextureDesc, TextureSource, TriangleMesh};
+        let texels = vec![[0.0, 0.0, 0.0, 1.0], [1.0, 1.0, 1.0, 1.0]];
+        let texture = Texture::from_rgba_f32(2, 1, texels).expect("texture");
+        let scene = SceneDescription {
+            textures: vec![TextureDesc {
+                name: "half".to_string(),
+                source: TextureSource::File("half.png".into()),
+                color_space: crate::texture::ColorSpace::Linear,
+                wrap_s: crate::texture::WrapMode::Clamp,
+                wrap_t: crate::texture::WrapMode::Clamp,
+            }],
+            materials: vec![Material {
+                emission: Vec3::splat(2.0),
+                emission_texture: Some(TextureBinding {
+                    texture: 0,
+                    transform: glam::Affine2::IDENTITY,
+                }),
+                ..Material::default()
+            }],
+            meshes: vec![TriangleMesh {
+                positions: vec![
+                    Vec3::new(0.0, 1.0, 0.0),
+                    Vec3::new(1.0, 1.0, 0.0),
+                    Vec3::new(0.0, 1.0, 1.0),
+                ],
+                st: vec![
+                    Vec2::new(0.0, 0.0),
+                    Vec2::new(1.0, 0.0),
+                    Vec2::new(0.0, 1.0),
+                ],
+                triangles: vec![[0, 1, 2]],
+                material: 0,
+                ..TriangleMesh::default()
+            }],
+            ..SceneDescription::default()
+        };
+        (scene, vec![std::sync::Arc::new(texture)])
+    }
+
+    #[test]
+    fn a_textured_light_has_the_texture_mean_in_its_power_and_st_at_its_samples() {
+        let (scene, textures) = textured_triangle_scene();
+        let lights = AreaLights::new(&scene, &textures);
+        assert_eq!(lights.len(), 1);
+        let light = lights.lights[0];
+        let textured = light.textured.expect("textured");
+        assert_eq!(textured.mean, Vec3::splat(0.5));
+        // L = 2 x mean 0.5 over a triangle of area 0.5, one-sided: 1 * 0.5 * pi.
+        assert!((light.power() - 0.5 * PI).abs() < 1e-5, "{}", light.power());
+        // Without the texture, the power of the factor alone.
+        let (mut plain, _) = textured_triangle_scene();
+        plain.materials[0].emission_texture = None;
+        let plain = AreaLights::new(&plain, &[]).lights[0];
+        assert!(plain.textured.is_none());
+        assert!((plain.power() - PI).abs() < 1e-5);
+        // A sample's st is the corners' st interpolated at its point (here st = (x, z)).
+        let mut u = Uniforms(5);
+        for _ in 0..100 {
+            let s = light
+                .sample(Vec3::ZERO, u.vec2())
+                .expect("the front faces the origin");
+            assert!(
+                (s.st - Vec2::new(s.point.x, s.point.z)).length() < 1e-5,
+                "{s:?}"
+            );
+        }
     }
 }

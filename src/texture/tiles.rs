@@ -7,6 +7,11 @@
 //! [`TextureTileRecorder`]. A [`TextureTileSet`] is kept per thread and keyed by
 //! (texture id, level, tile x, tile y), so one set can hold tiles of many textures;
 //! merge the per-thread sets at the end of a render.
+//!
+//! Besides the distinct tiles, a set counts *tile touches*: for every lookup, the number of
+//! distinct tiles that lookup reads, summed over lookups. That is how many tile requests a
+//! demand-loaded cache (OpenImageIO's `TextureSystem` with 64x64 tiles) would serve, while
+//! the distinct tiles are what it would have to load.
 
 use std::collections::HashSet;
 
@@ -28,11 +33,20 @@ impl TexelObserver for NoTextureTiles {
     fn touch(&mut self, _level: usize, _x: usize, _y: usize) {}
 }
 
-/// The observer of recording lookups: adds the texel's tile to a [`TextureTileSet`].
+/// How many tiles of one lookup a recorder remembers to count each of them once. A
+/// bilinear or trilinear lookup reads at most 8 tiles (4 per level where its texels straddle
+/// a tile corner); wide anisotropic lookups that read more are counted once per tile while
+/// they read at most this many in turn.
+const TILES_REMEMBERED: usize = 8;
+
+/// The observer of recording lookups: adds the texel's tile to a [`TextureTileSet`]. One
+/// recorder serves one lookup, so it also counts that lookup's distinct tiles (touches).
 pub(crate) struct TextureTileRecorder<'a> {
     texture_id: u64,
     tiles: &'a mut TextureTileSet,
-    last: Option<(usize, usize, usize)>,
+    /// The lookup's tiles so far, most recent first in a ring of `TILES_REMEMBERED`.
+    seen: [(usize, usize, usize); TILES_REMEMBERED],
+    seen_count: usize,
 }
 
 impl<'a> TextureTileRecorder<'a> {
@@ -40,7 +54,8 @@ impl<'a> TextureTileRecorder<'a> {
         TextureTileRecorder {
             texture_id,
             tiles,
-            last: None,
+            seen: [(0, 0, 0); TILES_REMEMBERED],
+            seen_count: 0,
         }
     }
 }
@@ -53,11 +68,16 @@ impl TexelObserver for TextureTileRecorder<'_> {
             x / TEXTURE_TILE_SIZE as usize,
             y / TEXTURE_TILE_SIZE as usize,
         );
-        // Neighbouring texels mostly share a tile: skip the hash for repeats.
-        if self.last != Some(key) {
-            self.last = Some(key);
-            self.tiles.record(self.texture_id, key.0, key.1, key.2);
+        // Neighbouring texels mostly share a tile: skip the hash (and the touch count) for
+        // tiles this lookup already read.
+        let remembered = self.seen_count.min(TILES_REMEMBERED);
+        if self.seen[..remembered].contains(&key) {
+            return;
         }
+        self.seen[self.seen_count % TILES_REMEMBERED] = key;
+        self.seen_count += 1;
+        self.tiles.touches += 1;
+        self.tiles.record(self.texture_id, key.0, key.1, key.2);
     }
 }
 
@@ -65,6 +85,8 @@ impl TexelObserver for TextureTileRecorder<'_> {
 #[derive(Clone, Debug, Default)]
 pub struct TextureTileSet {
     tiles: HashSet<(u64, u32, u32, u32)>,
+    /// Tile touches: distinct tiles per lookup, summed over the lookups recorded.
+    touches: u64,
 }
 
 impl TextureTileSet {
@@ -81,6 +103,7 @@ impl TextureTileSet {
 
     /// Adds every tile of `other`.
     pub fn merge(&mut self, other: TextureTileSet) {
+        self.touches += other.touches;
         if self.tiles.len() < other.tiles.len() {
             let mine = std::mem::replace(&mut self.tiles, other.tiles);
             self.tiles.extend(mine);
@@ -92,6 +115,11 @@ impl TextureTileSet {
     /// Number of distinct tiles over all textures and levels.
     pub fn count(&self) -> u64 {
         self.tiles.len() as u64
+    }
+
+    /// Tile touches: for every recorded lookup, the distinct tiles it read, summed.
+    pub fn touches(&self) -> u64 {
+        self.touches
     }
 
     /// Distinct tiles per mip level (summed over textures); index = level.
@@ -123,11 +151,22 @@ mod tests {
             r.touch(2, 1, 1);
         }
         assert_eq!(a.count(), 3);
+        assert_eq!(a.touches(), 3);
+        {
+            // A second lookup of a tile already in the set: one more touch, no new tile.
+            let mut r = TextureTileRecorder::new(7, &mut a);
+            r.touch(0, 10, 10);
+            r.touch(0, 64, 10);
+            r.touch(0, 11, 10); // back to the first tile: still one touch for it
+        }
+        assert_eq!(a.count(), 3);
+        assert_eq!(a.touches(), 5);
         let mut b = TextureTileSet::new();
         b.record(8, 0, 0, 0); // other texture, same tile coordinates
         b.record(7, 0, 0, 0); // duplicate of a's
         a.merge(b);
         assert_eq!(a.count(), 4);
+        assert_eq!(a.touches(), 5, "record() adds a tile, not a touch");
         assert_eq!(a.count_per_level(), vec![3, 0, 1]);
     }
 }

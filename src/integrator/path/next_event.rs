@@ -11,6 +11,7 @@ use crate::footprint::Footprint;
 use crate::integrator::texturing::environment_lookup;
 use crate::integrator::trace_wave::shadow_trace_rays;
 use crate::render::context::{RenderContext, WorkerState};
+use crate::render::surface_textures::area_light_radiance;
 use crate::shading::{self, Bsdf, LightRef, MaterialBsdf};
 
 /// A shadow ray and the radiance it delivers to its pixel if unoccluded.
@@ -80,14 +81,17 @@ pub(super) fn sample_light(
             (sample.wi, f32::INFINITY, None, radiance, sample.pdf)
         }
         LightRef::Area(index) => {
-            let Some(sample) = lights.area.lights[index].sample(point.origin, u_point) else {
+            let light = &lights.area.lights[index];
+            let Some(sample) = light.sample(point.origin, u_point) else {
                 return;
             };
+            // Emission textures are read at the sampled point, as for a ray that hits it.
+            let radiance = area_light_radiance(context, light, sample.st, worker);
             (
                 sample.direction_to_light,
                 sample.distance,
                 Some(sample.point),
-                sample.radiance,
+                radiance,
                 sample.pdf,
             )
         }

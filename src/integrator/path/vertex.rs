@@ -13,6 +13,7 @@ use crate::integrator::texturing::{self, environment_lookup, LookupRay};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::GeometryRef;
 use crate::render::stats::RayKind;
+use crate::render::surface_textures::area_light_radiance;
 use crate::render::tracer::TraceHit;
 use crate::shading::{self, area_lights::luminance, Bsdf, LightRef, MaterialBsdf};
 
@@ -86,23 +87,29 @@ pub(super) fn shade(
     }
 
     // Emission, from the front side only (one-sided emitters, `shading::area_lights`).
-    if inputs.emission.max_element() > 0.0 && surface.is_front_face(ray.direction) {
+    if material.emission.max_element() > 0.0 && surface.is_front_face(ray.direction) {
         let light = match context.surfaces.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(mesh) => lights.area.mesh_light(mesh, hit.primitive),
             GeometryRef::Spheres => lights.area.sphere_light(hit.primitive as usize),
             GeometryRef::Patches | GeometryRef::HeightPatches => None,
         };
-        let weight = match light {
-            Some(index) => {
+        let (emission, weight) = match light {
+            // A BSDF-sampled ray reads the light's emission as light sampling does
+            // (`area_light_radiance`), so both strategies estimate the same radiance.
+            Some(index) if ray.bsdf_pdf.is_some() => {
                 let pmf = lights.pmf(LightRef::Area(index));
-                found_light_weight(tracer, &ray, pmf, || {
-                    lights.area.lights[index].pdf(ray.from, surface.position)
-                })
+                let area_light = &lights.area.lights[index];
+                let weight = found_light_weight(tracer, &ray, pmf, || {
+                    area_light.pdf(ray.from, surface.position)
+                });
+                let emission = area_light_radiance(context, area_light, surface.st, worker);
+                (emission, weight)
             }
-            // Emitters that are not lights are found by BSDF rays alone.
-            None => 1.0,
+            // Seen by the camera or through a delta lobe: taken whole, filtered by the
+            // ray's footprint. Emitters that are not lights are found by BSDF rays alone.
+            _ => (inputs.emission, 1.0),
         };
-        add_radiance(image, ray.pixel, ray.throughput * inputs.emission * weight);
+        add_radiance(image, ray.pixel, ray.throughput * emission * weight);
     }
 
     // The same seven dimensions at every vertex, whichever are used.
