@@ -29,6 +29,7 @@
 
 pub mod crop;
 pub mod files;
+pub mod fog;
 pub mod font;
 pub mod index;
 pub mod methods;
@@ -99,8 +100,9 @@ pub struct AccuracyArgs {
     /// Do not print progress lines.
     #[arg(long)]
     pub quiet: bool,
-    /// What to measure: texture footprints and filters (the default), or curved patches
-    /// traced exactly against their tessellations ([`patches`]).
+    /// What to measure: texture footprints and filters (the default), curved patches
+    /// traced exactly against their tessellations ([`patches`]), or fog integrated exactly
+    /// against ray marching ([`fog`]).
     #[arg(long, value_enum, default_value_t = AccuracyMode::Footprints)]
     pub mode: AccuracyMode,
     /// Samples per pixel of every render of `--mode patches` (exact and tessellated alike).
@@ -119,6 +121,8 @@ pub enum AccuracyMode {
     Footprints,
     /// Exact patch intersection against tessellation at several error bounds.
     Patches,
+    /// Fog's closed-form optical depth against ray marching and the clamped blend ([`fog`]).
+    Fog,
 }
 
 /// A scene to measure, loaded and checked, with the options every method starts from.
@@ -484,6 +488,9 @@ fn write_scene_outputs(out: &Path, measurement: &SceneMeasurement) -> Result<(),
 pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
     if args.mode == AccuracyMode::Patches {
         return patches::run(args);
+    }
+    if args.mode == AccuracyMode::Fog {
+        return fog::run(args);
     }
     if args.runs == 0 {
         return Err(CommandError::bad_input("--runs must be at least 1"));
