@@ -431,3 +431,79 @@ fn the_path_tracer_says_it_leaves_fog_out() {
         "no note about fog in {notes}"
     );
 }
+
+/// `--fog-march-steps N` / `[render] fog_march_steps`: the midpoint rule on the density
+/// (`conetrace::medium::integration`). Straight down through height fog from y = 4 its error
+/// in `tau` is about `tau (k h)^2 / 24` (`h = 4 / N`): visible at 4 steps, below 1e-4 at 64;
+/// every segment takes N density samples.
+#[test]
+fn ray_marched_fog_approaches_the_closed_form_and_counts_its_samples() {
+    let dir = temp_dir();
+    let fog = "[[fog]]\ndensity = \"exponential\"\nsigma = 0.2\nheight = 1.0\nfalloff = 0.7\ncolor = [0.5, 0.5, 1]\n";
+    let tau = 0.2 / 0.7 * ((0.7f64).exp() - (-2.1f64).exp());
+    let exact = 1.0 - (1.0 - (-tau).exp()) * 0.5; // the red channel: T + (1 - T) 0.5
+    let mut errors = Vec::new();
+    for steps in [4u32, 64] {
+        let (image, stats) = render(
+            dir.path(),
+            &emissive_floor_scene(4.0, fog),
+            &["--fog-march-steps", &steps.to_string()],
+        );
+        assert_eq!(
+            stats["counters"]["fog_density_samples"],
+            25 * u64::from(steps),
+            "{}",
+            stats["counters"]
+        );
+        let error = image
+            .channel("R")
+            .iter()
+            .map(|&v| (f64::from(v) - exact).abs())
+            .fold(0.0, f64::max);
+        println!("{steps} steps: largest pixel error {error:.3e}");
+        errors.push(error);
+    }
+    assert!(errors[0] > 1e-3, "4 steps differ visibly: {errors:?}");
+    assert!(errors[1] < 1e-4, "64 steps are close: {errors:?}");
+    // The scene's own setting gives the same image as the option.
+    let scene = emissive_floor_scene(4.0, fog).replace("spp = 1", "spp = 1\nfog_march_steps = 4");
+    let (image, _) = render(dir.path(), &scene, &[]);
+    let (option, _) = render(
+        dir.path(),
+        &emissive_floor_scene(4.0, fog),
+        &["--fog-march-steps", "4"],
+    );
+    assert_eq!(image.channel("R"), option.channel("R"));
+    // The closed form takes no samples.
+    let (_, stats) = render(dir.path(), &emissive_floor_scene(4.0, fog), &[]);
+    assert_eq!(stats["counters"]["fog_density_samples"], 0);
+}
+
+#[test]
+fn zero_march_steps_exit_2_with_one_line() {
+    let dir = temp_dir();
+    write(dir.path(), "floor.obj", &square_obj(1.0, 0.0));
+    let fog = "[[fog]]\ndensity = \"constant\"\nsigma = 0.1\n";
+    write(dir.path(), "good.toml", &emissive_floor_scene(5.0, fog));
+    let bad = emissive_floor_scene(5.0, fog).replace("spp = 1", "spp = 1\nfog_march_steps = 0");
+    write(dir.path(), "bad.toml", &bad);
+    for (args, message) in [
+        (
+            vec!["render", "good.toml", "-o", "bad.exr", "--quiet", "--fog-march-steps", "0"],
+            "--fog-march-steps must be at least 1",
+        ),
+        (
+            vec!["render", "bad.toml", "-o", "bad.exr", "--quiet"],
+            "fog_march_steps must be at least 1",
+        ),
+    ] {
+        let out = run_in(dir.path(), &args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+        assert!(!dir.path().join("bad.exr").exists(), "{args:?}: an image was written");
+    }
+    let out = run_in(dir.path(), &["render", "bad.toml", "-o", "bad.exr", "--quiet"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("bad.toml"));
+}

@@ -148,6 +148,11 @@ pub struct RenderArgs {
     /// [default: the scene's, else 1].
     #[arg(long, allow_negative_numbers = true)]
     pub vct_bounces: Option<u32>,
+    /// Fog: integrate each segment's optical depth by ray marching with N steps (midpoint
+    /// rule) instead of the closed form, for comparison [default: the scene's
+    /// `fog_march_steps`, else the closed form].
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub fog_march_steps: Option<u32>,
     /// Render progressively for this many seconds: passes of samples (1, 1, 2, 4, ...), the
     /// outputs rewritten after each; --spp is then an upper bound, and without it the render
     /// runs until the time is up (`cli::progressive`).
@@ -179,9 +184,9 @@ pub fn filter_parser() -> impl clap::builder::TypedValueParser<Value = FilterMod
         .try_map(|name| name.parse::<FilterMode>())
 }
 
-/// `--integrator`, `--vct-resolution` and `--vct-bounces` over the scene's `[render]`
-/// settings (kept there, so a resumed or merged render is checked against them too: the
-/// signature covers the settings).
+/// `--integrator`, `--vct-resolution`, `--vct-bounces` and `--fog-march-steps` over the
+/// scene's `[render]` settings (kept there, so a resumed or merged render is checked against
+/// them too: the signature covers the settings).
 pub(crate) fn apply_integrator_options(
     args: &RenderArgs,
     scene: &mut SceneDescription,
@@ -197,6 +202,10 @@ pub(crate) fn apply_integrator_options(
     }
     if let Some(bounces) = args.vct_bounces {
         settings.vct_bounces = bounces;
+    }
+    if let Some(steps) = args.fog_march_steps {
+        settings.fog_integration = conetrace::medium::FogIntegration::march(steps)
+            .ok_or_else(|| CommandError::bad_input("--fog-march-steps must be at least 1"))?;
     }
     Ok(())
 }

@@ -2,7 +2,8 @@
 //! the exact optical depth of a segment through them (seed 004, "Analytic Fog Density").
 //!
 //! The amount of fog between two points is the definite integral of the density along the
-//! segment, evaluated in closed form, never marched. Each density kind has its own file
+//! segment, evaluated in closed form (`integration` keeps a ray march of it only to measure
+//! the difference). Each density kind has its own file
 //! (`constant`, `linear`, `exponential`) with the integral and its inverse (the distance at
 //! which a given optical depth is reached, for free-flight sampling); `segment` holds the
 //! f64 line and the clipping to a volume's box; `volume` sums over the overlapping volumes
@@ -11,15 +12,17 @@
 
 pub mod constant;
 pub mod exponential;
+pub mod integration;
 pub mod linear;
 pub mod segment;
 pub mod volume;
 
 pub use constant::ConstantDensity;
 pub use exponential::ExponentialDensity;
+pub use integration::FogIntegration;
 pub use linear::LinearDensity;
 pub use segment::{FogBox, Line};
-pub use volume::{free_flight, segment_fog, FogModel, FogVolume, SegmentFog};
+pub use volume::{free_flight, segment_fog, segment_fog_with, FogModel, FogVolume, SegmentFog};
 
 use glam::DVec3;
 

@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use super::integration::FogIntegration;
 use super::segment::{FogBox, Line};
 use super::Density;
 
@@ -81,11 +82,25 @@ impl SegmentFog {
 }
 
 /// The fog along the f32 ray `origin + t * direction` for `t` in `[0, t_end]` (`t_end` may
-/// be infinite: an escaping ray), summed over `volumes`, each clipped to its box.
+/// be infinite: an escaping ray), summed over `volumes`, each clipped to its box, with the
+/// exact optical depths.
 pub fn segment_fog(volumes: &[FogVolume], origin: Vec3, direction: Vec3, t_end: f32) -> SegmentFog {
+    segment_fog_with(volumes, origin, direction, t_end, FogIntegration::Exact).0
+}
+
+/// [`segment_fog`] with each volume's depth integrated as `integration` says, and the number
+/// of density samples that took (0 for the closed form).
+pub fn segment_fog_with(
+    volumes: &[FogVolume],
+    origin: Vec3,
+    direction: Vec3,
+    t_end: f32,
+    integration: FogIntegration,
+) -> (SegmentFog, u64) {
     let Some((line, scale)) = Line::from_ray(origin, direction) else {
-        return SegmentFog::CLEAR;
+        return (SegmentFog::CLEAR, 0);
     };
+    let mut density_samples = 0u64;
     let t1 = if t_end.is_infinite() {
         f64::INFINITY
     } else {
@@ -101,7 +116,8 @@ pub fn segment_fog(volumes: &[FogVolume], origin: Vec3, direction: Vec3, t_end: 
             continue;
         };
         crossed += 1;
-        let tau = volume.density.optical_depth(&line, u0, u1);
+        let (tau, samples) = integration.optical_depth(&volume.density, &line, u0, u1);
+        density_samples += samples;
         if tau.is_infinite() {
             infinite_colors += volume.color.as_dvec3();
             infinite_count += 1;
@@ -117,11 +133,14 @@ pub fn segment_fog(volumes: &[FogVolume], origin: Vec3, direction: Vec3, t_end: 
     } else {
         (0.0, glam::DVec3::ZERO)
     };
-    SegmentFog {
-        optical_depth,
-        color: color.as_vec3(),
-        crossed,
-    }
+    (
+        SegmentFog {
+            optical_depth,
+            color: color.as_vec3(),
+            crossed,
+        },
+        density_samples,
+    )
 }
 
 /// A free-flight distance along `line` in `[t0, t1]` through all `volumes`: the first

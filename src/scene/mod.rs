@@ -312,6 +312,9 @@ pub struct RenderSettings {
     pub vct_bounces: u32,
     /// How fog's optical depth becomes the blend towards its colour (`[render] fog_model`).
     pub fog_model: crate::medium::FogModel,
+    /// How fog segments' optical depth is integrated (`[render] fog_march_steps`: ray
+    /// marching with that many steps; the closed form by default).
+    pub fog_integration: crate::medium::FogIntegration,
 }
 
 impl Default for RenderSettings {
@@ -332,6 +335,7 @@ impl Default for RenderSettings {
             vct_resolution: None,
             vct_bounces: 1,
             fog_model: crate::medium::FogModel::Exact,
+            fog_integration: crate::medium::FogIntegration::Exact,
         }
     }
 }

@@ -29,6 +29,7 @@
 
 pub mod crop;
 pub mod files;
+pub mod fog;
 pub mod font;
 pub mod index;
 pub mod lighting;
@@ -101,8 +102,9 @@ pub struct AccuracyArgs {
     #[arg(long)]
     pub quiet: bool,
     /// What to measure: texture footprints and filters (the default), curved patches
-    /// traced exactly against their tessellations ([`patches`]), or light transport against
-    /// a path-traced ground truth ([`lighting`]).
+    /// traced exactly against their tessellations ([`patches`]), light transport against
+    /// a path-traced ground truth ([`lighting`]), or fog integrated exactly against ray
+    /// marching ([`fog`]).
     #[arg(long, value_enum, default_value_t = AccuracyMode::Footprints)]
     pub mode: AccuracyMode,
     /// Samples per pixel of every render of `--mode patches` (exact and tessellated alike).
@@ -141,6 +143,8 @@ pub enum AccuracyMode {
     Patches,
     /// Whitted, path tracing and voxel cone tracing against a path-traced ground truth.
     Lighting,
+    /// Fog's closed-form optical depth against ray marching and the clamped blend ([`fog`]).
+    Fog,
 }
 
 /// A scene to measure, loaded and checked, with the options every method starts from.
@@ -509,6 +513,9 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
     }
     if args.mode == AccuracyMode::Lighting {
         return lighting::run(args);
+    }
+    if args.mode == AccuracyMode::Fog {
+        return fog::run(args);
     }
     if args.runs == 0 {
         return Err(CommandError::bad_input("--runs must be at least 1"));

@@ -3,7 +3,8 @@
 //! escapes), blends towards the fog colour by `1 - T` and passes `T` of what lies behind
 //! it; every shadow segment passes `T` of the light. `T = exp(-tau)` with `tau` the exact
 //! optical depth (`crate::medium`), or the seed's clamped `1 - min(1, tau)` under
-//! `fog_model = "linear-blend"`.
+//! `fog_model = "linear-blend"`. `tau` is integrated as `[render] fog_march_steps` says
+//! (`crate::medium::integration`: the closed form unless a ray march is asked for).
 //!
 //! A ray carries its throughput from the camera, so the blend
 //! `L = T * L_behind + (1 - T) * fog_color` is applied as: add `throughput * (1 - T) *
@@ -14,7 +15,7 @@ use glam::Vec3;
 
 use super::{add_radiance, PathRay};
 use crate::film::TileImage;
-use crate::medium::{segment_fog, SegmentFog};
+use crate::medium::{segment_fog_with, SegmentFog};
 use crate::render::context::{RenderContext, WorkerState};
 
 /// The fog of `[0, t_end]` along `ray`, counted.
@@ -26,9 +27,16 @@ fn evaluate(
     t_end: f32,
     worker: &mut WorkerState,
 ) -> SegmentFog {
-    let fog = segment_fog(&context.scene.fog, origin, direction, t_end);
+    let (fog, density_samples) = segment_fog_with(
+        &context.scene.fog,
+        origin,
+        direction,
+        t_end,
+        context.scene.settings.fog_integration,
+    );
     worker.counters.fog_segments += 1;
     worker.counters.fog_volume_crossings += u64::from(fog.crossed);
+    worker.counters.fog_density_samples += density_samples;
     fog
 }
 

@@ -136,6 +136,7 @@ struct RawRender {
     vct_resolution: Option<Spanned<u32>>,
     vct_bounces: Option<Spanned<u32>>,
     fog_model: Option<RawFogModel>,
+    fog_march_steps: Option<Spanned<u32>>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -776,6 +777,10 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
             RawFogModel::Exact => crate::medium::FogModel::Exact,
             RawFogModel::LinearBlend => crate::medium::FogModel::LinearBlend,
         };
+    }
+    if let Some(steps) = &r.fog_march_steps {
+        s.fog_integration = crate::medium::FogIntegration::march(*steps.get_ref())
+            .ok_or_else(|| loc.at(steps, "render.fog_march_steps must be at least 1"))?;
     }
     Ok(s)
 }

@@ -1,0 +1,614 @@
+//! `conetrace accuracy --mode fog`: fog's optical depth integrated in closed form against
+//! ray marching at several steps per segment, and the exact transmittance against seed
+//! 004's clamped-linear blend — image error, render time, fog segments and density samples.
+//!
+//! Every scene (default: [`DEFAULT_SCENES`]: height fog seen from inside and from outside,
+//! and seed 004's edge-on view of constant box fog) is rendered with Whitted once per
+//! [`FogRowKind`]: the analytic integral (`G(B) - G(A)`, seed 004 "Analytic Fog Density -
+//! Integrals"), the midpoint-rule march at each count of [`MARCH_STEPS`]
+//! (`crate::medium::integration`), and the clamped blend `min(1, tau)` of the same exact
+//! depths (`fog_model = "linear-blend"`). The reference is the analytic row itself: its
+//! depths are the exact integrals to rounding (docs/fog.md measures them against f64
+//! quadrature to 1e-13), so no supersampled ground truth is needed, and all rows share the
+//! camera samples (same seed, same spp): the only difference between two images is the fog.
+//! Each row is compared with the analytic image (RMSE and FLIP of display values,
+//! [`super::metrics::compare`]); the analytic row's error is 0 by definition and the plot
+//! draws its time as a vertical line.
+//!
+//! Cost: the median of `--runs` timed renders (interleaved across rows, after an untimed
+//! first render that gives the image and the counters), and the work counters that do not
+//! depend on the machine: fog segments evaluated and density samples taken by marching.
+//!
+//! Outputs in `--out`, per scene: `<scene>_fog.csv`, `<scene>_fog.md`,
+//! `<scene>_fog_error_vs_time.png` and `<scene>_fog_crop.png` (the window where the rows
+//! differ most from the analytic image, each row weighted by its own mean error).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use plotters::prelude::*;
+
+use crate::cli::CommandError;
+use crate::film::PixelRect;
+use crate::integrator::Whitted;
+use crate::render::{self, RenderControl, RenderOptions, RenderResult};
+use crate::scene::SceneDescription;
+use conetrace::medium::{FogIntegration, FogModel};
+
+use super::font::FAMILY;
+use super::metrics::{self, DisplayImage, ErrorMetrics};
+use super::plot::{log_ticks, pareto_front, short_number};
+use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
+
+/// Scenes measured when none is named (run from the repository root).
+pub const DEFAULT_SCENES: [&str; 3] = [
+    "assets/scenes/fog_accuracy_inside.toml",
+    "assets/scenes/fog_accuracy_outside.toml",
+    "assets/scenes/fog_accuracy_edge.toml",
+];
+
+/// Ray-march steps per segment compared (coarsest first).
+pub const MARCH_STEPS: [u32; 4] = [4, 16, 64, 256];
+
+/// How a row integrates and applies the fog.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FogRowKind {
+    /// Closed-form depth, transmittance `exp(-tau)`: the reference.
+    Analytic,
+    /// Depth marched with this many midpoint steps per segment, transmittance `exp(-tau)`.
+    March(u32),
+    /// Closed-form depth, seed 004's clamped blend `min(1, tau)`.
+    LinearBlend,
+}
+
+impl FogRowKind {
+    /// Every row of a scene, the analytic one first.
+    pub fn all() -> Vec<FogRowKind> {
+        let mut kinds = vec![FogRowKind::Analytic];
+        kinds.extend(MARCH_STEPS.iter().map(|&steps| FogRowKind::March(steps)));
+        kinds.push(FogRowKind::LinearBlend);
+        kinds
+    }
+
+    /// `analytic`, `march`, `linear-blend`.
+    pub fn mode(&self) -> &'static str {
+        match self {
+            FogRowKind::Analytic => "analytic",
+            FogRowKind::March(_) => "march",
+            FogRowKind::LinearBlend => "linear-blend",
+        }
+    }
+
+    /// Steps per segment of a march row.
+    pub fn steps(&self) -> Option<u32> {
+        match *self {
+            FogRowKind::March(steps) => Some(steps),
+            _ => None,
+        }
+    }
+
+    /// `analytic`, `march 16`, `linear-blend`.
+    pub fn label(&self) -> String {
+        match self {
+            FogRowKind::March(steps) => format!("march {steps}"),
+            other => other.mode().to_string(),
+        }
+    }
+
+    /// The fog settings of this row.
+    fn integration_and_model(&self) -> (FogIntegration, FogModel) {
+        match *self {
+            FogRowKind::Analytic => (FogIntegration::Exact, FogModel::Exact),
+            FogRowKind::March(steps) => (
+                FogIntegration::March {
+                    steps_per_segment: steps,
+                },
+                FogModel::Exact,
+            ),
+            FogRowKind::LinearBlend => (FogIntegration::Exact, FogModel::LinearBlend),
+        }
+    }
+
+    /// `scene` with this row's fog settings.
+    pub fn scene(&self, scene: &SceneDescription) -> SceneDescription {
+        let mut variant = scene.clone();
+        let (integration, model) = self.integration_and_model();
+        variant.settings.fog_integration = integration;
+        variant.settings.fog_model = model;
+        variant
+    }
+}
+
+/// Width and height of the plot image in pixels.
+const PLOT_SIZE: (u32, u32) = (1100, 460);
+
+/// One row: what it cost and how far its image is from the analytic one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FogRow {
+    pub kind: FogRowKind,
+    /// Median render time of the timed runs, seconds.
+    pub render_seconds: f64,
+    /// Every timed render's seconds.
+    pub run_seconds: Vec<f64>,
+    /// Rays of every kind.
+    pub rays: u64,
+    /// Segments whose fog was evaluated (camera, secondary, shadow, escaping).
+    pub fog_segments: u64,
+    /// (segment, volume) pairs whose box the segment crossed.
+    pub fog_volume_crossings: u64,
+    /// Density samples taken by the march (0 for the closed form).
+    pub fog_density_samples: u64,
+    /// Error against the analytic render over all pixels.
+    pub error: ErrorMetrics,
+}
+
+/// Everything measured for one scene.
+#[derive(Clone, Debug)]
+pub struct FogReport {
+    pub name: String,
+    pub source: String,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub runs: usize,
+    pub threads: usize,
+    /// The fog volumes, as `kind sigma` pairs, for the caption.
+    pub volumes: Vec<String>,
+    pub crop: PixelRect,
+    /// In [`FogRowKind::all`] order.
+    pub rows: Vec<FogRow>,
+}
+
+/// The scenes named on the command line, or [`DEFAULT_SCENES`].
+fn scene_paths(args: &AccuracyArgs) -> Vec<PathBuf> {
+    if args.scenes.is_empty() {
+        DEFAULT_SCENES.iter().map(PathBuf::from).collect()
+    } else {
+        args.scenes.clone()
+    }
+}
+
+/// Renders every row of one scene and compares it with the analytic render.
+fn measure(
+    setup: &SceneSetup,
+    args: &AccuracyArgs,
+) -> Result<(FogReport, Vec<DisplayImage>), CommandError> {
+    let say = |text: String| {
+        if !args.quiet {
+            eprintln!("accuracy: {}: {text}", setup.name);
+        }
+    };
+    let textures = render::prepared::decode_textures(&setup.scene)
+        .map_err(|e| CommandError::bad_input(e.to_string()))?;
+    let options = RenderOptions {
+        spp: setup.scene.settings.spp.max(1),
+        ..setup.base.clone()
+    };
+    let display = |result: &RenderResult| {
+        DisplayImage::from_film(&result.film, setup.tonemap, setup.exposure)
+            .ok_or_else(|| CommandError::internal("a render produced no colour layer"))
+    };
+    let control = RenderControl::default();
+
+    let kinds = FogRowKind::all();
+    let mut contexts = Vec::with_capacity(kinds.len());
+    for kind in &kinds {
+        let scene = Arc::new(kind.scene(&setup.scene));
+        contexts.push(
+            render::prepare_with_textures(scene, options.clone(), textures.clone())
+                .map_err(|e| CommandError::bad_input(e.to_string()))?,
+        );
+    }
+    let mut first = Vec::with_capacity(contexts.len());
+    for context in &contexts {
+        first.push(render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?);
+    }
+    let images: Vec<DisplayImage> = first.iter().map(display).collect::<Result<_, _>>()?;
+    let mut times = vec![Vec::with_capacity(args.runs); contexts.len()];
+    for run in 0..args.runs {
+        for (index, context) in contexts.iter().enumerate() {
+            let result =
+                render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?;
+            times[index].push(result.stats.seconds);
+        }
+        say(format!("timed run {}/{} done", run + 1, args.runs));
+    }
+
+    let no_mask = vec![false; images[0].pixels.len()];
+    let mut rows = Vec::with_capacity(kinds.len());
+    for (index, kind) in kinds.iter().enumerate() {
+        let counters = &first[index].stats.counters;
+        let error = metrics::compare(&images[0], &images[index], &no_mask).all;
+        rows.push(FogRow {
+            kind: *kind,
+            render_seconds: median(&times[index]),
+            run_seconds: times[index].clone(),
+            rays: counters.total_rays(),
+            fog_segments: counters.fog_segments,
+            fog_volume_crossings: counters.fog_volume_crossings,
+            fog_density_samples: counters.fog_density_samples,
+            error,
+        });
+        say(format!(
+            "{}: RMSE {:.3e}, FLIP {:.3e}, render {:.3} s, {} fog segments, {} density samples",
+            kind.label(),
+            error.rmse,
+            error.flip,
+            median(&times[index]),
+            counters.fog_segments,
+            counters.fog_density_samples
+        ));
+    }
+
+    // The crop: where the rows differ from the analytic image most, each row's squared error
+    // divided by its own mean so that the march rows are not drowned by the blend's.
+    let (width, height) = (options.width, options.height);
+    let mut error = vec![0.0f64; images[0].pixels.len()];
+    for (image, row) in images[1..].iter().zip(&rows[1..]) {
+        let mean = row.error.rmse * row.error.rmse;
+        if mean > 0.0 {
+            for (sum, e) in error
+                .iter_mut()
+                .zip(metrics::squared_errors(&images[0], image))
+            {
+                *sum += e / mean;
+            }
+        }
+    }
+    let crop = crop::hardest_window(&error, width, height, crop::window_side(width, height));
+    let volumes = setup
+        .scene
+        .fog
+        .iter()
+        .map(|v| {
+            let bounded = if v.bounds.is_some() { ", boxed" } else { "" };
+            format!("{} sigma {}{bounded}", v.density.kind(), v.density.sigma())
+        })
+        .collect();
+    Ok((
+        FogReport {
+            name: setup.name.clone(),
+            source: setup.scene.source.clone(),
+            width,
+            height,
+            spp: options.spp,
+            runs: args.runs,
+            threads: rayon::current_num_threads(),
+            volumes,
+            crop,
+            rows,
+        },
+        images,
+    ))
+}
+
+/// The CSV header; one line per [`FogRow`] follows.
+pub const CSV_HEADER: &str = "scene,mode,steps,render_seconds,rays,fog_segments,\
+fog_volume_crossings,fog_density_samples,rmse,psnr_db,flip";
+
+/// The report as CSV.
+pub fn csv(report: &FogReport) -> String {
+    let mut text = format!("{CSV_HEADER}\n");
+    for row in &report.rows {
+        text.push_str(&format!(
+            "{},{},{},{:.6},{},{},{},{},{:.8},{:.2},{:.8}\n",
+            report.name,
+            row.kind.mode(),
+            row.kind.steps().map_or(String::new(), |s| s.to_string()),
+            row.render_seconds,
+            row.rays,
+            row.fog_segments,
+            row.fog_volume_crossings,
+            row.fog_density_samples,
+            row.error.rmse,
+            row.error.psnr,
+            row.error.flip,
+        ));
+    }
+    text
+}
+
+/// The report as a markdown table with a caption.
+pub fn markdown(report: &FogReport) -> String {
+    let mut text = format!(
+        "`{}` ({}), {}x{}, {} spp, {} threads, fog: {}. Error against the analytic render \
+         (the exact integral, same camera samples); render time the median of {} runs.\n\n\
+         | mode | render s | fog segments | density samples | rays | RMSE | PSNR dB | FLIP |\n\
+         |---|---|---|---|---|---|---|---|\n",
+        report.name,
+        report.source,
+        report.width,
+        report.height,
+        report.spp,
+        report.threads,
+        report.volumes.join("; "),
+        report.runs,
+    );
+    for row in &report.rows {
+        text.push_str(&format!(
+            "| {} | {:.3} | {} | {} | {} | {:.2e} | {:.1} | {:.2e} |\n",
+            row.kind.label(),
+            row.render_seconds,
+            row.fog_segments,
+            row.fog_density_samples,
+            row.rays,
+            row.error.rmse,
+            row.error.psnr,
+            row.error.flip,
+        ));
+    }
+    text
+}
+
+fn drawing_error<E: std::fmt::Debug>(error: E) -> String {
+    format!("drawing the plot: {error:?}")
+}
+
+/// One log-log panel: a marker per compared row `(render seconds, error)`, the Pareto front
+/// joined, and the analytic render's time as a vertical line (its error is 0).
+fn draw_panel(
+    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    title: &str,
+    error_name: &str,
+    points: &[(f64, f64)],
+    names: &[String],
+    analytic_seconds: f64,
+    labels: bool,
+) -> Result<(), String> {
+    let usable = |(t, e): (f64, f64)| t > 0.0 && e > 0.0 && t.is_finite() && e.is_finite();
+    let positive: Vec<(usize, (f64, f64))> = points
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|(_, p)| usable(*p))
+        .collect();
+    if positive.is_empty() {
+        if labels {
+            area.draw_text(
+                &format!("{title}: every row equals the analytic image"),
+                &(FAMILY, 16).into_text_style(area),
+                (20, 20),
+            )
+            .map_err(drawing_error)?;
+        }
+        return Ok(());
+    }
+    let times = positive
+        .iter()
+        .map(|(_, p)| p.0)
+        .chain(std::iter::once(analytic_seconds).filter(|t| *t > 0.0 && t.is_finite()));
+    let (t_low, t_high) = times.fold((f64::INFINITY, 0.0f64), |(lo, hi), t| {
+        (lo.min(t), hi.max(t))
+    });
+    let (e_low, e_high) = positive
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, p)| {
+            (lo.min(p.1), hi.max(p.1))
+        });
+    let x_range = t_low / 1.6..t_high * 1.6;
+    let y_range = e_low / 1.6..e_high * 1.6;
+    let mut builder = ChartBuilder::on(area);
+    builder.margin(12);
+    if labels {
+        builder
+            .caption(title, (FAMILY, 18))
+            .x_label_area_size(40)
+            .y_label_area_size(64);
+    }
+    let mut chart = builder
+        .build_cartesian_2d(
+            x_range
+                .clone()
+                .log_scale()
+                .with_key_points(log_ticks(&x_range)),
+            y_range
+                .clone()
+                .log_scale()
+                .with_key_points(log_ticks(&y_range)),
+        )
+        .map_err(drawing_error)?;
+    let mut mesh = chart.configure_mesh();
+    if labels {
+        mesh.x_desc("seconds (median render), log scale")
+            .y_desc(format!("{error_name} against analytic, log scale"))
+            .x_label_formatter(&|v| short_number(*v))
+            .y_label_formatter(&|v| short_number(*v))
+            .label_style((FAMILY, 13));
+    } else {
+        mesh.x_labels(0).y_labels(0);
+    }
+    mesh.light_line_style(WHITE).draw().map_err(drawing_error)?;
+    if analytic_seconds > 0.0 && analytic_seconds.is_finite() {
+        chart
+            .draw_series(LineSeries::new(
+                [
+                    (analytic_seconds, y_range.start),
+                    (analytic_seconds, y_range.end),
+                ],
+                ShapeStyle::from(&BLACK).stroke_width(2),
+            ))
+            .map_err(drawing_error)?;
+        if labels {
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    "analytic (error 0)".to_string(),
+                    (analytic_seconds, y_range.end / 1.3),
+                    (FAMILY, 13).into_font(),
+                )))
+                .map_err(drawing_error)?;
+        }
+    }
+    let front: Vec<(f64, f64)> = pareto_front(points)
+        .iter()
+        .map(|&i| points[i])
+        .filter(|p| usable(*p))
+        .collect();
+    chart
+        .draw_series(LineSeries::new(
+            front,
+            ShapeStyle::from(&RED).stroke_width(2),
+        ))
+        .map_err(drawing_error)?;
+    for (index, point) in positive {
+        chart
+            .draw_series(std::iter::once(Circle::new(point, 5, BLUE.filled())))
+            .map_err(drawing_error)?;
+        if labels {
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    names[index].clone(),
+                    point,
+                    (FAMILY, 12).into_font(),
+                )))
+                .map_err(drawing_error)?;
+        }
+    }
+    Ok(())
+}
+
+/// The error-against-time plot of one scene as RGB8 pixels of [`PLOT_SIZE`]: RMSE on the
+/// left, FLIP on the right, both over all pixels.
+pub fn draw_plot(report: &FogReport, labels: bool) -> Result<Vec<u8>, String> {
+    let (width, height) = PLOT_SIZE;
+    let mut buffer = vec![255u8; width as usize * height as usize * 3];
+    let compared: Vec<&FogRow> = report
+        .rows
+        .iter()
+        .filter(|r| r.kind != FogRowKind::Analytic)
+        .collect();
+    let names: Vec<String> = compared.iter().map(|r| r.kind.label()).collect();
+    let analytic_seconds = report
+        .rows
+        .iter()
+        .find(|r| r.kind == FogRowKind::Analytic)
+        .map_or(f64::NAN, |r| r.render_seconds);
+    let rmse: Vec<(f64, f64)> = compared
+        .iter()
+        .map(|r| (r.render_seconds, r.error.rmse))
+        .collect();
+    let flip: Vec<(f64, f64)> = compared
+        .iter()
+        .map(|r| (r.render_seconds, r.error.flip))
+        .collect();
+    {
+        let root = BitMapBackend::with_buffer(&mut buffer, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(drawing_error)?;
+        let (left, right) = root.split_horizontally(width / 2);
+        let title = format!("{}: fog RMSE", report.name);
+        draw_panel(
+            &left,
+            &title,
+            "RMSE",
+            &rmse,
+            &names,
+            analytic_seconds,
+            labels,
+        )?;
+        let title = format!("{}: fog FLIP", report.name);
+        draw_panel(
+            &right,
+            &title,
+            "FLIP",
+            &flip,
+            &names,
+            analytic_seconds,
+            labels,
+        )?;
+        root.present().map_err(drawing_error)?;
+    }
+    Ok(buffer)
+}
+
+/// Writes the four files of one scene.
+fn write_outputs(
+    out: &Path,
+    report: &FogReport,
+    images: &[DisplayImage],
+) -> Result<(), CommandError> {
+    let labels = font::labels_available();
+    let stem = format!("{}_fog", report.name);
+    files::write_text(&out.join(format!("{stem}.csv")), &csv(report))?;
+    files::write_text(&out.join(format!("{stem}.md")), &markdown(report))?;
+    let plot = draw_plot(report, labels).map_err(CommandError::internal)?;
+    files::write_rgb_png(
+        &out.join(format!("{stem}_error_vs_time.png")),
+        PLOT_SIZE.0,
+        PLOT_SIZE.1,
+        &plot,
+    )?;
+    let panels: Vec<crop::Panel> = report
+        .rows
+        .iter()
+        .zip(images)
+        .map(|(row, image)| crop::Panel {
+            title: row.kind.label(),
+            subtitle: format!("RMSE {:.2e}, FLIP {:.2e}", row.error.rmse, row.error.flip),
+            image,
+        })
+        .collect();
+    let (crop_width, crop_height, rgb) =
+        crop::compose(&panels, report.crop, labels).map_err(CommandError::internal)?;
+    files::write_rgb_png(
+        &out.join(format!("{stem}_crop.png")),
+        crop_width,
+        crop_height,
+        &rgb,
+    )
+}
+
+/// Measures every scene and writes its files; see the module docs.
+pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
+    if args.runs == 0 {
+        return Err(CommandError::bad_input("--runs must be at least 1"));
+    }
+    let mut setups = Vec::new();
+    for path in scene_paths(args) {
+        let setup = super::load_scene(args, super::scene_name(&path), Some(&path))?;
+        if !setup.scene.fog.iter().any(|v| v.density.sigma() > 0.0) {
+            return Err(CommandError::bad_input(format!(
+                "{}: the scene has no fog to compare",
+                path.display()
+            )));
+        }
+        setups.push(setup);
+    }
+    files::check_output_dir(&args.out)?;
+    let pool = crate::cli::worker_pool(args.threads)?;
+    for setup in &setups {
+        let (report, images) = pool.install(|| measure(setup, args))?;
+        write_outputs(&args.out, &report, &images)?;
+        println!(
+            "{}: wrote {}/{}_fog.csv, .md, _error_vs_time.png, _crop.png",
+            setup.name,
+            args.out.display(),
+            setup.name
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_set_the_fog_settings_they_name() {
+        let scene = SceneDescription::default();
+        let kinds = FogRowKind::all();
+        assert_eq!(kinds.len(), 2 + MARCH_STEPS.len());
+        assert_eq!(kinds[0], FogRowKind::Analytic);
+        let marched = FogRowKind::March(64).scene(&scene);
+        assert_eq!(
+            marched.settings.fog_integration,
+            FogIntegration::March {
+                steps_per_segment: 64
+            }
+        );
+        assert_eq!(marched.settings.fog_model, FogModel::Exact);
+        let blend = FogRowKind::LinearBlend.scene(&scene);
+        assert_eq!(blend.settings.fog_integration, FogIntegration::Exact);
+        assert_eq!(blend.settings.fog_model, FogModel::LinearBlend);
+        assert_eq!(FogRowKind::March(4).label(), "march 4");
+        assert_eq!(FogRowKind::LinearBlend.steps(), None);
+    }
+}
