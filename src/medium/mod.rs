@@ -12,12 +12,14 @@
 pub mod constant;
 pub mod exponential;
 pub mod linear;
+pub mod phase;
 pub mod segment;
 pub mod volume;
 
 pub use constant::ConstantDensity;
 pub use exponential::ExponentialDensity;
 pub use linear::LinearDensity;
+pub use phase::{HenyeyGreenstein, PhaseSample};
 pub use segment::{FogBox, Line};
 pub use volume::{free_flight, segment_fog, FogModel, FogVolume, SegmentFog};
 
