@@ -50,6 +50,8 @@ pub struct WorkCounters {
     pub fog_segments: u64,
     /// Fog volumes those segments crossed (the closed-form depth ran for each).
     pub fog_volume_crossings: u64,
+    /// Path tracing: collisions sampled inside fog (medium vertices).
+    pub fog_scatter_events: u64,
 }
 
 impl WorkCounters {
@@ -85,6 +87,7 @@ impl WorkCounters {
         self.nonfinite_samples += other.nonfinite_samples;
         self.fog_segments += other.fog_segments;
         self.fog_volume_crossings += other.fog_volume_crossings;
+        self.fog_scatter_events += other.fog_scatter_events;
     }
 }
 
