@@ -14,6 +14,7 @@ pub mod exponential;
 pub mod linear;
 pub mod phase;
 pub mod segment;
+pub mod tracking;
 pub mod volume;
 
 pub use constant::ConstantDensity;
@@ -21,6 +22,7 @@ pub use exponential::ExponentialDensity;
 pub use linear::LinearDensity;
 pub use phase::{HenyeyGreenstein, PhaseSample};
 pub use segment::{FogBox, Line};
+pub use tracking::{delta_tracking, TrackingError};
 pub use volume::{free_flight, segment_fog, FogModel, FogVolume, SegmentFog};
 
 use glam::DVec3;

@@ -33,7 +33,7 @@ pub(super) fn shade(
     worker: &mut WorkerState,
 ) {
     let lights = &context.lights;
-    // Fog between the ray's start and what it meets: a sampled collision makes this a
+    // Fog between the ray's origin and what it meets: a sampled collision makes this a
     // medium vertex instead (`medium`); a ray that passes keeps its throughput.
     if context.effects.fog {
         let t_end = if hit.is_hit() { hit.t } else { f32::INFINITY };
