@@ -13,6 +13,13 @@
 //! bounce they are replaced by the camera's footprint at that point
 //! (`crate::camera::Camera::approximate_dp_dxy`), as pbrt-v4 does for its non-specular
 //! bounces.
+//!
+//! A scattering event inside fog (the path tracer's medium vertices) uses the same rule
+//! with the phase function's value in place of the BSDF's, as seed 000 suggests for
+//! volumes ("substituting the phase function value for the BSDF"): an isotropic phase
+//! function, `1 / (4 pi)`, is below the diffuse `1 / pi` and spreads by the full `s_max`;
+//! a forward peak spreads less. Such a vertex has no surface to transfer the footprint
+//! onto, so [`Footprint::advance`] only propagates it to the scattering distance.
 
 use super::Footprint;
 
@@ -49,6 +56,22 @@ impl Footprint {
                 secondary: super::RayCone::new(e.secondary.width, e.secondary.angle + spread),
                 secondary_ignored: false,
             }),
+        }
+    }
+}
+
+impl Footprint {
+    /// The footprint carried `distance` along the ray with no surface there (a scattering
+    /// event inside fog): cones and the distance metric propagate (seed 000,
+    /// `w' = w + alpha d`); differentials stay as they are, to be replaced by the camera's
+    /// footprint at the next hit like after any non-delta bounce.
+    #[inline]
+    pub fn advance(&self, distance: f32) -> Footprint {
+        match self {
+            Footprint::Mip0 | Footprint::Differential(_) => *self,
+            Footprint::Distance(f) => Footprint::Distance(f.propagate(distance)),
+            Footprint::Cone1(c) => Footprint::Cone1(c.propagate(distance)),
+            Footprint::Cone(e) => Footprint::Cone(e.propagate(distance)),
         }
     }
 }
@@ -97,5 +120,26 @@ mod tests {
         assert!((out.primary.angle - 0.101).abs() < 1e-7);
         assert!((out.secondary.angle - 0.098).abs() < 1e-7);
         assert_eq!(Footprint::Mip0.scatter(0.25), Footprint::Mip0);
+    }
+
+    #[test]
+    fn a_medium_vertex_spreads_by_the_phase_value() {
+        use crate::medium::HenyeyGreenstein;
+        // Isotropic scattering, 1 / (4 pi), is below diffuse: the full s_max.
+        let iso = HenyeyGreenstein::new(0.0).eval_cos(0.3);
+        assert_eq!(bsdf_spread_angle(iso), DIFFUSE_SPREAD);
+        // A forward peak, g = 0.9, straight ahead: p = 0.19 / (4 pi 0.001) ~ 15.1, so the
+        // spread is s_max / (pi p), about a fiftieth of s_max.
+        let peak = HenyeyGreenstein::new(0.9).eval_cos(1.0);
+        let expected = DIFFUSE_SPREAD / (PI * peak);
+        assert!((bsdf_spread_angle(peak) - expected).abs() < 1e-7);
+        assert!(bsdf_spread_angle(peak) < 0.025 * DIFFUSE_SPREAD);
+        // The cone first travels to the scattering point: w' = w + alpha d.
+        let cone = Footprint::Cone1(RayCone::new(0.01, 0.002));
+        let Footprint::Cone1(moved) = cone.advance(5.0).scatter(bsdf_spread_angle(iso)) else {
+            panic!("strategy changed")
+        };
+        assert!((moved.width - 0.02).abs() < 1e-7, "{}", moved.width);
+        assert!((moved.angle - 0.252).abs() < 1e-7);
     }
 }

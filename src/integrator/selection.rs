@@ -168,14 +168,14 @@ pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution
 }
 
 /// What the integrator of `kind` leaves out of `scene`, one note each (the summary line and
-/// `--stats` print them): today, fog under the path tracer and the voxel cone tracer, which
-/// render as if the fog were not there.
+/// `--stats` print them): today, fog under the voxel cone tracer, which renders as if the
+/// fog were not there (Whitted blends it, the path tracer simulates it as a medium).
 pub fn unsupported_effects(kind: IntegratorKind, scene: &SceneDescription) -> Vec<String> {
     let mut notes = Vec::new();
-    if kind != IntegratorKind::Whitted && !scene.fog.is_empty() {
+    if kind == IntegratorKind::Vct && !scene.fog.is_empty() {
         notes.push(format!(
             "{}: fog is not simulated by this integrator (rendered without it; \
-             --integrator whitted renders it)",
+             --integrator whitted or path renders it)",
             kind.name()
         ));
     }

@@ -14,14 +14,18 @@ pub mod constant;
 pub mod exponential;
 pub mod integration;
 pub mod linear;
+pub mod phase;
 pub mod segment;
+pub mod tracking;
 pub mod volume;
 
 pub use constant::ConstantDensity;
 pub use exponential::ExponentialDensity;
 pub use integration::FogIntegration;
 pub use linear::LinearDensity;
+pub use phase::{HenyeyGreenstein, PhaseSample};
 pub use segment::{FogBox, Line};
+pub use tracking::{delta_tracking, TrackingError};
 pub use volume::{free_flight, segment_fog, segment_fog_with, FogModel, FogVolume, SegmentFog};
 
 use glam::DVec3;

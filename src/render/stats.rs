@@ -52,6 +52,8 @@ pub struct WorkCounters {
     pub fog_volume_crossings: u64,
     /// Density samples taken by ray-marched fog (`fog_march_steps`; 0 for the closed form).
     pub fog_density_samples: u64,
+    /// Path tracing: collisions sampled inside fog (medium vertices).
+    pub fog_scatter_events: u64,
 }
 
 impl WorkCounters {
@@ -88,6 +90,7 @@ impl WorkCounters {
         self.fog_segments += other.fog_segments;
         self.fog_volume_crossings += other.fog_volume_crossings;
         self.fog_density_samples += other.fog_density_samples;
+        self.fog_scatter_events += other.fog_scatter_events;
     }
 }
 

@@ -33,9 +33,16 @@
 //! ([`crate::camera::Camera::approximate_dp_dxy`]). Every texture lookup is filtered by the
 //! footprint at its hit.
 //!
-//! Files: `vertex` (what a hit adds and where the path goes next), `next_event` (light
-//! sampling and its shadow rays), `mis` (the power heuristic).
+//! Fog (`[[fog]]`) is a participating medium: every segment samples a free-flight distance
+//! through the volumes, and a collision is a medium vertex (light sampling with the
+//! Henyey–Greenstein phase function, phase-sampled continuation, the albedo as weight);
+//! shadow rays pass the exact transmittance (`medium`, docs/fog.md).
+//!
+//! Files: `vertex` (what a hit adds and where the path goes next), `medium` (free flights
+//! through fog and the medium vertex), `next_event` (light sampling and its shadow rays),
+//! `mis` (the power heuristic).
 
+mod medium;
 mod mis;
 mod next_event;
 mod vertex;

@@ -1,6 +1,9 @@
 //! Next-event estimation: at a hit, one light chosen by power, one point (or direction) on
 //! it, and the shadow ray that delivers its light if nothing blocks it, weighted against
 //! BSDF sampling by the power heuristic when the light has an area (or is the environment).
+//! A scattering point inside fog does the same with its phase function in place of the
+//! BSDF, and every shadow ray that reaches its light passes the exact transmittance
+//! `exp(-tau)` of the fog on its segment (`crate::medium::segment_fog`).
 
 use glam::{Vec2, Vec3};
 
@@ -10,6 +13,7 @@ use crate::film::TileImage;
 use crate::footprint::Footprint;
 use crate::integrator::texturing::environment_lookup;
 use crate::integrator::trace_wave::shadow_trace_rays;
+use crate::medium::{segment_fog, FogModel, HenyeyGreenstein};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::surface_textures::area_light_radiance;
 use crate::shading::{self, Bsdf, LightRef, MaterialBsdf};
@@ -25,17 +29,56 @@ pub(super) struct ShadowRay {
     pub(super) pixel: u32,
 }
 
+/// What scatters light at a shading point: a surface's BSDF or a fog volume's phase
+/// function.
+pub(super) enum Scatterer<'a> {
+    Surface {
+        /// Geometric normal on the viewer's side.
+        ng: Vec3,
+        /// Shading normal on the viewer's side.
+        ns: Vec3,
+        bsdf: &'a MaterialBsdf,
+    },
+    Medium(HenyeyGreenstein),
+}
+
+impl Scatterer<'_> {
+    /// Whether light can arrive from `wi` at all (a surface only from its viewer's side).
+    #[inline]
+    fn admits(&self, wi: Vec3) -> bool {
+        match self {
+            Scatterer::Surface { ng, .. } => wi.dot(*ng) > 0.0,
+            Scatterer::Medium(_) => true,
+        }
+    }
+
+    /// The factor light from `wi` is scattered towards `wo` by: `f |cos|` for a surface,
+    /// the phase function's value for fog (light travels along `-wi` before scattering).
+    #[inline]
+    fn value(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        match self {
+            Scatterer::Surface { ns, bsdf, .. } => bsdf.eval(wo, wi) * ns.dot(wi).abs(),
+            Scatterer::Medium(phase) => Vec3::splat(phase.eval(-wi, wo)),
+        }
+    }
+
+    /// The density with which the path would have sampled `wi` itself.
+    #[inline]
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Scatterer::Surface { bsdf, .. } => bsdf.pdf(wo, wi),
+            Scatterer::Medium(phase) => phase.pdf(-wo, wi),
+        }
+    }
+}
+
 /// The shading point light sampling starts from.
 pub(super) struct ShadingPoint<'a> {
     /// Where shadow rays start: the hit's spawn point moved off the surface on the side of
-    /// `ng`.
+    /// `ng`, or the scattering point inside fog.
     pub(super) origin: Vec3,
-    /// Geometric normal on the viewer's side.
-    pub(super) ng: Vec3,
-    /// Shading normal on the viewer's side.
-    pub(super) ns: Vec3,
     pub(super) wo: Vec3,
-    pub(super) bsdf: &'a MaterialBsdf,
+    pub(super) scatterer: Scatterer<'a>,
     pub(super) throughput: Vec3,
     pub(super) footprint: &'a Footprint,
     pub(super) pixel: u32,
@@ -96,12 +139,10 @@ pub(super) fn sample_light(
             )
         }
     };
-    if wi.dot(point.ng) <= 0.0 || radiance.max_element() <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
+    if !point.scatterer.admits(wi) || radiance.max_element() <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
         return;
     }
-    let bsdf = point.bsdf;
-    let cosine = point.ns.dot(wi).abs();
-    let f = bsdf.eval(point.wo, wi) * cosine;
+    let f = point.scatterer.value(point.wo, wi);
     if f.max_element() <= 0.0 {
         return;
     }
@@ -114,7 +155,7 @@ pub(super) fn sample_light(
         let weight = if point.last || strategy == LightStrategy::LightSampling {
             1.0
         } else {
-            power_heuristic(light_pdf, bsdf.pdf(point.wo, wi))
+            power_heuristic(light_pdf, point.scatterer.pdf(point.wo, wi))
         };
         point.throughput * f * radiance * (weight / light_pdf)
     };
@@ -137,6 +178,8 @@ pub(super) fn sample_light(
 
 /// Trace the wave's shadow rays as one occlusion stream and add what reaches the lights.
 /// Any surface blocks a shadow ray (light through glass arrives by BSDF-sampled paths).
+/// With fog, what reaches a light is attenuated by the exact transmittance of the fog on
+/// the shadow segment, evaluated only for the rays that are not blocked.
 pub(super) fn trace_shadow_rays(
     context: &RenderContext,
     waves: &mut PathWaves,
@@ -160,8 +203,23 @@ pub(super) fn trace_shadow_rays(
         &mut worker.counters,
     );
     for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
-        if !blocked {
-            add_radiance(image, shadow.pixel, shadow.contribution);
+        if *blocked {
+            continue;
         }
+        let mut contribution = shadow.contribution;
+        if context.effects.fog {
+            let fog = segment_fog(
+                &context.scene.fog,
+                shadow.origin,
+                shadow.direction,
+                shadow.tfar,
+            );
+            worker.counters.fog_segments += 1;
+            worker.counters.fog_volume_crossings += u64::from(fog.crossed);
+            // The path tracer's medium is Beer-Lambert's whatever `fog_model` says (the
+            // clamped blend is Whitted's model of seed 004, not a transmittance).
+            contribution *= fog.transmittance(FogModel::Exact);
+        }
+        add_radiance(image, shadow.pixel, contribution);
     }
 }

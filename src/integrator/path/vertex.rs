@@ -4,8 +4,9 @@
 
 use glam::Vec3;
 
+use super::medium;
 use super::mis::power_heuristic;
-use super::next_event::{sample_light, ShadingPoint};
+use super::next_event::{sample_light, Scatterer, ShadingPoint};
 use super::{add_radiance, LightStrategy, PathRay, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::footprint::{bsdf_spread_angle, Footprint, LodStrategy, RayDifferential};
@@ -33,6 +34,15 @@ pub(super) fn shade(
     worker: &mut WorkerState,
 ) {
     let lights = &context.lights;
+    // Fog between the ray's origin and what it meets: a sampled collision makes this a
+    // medium vertex instead (`medium`); a ray that passes keeps its throughput.
+    if context.effects.fog {
+        let t_end = if hit.is_hit() { hit.t } else { f32::INFINITY };
+        if let Some(collision) = medium::sample_collision(context, &mut ray, t_end, worker) {
+            medium::scatter(tracer, context, ray, collision, waves, worker);
+            return;
+        }
+    }
     if !hit.is_hit() {
         let radiance = environment_lookup(context, ray.direction, &ray.footprint, worker);
         let environment = LightRef::Environment;
@@ -139,10 +149,12 @@ pub(super) fn shade(
     if bsdf_has_smooth_part(&bsdf, wo, ns) {
         let point = ShadingPoint {
             origin: spawn.offset_origin(ng),
-            ng,
-            ns,
             wo,
-            bsdf: &bsdf,
+            scatterer: Scatterer::Surface {
+                ng,
+                ns,
+                bsdf: &bsdf,
+            },
             throughput: ray.throughput,
             footprint: &ray.footprint,
             pixel: ray.pixel,
@@ -170,7 +182,7 @@ pub(super) fn shade(
     if !delta && ray.diffuse_depth >= tracer.diffuse_bounces {
         return;
     }
-    let mut throughput = ray.throughput * sample.weight;
+    let throughput = ray.throughput * sample.weight;
     let wi = sample.wi;
     let crosses = wi.dot(ng) < 0.0;
     // Footprint of the continuing ray: mirror and refraction as in Whitted, a widened cone
@@ -202,25 +214,9 @@ pub(super) fn shade(
         ray.sigma
     };
     let depth = ray.depth + 1;
-    if depth > ROULETTE_AFTER {
-        let largest = throughput.max_element();
-        if largest < 1.0 {
-            let end = (1.0 - largest).max(ROULETTE_MIN_END);
-            if u_roulette < end {
-                worker.counters.roulette_terminations += 1;
-                return;
-            }
-            throughput /= 1.0 - end;
-        }
-    }
-    let largest = throughput.max_element();
-    if largest.is_nan() || largest <= 0.0 {
+    let Some(throughput) = continuing_throughput(throughput, depth, u_roulette, worker) else {
         return;
-    }
-    if !throughput.is_finite() {
-        worker.counters.nonfinite_samples += 1;
-        return;
-    }
+    };
     let kind = if crosses {
         RayKind::Refraction
     } else {
@@ -246,6 +242,39 @@ pub(super) fn shade(
         first_sample: ray.first_sample,
         sampler: ray.sampler,
     });
+}
+
+/// The throughput a path continues with after its `depth`-th bounce, or `None` when it
+/// ends there: after [`ROULETTE_AFTER`] bounces, Russian roulette ends it with probability
+/// `max(ROULETTE_MIN_END, 1 - max(throughput))` (`u_roulette` decides) when the throughput
+/// has fallen below 1 and divides the survivors' by the survival probability; a zero, NaN
+/// or infinite throughput ends it too (infinities counted as non-finite samples).
+pub(super) fn continuing_throughput(
+    mut throughput: Vec3,
+    depth: u32,
+    u_roulette: f32,
+    worker: &mut WorkerState,
+) -> Option<Vec3> {
+    if depth > ROULETTE_AFTER {
+        let largest = throughput.max_element();
+        if largest < 1.0 {
+            let end = (1.0 - largest).max(ROULETTE_MIN_END);
+            if u_roulette < end {
+                worker.counters.roulette_terminations += 1;
+                return None;
+            }
+            throughput /= 1.0 - end;
+        }
+    }
+    let largest = throughput.max_element();
+    if largest.is_nan() || largest <= 0.0 {
+        return None;
+    }
+    if !throughput.is_finite() {
+        worker.counters.nonfinite_samples += 1;
+        return None;
+    }
+    Some(throughput)
 }
 
 /// The weight of light found by a ray (emission it hits, the environment it escapes to)
