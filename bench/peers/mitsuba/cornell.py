@@ -141,6 +141,8 @@ def main():
         image = np.array(mi.render(scene, spp=args.spp, seed=seed), dtype=np.float64)[:, :, :3]
         seconds = time.perf_counter() - start
         theirs.append(image)
+        mi.Bitmap(image.astype(np.float32)).write(
+            os.path.join(work, f"mitsuba_{args.spp}spp_seed{seed}.exr"))
         rows.append(dict(renderer="Mitsuba path", seed=seed, spp=args.spp, seconds=seconds,
                          mean=image.reshape(-1, 3).mean(axis=0)))
         log(f"Mitsuba seed {seed}: {seconds:.1f} s (kernel compilation included), "
