@@ -5,6 +5,8 @@
 #   bash bench/peers/mitsuba/run.sh [run.py options, e.g. --max-spp 1024]
 #   bash bench/peers/mitsuba/run.sh sampler [sampler.py options]   (samplers at equal N)
 #   bash bench/peers/mitsuba/run.sh direct [direct.py options]     (direct lighting)
+#   bash bench/peers/mitsuba/run.sh cornell [cornell.py options]   (path tracers agree?)
+#   bash bench/peers/mitsuba/run.sh path [path.py options]         (path tracing, time to error)
 #
 # Installs (only what is missing): Debian's libllvm19 (Mitsuba's llvm_ad_rgb variant JIT-
 # compiles with it), python3-venv, python3-openimageio and python3-numpy (reading EXRs),
@@ -58,6 +60,12 @@ if [ "${1:-}" = "sampler" ]; then
     shift
 elif [ "${1:-}" = "direct" ]; then
     script="$here/direct.py"
+    shift
+elif [ "${1:-}" = "cornell" ]; then
+    script="$here/cornell.py"
+    shift
+elif [ "${1:-}" = "path" ]; then
+    script="$here/path.py"
     shift
 fi
 exec "$venv/bin/python" "$script" --conetrace "$binary" --work "$cache/work" "$@"
