@@ -33,13 +33,52 @@ const DIGIT_BITS: u32 = 24;
 /// Digits per encoded sum: `6 * 24 = 144 >= 128` bits.
 pub const DIGITS: usize = 6;
 
-/// One sample's value as a fixed-point integer (see the module doc for the scale).
+/// One sample's value as a fixed-point integer (see the module doc for the scale):
+/// `round(clamp(value, ±2^31) * 2^64)`, halves rounded away from zero, NaN as 0.
+///
+/// Computed from the float's bits: an `f32` is `m * 2^e` with an integer mantissa
+/// `m < 2^24`, so the scaled value is `m` shifted by `e + 64` places, exact when shifting up
+/// and rounded once when shifting down. (The same number as rounding the scaled `f64` and
+/// converting it, [`to_fixed_via_f64`] in the tests, without the two library calls that
+/// conversion costs on every sample of every pixel.)
 #[inline]
 pub fn to_fixed(value: f32) -> i128 {
-    let clamped = (value as f64).clamp(-MAX_SAMPLE_MAGNITUDE, MAX_SAMPLE_MAGNITUDE);
-    // Multiplying by a power of two is exact; `round` then rounds half away from zero, and
-    // `as` maps NaN (which `clamp` passes through) to 0.
-    (clamped * 2f64.powi(FRACTION_BITS)).round() as i128
+    let bits = value.to_bits();
+    let negative = bits >> 31 != 0;
+    let biased_exponent = (bits >> 23) & 0xff;
+    let fraction = bits & 0x7f_ffff;
+    if biased_exponent == 0xff && fraction != 0 {
+        return 0; // NaN
+    }
+    let magnitude: i128 = if f32::from_bits(bits & 0x7fff_ffff) >= MAX_SAMPLE_MAGNITUDE as f32 {
+        // Clamped (infinities too): 2^31 * 2^64.
+        1i128 << (31 + FRACTION_BITS)
+    } else {
+        // value = mantissa * 2^exponent (subnormals have no implicit bit and exponent -149).
+        let (mantissa, exponent) = if biased_exponent == 0 {
+            (fraction, -149)
+        } else {
+            (fraction | 0x80_0000, biased_exponent as i32 - 150)
+        };
+        let shift = exponent + FRACTION_BITS;
+        if shift >= 0 {
+            // Below 2^31, so the shift is at most 31 - 24 + 1 + 64 = 72: under 2^96, exact.
+            (mantissa as i128) << shift
+        } else {
+            let down = -shift as u32;
+            if down > 25 {
+                0 // below half of 2^-64 (mantissa < 2^24 < 2^(down - 1))
+            } else {
+                // Round half away from zero on the magnitude: add half, drop the bits.
+                ((mantissa as u64 + (1u64 << (down - 1))) >> down) as i128
+            }
+        }
+    };
+    if negative {
+        -magnitude
+    } else {
+        magnitude
+    }
 }
 
 /// The mean of `count` samples whose fixed-point values add up to `sum`, as the pixel's
@@ -90,6 +129,62 @@ pub fn decode(digits: &[f32; DIGITS]) -> Option<i128> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The definition [`to_fixed`] computes from the bits: clamp in `f64`, scale by a power
+    /// of two (exact), round half away from zero, convert (NaN to 0).
+    fn to_fixed_via_f64(value: f32) -> i128 {
+        let clamped = (value as f64).clamp(-MAX_SAMPLE_MAGNITUDE, MAX_SAMPLE_MAGNITUDE);
+        (clamped * 2f64.powi(FRACTION_BITS)).round() as i128
+    }
+
+    #[test]
+    fn fixed_point_from_the_bits_equals_the_rounded_f64() {
+        let mut special = vec![
+            0.0f32,
+            -0.0,
+            f32::MIN_POSITIVE,
+            f32::from_bits(1),
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            2_147_483_648.0,
+            2_147_483_520.0,
+            2_147_483_904.0,
+            -2_147_483_648.0,
+        ];
+        // Values whose scaled form lies exactly on a half: 2^-65, 3 * 2^-65, and the largest
+        // that round to zero or to one unit.
+        for k in 60..=90 {
+            let unit = 2f32.powi(-k);
+            special.extend([
+                unit,
+                3.0 * unit,
+                -unit,
+                -3.0 * unit,
+                1.5 * unit,
+                0.75 * unit,
+            ]);
+        }
+        for v in special {
+            assert_eq!(
+                to_fixed(v),
+                to_fixed_via_f64(v),
+                "{v:e} ({:#x})",
+                v.to_bits()
+            );
+        }
+        // Every exponent, a spread of mantissas, both signs.
+        let mut x = 0x2545_f491u32;
+        for _ in 0..2_000_000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            let v = f32::from_bits(x);
+            assert_eq!(to_fixed(v), to_fixed_via_f64(v), "{v:e} ({x:#x})");
+        }
+    }
 
     #[test]
     fn every_split_of_the_samples_sums_to_the_same_bits() {

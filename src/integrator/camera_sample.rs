@@ -3,8 +3,6 @@
 //! the camera gives it and the pixel's sampler (which has drawn the camera's dimensions, so
 //! an integrator's own draws continue from there).
 
-use glam::Vec2;
-
 use crate::film::{block_order, PixelRect};
 use crate::footprint::Footprint;
 use crate::render::context::RenderContext;
@@ -42,13 +40,11 @@ pub(crate) fn for_each_camera_ray(
     for (x, y) in block_order(tile) {
         let (px, py) = (tile.x0 + x, tile.y0 + y);
         let mut pixel_sampler = sampler.pixel(py * image_width + px, sample);
-        let camera_sample = pixel_sampler.camera_sample(spp);
+        // Only the values the camera uses are computed (the lens centre without depth of
+        // field); the sampler's dimensions move on the same either way.
+        let camera_sample = pixel_sampler.camera_sample_drawing(spp, dof);
         let offset = camera_sample.pixel_offset;
-        let lens = if dof {
-            camera_sample.lens
-        } else {
-            Vec2::splat(0.5)
-        };
+        let lens = camera_sample.lens;
         let (fx, fy) = (px as f32 + offset.x, py as f32 + offset.y);
         let (origin, direction) = camera.generate_ray(fx, fy, lens);
         let start = context.surfaces.bounds.map_or(0.0, |bounds| {

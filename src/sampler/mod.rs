@@ -44,7 +44,7 @@ mod sobol;
 
 use glam::Vec2;
 
-use scramble::{hash_u32, hash_words, nested_uniform_scramble, unit_float};
+use scramble::{hash_u32, hash_words, nested_uniform_scramble, scramble_mirrored, unit_float};
 
 /// The sampler of one render: the seed every sample position derives from (`--seed`,
 /// `[render] seed`). Equal seeds give bit-identical images.
@@ -116,10 +116,8 @@ impl PixelSampler {
     pub fn next_1d(&mut self) -> f32 {
         let key = self.take(1);
         let shuffled = nested_uniform_scramble(self.index, key);
-        unit_float(nested_uniform_scramble(
-            sobol::dimension_0(shuffled),
-            hash_u32(key ^ 0x5bd1_e995),
-        ))
+        // Sobol dimension 0 mirrored is the (shuffled) index itself.
+        unit_float(scramble_mirrored(shuffled, hash_u32(key ^ 0x5bd1_e995)))
     }
 
     /// The next two dimensions: a point in [0, 1)^2.
@@ -127,8 +125,13 @@ impl PixelSampler {
     pub fn next_2d(&mut self) -> Vec2 {
         let key = self.take(2);
         let shuffled = nested_uniform_scramble(self.index, key);
-        let x = nested_uniform_scramble(sobol::dimension_0(shuffled), hash_u32(key ^ 0x5bd1_e995));
-        let y = nested_uniform_scramble(sobol::dimension_1(shuffled), hash_u32(key ^ 0x1b87_3593));
+        // The scramble works on mirrored bits: Sobol dimension 0 mirrored is the index, and
+        // dimension 1 mirrored has a closed form (`sobol::dimension_1_mirrored`).
+        let x = scramble_mirrored(shuffled, hash_u32(key ^ 0x5bd1_e995));
+        let y = scramble_mirrored(
+            sobol::dimension_1_mirrored(shuffled),
+            hash_u32(key ^ 0x1b87_3593),
+        );
         Vec2::new(unit_float(x), unit_float(y))
     }
 
@@ -138,16 +141,34 @@ impl PixelSampler {
     /// centre, as OpenImageIO's lookups with the same footprint are.
     #[inline]
     pub fn camera_sample(&mut self, samples_per_pixel: u32) -> CameraSample {
-        let position = self.next_2d();
-        let lens = self.next_2d();
-        CameraSample {
-            pixel_offset: if samples_per_pixel <= 1 {
-                Vec2::splat(0.5)
-            } else {
-                position
-            },
-            lens,
-        }
+        self.camera_sample_drawing(samples_per_pixel, true)
+    }
+
+    /// [`camera_sample`](Self::camera_sample) computing only the values the camera uses: the
+    /// position in the pixel only with more than one sample per pixel, the lens position only
+    /// when `lens` (a thin-lens camera); an undrawn lens position is the lens centre (0.5,
+    /// 0.5). Both pairs of dimensions are taken either way, so later draws are the same.
+    #[inline]
+    pub fn camera_sample_drawing(&mut self, samples_per_pixel: u32, lens: bool) -> CameraSample {
+        let pixel_offset = if samples_per_pixel <= 1 {
+            self.skip(2);
+            Vec2::splat(0.5)
+        } else {
+            self.next_2d()
+        };
+        let lens = if lens {
+            self.next_2d()
+        } else {
+            self.skip(2);
+            Vec2::splat(0.5)
+        };
+        CameraSample { pixel_offset, lens }
+    }
+
+    /// Takes `count` dimensions without drawing them.
+    #[inline]
+    fn skip(&mut self, count: u32) {
+        self.dimension += count;
     }
 }
 

@@ -53,6 +53,14 @@ pub fn nested_uniform_scramble(value: u32, seed: u32) -> u32 {
     laine_karras_permutation(value.reverse_bits(), seed).reverse_bits()
 }
 
+/// [`nested_uniform_scramble`] of the value whose bits mirrored are `mirrored`: the same
+/// result without the first mirroring, for values (Sobol points) that are cheaper to
+/// compute mirrored (`super::sobol::dimension_1_mirrored`; dimension 0 mirrored is the index).
+#[inline]
+pub fn scramble_mirrored(mirrored: u32, seed: u32) -> u32 {
+    laine_karras_permutation(mirrored, seed).reverse_bits()
+}
+
 /// A 32-bit fraction as a float in [0, 1): its top 24 bits, which an `f32` holds exactly
 /// (so the result never rounds up to 1).
 #[inline]

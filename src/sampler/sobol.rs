@@ -15,8 +15,10 @@
 //! v_k = m_k / 2^k.
 
 /// The 32 direction numbers of dimension 1 as fixed-point fractions: `m_k << (32 - k)`.
+#[cfg_attr(not(test), allow(dead_code))]
 const DIMENSION_1_DIRECTIONS: [u32; 32] = dimension_1_directions();
 
+#[cfg_attr(not(test), allow(dead_code))]
 const fn dimension_1_directions() -> [u32; 32] {
     let mut directions = [0u32; 32];
     // m_k as a k-bit odd integer; the recurrence m_k = (m_{k-1} << 1) ^ m_{k-1} keeps it
@@ -32,6 +34,9 @@ const fn dimension_1_directions() -> [u32; 32] {
 }
 
 /// Point `index` of Sobol dimension 0: the bits of `index` mirrored about the binary point.
+/// (The sampler scrambles mirrored bits, so it uses `index` itself; this and [`dimension_1`]
+/// are the definitions its mirrored forms are tested against.)
+#[cfg_attr(not(test), allow(dead_code))]
 #[inline]
 pub fn dimension_0(index: u32) -> u32 {
     index.reverse_bits()
@@ -39,6 +44,7 @@ pub fn dimension_0(index: u32) -> u32 {
 
 /// Point `index` of Sobol dimension 1: the XOR of the direction numbers of `index`'s set
 /// bits (the generator matrix applied to the bits of `index`).
+#[cfg_attr(not(test), allow(dead_code))]
 #[inline]
 pub fn dimension_1(index: u32) -> u32 {
     let mut bits = index;
@@ -51,9 +57,60 @@ pub fn dimension_1(index: u32) -> u32 {
     value
 }
 
+/// Point `index` of Sobol dimension 1 with its bits mirrored: `dimension_1(index).reverse_bits()`
+/// without the loop over set bits, for the scramble, which works on mirrored bits
+/// (`super::scramble::scramble_mirrored`).
+///
+/// Why this is the same number: m_k is the GF(2) polynomial (1 + x)^(k-1), whose binomial
+/// coefficients are symmetric, so mirroring v_k = m_k << (32 - k) about the 32 bits gives
+/// (1 + x)^(k-1) back in the low bits. The mirrored point is therefore the index's bits
+/// read as a polynomial i(y) and evaluated at y = 1 + x over GF(2). Splitting i into halves,
+/// i = A + y^s B, and using (1 + x)^s = 1 + x^s for s a power of two, gives
+/// i(1 + x) = A' + B' + x^s B': inside each aligned block of 2s bits the low half takes the
+/// XOR of both transformed halves. Five such steps (s = 1, 2, 4, 8, 16, innermost first)
+/// evaluate the whole polynomial.
+#[inline]
+pub fn dimension_1_mirrored(index: u32) -> u32 {
+    let mut bits = index;
+    bits ^= (bits >> 1) & 0x5555_5555;
+    bits ^= (bits >> 2) & 0x3333_3333;
+    bits ^= (bits >> 4) & 0x0f0f_0f0f;
+    bits ^= (bits >> 8) & 0x00ff_00ff;
+    bits ^= (bits >> 16) & 0x0000_ffff;
+    bits
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn mirrored_dimension_1_is_dimension_1_mirrored() {
+        // Every single bit, then a spread of indices (the sampler feeds scrambled, so
+        // arbitrary, 32-bit indices).
+        for b in 0..32 {
+            let index = 1u32 << b;
+            assert_eq!(
+                dimension_1_mirrored(index),
+                dimension_1(index).reverse_bits(),
+                "bit {b}"
+            );
+        }
+        let mut index = 0x9e37_79b9u32;
+        for i in 0..200_000u32 {
+            index = index.wrapping_mul(747_796_405).wrapping_add(2_891_336_453) ^ i;
+            assert_eq!(
+                dimension_1_mirrored(index),
+                dimension_1(index).reverse_bits(),
+                "{index:#x}"
+            );
+            assert_eq!(
+                dimension_1_mirrored(i),
+                dimension_1(i).reverse_bits(),
+                "{i}"
+            );
+        }
+    }
 
     fn fraction(bits: u32) -> f64 {
         bits as f64 / 4_294_967_296.0

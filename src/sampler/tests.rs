@@ -203,3 +203,60 @@ fn a_sample_does_not_depend_on_the_sample_count() {
         assert_eq!(a, b, "{index}");
     }
 }
+
+#[test]
+fn draws_equal_the_sobol_definitions() {
+    // The draws scramble mirrored bits (`sobol::dimension_1_mirrored`,
+    // `scramble::scramble_mirrored`); they must equal the scramble of the Sobol points
+    // computed from their definitions, bit for bit.
+    use super::scramble::{hash_u32, hash_words, nested_uniform_scramble, unit_float};
+    use super::sobol;
+    for seed in [0u32, 7, 1_000_003] {
+        let sampler = Sampler::new(seed);
+        for pixel in [0u32, 1, 517, 262_143, 4_000_000] {
+            for index in [0u32, 1, 2, 3, 15, 16, 255, 1023, 65_537] {
+                let mut draws = sampler.pixel(pixel, index);
+                let pixel_key = draws.pixel_key;
+                for dimension in (0..12u32).step_by(3) {
+                    let key = hash_words(&[pixel_key, dimension]);
+                    let shuffled = nested_uniform_scramble(index, key);
+                    let x = nested_uniform_scramble(
+                        sobol::dimension_0(shuffled),
+                        hash_u32(key ^ 0x5bd1_e995),
+                    );
+                    let y = nested_uniform_scramble(
+                        sobol::dimension_1(shuffled),
+                        hash_u32(key ^ 0x1b87_3593),
+                    );
+                    let pair = draws.next_2d();
+                    assert_eq!(pair.x.to_bits(), unit_float(x).to_bits());
+                    assert_eq!(pair.y.to_bits(), unit_float(y).to_bits());
+                    let key = hash_words(&[pixel_key, dimension + 2]);
+                    let shuffled = nested_uniform_scramble(index, key);
+                    let single = nested_uniform_scramble(
+                        sobol::dimension_0(shuffled),
+                        hash_u32(key ^ 0x5bd1_e995),
+                    );
+                    assert_eq!(draws.next_1d().to_bits(), unit_float(single).to_bits());
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_camera_sample_without_the_lens_keeps_the_dimensions() {
+    let sampler = Sampler::new(11);
+    for spp in [1u32, 4] {
+        for index in 0..spp {
+            let mut full = sampler.pixel(321, index);
+            let mut pinhole = sampler.pixel(321, index);
+            let a = full.camera_sample(spp);
+            let b = pinhole.camera_sample_drawing(spp, false);
+            assert_eq!(a.pixel_offset, b.pixel_offset);
+            assert_eq!(b.lens, Vec2::splat(0.5));
+            assert_eq!(pinhole.dimension(), 4);
+            assert_eq!(full.next_2d(), pinhole.next_2d());
+        }
+    }
+}
