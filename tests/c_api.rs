@@ -1280,7 +1280,10 @@ fn the_integrator_is_chosen_through_the_options() {
     }
     let mut earlier = unsafe { earlier.assume_init() };
     assert_eq!(earlier.struct_size as usize, earlier_size);
-    assert_eq!(earlier.integrator, 0xABAB_ABAB, "init wrote past the earlier size");
+    assert_eq!(
+        earlier.integrator, 0xABAB_ABAB,
+        "init wrote past the earlier size"
+    );
     earlier.width = 64;
     earlier.height = 48;
     earlier.threads = 2;
@@ -1292,4 +1295,3 @@ fn the_integrator_is_chosen_through_the_options() {
 fn size_of_options() -> usize {
     std::mem::size_of::<CtRenderOptions>()
 }
-

@@ -491,7 +491,15 @@ fn zero_march_steps_exit_2_with_one_line() {
     write(dir.path(), "bad.toml", &bad);
     for (args, message) in [
         (
-            vec!["render", "good.toml", "-o", "bad.exr", "--quiet", "--fog-march-steps", "0"],
+            vec![
+                "render",
+                "good.toml",
+                "-o",
+                "bad.exr",
+                "--quiet",
+                "--fog-march-steps",
+                "0",
+            ],
             "--fog-march-steps must be at least 1",
         ),
         (
@@ -504,8 +512,14 @@ fn zero_march_steps_exit_2_with_one_line() {
         assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
         assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
         assert!(stderr.contains(message), "{args:?}: {stderr}");
-        assert!(!dir.path().join("bad.exr").exists(), "{args:?}: an image was written");
+        assert!(
+            !dir.path().join("bad.exr").exists(),
+            "{args:?}: an image was written"
+        );
     }
-    let out = run_in(dir.path(), &["render", "bad.toml", "-o", "bad.exr", "--quiet"]);
+    let out = run_in(
+        dir.path(),
+        &["render", "bad.toml", "-o", "bad.exr", "--quiet"],
+    );
     assert!(String::from_utf8_lossy(&out.stderr).contains("bad.toml"));
 }

@@ -26,7 +26,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use plotters::prelude::*;
+use plotters::style::BLUE;
 
 use crate::cli::CommandError;
 use crate::film::PixelRect;
@@ -35,9 +35,8 @@ use crate::render::{self, RenderControl, RenderOptions, RenderResult};
 use crate::scene::SceneDescription;
 use conetrace::medium::{FogIntegration, FogModel};
 
-use super::font::FAMILY;
 use super::metrics::{self, DisplayImage, ErrorMetrics};
-use super::plot::{log_ticks, pareto_front, short_number};
+use super::plot::{draw_two_panels, PanelText, PlotPoint, PLOT_SIZE};
 use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
 
 /// Scenes measured when none is named (run from the repository root).
@@ -118,9 +117,6 @@ impl FogRowKind {
         variant
     }
 }
-
-/// Width and height of the plot image in pixels.
-const PLOT_SIZE: (u32, u32) = (1100, 460);
 
 /// One row: what it cost and how far its image is from the analytic one.
 #[derive(Clone, Debug, PartialEq)]
@@ -340,183 +336,45 @@ pub fn markdown(report: &FogReport) -> String {
     text
 }
 
-fn drawing_error<E: std::fmt::Debug>(error: E) -> String {
-    format!("drawing the plot: {error:?}")
-}
-
-/// One log-log panel: a marker per compared row `(render seconds, error)`, the Pareto front
-/// joined, and the analytic render's time as a vertical line (its error is 0).
-fn draw_panel(
-    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
-    title: &str,
-    error_name: &str,
-    points: &[(f64, f64)],
-    names: &[String],
-    analytic_seconds: f64,
-    labels: bool,
-) -> Result<(), String> {
-    let usable = |(t, e): (f64, f64)| t > 0.0 && e > 0.0 && t.is_finite() && e.is_finite();
-    let positive: Vec<(usize, (f64, f64))> = points
-        .iter()
-        .copied()
-        .enumerate()
-        .filter(|(_, p)| usable(*p))
-        .collect();
-    if positive.is_empty() {
-        if labels {
-            area.draw_text(
-                &format!("{title}: every row equals the analytic image"),
-                &(FAMILY, 16).into_text_style(area),
-                (20, 20),
-            )
-            .map_err(drawing_error)?;
-        }
-        return Ok(());
-    }
-    let times = positive
-        .iter()
-        .map(|(_, p)| p.0)
-        .chain(std::iter::once(analytic_seconds).filter(|t| *t > 0.0 && t.is_finite()));
-    let (t_low, t_high) = times.fold((f64::INFINITY, 0.0f64), |(lo, hi), t| {
-        (lo.min(t), hi.max(t))
-    });
-    let (e_low, e_high) = positive
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, p)| {
-            (lo.min(p.1), hi.max(p.1))
-        });
-    let x_range = t_low / 1.6..t_high * 1.6;
-    let y_range = e_low / 1.6..e_high * 1.6;
-    let mut builder = ChartBuilder::on(area);
-    builder.margin(12);
-    if labels {
-        builder
-            .caption(title, (FAMILY, 18))
-            .x_label_area_size(40)
-            .y_label_area_size(64);
-    }
-    let mut chart = builder
-        .build_cartesian_2d(
-            x_range
-                .clone()
-                .log_scale()
-                .with_key_points(log_ticks(&x_range)),
-            y_range
-                .clone()
-                .log_scale()
-                .with_key_points(log_ticks(&y_range)),
-        )
-        .map_err(drawing_error)?;
-    let mut mesh = chart.configure_mesh();
-    if labels {
-        mesh.x_desc("seconds (median render), log scale")
-            .y_desc(format!("{error_name} against analytic, log scale"))
-            .x_label_formatter(&|v| short_number(*v))
-            .y_label_formatter(&|v| short_number(*v))
-            .label_style((FAMILY, 13));
-    } else {
-        mesh.x_labels(0).y_labels(0);
-    }
-    mesh.light_line_style(WHITE).draw().map_err(drawing_error)?;
-    if analytic_seconds > 0.0 && analytic_seconds.is_finite() {
-        chart
-            .draw_series(LineSeries::new(
-                [
-                    (analytic_seconds, y_range.start),
-                    (analytic_seconds, y_range.end),
-                ],
-                ShapeStyle::from(&BLACK).stroke_width(2),
-            ))
-            .map_err(drawing_error)?;
-        if labels {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    "analytic (error 0)".to_string(),
-                    (analytic_seconds, y_range.end / 1.3),
-                    (FAMILY, 13).into_font(),
-                )))
-                .map_err(drawing_error)?;
-        }
-    }
-    let front: Vec<(f64, f64)> = pareto_front(points)
-        .iter()
-        .map(|&i| points[i])
-        .filter(|p| usable(*p))
-        .collect();
-    chart
-        .draw_series(LineSeries::new(
-            front,
-            ShapeStyle::from(&RED).stroke_width(2),
-        ))
-        .map_err(drawing_error)?;
-    for (index, point) in positive {
-        chart
-            .draw_series(std::iter::once(Circle::new(point, 5, BLUE.filled())))
-            .map_err(drawing_error)?;
-        if labels {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    names[index].clone(),
-                    point,
-                    (FAMILY, 12).into_font(),
-                )))
-                .map_err(drawing_error)?;
-        }
-    }
-    Ok(())
-}
-
 /// The error-against-time plot of one scene as RGB8 pixels of [`PLOT_SIZE`]: RMSE on the
-/// left, FLIP on the right, both over all pixels.
+/// left, FLIP on the right, both over all pixels, the analytic render's time as a vertical
+/// line (its error is 0).
 pub fn draw_plot(report: &FogReport, labels: bool) -> Result<Vec<u8>, String> {
-    let (width, height) = PLOT_SIZE;
-    let mut buffer = vec![255u8; width as usize * height as usize * 3];
     let compared: Vec<&FogRow> = report
         .rows
         .iter()
         .filter(|r| r.kind != FogRowKind::Analytic)
         .collect();
-    let names: Vec<String> = compared.iter().map(|r| r.kind.label()).collect();
     let analytic_seconds = report
         .rows
         .iter()
         .find(|r| r.kind == FogRowKind::Analytic)
         .map_or(f64::NAN, |r| r.render_seconds);
-    let rmse: Vec<(f64, f64)> = compared
-        .iter()
-        .map(|r| (r.render_seconds, r.error.rmse))
-        .collect();
-    let flip: Vec<(f64, f64)> = compared
-        .iter()
-        .map(|r| (r.render_seconds, r.error.flip))
-        .collect();
-    {
-        let root = BitMapBackend::with_buffer(&mut buffer, (width, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(drawing_error)?;
-        let (left, right) = root.split_horizontally(width / 2);
-        let title = format!("{}: fog RMSE", report.name);
-        draw_panel(
-            &left,
-            &title,
-            "RMSE",
-            &rmse,
-            &names,
-            analytic_seconds,
-            labels,
-        )?;
-        let title = format!("{}: fog FLIP", report.name);
-        draw_panel(
-            &right,
-            &title,
-            "FLIP",
-            &flip,
-            &names,
-            analytic_seconds,
-            labels,
-        )?;
-        root.present().map_err(drawing_error)?;
-    }
-    Ok(buffer)
+    let points = |error: fn(&FogRow) -> f64| -> Vec<PlotPoint> {
+        compared
+            .iter()
+            .map(|r| PlotPoint {
+                seconds: r.render_seconds,
+                error: error(r),
+                label: r.kind.label(),
+                colour: BLUE,
+            })
+            .collect()
+    };
+    let text = |title: String, error_name: &str| PanelText {
+        title,
+        x_desc: "seconds (median render), log scale",
+        y_desc: format!("{error_name} against analytic, log scale"),
+        empty_note: "every row equals the analytic image",
+        zero_error: Some((analytic_seconds, "analytic")),
+    };
+    let rmse_title = format!("{}: fog RMSE", report.name);
+    let flip_title = format!("{}: fog FLIP", report.name);
+    draw_two_panels(
+        (&text(rmse_title, "RMSE"), &points(|r| r.error.rmse)),
+        (&text(flip_title, "FLIP"), &points(|r| r.error.flip)),
+        labels,
+    )
 }
 
 /// Writes the four files of one scene.

@@ -35,7 +35,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use plotters::prelude::*;
+use plotters::style::RGBColor;
 
 use crate::cli::CommandError;
 use crate::film::PixelRect;
@@ -43,9 +43,8 @@ use crate::integrator::{PathTracer, Vct, Whitted};
 use crate::render::{self, Integrator, RenderContext, RenderControl, RenderOptions, RenderResult};
 use conetrace::vct::{build_voxel_scene, VctSettings};
 
-use super::font::FAMILY;
 use super::metrics::{self, DisplayImage, ErrorMetrics};
-use super::plot::{log_ticks, pareto_front, short_number};
+use super::plot::{draw_two_panels, pareto_front, PanelText, PlotPoint, PLOT_SIZE};
 use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
 
 /// Scenes measured when none is named (run from the repository root).
@@ -61,9 +60,6 @@ pub const OUTPUT_SUBDIR: &str = "lighting";
 
 /// Largest grid resolution vct accepts (`crate::vct::grid`'s limit for an explicit one).
 const MAX_VCT_RESOLUTION: u32 = 1024;
-
-/// Width and height of the plot image in pixels.
-const PLOT_SIZE: (u32, u32) = (1100, 460);
 
 /// How one row transports light.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -454,10 +450,6 @@ pub fn markdown(report: &LightingReport) -> String {
     text
 }
 
-fn drawing_error<E: std::fmt::Debug>(error: E) -> String {
-    format!("drawing the plot: {error:?}")
-}
-
 /// A colour per family of rows: Whitted, path, vct direct only, vct with a bounce.
 fn family_colour(method: &LightingMethod) -> RGBColor {
     match method {
@@ -468,131 +460,36 @@ fn family_colour(method: &LightingMethod) -> RGBColor {
     }
 }
 
-/// One log-log panel: a marker per row at `(total seconds, error)`, coloured by family and
-/// labelled, and the Pareto front of these points joined in red.
-fn draw_panel(
-    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
-    title: &str,
-    error_name: &str,
-    rows: &[LightingRow],
-    points: &[(f64, f64)],
-    labels: bool,
-) -> Result<(), String> {
-    let positive: Vec<usize> = (0..points.len())
-        .filter(|&i| {
-            let (t, e) = points[i];
-            t > 0.0 && e > 0.0 && t.is_finite() && e.is_finite()
-        })
-        .collect();
-    if positive.is_empty() {
-        if labels {
-            area.draw_text(
-                &format!("{title}: no positive values to plot"),
-                &(FAMILY, 16).into_text_style(area),
-                (20, 20),
-            )
-            .map_err(drawing_error)?;
-        }
-        return Ok(());
-    }
-    let bounds = |axis: fn(&(f64, f64)) -> f64| {
-        positive
-            .iter()
-            .map(|&i| axis(&points[i]))
-            .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
-                (lo.min(v), hi.max(v))
-            })
-    };
-    let (t_low, t_high) = bounds(|p| p.0);
-    let (e_low, e_high) = bounds(|p| p.1);
-    let x_range = t_low / 1.6..t_high * 1.6;
-    let y_range = e_low / 1.6..e_high * 1.6;
-    let mut builder = ChartBuilder::on(area);
-    builder.margin(12);
-    if labels {
-        builder
-            .caption(title, (FAMILY, 18))
-            .x_label_area_size(40)
-            .y_label_area_size(64);
-    }
-    let mut chart = builder
-        .build_cartesian_2d(
-            x_range
-                .clone()
-                .log_scale()
-                .with_key_points(log_ticks(&x_range)),
-            y_range
-                .clone()
-                .log_scale()
-                .with_key_points(log_ticks(&y_range)),
-        )
-        .map_err(drawing_error)?;
-    let mut mesh = chart.configure_mesh();
-    if labels {
-        mesh.x_desc("seconds (vct build + median render), log scale")
-            .y_desc(format!("{error_name} against path reference, log scale"))
-            .x_label_formatter(&|v| short_number(*v))
-            .y_label_formatter(&|v| short_number(*v))
-            .label_style((FAMILY, 13));
-    } else {
-        mesh.x_labels(0).y_labels(0);
-    }
-    mesh.light_line_style(WHITE).draw().map_err(drawing_error)?;
-    let front: Vec<(f64, f64)> = pareto_front(points).iter().map(|&i| points[i]).collect();
-    chart
-        .draw_series(LineSeries::new(
-            front,
-            ShapeStyle::from(&RED).stroke_width(2),
-        ))
-        .map_err(drawing_error)?;
-    for index in positive {
-        let point = points[index];
-        chart
-            .draw_series(std::iter::once(Circle::new(
-                point,
-                5,
-                family_colour(&rows[index].method).filled(),
-            )))
-            .map_err(drawing_error)?;
-        if labels {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    rows[index].method.label(),
-                    point,
-                    (FAMILY, 12).into_font(),
-                )))
-                .map_err(drawing_error)?;
-        }
-    }
-    Ok(())
-}
-
 /// The error-against-time plot of one scene as RGB8 pixels of [`PLOT_SIZE`]: RMSE on the
-/// left, FLIP on the right, each with its own Pareto front.
+/// left, FLIP on the right, each with its own Pareto front; a marker per row at its total
+/// seconds, coloured by family and labelled.
 pub fn draw_plot(report: &LightingReport, labels: bool) -> Result<Vec<u8>, String> {
-    let (width, height) = PLOT_SIZE;
-    let mut buffer = vec![255u8; width as usize * height as usize * 3];
-    let rmse: Vec<(f64, f64)> = report
-        .rows
-        .iter()
-        .map(|r| (r.total_seconds(), r.error.rmse))
-        .collect();
-    let flip: Vec<(f64, f64)> = report
-        .rows
-        .iter()
-        .map(|r| (r.total_seconds(), r.error.flip))
-        .collect();
-    {
-        let root = BitMapBackend::with_buffer(&mut buffer, (width, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(drawing_error)?;
-        let (left, right) = root.split_horizontally(width / 2);
-        let title = format!("{}: RMSE", report.name);
-        draw_panel(&left, &title, "RMSE", &report.rows, &rmse, labels)?;
-        let title = format!("{}: FLIP", report.name);
-        draw_panel(&right, &title, "FLIP", &report.rows, &flip, labels)?;
-        root.present().map_err(drawing_error)?;
-    }
-    Ok(buffer)
+    let points = |error: fn(&LightingRow) -> f64| -> Vec<PlotPoint> {
+        report
+            .rows
+            .iter()
+            .map(|r| PlotPoint {
+                seconds: r.total_seconds(),
+                error: error(r),
+                label: r.method.label(),
+                colour: family_colour(&r.method),
+            })
+            .collect()
+    };
+    let text = |title: String, error_name: &str| PanelText {
+        title,
+        x_desc: "seconds (vct build + median render), log scale",
+        y_desc: format!("{error_name} against path reference, log scale"),
+        empty_note: "no positive values to plot",
+        zero_error: None,
+    };
+    let rmse_title = format!("{}: RMSE", report.name);
+    let flip_title = format!("{}: FLIP", report.name);
+    draw_two_panels(
+        (&text(rmse_title, "RMSE"), &points(|r| r.error.rmse)),
+        (&text(flip_title, "FLIP"), &points(|r| r.error.flip)),
+        labels,
+    )
 }
 
 /// Writes the four files of one scene.

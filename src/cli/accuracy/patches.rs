@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use plotters::prelude::*;
+use plotters::style::BLUE;
 
 use crate::cli::CommandError;
 use crate::film::PixelRect;
@@ -40,9 +40,8 @@ use crate::scene::patch::intersect::PatchIntersector;
 use crate::scene::patch::tessellate::tessellate_all;
 use crate::scene::SceneDescription;
 
-use super::font::FAMILY;
 use super::metrics::{self, DisplayImage, ErrorMetrics};
-use super::plot::{log_ticks, pareto_front, short_number};
+use super::plot::{draw_two_panels, PanelText, PlotPoint, PLOT_SIZE};
 use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
 
 /// Scenes measured when none is named (run from the repository root).
@@ -96,9 +95,6 @@ impl RowKind {
         }
     }
 }
-
-/// Width and height of the plot image in pixels.
-const PLOT_SIZE: (u32, u32) = (1100, 460);
 
 /// One way of rendering a scene's patches and what it cost.
 #[derive(Clone, Debug, PartialEq)]
@@ -470,171 +466,58 @@ pub fn markdown(report: &PatchReport) -> String {
     text
 }
 
-fn drawing_error<E: std::fmt::Debug>(error: E) -> String {
-    format!("drawing the plot: {error:?}")
-}
-
-/// One log-log panel: a marker per tessellation `(total seconds, error)`, the Pareto front
-/// joined, and the exact render's time as a vertical line (its error is 0).
-fn draw_panel(
-    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
-    title: &str,
-    error_name: &str,
-    points: &[(f64, f64)],
-    names: &[String],
-    exact_seconds: f64,
-    labels: bool,
-) -> Result<(), String> {
-    let positive: Vec<(usize, (f64, f64))> = points
-        .iter()
-        .copied()
-        .enumerate()
-        .filter(|(_, (t, e))| *t > 0.0 && *e > 0.0 && t.is_finite() && e.is_finite())
-        .collect();
-    if positive.is_empty() {
-        if labels {
-            area.draw_text(
-                &format!("{title}: no positive values to plot"),
-                &(FAMILY, 16).into_text_style(area),
-                (20, 20),
-            )
-            .map_err(drawing_error)?;
-        }
-        return Ok(());
-    }
-    let times = positive
-        .iter()
-        .map(|(_, p)| p.0)
-        .chain(std::iter::once(exact_seconds).filter(|t| *t > 0.0 && t.is_finite()));
-    let (t_low, t_high) = times.fold((f64::INFINITY, 0.0f64), |(lo, hi), t| {
-        (lo.min(t), hi.max(t))
-    });
-    let (e_low, e_high) = positive
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, p)| {
-            (lo.min(p.1), hi.max(p.1))
-        });
-    let x_range = t_low / 1.6..t_high * 1.6;
-    let y_range = e_low / 1.6..e_high * 1.6;
-    let mut builder = ChartBuilder::on(area);
-    builder.margin(12);
-    if labels {
-        builder
-            .caption(title, (FAMILY, 18))
-            .x_label_area_size(40)
-            .y_label_area_size(64);
-    }
-    let mut chart = builder
-        .build_cartesian_2d(
-            x_range
-                .clone()
-                .log_scale()
-                .with_key_points(log_ticks(&x_range)),
-            y_range
-                .clone()
-                .log_scale()
-                .with_key_points(log_ticks(&y_range)),
-        )
-        .map_err(drawing_error)?;
-    let mut mesh = chart.configure_mesh();
-    if labels {
-        mesh.x_desc("seconds (build + median render), log scale")
-            .y_desc(format!("{error_name} against exact, log scale"))
-            .x_label_formatter(&|v| short_number(*v))
-            .y_label_formatter(&|v| short_number(*v))
-            .label_style((FAMILY, 13));
-    } else {
-        mesh.x_labels(0).y_labels(0);
-    }
-    mesh.light_line_style(WHITE).draw().map_err(drawing_error)?;
-    if exact_seconds > 0.0 && exact_seconds.is_finite() {
-        chart
-            .draw_series(LineSeries::new(
-                [(exact_seconds, y_range.start), (exact_seconds, y_range.end)],
-                ShapeStyle::from(&BLACK).stroke_width(2),
-            ))
-            .map_err(drawing_error)?;
-        if labels {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    "exact (error 0)".to_string(),
-                    (exact_seconds, y_range.end / 1.3),
-                    (FAMILY, 13).into_font(),
-                )))
-                .map_err(drawing_error)?;
-        }
-    }
-    let front: Vec<(f64, f64)> = pareto_front(points).iter().map(|&i| points[i]).collect();
-    chart
-        .draw_series(LineSeries::new(
-            front,
-            ShapeStyle::from(&RED).stroke_width(2),
-        ))
-        .map_err(drawing_error)?;
-    for (index, point) in positive {
-        chart
-            .draw_series(std::iter::once(Circle::new(point, 5, BLUE.filled())))
-            .map_err(drawing_error)?;
-        if labels {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    names[index].clone(),
-                    point,
-                    (FAMILY, 12).into_font(),
-                )))
-                .map_err(drawing_error)?;
-        }
-    }
-    Ok(())
-}
-
 /// The error-against-time plot of one scene as RGB8 pixels of [`PLOT_SIZE`]: RMSE over all
-/// pixels on the left, FLIP on the right (over the textured pixels when there are some).
+/// pixels on the left, FLIP on the right (over the textured pixels when there are some), the
+/// exact render's time as a vertical line (its error is 0).
 pub fn draw_plot(report: &PatchReport, labels: bool) -> Result<Vec<u8>, String> {
-    let (width, height) = PLOT_SIZE;
-    let mut buffer = vec![255u8; width as usize * height as usize * 3];
     let tessellated: Vec<&PatchRow> = report
         .rows
         .iter()
         .filter(|r| r.kind != RowKind::Exact)
         .collect();
-    let names: Vec<String> = tessellated.iter().map(|r| r.kind.short()).collect();
     let exact_seconds = report
         .rows
         .iter()
         .find(|r| r.kind == RowKind::Exact)
         .map_or(f64::NAN, PatchRow::total_seconds);
-    let rmse: Vec<(f64, f64)> = tessellated
-        .iter()
-        .map(|r| (r.total_seconds(), r.error.rmse))
-        .collect();
     let textured = tessellated.iter().all(|r| r.textured_error.is_some());
-    let flip: Vec<(f64, f64)> = tessellated
-        .iter()
-        .map(|r| {
-            let e = if textured {
-                r.textured_error.unwrap_or(r.error)
-            } else {
-                r.error
-            };
-            (r.total_seconds(), e.flip)
-        })
-        .collect();
-    {
-        let root = BitMapBackend::with_buffer(&mut buffer, (width, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(drawing_error)?;
-        let (left, right) = root.split_horizontally(width / 2);
-        let title = format!("{}: RMSE, all pixels", report.name);
-        draw_panel(&left, &title, "RMSE", &rmse, &names, exact_seconds, labels)?;
-        let title = if textured {
-            format!("{}: FLIP, textured pixels", report.name)
+    let points = |error: &dyn Fn(&PatchRow) -> f64| -> Vec<PlotPoint> {
+        tessellated
+            .iter()
+            .map(|r| PlotPoint {
+                seconds: r.total_seconds(),
+                error: error(r),
+                label: r.kind.short(),
+                colour: BLUE,
+            })
+            .collect()
+    };
+    let rmse = points(&|r| r.error.rmse);
+    let flip = points(&|r| {
+        if textured {
+            r.textured_error.unwrap_or(r.error).flip
         } else {
-            format!("{}: FLIP, all pixels", report.name)
-        };
-        draw_panel(&right, &title, "FLIP", &flip, &names, exact_seconds, labels)?;
-        root.present().map_err(drawing_error)?;
-    }
-    Ok(buffer)
+            r.error.flip
+        }
+    });
+    let text = |title: String, error_name: &str| PanelText {
+        title,
+        x_desc: "seconds (build + median render), log scale",
+        y_desc: format!("{error_name} against exact, log scale"),
+        empty_note: "no positive values to plot",
+        zero_error: Some((exact_seconds, "exact")),
+    };
+    let rmse_title = format!("{}: RMSE, all pixels", report.name);
+    let flip_title = if textured {
+        format!("{}: FLIP, textured pixels", report.name)
+    } else {
+        format!("{}: FLIP, all pixels", report.name)
+    };
+    draw_two_panels(
+        (&text(rmse_title, "RMSE"), &rmse),
+        (&text(flip_title, "FLIP"), &flip),
+        labels,
+    )
 }
 
 /// Writes the four files of one scene.

@@ -55,9 +55,9 @@ fn method_colour(index: usize) -> RGBColor {
     COLOURS[index % COLOURS.len()]
 }
 
-type PlotResult<T> = Result<T, String>;
+pub type PlotResult<T> = Result<T, String>;
 
-fn drawing_error<E: std::fmt::Debug>(error: E) -> String {
+pub fn drawing_error<E: std::fmt::Debug>(error: E) -> String {
     format!("drawing the plot: {error:?}")
 }
 
@@ -108,23 +108,54 @@ fn log_range(values: impl Iterator<Item = f64>) -> Option<std::ops::Range<f64>> 
     Some(low / 1.6..high * 1.6)
 }
 
-/// One panel: `(seconds, error)` per method (the compared methods, ground truth excluded).
-fn draw_panel(
+/// One marker of a log-log error-against-time panel.
+pub struct PlotPoint {
+    pub seconds: f64,
+    pub error: f64,
+    /// Drawn beside the marker, in its colour, when labels are on.
+    pub label: String,
+    pub colour: RGBColor,
+}
+
+/// What a panel writes: its title, axis descriptions, what it says when nothing can be
+/// plotted, and an optional reference row of zero error by construction (an exact or
+/// analytic render), drawn as a labelled vertical line at its seconds because a log axis
+/// cannot show an error of 0.
+pub struct PanelText {
+    pub title: String,
+    pub x_desc: &'static str,
+    pub y_desc: String,
+    pub empty_note: &'static str,
+    pub zero_error: Option<(f64, &'static str)>,
+}
+
+fn plottable(seconds: f64, error: f64) -> bool {
+    seconds > 0.0 && error > 0.0 && seconds.is_finite() && error.is_finite()
+}
+
+/// One log-log panel: a marker per point at `(seconds, error)`, the Pareto front of all
+/// points joined and ringed in red, points with a zero or non-finite coordinate left out.
+pub fn draw_log_log_panel(
     area: &DrawingArea<BitMapBackend<'_>, Shift>,
-    title: &str,
-    error_name: &str,
-    points: &[(f64, f64)],
+    text: &PanelText,
+    points: &[PlotPoint],
     labels: bool,
 ) -> PlotResult<()> {
-    let positive = |&(t, e): &(f64, f64)| t > 0.0 && e > 0.0 && t.is_finite() && e.is_finite();
+    let shown: Vec<&PlotPoint> = points
+        .iter()
+        .filter(|p| plottable(p.seconds, p.error))
+        .collect();
+    let zero_seconds = text
+        .zero_error
+        .map(|(seconds, _)| seconds)
+        .filter(|s| *s > 0.0 && s.is_finite());
     let (Some(x_range), Some(y_range)) = (
-        log_range(points.iter().filter(|p| positive(p)).map(|p| p.0)),
-        log_range(points.iter().filter(|p| positive(p)).map(|p| p.1)),
+        log_range(shown.iter().map(|p| p.seconds).chain(zero_seconds)),
+        log_range(shown.iter().map(|p| p.error)),
     ) else {
-        // Nothing to plot (e.g. every error is zero).
         if labels {
             area.draw_text(
-                &format!("{title}: no positive values to plot"),
+                &format!("{}: {}", text.title, text.empty_note),
                 &(FAMILY, 16).into_text_style(area),
                 (20, 20),
             )
@@ -136,7 +167,7 @@ fn draw_panel(
     builder.margin(12);
     if labels {
         builder
-            .caption(title, (FAMILY, 18))
+            .caption(text.title.as_str(), (FAMILY, 18))
             .x_label_area_size(40)
             .y_label_area_size(64);
     }
@@ -154,8 +185,8 @@ fn draw_panel(
         .map_err(drawing_error)?;
     let mut mesh = chart.configure_mesh();
     if labels {
-        mesh.x_desc("seconds (median), log scale")
-            .y_desc(format!("{error_name}, log scale"))
+        mesh.x_desc(text.x_desc)
+            .y_desc(text.y_desc.as_str())
             .x_label_formatter(&|v| short_number(*v))
             .y_label_formatter(&|v| short_number(*v))
             .label_style((FAMILY, 13));
@@ -164,12 +195,30 @@ fn draw_panel(
     }
     mesh.light_line_style(WHITE).draw().map_err(drawing_error)?;
 
+    if let (Some(seconds), Some((_, name))) = (zero_seconds, text.zero_error) {
+        chart
+            .draw_series(LineSeries::new(
+                [(seconds, y_range.start), (seconds, y_range.end)],
+                ShapeStyle::from(&BLACK).stroke_width(2),
+            ))
+            .map_err(drawing_error)?;
+        if labels {
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    format!("{name} (error 0)"),
+                    (seconds, y_range.end / 1.3),
+                    (FAMILY, 13).into_font(),
+                )))
+                .map_err(drawing_error)?;
+        }
+    }
+
     // The Pareto front as a line under the markers.
-    let front = pareto_front(points);
-    let front_points: Vec<(f64, f64)> = front
+    let pairs: Vec<(f64, f64)> = points.iter().map(|p| (p.seconds, p.error)).collect();
+    let front_points: Vec<(f64, f64)> = pareto_front(&pairs)
         .iter()
-        .map(|&i| points[i])
-        .filter(|p| positive(p))
+        .map(|&i| pairs[i])
+        .filter(|&(t, e)| plottable(t, e))
         .collect();
     chart
         .draw_series(LineSeries::new(
@@ -184,25 +233,67 @@ fn draw_panel(
                 .map(|&p| Circle::new(p, 9, ShapeStyle::from(&RED).stroke_width(2))),
         )
         .map_err(drawing_error)?;
-    for (index, point) in points.iter().enumerate() {
-        if !positive(point) {
-            continue;
-        }
-        let colour = method_colour(index);
+    for point in shown {
+        let at = (point.seconds, point.error);
         chart
-            .draw_series(std::iter::once(Circle::new(*point, 5, colour.filled())))
+            .draw_series(std::iter::once(Circle::new(at, 5, point.colour.filled())))
             .map_err(drawing_error)?;
         if labels {
             chart
                 .draw_series(std::iter::once(Text::new(
-                    format!("{}", index + 1),
-                    *point,
-                    (FAMILY, 12).into_font().color(&colour),
+                    point.label.clone(),
+                    at,
+                    (FAMILY, 12).into_font().color(&point.colour),
                 )))
                 .map_err(drawing_error)?;
         }
     }
     Ok(())
+}
+
+/// A plot of [`PLOT_SIZE`] as RGB8 pixels with two panels side by side (RMSE on the left,
+/// FLIP on the right in every mode).
+pub fn draw_two_panels(
+    left: (&PanelText, &[PlotPoint]),
+    right: (&PanelText, &[PlotPoint]),
+    labels: bool,
+) -> PlotResult<Vec<u8>> {
+    let (width, height) = PLOT_SIZE;
+    let mut buffer = vec![255u8; width as usize * height as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buffer, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(drawing_error)?;
+        let (left_area, right_area) = root.split_horizontally(width / 2);
+        draw_log_log_panel(&left_area, left.0, left.1, labels)?;
+        draw_log_log_panel(&right_area, right.0, right.1, labels)?;
+        root.present().map_err(drawing_error)?;
+    }
+    Ok(buffer)
+}
+
+/// The footprint mode's points: the methods numbered from 1, each in its colour.
+fn numbered_points(points: &[(f64, f64)]) -> Vec<PlotPoint> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(index, &(seconds, error))| PlotPoint {
+            seconds,
+            error,
+            label: format!("{}", index + 1),
+            colour: method_colour(index),
+        })
+        .collect()
+}
+
+/// The footprint mode's panel text: methods against the supersampled ground truth.
+fn footprint_text(title: &str, error_name: &str) -> PanelText {
+    PanelText {
+        title: title.to_string(),
+        x_desc: "seconds (median), log scale",
+        y_desc: format!("{error_name}, log scale"),
+        empty_note: "no positive values to plot",
+        zero_error: None,
+    }
 }
 
 /// The legend: one numbered line per method, in its colour, front members marked.
@@ -274,9 +365,19 @@ pub fn draw_error_vs_time(report: &SceneReport, labels: bool) -> PlotResult<Vec<
         let (charts, legend) = root.split_horizontally(width - 250);
         let (left, right) = charts.split_horizontally((width - 250) / 2);
         let title = format!("{}: RMSE, all pixels", report.name);
-        draw_panel(&left, &title, "RMSE", &rmse, labels)?;
+        draw_log_log_panel(
+            &left,
+            &footprint_text(&title, "RMSE"),
+            &numbered_points(&rmse),
+            labels,
+        )?;
         let title = format!("{}: {flip_title}", report.name);
-        draw_panel(&right, &title, "FLIP", &flip, labels)?;
+        draw_log_log_panel(
+            &right,
+            &footprint_text(&title, "FLIP"),
+            &numbered_points(&flip),
+            labels,
+        )?;
         if labels {
             let front = pareto_front(&rmse);
             let on_front: Vec<bool> = (0..names.len()).map(|i| front.contains(&i)).collect();
