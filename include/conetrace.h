@@ -231,7 +231,9 @@ typedef struct CtRenderOptions {
   // large. 0 = the memory the system reports available (no limit where it reports none).
   uint64_t max_memory;
   // Integrator (`CT_INTEGRATOR_*`). Appended last: a caller whose `struct_size` ends before
-  // it gets `CT_INTEGRATOR_SCENE`.
+  // it gets `CT_INTEGRATOR_SCENE`. The struct ends in 4 bytes of padding after it; a field
+  // appended later must start after that padding (at an 8-byte boundary), so that every
+  // version of this header has its own `struct_size`.
   uint32_t integrator;
 } CtRenderOptions;
 

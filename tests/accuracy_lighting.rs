@@ -206,3 +206,48 @@ fn a_missing_scene_fails_before_anything_is_written() {
     assert_eq!(stderr.trim().lines().count(), 1, "stderr: {stderr}");
     assert!(!out.exists(), "nothing may be written for bad input");
 }
+
+/// A grid whose voxel pyramid vct would refuse (over its memory limit) stops the command
+/// before the reference renders: exit 2, one line naming the scene, nothing written.
+#[test]
+fn an_oversized_vct_grid_fails_before_anything_is_written() {
+    let dir = temp_dir();
+    let out = dir.path().join("out");
+    let out_text = out.to_str().unwrap().to_string();
+    let cornell = asset("cornell.toml");
+    let mut args = lighting_args(&out_text, &[cornell.to_str().unwrap()]);
+    args.extend_from_slice(&["--lighting-vct-resolutions", "1024"]);
+    let result = run_in(dir.path(), &args);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "stderr: {stderr}");
+    assert!(
+        stderr.contains("cornell.toml") && stderr.contains("1024"),
+        "stderr: {stderr}"
+    );
+    assert_eq!(stderr.trim().lines().count(), 1, "stderr: {stderr}");
+    assert!(!out.exists(), "nothing may be written for bad input");
+}
+
+/// Two scenes with the same file stem would write the same report files: refused up front.
+#[test]
+fn two_scenes_with_one_name_are_refused() {
+    let dir = temp_dir();
+    let out = dir.path().join("out");
+    let out_text = out.to_str().unwrap().to_string();
+    let cornell = asset("cornell.toml");
+    let copy_dir = dir.path().join("copy");
+    std::fs::create_dir_all(&copy_dir).unwrap();
+    let copy = copy_dir.join("cornell.toml");
+    std::fs::copy(&cornell, &copy).unwrap();
+    let result = run_in(
+        dir.path(),
+        &lighting_args(
+            &out_text,
+            &[cornell.to_str().unwrap(), copy.to_str().unwrap()],
+        ),
+    );
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.contains("same name"), "stderr: {stderr}");
+    assert!(!out.exists(), "nothing may be written for bad input");
+}

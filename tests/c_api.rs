@@ -1263,6 +1263,13 @@ fn the_integrator_is_chosen_through_the_options() {
         CtStatus::CT_ERROR_INVALID_ARGUMENT
     );
     assert!(last_error().contains("integrator"), "{}", last_error());
+    // The memory estimate checks the options as the render does.
+    let mut bytes = 0u64;
+    assert_eq!(
+        unsafe { ct_render_memory_estimate(scene, &options, &mut bytes) },
+        CtStatus::CT_ERROR_INVALID_ARGUMENT
+    );
+    assert!(last_error().contains("integrator"), "{}", last_error());
 
     // A caller built against the header before `integrator` existed: its struct ends at the
     // field, and it renders with the scene's integrator.

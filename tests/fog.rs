@@ -271,7 +271,9 @@ albedo = [0.9, 0.9, 0.9]
             < 1e-6
     );
     assert_eq!(height.g, 0.6);
-    let bounds = height.bounds.expect("a box");
+    let Some(conetrace::medium::FogBounds::Box(bounds)) = height.bounds else {
+        panic!("not a box: {:?}", height.bounds)
+    };
     assert_eq!(bounds.max, glam::DVec3::new(5.0, 3.0, 5.0));
     let conetrace::medium::Density::Linear(plane) = scene.fog[1].density else {
         panic!("not linear")
@@ -279,6 +281,109 @@ albedo = [0.9, 0.9, 0.9]
     // Normalised: [0, 4, 0, -8] is y = 2 with a unit normal.
     assert_eq!((plane.normal, plane.offset), (glam::DVec3::Y, -2.0));
     assert_eq!(scene.fog[1].color, glam::Vec3::splat(0.8));
+}
+
+#[test]
+fn fog_in_a_closed_mesh_is_clipped_to_the_mesh() {
+    let dir = temp_dir();
+    write(
+        dir.path(),
+        "cube.obj",
+        &boxes_obj(&[([-0.5, -0.5, -0.5], [0.5, 0.5, 0.5])]),
+    );
+    // The unit cube placed as the box [-1, 1] x [1, 1.5] x [-1, 1]: the same 0.5-unit slab
+    // of sigma 5 as `bounded_fog_counts_only_the_segments_that_cross_its_box`.
+    let fog = "[[fog]]\ndensity = \"constant\"\nsigma = 5\ncolor = [0, 0, 0]\n\
+               bounds = { mesh = \"cube.obj\", translate = [0, 1.25, 0], scale = [2, 0.5, 2] }\n";
+    let (image, stats) = render(dir.path(), &emissive_floor_scene(5.0, fog), &[]);
+    assert_blend(&image, 2.5, [0.0, 0.0, 0.0], "fog in a placed cube mesh");
+    assert_eq!(stats["counters"]["fog_volume_crossings"], 25);
+    // Two slabs in one mesh, with clear air between and around them: every camera ray
+    // crosses both, 0.5 + 0.25 units of linear fog growing downwards from y = 4.
+    write(
+        dir.path(),
+        "slabs.obj",
+        &boxes_obj(&[
+            ([-2.0, 1.0, -2.0], [2.0, 1.5, 2.0]),
+            ([-2.0, 2.5, -2.0], [2.0, 2.75, 2.0]),
+        ]),
+    );
+    let fog = "[[fog]]\ndensity = \"linear\"\nsigma = 0.4\nplane = [0, 1, 0, -4]\n\
+               color = [0.2, 0.3, 0.4]\nbounds = { mesh = \"slabs.obj\" }\n";
+    let (image, stats) = render(dir.path(), &emissive_floor_scene(5.0, fog), &[]);
+    // density 0.4 (4 - y): integral over [1, 1.5] is 0.4 * 0.5 * 2.75 = 0.55, over
+    // [2.5, 2.75] 0.4 * 0.25 * 1.375 = 0.1375.
+    assert_blend(
+        &image,
+        0.55 + 0.1375,
+        [0.2, 0.3, 0.4],
+        "linear fog in two slabs",
+    );
+    assert_eq!(stats["counters"]["fog_volume_crossings"], 25);
+    // Beside the view: no camera ray crosses the mesh.
+    let fog = "[[fog]]\ndensity = \"constant\"\nsigma = 5\n\
+               bounds = { mesh = \"cube.obj\", translate = [3.5, 0.5, 0] }\n";
+    let (image, stats) = render(dir.path(), &emissive_floor_scene(5.0, fog), &[]);
+    assert!(image.channel("G").iter().all(|&v| v == 1.0));
+    assert_eq!(stats["counters"]["fog_volume_crossings"], 0);
+}
+
+#[test]
+fn fog_meshes_that_bound_nothing_exit_2_with_one_line() {
+    let dir = temp_dir();
+    write(dir.path(), "floor.obj", &square_obj(1.0, 0.0));
+    let cube = boxes_obj(&[([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])]);
+    let open: String = cube
+        .lines()
+        .take(8 + 11)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    write(dir.path(), "open.obj", &open);
+    write(dir.path(), "cube.obj", &cube);
+    let cases = [
+        (
+            "bounds = { mesh = \"open.obj\" }",
+            "open.obj' is not closed",
+        ),
+        (
+            "bounds = { mesh = \"missing.obj\" }",
+            "cannot read fog bounds mesh",
+        ),
+        (
+            "bounds = { mesh = \"cube.obj\", scale = 0 }",
+            "scale must not be zero",
+        ),
+        (
+            "bounds = { mesh = \"cube.obj\", min = [0, 0, 0], max = [1, 1, 1] }",
+            "a box { min",
+        ),
+        (
+            "bounds = { min = [0, 0, 0], translate = [1, 0, 0] }",
+            "a box { min",
+        ),
+    ];
+    for (bounds, message) in cases {
+        let text = emissive_floor_scene(
+            5.0,
+            &format!("[[fog]]\ndensity = \"constant\"\nsigma = 1\n{bounds}\n"),
+        );
+        write(dir.path(), "bad.toml", &text);
+        let out = run_in(
+            dir.path(),
+            &["render", "bad.toml", "-o", "bad.exr", "--quiet"],
+        );
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{bounds}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{bounds}: {stderr}");
+        assert!(
+            stderr.contains("bad.toml") && stderr.contains(message),
+            "{bounds}: expected '{message}' in: {stderr}"
+        );
+        assert!(
+            !dir.path().join("bad.exr").exists(),
+            "{bounds}: an image was written"
+        );
+    }
 }
 
 #[test]
@@ -376,6 +481,28 @@ fn gltf_files_bring_fog_through_extras() {
     assert_eq!(scene.fog.len(), 1);
     assert_eq!(scene.fog[0].density.kind(), "linear");
     assert_eq!(scene.fog[0].color, glam::Vec3::new(0.1, 0.2, 0.3));
+    // A mesh bound is read relative to the glTF file.
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    write(
+        &dir.path().join("sub"),
+        "volume.obj",
+        &boxes_obj(&[([0.0, 0.0, 0.0], [1.0, 2.0, 1.0])]),
+    );
+    let path = write(
+        &dir.path().join("sub"),
+        "meshfog.gltf",
+        &gltf_with_fog(
+            r#"[{"density": "constant", "sigma": 0.5, "bounds": {"mesh": "volume.obj", "translate": [1, 0, 0]}}]"#,
+        ),
+    );
+    let scene = conetrace::scene::load::load_scene(&path).expect("loads");
+    let volume = &scene.fog[0];
+    assert!(matches!(
+        volume.bounds,
+        Some(conetrace::medium::FogBounds::Mesh(_))
+    ));
+    assert!(volume.contains(glam::DVec3::new(1.5, 1.5, 0.5)));
+    assert!(!volume.contains(glam::DVec3::new(0.5, 1.5, 0.5)));
     // Placed by a TOML scene without a transform the fog comes along; with one, a note says
     // it was left out.
     let toml = |placement: &str| {

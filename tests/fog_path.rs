@@ -88,7 +88,7 @@ base_color = [0.0, 0.0, 0.0]
 
 # Outside the view and the fog: the scene's only surface.
 [[sphere]]
-center = [0.0, 0.0, -50.0]
+center = [50.0, 0.0, -50.0]
 radius = 0.1
 material = "black"
 
@@ -230,7 +230,7 @@ base_color = [1.0, 1.0, 1.0]
 const FURNACE_ALONE: &str = r#"
 # Far outside the box and the view: the scene's only surface (white, it absorbs nothing).
 [[sphere]]
-center = [0.0, 0.0, -60.0]
+center = [60.0, 0.0, -60.0]
 radius = 0.1
 material = "white"
 
@@ -291,6 +291,97 @@ fn a_medium_furnace_returns_the_environment() {
         );
         assert_eq!(counters.nonfinite_samples, 0);
     }
+}
+
+/// Fog bounded by closed meshes under the path tracer: (a) the absorber of
+/// `a_pure_absorber_passes_exp_minus_sigma_d` split into two slabs of one mesh with clear
+/// air between them (z in [-1.5, -1] and [0.5, 1], sigma 1: again exp(-1)); (b) the medium
+/// furnace in a tessellated sphere, where scattered paths start inside the mesh.
+#[test]
+fn fog_in_a_mesh_absorbs_and_scatters_like_fog_in_a_box() {
+    let dir = temp_dir();
+    write(
+        dir.path(),
+        "slabs.obj",
+        &boxes_obj(&[
+            ([-10.0, -10.0, -1.5], [10.0, 10.0, -1.0]),
+            ([-10.0, -10.0, 0.5], [10.0, 10.0, 1.0]),
+        ]),
+    );
+    write(
+        dir.path(),
+        "ball.obj",
+        &uv_sphere_obj([0.0; 3], 1.0, 64, 32),
+    );
+    let absorber = r#"
+[render]
+width = 8
+height = 8
+spp = 1024
+max_depth = 8
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+height = 2.0
+
+[environment]
+color = [1.0, 1.0, 1.0]
+
+[[material]]
+name = "black"
+base_color = [0.0, 0.0, 0.0]
+
+[[sphere]]
+center = [50.0, 0.0, -50.0]
+radius = 0.1
+material = "black"
+
+[[fog]]
+density = "constant"
+sigma = 1.0
+albedo = [0.0, 0.0, 0.0]
+bounds = { mesh = "slabs.obj" }
+"#;
+    let (pixels, stats) = render_path(load(dir.path(), absorber));
+    let expected = (-1.0f64).exp();
+    let m = mean(&pixels);
+    let tolerance = 4.0 * (expected * (1.0 - expected) / 65536.0).sqrt();
+    eprintln!(
+        "absorber in two slabs of a mesh: mean {m:?}, expected {expected:.6} +- {tolerance:.4}"
+    );
+    for value in m {
+        assert!(
+            (value - expected).abs() < tolerance,
+            "mean {value}, expected {expected}"
+        );
+    }
+    assert_eq!(stats.counters.fog_volume_crossings, 65536);
+
+    let furnace = FURNACE_ALONE.replace(
+        "bounds = { min = [-1.0, -1.0, -1.0], max = [1.0, 1.0, 1.0] }",
+        "bounds = { mesh = \"ball.obj\" }",
+    );
+    assert!(furnace.contains("ball.obj"));
+    let (pixels, stats) = render_path(medium_furnace(dir.path(), 1024, &furnace));
+    let m = mean(&pixels);
+    let worst = worst_error(&pixels, 1.0);
+    let counters = &stats.counters;
+    eprintln!(
+        "medium furnace in a sphere mesh: mean {m:?}, worst pixel error {worst:.4}, \
+         scatter events {} over {} paths",
+        counters.fog_scatter_events, counters.paths
+    );
+    for value in m {
+        assert!((value - 1.0).abs() < 0.01, "mean {value} (expected 1)");
+    }
+    assert!(worst < 0.05, "a pixel is {worst} off");
+    assert!(
+        counters.fog_scatter_events > counters.paths / 2,
+        "{counters:?}"
+    );
+    assert_eq!(counters.nonfinite_samples, 0);
 }
 
 /// Light sampling alone, phase-function sampling alone and their MIS combination estimate

@@ -168,4 +168,6 @@ fn texture_tiles_are_counted_at_every_bounce() {
     assert!(bounced_lookups > camera_lookups * 5 / 4);
     assert!(bounced.touches > camera_only.touches * 5 / 4);
     assert!(bounced.total > camera_only.total);
+    // Cones widen at every diffuse bounce, so bounced lookups reach coarser levels.
+    assert!(coarsest_level(&bounced) >= coarsest_level(&camera_only));
 }

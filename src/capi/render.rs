@@ -110,7 +110,9 @@ pub struct CtRenderOptions {
     /// large. 0 = the memory the system reports available (no limit where it reports none).
     pub max_memory: u64,
     /// Integrator (`CT_INTEGRATOR_*`). Appended last: a caller whose `struct_size` ends before
-    /// it gets `CT_INTEGRATOR_SCENE`.
+    /// it gets `CT_INTEGRATOR_SCENE`. The struct ends in 4 bytes of padding after it; a field
+    /// appended later must start after that padding (at an 8-byte boundary), so that every
+    /// version of this header has its own `struct_size`.
     pub integrator: u32,
 }
 
@@ -494,6 +496,8 @@ pub unsafe extern "C" fn ct_render_memory_estimate(
             }?
         };
         let object = handles::scene(scene)?;
+        // The same checks as `ct_render`: an unknown integrator is an error here too.
+        integrator_from_code(c_options.integrator, &object.scene.settings)?;
         let render_options = render_options(&c_options, &object.scene)?;
         let estimate = memory_estimate(&c_options, &object.scene, &render_options)?;
         // SAFETY: checked non-null above.

@@ -33,7 +33,7 @@ pub struct BenchTilesArgs {
     #[arg(default_value = "assets/scenes/path_textured.toml")]
     pub scene: PathBuf,
     /// Integrator (whitted, path, vct or auto).
-    #[arg(long, default_value = "path")]
+    #[arg(long, default_value = "path", value_parser = ["whitted", "path", "vct", "auto"])]
     pub integrator: String,
     /// Image width (default: the scene's).
     #[arg(long)]
@@ -207,6 +207,9 @@ pub fn table(rows: &[TileRow]) -> String {
 }
 
 pub fn run(args: &BenchTilesArgs) -> Result<(), CommandError> {
+    if args.runs == 0 {
+        return Err(CommandError::bad_input("--runs must be at least 1"));
+    }
     let render_args = render_args(args)?;
     let pool = crate::cli::worker_pool(args.threads)?;
     let mut scene = render_cmd::load(&render_args)?;
@@ -215,7 +218,7 @@ pub fn run(args: &BenchTilesArgs) -> Result<(), CommandError> {
     let choice = scene.settings.integrator;
     let (width, height, spp) = (options.width, options.height, options.spp);
     pool.install(|| {
-        let (rows, integrator) = measure(Arc::new(scene), &options, choice, args.runs.max(1))?;
+        let (rows, integrator) = measure(Arc::new(scene), &options, choice, args.runs)?;
         let command = std::iter::once("conetrace".to_string())
             .chain(std::env::args().skip(1))
             .collect::<Vec<_>>()
@@ -225,13 +228,13 @@ pub fn run(args: &BenchTilesArgs) -> Result<(), CommandError> {
              median of {} timed rounds\n\n",
             args.scene.display(),
             rayon::current_num_threads(),
-            args.runs.max(1),
+            args.runs,
         );
         text.push_str(&table(&rows));
         print!("{text}");
         if let Some(file) = &args.markdown {
-            std::fs::write(file, &text)
-                .map_err(|e| CommandError::bad_input(format!("{}: {e}", file.display())))?;
+            // Written whole or not at all (a temporary file renamed into place).
+            crate::cli::accuracy::files::write_text(file, &text)?;
         }
         Ok(())
     })

@@ -39,7 +39,7 @@ pub const DIGITS: usize = 6;
 /// Computed from the float's bits: an `f32` is `m * 2^e` with an integer mantissa
 /// `m < 2^24`, so the scaled value is `m` shifted by `e + 64` places, exact when shifting up
 /// and rounded once when shifting down. (The same number as rounding the scaled `f64` and
-/// converting it, [`to_fixed_via_f64`] in the tests, without the two library calls that
+/// converting it, `to_fixed_via_f64` in the tests, without the two library calls that
 /// conversion costs on every sample of every pixel.)
 #[inline]
 pub fn to_fixed(value: f32) -> i128 {

@@ -8,12 +8,16 @@
 //! which a given optical depth is reached, for free-flight sampling); `segment` holds the
 //! f64 line and the clipping to a volume's box; `volume` sums over the overlapping volumes
 //! of a scene and turns depth into what an integrator uses (transmittance, the blend towards
-//! the fog colour, free-flight distances). Everything is computed in f64.
+//! the fog colour, free-flight distances). `phase` is the Henyey-Greenstein phase function
+//! of the path tracer's scattering vertices, `tracking` delta tracking against a majorant
+//! (for densities without a closed-form inverse). Depths and distances are computed in f64;
+//! the phase function, which works on f32 directions, in f32.
 
 pub mod constant;
 pub mod exponential;
 pub mod integration;
 pub mod linear;
+pub mod mesh_bounds;
 pub mod phase;
 pub mod segment;
 pub mod tracking;
@@ -23,10 +27,14 @@ pub use constant::ConstantDensity;
 pub use exponential::ExponentialDensity;
 pub use integration::FogIntegration;
 pub use linear::LinearDensity;
+pub use mesh_bounds::{ClosedMesh, MeshBoundsError};
 pub use phase::{HenyeyGreenstein, PhaseSample};
 pub use segment::{FogBox, Line};
 pub use tracking::{delta_tracking, TrackingError};
-pub use volume::{free_flight, segment_fog, segment_fog_with, FogModel, FogVolume, SegmentFog};
+pub use volume::{
+    free_flight, segment_fog, segment_fog_with, FogBounds, FogModel, FogVolume, InsideParts,
+    SegmentFog,
+};
 
 use glam::DVec3;
 

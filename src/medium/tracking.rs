@@ -15,14 +15,19 @@
 //! needed, never its integral.
 //!
 //! The majorant here is the sum, over the volumes the segment crosses, of each volume's
-//! largest density on its clipped part. Every kind is monotone along a line (constant, an
+//! largest density on its clipped parts. Every kind is monotone along a line (constant, an
 //! affine function clamped at 0, an exponential), so that maximum is at an end of the
 //! part; a part running to infinity with a growing density has no finite majorant
-//! ([`TrackingError::UnboundedDensity`]). The tracker is tested against the closed-form
+//! ([`TrackingError::UnboundedDensity`]). The majorant is recomputed from each null
+//! collision onward, so it tightens as the walk advances and, through fog thinning toward
+//! infinity, shrinks to zero and lets the walk end. The tracker is tested against the closed-form
 //! sampler below; the renderer keeps the exact inversion, which needs no rejection steps.
+
+use glam::DVec3;
 
 use super::segment::Line;
 use super::volume::FogVolume;
+use super::Density;
 
 /// Why a segment cannot be tracked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
@@ -32,16 +37,46 @@ pub enum TrackingError {
     UnboundedDensity,
 }
 
+/// Whether `density` grows along `direction` (each kind is monotone along a line, so the
+/// sign of its slope decides; a clamped linear density counts as growing toward its fog
+/// even while the clamp holds it at zero).
+fn grows_along(density: &Density, direction: DVec3) -> bool {
+    match density {
+        Density::Constant(_) => false,
+        Density::Linear(linear) => -linear.normal.dot(direction) > 0.0,
+        Density::Exponential(exponential) => -exponential.falloff * direction.y > 0.0,
+    }
+}
+
 /// The largest density of `volume` on `[u0, u1]` (already clipped to its box), or `None`
 /// when `u1` is infinite and the density grows along the line.
 fn max_density_on(volume: &FogVolume, line: &Line, u0: f64, u1: f64) -> Option<f64> {
     let start = volume.density.density_at(line.at(u0));
     if u1.is_infinite() {
-        // Monotone along the line: growing one unit further means growing for ever.
-        let further = volume.density.density_at(line.at(u0 + 1.0));
-        return (further <= start).then_some(start);
+        return (!grows_along(&volume.density, line.direction)).then_some(start);
     }
     Some(start.max(volume.density.density_at(line.at(u1))))
+}
+
+/// A majorant of the summed extinction on `[t, t1]`: each crossed volume's largest
+/// density on its clipped part, summed, with a relative margin so that rounding in a point
+/// evaluation never exceeds it.
+fn majorant_from(
+    volumes: &[FogVolume],
+    line: &Line,
+    t: f64,
+    t1: f64,
+) -> Result<f64, TrackingError> {
+    let mut majorant = 0.0f64;
+    for volume in volumes {
+        let mut largest = 0.0f64;
+        for (u0, u1) in volume.parts(line, t, t1).iter() {
+            largest = largest
+                .max(max_density_on(volume, line, u0, u1).ok_or(TrackingError::UnboundedDensity)?);
+        }
+        majorant += largest;
+    }
+    Ok(majorant * (1.0 + 1e-9))
 }
 
 /// The summed extinction of `volumes` at distance `t` along `line`, with the index of the
@@ -49,7 +84,7 @@ fn max_density_on(volume: &FogVolume, line: &Line, u0: f64, u1: f64) -> Option<f
 /// by `u` in [0, 1).
 fn density_at(volumes: &[FogVolume], line: &Line, t: f64, u: f64) -> (f64, Option<usize>) {
     let p = line.at(t);
-    let inside = |v: &FogVolume| v.bounds.is_none_or(|b| b.contains(p));
+    let inside = |v: &FogVolume| v.contains(p);
     let total: f64 = volumes
         .iter()
         .filter(|v| inside(v))
@@ -83,20 +118,15 @@ pub fn delta_tracking(
     t1: f64,
     mut uniform: impl FnMut() -> f64,
 ) -> Result<Option<(f64, usize)>, TrackingError> {
-    let mut majorant = 0.0f64;
-    for volume in volumes {
-        if let Some((u0, u1)) = volume.clip(line, t0, t1) {
-            majorant +=
-                max_density_on(volume, line, u0, u1).ok_or(TrackingError::UnboundedDensity)?;
-        }
-    }
-    if majorant <= 0.0 {
-        return Ok(None);
-    }
-    // A relative margin so that rounding in a point evaluation never exceeds the majorant.
-    let majorant = majorant * (1.0 + 1e-9);
     let mut t = t0;
     loop {
+        // Recomputed from the current point on: over the rest of the segment the bound can
+        // only tighten, and along an infinite segment through thinning fog it must shrink
+        // for the walk to end.
+        let majorant = majorant_from(volumes, line, t, t1)?;
+        if majorant <= 0.0 {
+            return Ok(None);
+        }
         t += -(1.0 - uniform()).ln() / majorant;
         if t >= t1 {
             return Ok(None);
@@ -115,14 +145,14 @@ pub fn delta_tracking(
 mod tests {
     use super::*;
     use crate::medium::{
-        free_flight, ConstantDensity, Density, ExponentialDensity, FogBox, LinearDensity,
+        free_flight, ConstantDensity, Density, ExponentialDensity, FogBounds, FogBox, LinearDensity,
     };
     use glam::{DVec3, Vec3};
 
     fn volume(density: Density, bounds: Option<FogBox>) -> FogVolume {
         FogVolume {
             density,
-            bounds,
+            bounds: bounds.map(FogBounds::Box),
             color: Vec3::ONE,
             albedo: Vec3::ONE,
             g: 0.0,
@@ -230,5 +260,57 @@ mod tests {
         };
         let hit = delta_tracking(&volumes, &up, 0.0, f64::INFINITY, generator(2)).unwrap();
         assert!(hit.is_some());
+    }
+
+    /// A ray starting far above a linear fog plane and heading into it reads density 0 at
+    /// its start and one unit on, yet the fog grows without bound ahead: no majorant.
+    #[test]
+    fn clamped_linear_fog_ahead_is_unbounded() {
+        let volumes = vec![volume(
+            Density::Linear(LinearDensity::from_plane(0.2, [0.0, 1.0, 0.0, 0.0]).unwrap()),
+            None,
+        )];
+        let down = Line {
+            origin: DVec3::new(0.0, 10.0, 0.0),
+            direction: DVec3::NEG_Y,
+        };
+        let result = delta_tracking(&volumes, &down, 0.0, f64::INFINITY, generator(3));
+        assert_eq!(result, Err(TrackingError::UnboundedDensity));
+    }
+
+    /// Upwards to infinity through height fog alone a ray escapes with probability
+    /// `exp(-tau)`, `tau` finite: tracking must end (the majorant shrinks with the fog) and
+    /// pass at that rate.
+    #[test]
+    fn escaping_through_thinning_fog_ends_and_passes_at_exp_minus_tau() {
+        let volumes = vec![volume(
+            Density::Exponential(ExponentialDensity {
+                sigma: 0.5,
+                height: 0.0,
+                falloff: 0.8,
+            }),
+            None,
+        )];
+        let up = Line {
+            origin: DVec3::ZERO,
+            direction: DVec3::new(0.6, 0.8, 0.0),
+        };
+        let tau = volumes[0].optical_depth(&up, 0.0, f64::INFINITY);
+        let pass = (-tau).exp();
+        let n = 50_000;
+        let mut uniform = generator(4);
+        let passed = (0..n)
+            .filter(|_| {
+                delta_tracking(&volumes, &up, 0.0, f64::INFINITY, &mut uniform)
+                    .unwrap()
+                    .is_none()
+            })
+            .count();
+        let rate = passed as f64 / n as f64;
+        let sd = (pass * (1.0 - pass) / n as f64).sqrt();
+        assert!(
+            (rate - pass).abs() < 4.0 * sd,
+            "pass rate {rate} against exp(-tau) = {pass}"
+        );
     }
 }

@@ -2,18 +2,67 @@
 //! the summed optical depth, the colour its in-scattering blends towards, its transmittance
 //! under either fog model, and free-flight distances for a path tracer.
 
-use glam::Vec3;
+use std::sync::Arc;
+
+use glam::{DVec3, Vec3};
 
 use super::integration::FogIntegration;
+use super::mesh_bounds::ClosedMesh;
 use super::segment::{FogBox, Line};
 use super::Density;
+
+/// What a bounded fog volume fills.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FogBounds {
+    /// An axis-aligned box (`bounds = { min, max }`).
+    Box(FogBox),
+    /// The inside of a closed mesh (`bounds = { mesh = ... }`), shared between clones.
+    Mesh(Arc<ClosedMesh>),
+}
+
+impl FogBounds {
+    /// Whether `p` lies inside (on the boundary counts as inside).
+    pub fn contains(&self, p: DVec3) -> bool {
+        match self {
+            FogBounds::Box(b) => b.contains(p),
+            FogBounds::Mesh(m) => m.contains(p),
+        }
+    }
+}
+
+/// The parts of a segment inside a volume, in order along the line: at most one for a box
+/// or unbounded fog, any number for a mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub enum InsideParts {
+    One(Option<(f64, f64)>),
+    Many(Vec<(f64, f64)>),
+}
+
+impl InsideParts {
+    /// The parts, as `(start, end)` distances.
+    pub fn iter(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let (one, many) = match self {
+            InsideParts::One(part) => (*part, &[][..]),
+            InsideParts::Many(parts) => (None, &parts[..]),
+        };
+        one.into_iter().chain(many.iter().copied())
+    }
+
+    /// Whether the segment misses the volume.
+    pub fn is_empty(&self) -> bool {
+        match self {
+            InsideParts::One(part) => part.is_none(),
+            InsideParts::Many(parts) => parts.is_empty(),
+        }
+    }
+}
 
 /// One `[[fog]]` volume.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FogVolume {
     pub density: Density,
-    /// The box the fog fills; `None` for fog everywhere.
-    pub bounds: Option<FogBox>,
+    /// The box or mesh the fog fills; `None` for fog everywhere.
+    pub bounds: Option<FogBounds>,
     /// What in-scattered light blends towards (Whitted, seed 004): linear RGB radiance.
     pub color: Vec3,
     /// Single-scattering albedo `sigma_s / sigma_t` per channel, in [0, 1] (path tracer).
@@ -23,21 +72,28 @@ pub struct FogVolume {
 }
 
 impl FogVolume {
-    /// The part of `[t0, t1]` inside this volume's box (all of it when unbounded).
+    /// The parts of `[t0, t1]` inside this volume's box or mesh (all of it when
+    /// unbounded).
     #[inline]
-    pub fn clip(&self, line: &Line, t0: f64, t1: f64) -> Option<(f64, f64)> {
+    pub fn parts(&self, line: &Line, t0: f64, t1: f64) -> InsideParts {
         match &self.bounds {
-            Some(b) => b.clip(line, t0, t1),
-            None => (t1 > t0).then_some((t0, t1)),
+            None => InsideParts::One((t1 > t0).then_some((t0, t1))),
+            Some(FogBounds::Box(b)) => InsideParts::One(b.clip(line, t0, t1)),
+            Some(FogBounds::Mesh(m)) => InsideParts::Many(m.inside_parts(line, t0, t1)),
         }
+    }
+
+    /// Whether `p` lies in the volume's box or mesh (everywhere when unbounded).
+    pub fn contains(&self, p: DVec3) -> bool {
+        self.bounds.as_ref().is_none_or(|b| b.contains(p))
     }
 
     /// The exact optical depth of `[t0, t1]` along `line` inside this volume.
     pub fn optical_depth(&self, line: &Line, t0: f64, t1: f64) -> f64 {
-        match self.clip(line, t0, t1) {
-            Some((u0, u1)) => self.density.optical_depth(line, u0, u1),
-            None => 0.0,
-        }
+        self.parts(line, t0, t1)
+            .iter()
+            .map(|(u0, u1)| self.density.optical_depth(line, u0, u1))
+            .sum()
     }
 }
 
@@ -112,12 +168,17 @@ pub fn segment_fog_with(
     let mut infinite_count = 0u32;
     let mut crossed = 0u32;
     for volume in volumes {
-        let Some((u0, u1)) = volume.clip(&line, 0.0, t1) else {
+        let parts = volume.parts(&line, 0.0, t1);
+        if parts.is_empty() {
             continue;
-        };
+        }
         crossed += 1;
-        let (tau, samples) = integration.optical_depth(&volume.density, &line, u0, u1);
-        density_samples += samples;
+        let mut tau = 0.0;
+        for (u0, u1) in parts.iter() {
+            let (part_tau, samples) = integration.optical_depth(&volume.density, &line, u0, u1);
+            density_samples += samples;
+            tau += part_tau;
+        }
         if tau.is_infinite() {
             infinite_colors += volume.color.as_dvec3();
             infinite_count += 1;
@@ -148,10 +209,11 @@ pub fn segment_fog_with(
 /// it collides in, or `None` if it passes the whole interval.
 ///
 /// `optical_depth_draw` gives an independent exponential variate of mean 1 (e.g.
-/// `-ln(1 - u)`) per call. Each volume's collision distance is found by inverting its own
-/// closed-form depth; the nearest of them is distributed as the first collision in the sum
-/// of the volumes, because the probability of passing `t` without collision is the product
-/// of the volumes' transmittances, `exp(-sum tau_i)`.
+/// `-ln(1 - u)`) per call, one per volume the segment crosses. Each volume's collision
+/// distance is found by inverting its own closed-form depth (through a mesh's parts in
+/// turn, the draw used up part by part); the nearest of them is distributed as the first
+/// collision in the sum of the volumes, because the probability of passing `t` without
+/// collision is the product of the volumes' transmittances, `exp(-sum tau_i)`.
 pub fn free_flight(
     volumes: &[FogVolume],
     line: &Line,
@@ -161,14 +223,22 @@ pub fn free_flight(
 ) -> Option<(f64, usize)> {
     let mut nearest: Option<(f64, usize)> = None;
     for (index, volume) in volumes.iter().enumerate() {
-        let Some((u0, u1)) = volume.clip(line, t0, t1) else {
+        let parts = volume.parts(line, t0, t1);
+        if parts.is_empty() {
             continue;
-        };
-        let tau = optical_depth_draw();
-        if let Some(t) = volume.density.distance_at_optical_depth(line, u0, u1, tau) {
-            if nearest.is_none_or(|(best, _)| t < best) {
-                nearest = Some((t, index));
+        }
+        let mut tau = optical_depth_draw();
+        for (u0, u1) in parts.iter() {
+            if nearest.is_some_and(|(best, _)| best <= u0) {
+                break;
             }
+            if let Some(t) = volume.density.distance_at_optical_depth(line, u0, u1, tau) {
+                if nearest.is_none_or(|(best, _)| t < best) {
+                    nearest = Some((t, index));
+                }
+                break;
+            }
+            tau -= volume.density.optical_depth(line, u0, u1);
         }
     }
     nearest
@@ -183,7 +253,7 @@ mod tests {
     fn constant(sigma: f64, color: Vec3, bounds: Option<FogBox>) -> FogVolume {
         FogVolume {
             density: Density::Constant(ConstantDensity { sigma }),
-            bounds,
+            bounds: bounds.map(FogBounds::Box),
             color,
             albedo: Vec3::ONE,
             g: 0.0,
@@ -283,5 +353,92 @@ mod tests {
         // Collisions fall in each volume in proportion to its density.
         let share = in_second as f64 / (n - passed) as f64;
         assert!((share - 0.6).abs() < 0.01, "{share}");
+    }
+
+    /// Two separate unit cubes along x, `[1, 2]` and `[4, 5]`, as one closed mesh.
+    fn two_cubes() -> FogBounds {
+        let mut triangles = Vec::new();
+        for x in [1.0, 4.0] {
+            let corner = |i: usize| {
+                DVec3::new(
+                    x + (i & 1) as f64,
+                    -0.5 + ((i >> 1) & 1) as f64,
+                    -0.5 + ((i >> 2) & 1) as f64,
+                )
+            };
+            for q in [
+                [0, 4, 6, 2],
+                [1, 3, 7, 5],
+                [0, 1, 5, 4],
+                [2, 6, 7, 3],
+                [0, 2, 3, 1],
+                [4, 5, 7, 6],
+            ] {
+                triangles.push([corner(q[0]), corner(q[1]), corner(q[2])]);
+                triangles.push([corner(q[0]), corner(q[2]), corner(q[3])]);
+            }
+        }
+        FogBounds::Mesh(std::sync::Arc::new(
+            crate::medium::ClosedMesh::new(&triangles).unwrap(),
+        ))
+    }
+
+    /// Free flights through fog in a mesh of two parts: collisions only inside the parts,
+    /// passing with `exp(-tau)` of both, and the first part taking `1 - exp(-sigma)` of
+    /// the flights; delta tracking through the same mesh agrees.
+    #[test]
+    fn free_flights_through_a_mesh_of_two_parts() {
+        let sigma = 0.7;
+        let volumes = [FogVolume {
+            bounds: Some(two_cubes()),
+            ..constant(sigma, Vec3::ONE, None)
+        }];
+        let line = Line {
+            origin: DVec3::new(0.0, 0.1, 0.2),
+            direction: DVec3::X,
+        };
+        let tau = volumes[0].optical_depth(&line, 0.0, 10.0);
+        assert!((tau - 2.0 * sigma).abs() < 1e-12, "{tau}");
+        let fog = segment_fog(&volumes, Vec3::new(0.0, 0.1, 0.2), Vec3::X, 3.0);
+        assert!((fog.optical_depth - sigma).abs() < 1e-6, "{fog:?}");
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut uniform = move || {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 200_000;
+        let (mut passed, mut in_first, mut tracked_passed) = (0, 0, 0);
+        for _ in 0..n {
+            match free_flight(&volumes, &line, 0.0, 10.0, || -(1.0 - uniform()).ln()) {
+                None => passed += 1,
+                Some((t, _)) => {
+                    assert!((1.0..=2.0).contains(&t) || (4.0..=5.0).contains(&t), "{t}");
+                    in_first += usize::from(t <= 2.0);
+                }
+            }
+            let tracked =
+                crate::medium::delta_tracking(&volumes, &line, 0.0, 10.0, &mut uniform).unwrap();
+            match tracked {
+                None => tracked_passed += 1,
+                Some((t, _)) => {
+                    assert!((1.0..=2.0).contains(&t) || (4.0..=5.0).contains(&t), "{t}")
+                }
+            }
+        }
+        let expected = (-2.0 * sigma).exp();
+        let sd = (expected * (1.0 - expected) / n as f64).sqrt();
+        for (what, count) in [("free flight", passed), ("delta tracking", tracked_passed)] {
+            let p = count as f64 / n as f64;
+            assert!((p - expected).abs() < 4.0 * sd, "{what}: {p} vs {expected}");
+        }
+        let first = in_first as f64 / n as f64;
+        let expected_first = 1.0 - (-sigma).exp();
+        let sd = (expected_first * (1.0 - expected_first) / n as f64).sqrt();
+        assert!(
+            (first - expected_first).abs() < 4.0 * sd,
+            "{first} vs {expected_first}"
+        );
     }
 }

@@ -46,8 +46,9 @@ pub fn sample_binding(
 }
 
 /// The radiance an area light emits at texture coordinates `st` (from its front side): its
-/// emission factor, times its material's emission texture read at level 0 with a bilinear
-/// point lookup (zero gradients) when it has one.
+/// emission factor, times its material's emission texture read at level 0 with the render's
+/// filter and zero gradients (a point lookup: bilinear for the filtering modes, the nearest
+/// texel for `closest`) when it has one.
 ///
 /// Next-event estimation reads it at the sampled point and a BSDF-sampled ray that hits the
 /// light at the hit, so the two halves of multiple importance sampling weigh the same

@@ -111,6 +111,13 @@ impl PixelSampler {
         key
     }
 
+    /// Moves past `count` dimensions without drawing them, so that an estimator that uses
+    /// fewer dimensions on some paths still starts its next step at the same dimension.
+    #[inline]
+    pub fn skip_dimensions(&mut self, count: u32) {
+        self.dimension += count;
+    }
+
     /// The next dimension: a value in [0, 1).
     #[inline]
     pub fn next_1d(&mut self) -> f32 {

@@ -94,7 +94,9 @@ pub struct AreaLightSample {
     pub distance: f32,
     /// The point on the light (where shadow rays stop short of).
     pub point: Vec3,
-    /// Radiance arriving along `direction_to_light` (zero from the back side).
+    /// The light's emission factor along `direction_to_light` (zero from the back side),
+    /// untextured: a textured light's radiance is this times its texture at `st`
+    /// (`render::surface_textures::area_light_radiance`).
     pub radiance: Vec3,
     /// Solid-angle density of the direction.
     pub pdf: f32,

@@ -44,7 +44,8 @@ const TILES_REMEMBERED: usize = 8;
 pub(crate) struct TextureTileRecorder<'a> {
     texture_id: u64,
     tiles: &'a mut TextureTileSet,
-    /// The lookup's tiles so far, most recent first in a ring of `TILES_REMEMBERED`.
+    /// The last `TILES_REMEMBERED` tiles this lookup recorded, in a ring (slot `seen_count %
+    /// TILES_REMEMBERED` is written next).
     seen: [(usize, usize, usize); TILES_REMEMBERED],
     seen_count: usize,
 }

@@ -43,6 +43,39 @@ pub fn square_obj(half: f32, y: f32) -> String {
     )
 }
 
+/// Axis-aligned boxes `[lo, hi]` as one OBJ, each with 12 outward-facing triangles.
+pub fn boxes_obj(boxes: &[([f32; 3], [f32; 3])]) -> String {
+    use std::fmt::Write;
+    let mut obj = String::new();
+    for (index, (lo, hi)) in boxes.iter().enumerate() {
+        for corner in 0..8 {
+            let pick = |axis: usize| {
+                if corner >> axis & 1 == 0 {
+                    lo[axis]
+                } else {
+                    hi[axis]
+                }
+            };
+            writeln!(obj, "v {} {} {}", pick(0), pick(1), pick(2)).unwrap();
+        }
+        // Quads counter-clockwise seen from outside: -x, +x, -y, +y, -z, +z.
+        let quads = [
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+        ];
+        let base = 1 + 8 * index;
+        for q in quads {
+            let [a, b, c, d] = q.map(|i| base + i);
+            writeln!(obj, "f {a} {b} {c}\nf {a} {c} {d}").unwrap();
+        }
+    }
+    obj
+}
+
 /// A UV sphere of `segments` x `rings` around `center` with radius `radius`, as OBJ with
 /// unit vertex normals (smooth shading) and counter-clockwise (outward) winding.
 pub fn uv_sphere_obj(center: [f64; 3], radius: f64, segments: usize, rings: usize) -> String {

@@ -9,7 +9,7 @@
 //! (`crate::medium::integration`), and the clamped blend `min(1, tau)` of the same exact
 //! depths (`fog_model = "linear-blend"`). The reference is the analytic row itself: its
 //! depths are the exact integrals to rounding (docs/fog.md measures them against f64
-//! quadrature to 1e-13), so no supersampled ground truth is needed, and all rows share the
+//! quadrature to about 1e-13 and better; docs/fog.md), so no supersampled ground truth is needed, and all rows share the
 //! camera samples (same seed, same spp): the only difference between two images is the fog.
 //! Each row is compared with the analytic image (RMSE and FLIP of display values,
 //! [`super::metrics::compare`]); the analytic row's error is 0 by definition and the plot
@@ -23,7 +23,7 @@
 //! `<scene>_fog_error_vs_time.png` and `<scene>_fog_crop.png` (the window where the rows
 //! differ most from the analytic image, each row weighted by its own mean error).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 use plotters::style::BLUE;
@@ -155,15 +155,6 @@ pub struct FogReport {
     pub rows: Vec<FogRow>,
 }
 
-/// The scenes named on the command line, or [`DEFAULT_SCENES`].
-fn scene_paths(args: &AccuracyArgs) -> Vec<PathBuf> {
-    if args.scenes.is_empty() {
-        DEFAULT_SCENES.iter().map(PathBuf::from).collect()
-    } else {
-        args.scenes.clone()
-    }
-}
-
 /// Renders every row of one scene and compares it with the analytic render.
 fn measure(
     setup: &SceneSetup,
@@ -257,7 +248,11 @@ fn measure(
         .fog
         .iter()
         .map(|v| {
-            let bounded = if v.bounds.is_some() { ", boxed" } else { "" };
+            let bounded = match v.bounds {
+                None => "",
+                Some(conetrace::medium::FogBounds::Box(_)) => ", boxed",
+                Some(conetrace::medium::FogBounds::Mesh(_)) => ", in a mesh",
+            };
             format!("{} sigma {}{bounded}", v.density.kind(), v.density.sigma())
         })
         .collect();
@@ -420,7 +415,7 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
         return Err(CommandError::bad_input("--runs must be at least 1"));
     }
     let mut setups = Vec::new();
-    for path in scene_paths(args) {
+    for path in super::mode_scene_paths(args, &DEFAULT_SCENES)? {
         let setup = super::load_scene(args, super::scene_name(&path), Some(&path))?;
         if !setup.scene.fog.iter().any(|v| v.density.sigma() > 0.0) {
             return Err(CommandError::bad_input(format!(

@@ -32,7 +32,7 @@
 //! the front in red) and `<scene>_crop.png` (the window where the rows err most on average,
 //! the reference first). Bad input stops the command before it renders anything.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use plotters::style::RGBColor;
@@ -58,8 +58,8 @@ pub const DEFAULT_SCENES: [&str; 4] = [
 /// The subdirectory of `--out` the lighting report is written to.
 pub const OUTPUT_SUBDIR: &str = "lighting";
 
-/// Largest grid resolution vct accepts (`crate::vct::grid`'s limit for an explicit one).
-const MAX_VCT_RESOLUTION: u32 = 1024;
+/// Largest grid resolution vct accepts for an explicit one.
+const MAX_VCT_RESOLUTION: u32 = conetrace::vct::build::MAX_RESOLUTION;
 
 /// How one row transports light.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,7 +83,7 @@ impl LightingMethod {
         }
     }
 
-    /// A short label for plots and crops: `whitted`, `path 16`, `vct 64 b2`.
+    /// A short label for plots and crops: `whitted+ambient`, `path 16`, `vct 64 b2`.
     pub fn label(&self) -> String {
         match self {
             LightingMethod::Whitted => "whitted+ambient".to_string(),
@@ -201,15 +201,6 @@ fn check_options(args: &AccuracyArgs) -> Result<(), CommandError> {
         )));
     }
     Ok(())
-}
-
-/// The scenes named on the command line, or [`DEFAULT_SCENES`].
-fn scene_paths(args: &AccuracyArgs) -> Vec<PathBuf> {
-    if args.scenes.is_empty() {
-        DEFAULT_SCENES.iter().map(PathBuf::from).collect()
-    } else {
-        args.scenes.clone()
-    }
 }
 
 /// Renders `context` `runs` times with `integrator`: the first result and every run's
@@ -537,7 +528,7 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
     check_options(args)?;
     // Load and check every scene before writing or rendering anything.
     let mut setups = Vec::new();
-    for path in scene_paths(args) {
+    for path in super::mode_scene_paths(args, &DEFAULT_SCENES)? {
         let mut setup = super::load_scene(args, super::scene_name(&path), Some(&path))?;
         let (width, height) = image_size(
             setup.scene.settings.width,
@@ -546,6 +537,20 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
         );
         setup.base.width = width;
         setup.base.height = height;
+        // A grid vct would refuse (its pyramid over the memory limit) is refused now, not
+        // after the reference has rendered.
+        let (lo, hi) = setup.scene.bounds().unwrap_or_default();
+        for &resolution in &args.lighting_vct_resolutions {
+            let bytes = conetrace::vct::GridFrame::for_bounds(lo, hi, resolution).pyramid_bytes();
+            if bytes > conetrace::vct::build::MAX_PYRAMID_BYTES {
+                return Err(CommandError::bad_input(format!(
+                    "{}: --lighting-vct-resolutions {resolution} needs a {bytes}-byte voxel \
+                     pyramid, over the {}-byte limit",
+                    path.display(),
+                    conetrace::vct::build::MAX_PYRAMID_BYTES
+                )));
+            }
+        }
         setups.push(setup);
     }
     let out = args.out.join(OUTPUT_SUBDIR);

@@ -1,4 +1,10 @@
-//! `conetrace accuracy`: how close each footprint strategy and texture filter comes to the
+//! `conetrace accuracy`: error against time, in four modes (`--mode`). This module is the
+//! default mode, `footprints`; the others are [`patches`] (curved patches traced exactly
+//! against their tessellations), [`lighting`] (Whitted, the path tracer and voxel cone
+//! tracing against a path-traced ground truth) and [`fog`] (fog's closed-form optical depth
+//! against ray marching). They share the metrics, the plots, the crops and the files.
+//!
+//! The footprint mode: how close each footprint strategy and texture filter comes to the
 //! ground truth, and at what cost.
 //!
 //! Every scene (default: the built-in showcase and `assets/scenes/fp_*.toml`) is rendered
@@ -203,6 +209,26 @@ fn scene_inputs(args: &AccuracyArgs) -> Result<Vec<(String, Option<PathBuf>)>, C
         }
     }
     Ok(inputs)
+}
+
+/// The scene files a mode measures: those named on the command line, or the mode's
+/// `defaults`; an error when two of them share a file stem (their output files would clash).
+fn mode_scene_paths(args: &AccuracyArgs, defaults: &[&str]) -> Result<Vec<PathBuf>, CommandError> {
+    let paths: Vec<PathBuf> = if args.scenes.is_empty() {
+        defaults.iter().map(PathBuf::from).collect()
+    } else {
+        args.scenes.clone()
+    };
+    for (i, path) in paths.iter().enumerate() {
+        let name = scene_name(path);
+        if paths[..i].iter().any(|other| scene_name(other) == name) {
+            return Err(CommandError::bad_input(format!(
+                "{}: another scene has the same name '{name}' (the output files would clash)",
+                path.display()
+            )));
+        }
+    }
+    Ok(paths)
 }
 
 fn scene_name(path: &Path) -> String {

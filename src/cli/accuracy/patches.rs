@@ -26,7 +26,7 @@
 //! `<scene>_patches_error_vs_time.png` and `<scene>_patches_crop.png` (the window where
 //! the tessellations differ most, at every bound).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -238,15 +238,6 @@ fn variants(scene: &SceneDescription) -> Vec<Variant> {
         }
     }
     variants
-}
-
-/// The scenes named on the command line, or [`DEFAULT_SCENES`].
-fn scene_paths(args: &AccuracyArgs) -> Vec<PathBuf> {
-    if args.scenes.is_empty() {
-        DEFAULT_SCENES.iter().map(PathBuf::from).collect()
-    } else {
-        args.scenes.clone()
-    }
 }
 
 /// Renders every variant of one scene and compares it with the exact render.
@@ -571,7 +562,7 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
         ));
     }
     let mut setups = Vec::new();
-    for path in scene_paths(args) {
+    for path in super::mode_scene_paths(args, &DEFAULT_SCENES)? {
         let setup = super::load_scene(args, super::scene_name(&path), Some(&path))?;
         if setup.scene.patches.is_empty() && setup.scene.height_patches.is_empty() {
             return Err(CommandError::bad_input(format!(

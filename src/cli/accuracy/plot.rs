@@ -1,8 +1,11 @@
-//! The error-vs-time plot of one scene: log-log, one marker per method, the Pareto front
-//! (the methods no other method beats in both time and error) joined by a line.
+//! The error-vs-time plots of every accuracy mode: log-log panels, one marker per method
+//! or row, the Pareto front (the points no other point beats in both time and error)
+//! joined and ringed in red ([`draw_log_log_panel`]), two panels side by side (RMSE and
+//! FLIP, [`draw_two_panels`]).
 //!
-//! Two panels share the time axis: RMSE over all pixels and FLIP over the textured pixels
-//! (all pixels when none is textured). A legend on the right numbers the methods.
+//! The footprint mode's plot ([`draw_error_vs_time`]) numbers its methods and adds a legend
+//! on the right; its FLIP panel is over the textured pixels (all pixels when none is
+//! textured).
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -55,9 +58,9 @@ fn method_colour(index: usize) -> RGBColor {
     COLOURS[index % COLOURS.len()]
 }
 
-pub type PlotResult<T> = Result<T, String>;
+type PlotResult<T> = Result<T, String>;
 
-pub fn drawing_error<E: std::fmt::Debug>(error: E) -> String {
+fn drawing_error<E: std::fmt::Debug>(error: E) -> String {
     format!("drawing the plot: {error:?}")
 }
 

@@ -36,7 +36,9 @@ pub(super) struct Collision {
 
 /// Sample the first collision of `ray` with the scene's fog between its origin and `t_end`
 /// (its hit, or infinity for a ray that escapes); `None` if it passes. Each volume the
-/// segment crosses draws one exponential variate from the path's sampler.
+/// segment crosses draws one exponential variate from the path's sampler; the segment
+/// always moves the sampler on by one dimension per volume of the scene, crossed or not, so
+/// that the dimensions of the vertices after it do not depend on which volumes it crossed.
 pub(super) fn sample_collision(
     context: &RenderContext,
     ray: &mut PathRay,
@@ -61,6 +63,9 @@ pub(super) fn sample_collision(
         -(1.0 - f64::from(sampler.next_1d())).ln()
     });
     worker.counters.fog_volume_crossings += crossed;
+    let volumes = context.scene.fog.len() as u64;
+    ray.sampler
+        .skip_dimensions(volumes.saturating_sub(crossed) as u32);
     let (distance, volume) = found?;
     Some(Collision {
         t: (distance / scale) as f32,
@@ -71,8 +76,9 @@ pub(super) fn sample_collision(
 
 /// The medium vertex at `collision`: light sampling weighted by the phase function (MIS
 /// against phase sampling), then the path continues in a direction the phase function
-/// samples. Draws the same five dimensions at every such vertex (light choice, point on the
-/// light, direction, roulette).
+/// samples. Moves the sampler on by the seven dimensions of a surface vertex (light choice,
+/// point on the light, lobe, direction, roulette; the lobe's is unused here), so that later
+/// vertices draw the same dimensions whether this one was in fog or on a surface.
 pub(super) fn scatter(
     tracer: &PathTracer,
     context: &RenderContext,
@@ -96,6 +102,7 @@ pub(super) fn scatter(
 
     let u_light = ray.sampler.next_1d();
     let u_light_point = ray.sampler.next_2d();
+    ray.sampler.skip_dimensions(1);
     let u_direction = ray.sampler.next_2d();
     let u_roulette = ray.sampler.next_1d();
 
@@ -139,6 +146,7 @@ pub(super) fn scatter(
     };
     // Seed 000's BSDF spread with the phase function's value in the sampled direction.
     let footprint = if context.effects.footprints {
+        worker.counters.footprint_updates += 1;
         footprint.scatter(bsdf_spread_angle(sample.pdf))
     } else {
         footprint

@@ -125,10 +125,12 @@ struct PathRay {
     /// Bounces so far (0 for camera rays), and how many of them were non-delta.
     depth: u32,
     diffuse_depth: u32,
-    /// The density with which the BSDF chose this ray, for weighting the light it finds;
-    /// `None` for camera rays and delta bounces, whose light is taken whole.
+    /// The density with which the BSDF (or, at a fog vertex, the phase function) chose this
+    /// ray, for weighting the light it finds; `None` for camera rays and delta bounces,
+    /// whose light is taken whole.
     bsdf_pdf: Option<f32>,
-    /// The hit this ray left (for the density of light sampling at the light it finds).
+    /// The hit or fog scattering point this ray left (for the density of light sampling at
+    /// the light it finds).
     from: Vec3,
     kind: RayKind,
     /// Absorption coefficient of the medium the ray travels in (zero outside media).

@@ -6,12 +6,18 @@
 //! parameter reads the same in either format: negative or missing `sigma`, a zero plane
 //! normal, a box whose `min` exceeds its `max`, keys that do not belong to the density kind.
 
-use glam::Vec3;
+use std::sync::Arc;
+
+use glam::{DVec3, Vec3};
 use serde::Deserialize;
 
-use super::toml_format::{v3, Num, V3};
+use super::files::Files;
+use super::merge::{Placement, Transform};
+use super::toml_format::{v3, Num, Scale, V3};
+use super::SceneError;
 use crate::medium::{
-    ConstantDensity, Density, ExponentialDensity, FogBox, FogVolume, LinearDensity,
+    ClosedMesh, ConstantDensity, Density, ExponentialDensity, FogBounds, FogBox, FogVolume,
+    LinearDensity,
 };
 
 /// The colour fog blends towards when a volume gives none (a light grey).
@@ -25,11 +31,17 @@ pub(super) enum RawDensityKind {
     Exponential,
 }
 
-#[derive(Clone, Copy, Debug, Deserialize)]
+/// `bounds`: a box (`min`, `max`) or a closed mesh (`mesh`, placed by `translate`,
+/// `rotate`, `scale` as a `[[mesh]]` is).
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawBounds {
-    min: V3,
-    max: V3,
+    min: Option<V3>,
+    max: Option<V3>,
+    mesh: Option<String>,
+    translate: Option<V3>,
+    rotate: Option<V3>,
+    scale: Option<Scale>,
 }
 
 /// One fog volume as written in the file.
@@ -48,8 +60,9 @@ pub(super) struct RawFog {
     g: Option<Num>,
 }
 
-/// Checks `raw` and builds the volume; the error is the message without the file.
-pub(super) fn fog_volume(raw: &RawFog) -> Result<FogVolume, String> {
+/// Checks `raw` and builds the volume, reading a bounding mesh through `files`; the error
+/// is the message without the file.
+pub(super) fn fog_volume(raw: &RawFog, files: &Files) -> Result<FogVolume, String> {
     let sigma = raw.sigma.0;
     if sigma < 0.0 {
         return Err(format!("fog sigma = {sigma} must be >= 0"));
@@ -94,21 +107,9 @@ pub(super) fn fog_volume(raw: &RawFog) -> Result<FogVolume, String> {
             falloff: f64::from(raw.falloff.ok_or("exponential fog needs falloff")?.0),
         }),
     };
-    let bounds = match raw.bounds {
+    let bounds = match &raw.bounds {
         None => None,
-        Some(b) => {
-            let (min, max) = (v3(b.min), v3(b.max));
-            if min.cmpgt(max).any() {
-                return Err(format!(
-                    "fog bounds min = [{}, {}, {}] exceeds max = [{}, {}, {}]",
-                    min.x, min.y, min.z, max.x, max.y, max.z
-                ));
-            }
-            Some(FogBox {
-                min: min.as_dvec3(),
-                max: max.as_dvec3(),
-            })
-        }
+        Some(b) => Some(fog_bounds(b, files)?),
     };
     let color = raw.color.map_or(DEFAULT_FOG_COLOR, v3);
     if color.min_element() < 0.0 {
@@ -150,10 +151,68 @@ pub(super) fn fog_volume(raw: &RawFog) -> Result<FogVolume, String> {
     })
 }
 
+/// A box or a closed mesh from `bounds`.
+fn fog_bounds(raw: &RawBounds, files: &Files) -> Result<FogBounds, String> {
+    let placed = raw.translate.is_some() || raw.rotate.is_some() || raw.scale.is_some();
+    match (raw.min, raw.max, &raw.mesh) {
+        (Some(min), Some(max), None) if !placed => {
+            let (min, max) = (v3(min), v3(max));
+            if min.cmpgt(max).any() {
+                return Err(format!(
+                    "fog bounds min = [{}, {}, {}] exceeds max = [{}, {}, {}]",
+                    min.x, min.y, min.z, max.x, max.y, max.z
+                ));
+            }
+            Ok(FogBounds::Box(FogBox {
+                min: min.as_dvec3(),
+                max: max.as_dvec3(),
+            }))
+        }
+        (None, None, Some(file)) => {
+            let placement = Placement {
+                translate: raw.translate.map_or(Vec3::ZERO, v3),
+                rotate_degrees: raw.rotate.map_or(Vec3::ZERO, v3),
+                scale: raw.scale.as_ref().map_or(Vec3::ONE, |s| s.0),
+            };
+            let transform = Transform::new(placement.matrix())
+                .ok_or("fog bounds mesh scale must not be zero")?;
+            let path = files.resolve(file);
+            let part = super::load_part(files, &path).map_err(|e| match e {
+                SceneError::Unreadable { reason, .. } => {
+                    format!("cannot read fog bounds mesh '{}': {reason}", path.display())
+                }
+                SceneError::UnknownFormat { extension, .. } => format!(
+                    "fog bounds mesh '{}' has unknown format '{extension}' (known: obj, gltf, glb)",
+                    path.display()
+                ),
+                other => format!("fog bounds mesh: {other}"),
+            })?;
+            let triangles: Vec<[DVec3; 3]> = part
+                .meshes
+                .iter()
+                .flat_map(|mesh| {
+                    mesh.triangles
+                        .iter()
+                        .map(|t| t.map(|i| transform.point(mesh.positions[i as usize]).as_dvec3()))
+                })
+                .collect();
+            let mesh = ClosedMesh::new(&triangles)
+                .map_err(|e| format!("fog bounds mesh '{}' {e}", path.display()))?;
+            Ok(FogBounds::Mesh(Arc::new(mesh)))
+        }
+        _ => Err(
+            "fog bounds must be a box { min = [x, y, z], max = [x, y, z] } or a closed mesh \
+             { mesh = \"file\" } (optionally placed by translate, rotate, scale)"
+                .into(),
+        ),
+    }
+}
+
 /// The fog volumes in a glTF file's root `extras` (`{"fog": [{...}, ...]}`); other extras
 /// are left alone.
 pub(super) fn gltf_fog(
     extras: Option<&serde_json::value::RawValue>,
+    files: &Files,
 ) -> Result<Vec<FogVolume>, String> {
     let Some(extras) = extras else {
         return Ok(Vec::new());
@@ -167,7 +226,7 @@ pub(super) fn gltf_fog(
         serde_json::from_value(fog.clone()).map_err(|e| format!("extras.fog: {e}"))?;
     raw.iter()
         .enumerate()
-        .map(|(i, r)| fog_volume(r).map_err(|e| format!("extras.fog[{i}]: {e}")))
+        .map(|(i, r)| fog_volume(r, files).map_err(|e| format!("extras.fog[{i}]: {e}")))
         .collect()
 }
 
@@ -178,7 +237,7 @@ mod tests {
 
     fn extras(json: &str) -> Result<Vec<FogVolume>, String> {
         let raw = RawValue::from_string(json.to_owned()).unwrap();
-        gltf_fog(Some(&raw))
+        gltf_fog(Some(&raw), &Files::disk(std::path::Path::new(".")))
     }
 
     #[test]
@@ -206,7 +265,10 @@ mod tests {
         assert_eq!(fog[1].color, DEFAULT_FOG_COLOR);
         // Extras without fog are someone else's business.
         assert_eq!(extras(r#"{"author": "someone"}"#).unwrap(), Vec::new());
-        assert_eq!(gltf_fog(None).unwrap(), Vec::new());
+        assert_eq!(
+            gltf_fog(None, &Files::disk(std::path::Path::new("."))).unwrap(),
+            Vec::new()
+        );
     }
 
     #[test]

@@ -65,7 +65,7 @@ pub(crate) fn load_gltf(files: &Files, path: &Path) -> Result<SceneDescription, 
         return Err(err("no triangle meshes in the glTF file".into()));
     }
     loader.part.fog =
-        super::fog::gltf_fog(gltf.document.as_json().extras.as_deref()).map_err(err)?;
+        super::fog::gltf_fog(gltf.document.as_json().extras.as_deref(), &local).map_err(err)?;
     Ok(loader.part)
 }
 

@@ -634,7 +634,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
         scene.lights.push(light_desc(light, loc)?);
     }
     for fog in &raw.fog {
-        let volume = super::fog::fog_volume(fog.get_ref()).map_err(|e| loc.at(fog, e))?;
+        let volume = super::fog::fog_volume(fog.get_ref(), files).map_err(|e| loc.at(fog, e))?;
         scene.fog.push(volume);
     }
     Ok(scene)
