@@ -1,13 +1,24 @@
 //! Which light to sample: the scene's lights (punctual lights, the environment and the
-//! area lights of emissive geometry) and a choice of one of them per sample, with
-//! probability proportional to an estimate of its power (pbrt-v4's power light sampler,
-//! section 12.6.2), through one alias table over all of them ([`super::AliasTable`]).
+//! area lights of emissive geometry) and a choice of one of them per sample, through one
+//! alias table over all of them ([`super::AliasTable`]).
 //!
-//! Powers are compared by luminance (Rec. 709 weights): a point light's is `4 pi I`, a spot
-//! light's `2 pi (1 - cos theta) I` with the mean of its inner and outer angles, a
-//! directional light's `pi r^2 E` and the environment's `4 pi^2 r^2 L_mean` over a disk or
-//! sphere of the scene's bounding radius `r`, an area light's `pi A L`
-//! ([`super::AreaLight::power`]). A light with no power is never chosen.
+//! Lights at infinity (the environment and directional lights) and local lights (point,
+//! spot and area lights) are weighed apart, as pbrt-v4's BVH light sampler does (section
+//! 12.6.3): each light at infinity that gives any light is chosen with probability
+//! `1 / (n_infinite + 1)`, and the local lights together take the remaining share, or
+//! everything when nothing lies at infinity. Among themselves the local lights are chosen
+//! in proportion to an estimate of their power (pbrt-v4's power light sampler, section
+//! 12.6.2), by luminance (Rec. 709 weights): a point light's is `4 pi I`, a spot light's
+//! `2 pi (1 - cos theta) I` with the mean of its inner and outer angles, an area light's
+//! `pi A L` ([`super::AreaLight::power`]). A light with no power is never chosen.
+//!
+//! Why not weigh the lights at infinity by power too: their power is only defined over some
+//! disk or sphere around the scene (`pi r^2 E` for a directional light, `4 pi^2 r^2 L` for
+//! the environment, `r` the scene's bounding radius), which grows with the size of the
+//! scene and not with what any one point receives. A large ground plane under a point light
+//! and a dim sky then gave the sky 96 % of the samples, and with stratified samples each
+//! pixel got either two or three of its 64 samples from the light: a blotchy image
+//! (`tests/path_tracer.rs`, `a_point_light_over_a_large_ground_is_sampled_evenly`).
 
 use std::f32::consts::PI;
 
@@ -92,14 +103,44 @@ impl SceneLights {
         area: AreaLights,
     ) -> SceneLights {
         let environment = EnvironmentLight::constant(environment_mean);
-        let r2 = scene_radius * scene_radius;
-        let mut powers: Vec<f32> = lights.iter().map(|l| light_power(l, r2)).collect();
-        powers.push(4.0 * PI * PI * r2 * luminance(environment_mean));
-        powers.extend(area.lights.iter().map(|l| l.power()));
+        // (at infinity, weight): a luminance for a light at infinity (only whether it is
+        // positive counts), the power for a local light.
+        let usable = |w: f32| if w.is_finite() && w > 0.0 { w } else { 0.0 };
+        let mut weights: Vec<(bool, f32)> = lights
+            .iter()
+            .map(|l| match l {
+                Light::Directional {
+                    color, intensity, ..
+                } => (true, usable(intensity * luminance(*color))),
+                _ => (false, usable(light_power(l))),
+            })
+            .collect();
+        weights.push((true, usable(luminance(environment_mean))));
+        weights.extend(area.lights.iter().map(|l| (false, usable(l.power()))));
+        let infinite = weights.iter().filter(|&&(inf, w)| inf && w > 0.0).count();
+        let local_power: f64 = weights
+            .iter()
+            .filter(|&&(inf, _)| !inf)
+            .map(|&(_, w)| f64::from(w))
+            .sum();
+        let local_share = if local_power > 0.0 { 1.0 } else { 0.0 };
+        let total_shares = infinite as f64 + local_share;
+        let probabilities: Vec<f32> = weights
+            .iter()
+            .map(|&(inf, w)| {
+                if w <= 0.0 {
+                    0.0
+                } else if inf {
+                    (1.0 / total_shares) as f32
+                } else {
+                    (f64::from(w) / local_power / total_shares) as f32
+                }
+            })
+            .collect();
         SceneLights {
             environment,
             area,
-            selection: LightSelection::from_weights(&powers),
+            selection: LightSelection::from_weights(&probabilities),
             punctual_count: lights.len(),
             scene_radius,
         }
@@ -137,8 +178,9 @@ impl SceneLights {
     }
 }
 
-/// The power estimate of one punctual light (see the module docs).
-fn light_power(light: &Light, r2: f32) -> f32 {
+/// The power estimate of a local punctual light (see the module docs); 0 for a
+/// directional light, which lies at infinity.
+fn light_power(light: &Light) -> f32 {
     match light {
         Light::Point {
             color, intensity, ..
@@ -153,9 +195,7 @@ fn light_power(light: &Light, r2: f32) -> f32 {
             let half_angle = 0.5 * (inner_angle + outer_angle);
             2.0 * PI * (1.0 - half_angle.cos()) * intensity * luminance(*color)
         }
-        Light::Directional {
-            color, intensity, ..
-        } => PI * r2 * intensity * luminance(*color),
+        Light::Directional { .. } => 0.0,
     }
 }
 
@@ -198,21 +238,19 @@ mod tests {
     }
 
     #[test]
-    fn scene_lights_weigh_lights_by_power() {
-        let lights = [
-            Light::Point {
-                position: Vec3::ZERO,
-                color: Vec3::ONE,
-                intensity: 10.0,
-            },
-            Light::Directional {
-                direction: -Vec3::Y,
-                color: Vec3::ONE,
-                intensity: 1.0,
-            },
-        ];
-        let scene = SceneLights::new(&lights, Vec3::ZERO, 2.0);
-        // 40 pi against 4 pi: the point light is chosen ten times as often.
+    fn local_lights_share_by_power_and_lights_at_infinity_by_count() {
+        let point = |intensity: f32| Light::Point {
+            position: Vec3::ZERO,
+            color: Vec3::ONE,
+            intensity,
+        };
+        let sun = Light::Directional {
+            direction: -Vec3::Y,
+            color: Vec3::ONE,
+            intensity: 1.0,
+        };
+        // Two point lights alone: by power, 40 pi against 4 pi.
+        let scene = SceneLights::new(&[point(10.0), point(1.0)], Vec3::ZERO, 2.0);
         let ratio = scene.selection.pmf(0) / scene.selection.pmf(1);
         assert!((ratio - 10.0).abs() < 1e-4, "{ratio}");
         assert_eq!(
@@ -220,8 +258,19 @@ mod tests {
             0.0,
             "a black environment is never chosen"
         );
-        let lit = SceneLights::new(&lights, Vec3::splat(0.5), 2.0);
-        assert!(lit.selection.pmf(2) > 0.0);
-        assert_eq!(lit.environment.mean_radiance, Vec3::splat(0.5));
+        // With a sun and a sky: one third each for the sun, the sky and the two point
+        // lights together, whatever the scene's size.
+        for radius in [1.0, 1000.0] {
+            let lit = SceneLights::new(&[point(10.0), point(1.0), sun], Vec3::splat(0.5), radius);
+            let pmf = |i| lit.selection.pmf(i);
+            assert!((pmf(0) + pmf(1) - 1.0 / 3.0).abs() < 1e-5, "{}", pmf(0));
+            assert!((pmf(0) / pmf(1) - 10.0).abs() < 1e-3);
+            assert!((pmf(2) - 1.0 / 3.0).abs() < 1e-5, "sun {}", pmf(2));
+            assert!((pmf(3) - 1.0 / 3.0).abs() < 1e-5, "sky {}", pmf(3));
+            assert_eq!(lit.environment.mean_radiance, Vec3::splat(0.5));
+        }
+        // Only the sky: it takes every sample.
+        let sky = SceneLights::new(&[], Vec3::splat(0.5), 3.0);
+        assert_eq!(sky.selection.pmf(0), 1.0);
     }
 }
