@@ -261,7 +261,11 @@ mod tests {
         // With a sun and a sky: one third each for the sun, the sky and the two point
         // lights together, whatever the scene's size.
         for radius in [1.0, 1000.0] {
-            let lit = SceneLights::new(&[point(10.0), point(1.0), sun], Vec3::splat(0.5), radius);
+            let lit = SceneLights::new(
+                &[point(10.0), point(1.0), sun.clone()],
+                Vec3::splat(0.5),
+                radius,
+            );
             let pmf = |i| lit.selection.pmf(i);
             assert!((pmf(0) + pmf(1) - 1.0 / 3.0).abs() < 1e-5, "{}", pmf(0));
             assert!((pmf(0) / pmf(1) - 10.0).abs() < 1e-3);
