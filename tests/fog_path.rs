@@ -384,6 +384,95 @@ bounds = { mesh = "slabs.obj" }
     assert_eq!(counters.nonfinite_samples, 0);
 }
 
+/// A pixel whose first camera sample collides in fog keeps the surface behind the fog in
+/// its AOVs, as Whitted's does: depth, normal, texture coordinates and albedo of a textured
+/// sphere seen through fog so dense (optical depth 36) that every camera ray scatters first,
+/// equal to Whitted's AOVs of the same scene. Before, those pixels kept a miss's values.
+#[test]
+fn aovs_describe_the_surface_behind_the_fog() {
+    let dir = temp_dir();
+    let text = r#"
+[render]
+width = 12
+height = 12
+spp = 1
+max_depth = 2
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+height = 1.2
+
+[environment]
+color = [0.5, 0.5, 0.5]
+
+[[texture]]
+name = "checker"
+file = "checker.png"
+
+[[material]]
+name = "textured"
+base_color = [1.0, 1.0, 1.0]
+base_color_texture = "checker"
+
+[[sphere]]
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+material = "textured"
+
+[[fog]]
+density = "constant"
+sigma = 20.0
+bounds = { min = [-5.0, -5.0, 1.2], max = [5.0, 5.0, 3.0] }
+"#;
+    std::fs::copy(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textures/checker.png"),
+        dir.path().join("checker.png"),
+    )
+    .expect("copy the checker texture");
+    fn render_aovs<I: conetrace::render::Integrator>(
+        dir: &Path,
+        text: &str,
+        integrator: &I,
+    ) -> (Vec<Vec<f32>>, RenderStats) {
+        let scene = load(dir, text);
+        let mut options = RenderOptions::from_settings(&scene.settings);
+        options.aovs = conetrace::film::AovSelection::ALL;
+        let context = render::prepare(Arc::new(scene), options).expect("prepare");
+        let result =
+            render::render(&context, integrator, &RenderControl::default()).expect("render");
+        let names = [
+            "Z", "N.X", "N.Y", "N.Z", "uv.U", "uv.V", "albedo.R", "albedo.G",
+        ];
+        let channels = names
+            .iter()
+            .map(|n| result.film.channel(n).expect(n).to_vec())
+            .collect();
+        (channels, result.stats)
+    }
+    let scene = load(dir.path(), text);
+    let tracer = PathTracer::for_settings(&scene.settings);
+    let (path, stats) = render_aovs(dir.path(), text, &tracer);
+    let (whitted, _) = render_aovs(dir.path(), text, &conetrace::integrator::Whitted);
+    // Every camera ray scattered in the fog.
+    assert!(
+        stats.counters.fog_scatter_events >= 144,
+        "{:?}",
+        stats.counters
+    );
+    let on_sphere = whitted[0].iter().filter(|z| **z < 100.0).count();
+    assert!(on_sphere > 100, "{on_sphere} pixels on the sphere");
+    for (index, (p, w)) in path.iter().zip(&whitted).enumerate() {
+        for (pixel, (a, b)) in p.iter().zip(w).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-5 * b.abs().max(1.0),
+                "AOV channel {index}, pixel {pixel}: path {a}, Whitted {b}"
+            );
+        }
+    }
+}
+
 /// Light sampling alone, phase-function sampling alone and their MIS combination estimate
 /// the same image at medium vertices: a box of coloured, forward-scattering fog (albedo
 /// [0.9, 0.7, 0.5], g = 0.4) under an emissive quad (an area light) in a dim environment,

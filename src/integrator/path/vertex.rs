@@ -10,12 +10,14 @@ use super::next_event::{sample_light, Scatterer, ShadingPoint};
 use super::{add_radiance, LightStrategy, PathRay, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::footprint::{bsdf_spread_angle, Footprint, LodStrategy, RayDifferential};
+use crate::hit::SurfaceHit;
 use crate::integrator::texturing::{self, environment_lookup, LookupRay};
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::prepared::GeometryRef;
+use crate::render::prepared::{GeometryRef, SurfaceDetail};
 use crate::render::stats::RayKind;
 use crate::render::surface_textures::area_light_radiance;
 use crate::render::tracer::TraceHit;
+use crate::shading::surface_inputs::SurfaceInputs;
 use crate::shading::{self, area_lights::luminance, Bsdf, LightRef, MaterialBsdf};
 
 /// Bounces after which Russian roulette may end a path.
@@ -38,7 +40,11 @@ pub(super) fn shade(
     // medium vertex instead (`medium`); a ray that passes keeps its throughput.
     if context.effects.fog {
         let t_end = if hit.is_hit() { hit.t } else { f32::INFINITY };
+        let camera_footprint = ray.footprint;
         if let Some(collision) = medium::sample_collision(context, &mut ray, t_end, worker) {
+            if ray.kind == RayKind::Camera && ray.first_sample && hit.is_hit() {
+                record_hidden_surface_aovs(context, &ray, camera_footprint, hit, image, worker);
+            }
             medium::scatter(tracer, context, ray, collision, waves, worker);
             return;
         }
@@ -58,11 +64,8 @@ pub(super) fn shade(
         .surfaces
         .surface_hit(ray.origin, ray.direction, hit, detail);
     let material = &context.scene.materials[surface.material as usize];
-    let pixel = ray.pixel as usize;
-    if camera_first && !image.depth.is_empty() {
-        image.depth[pixel] = surface.t * ray.direction.dot(context.camera_forward);
-        image.normal[pixel] = surface.shading_normal.to_array();
-        image.uv[pixel] = surface.st.to_array();
+    if camera_first {
+        write_geometry_aovs(context, image, ray.pixel, ray.direction, &surface);
     }
     // Beer's law over the distance travelled inside the medium (seed 004).
     if context.effects.absorption && ray.sigma != Vec3::ZERO {
@@ -89,11 +92,8 @@ pub(super) fn shade(
         first_sample: ray.first_sample,
     };
     let inputs = texturing::surface_inputs(context, lookup, material, &surface, image, worker);
-    if camera_first && !image.albedo.is_empty() {
-        image.albedo[pixel] = inputs.albedo.to_array();
-        if !image.normal.is_empty() {
-            image.normal[pixel] = inputs.shading_normal.to_array();
-        }
+    if camera_first {
+        write_material_aovs(image, ray.pixel, &inputs);
     }
 
     // Emission, from the front side only (one-sided emitters, `shading::area_lights`).
@@ -306,4 +306,73 @@ fn found_light_weight(
 #[inline]
 fn bsdf_has_smooth_part(bsdf: &MaterialBsdf, wo: Vec3, ns: Vec3) -> bool {
     bsdf.pdf(wo, ns) > 0.0 || bsdf.eval(wo, ns).max_element() > 0.0
+}
+
+/// The depth, shading normal and texture coordinates of the first camera sample's hit, if
+/// the render keeps surface AOVs.
+fn write_geometry_aovs(
+    context: &RenderContext,
+    image: &mut TileImage,
+    pixel: u32,
+    direction: Vec3,
+    surface: &SurfaceHit,
+) {
+    if image.depth.is_empty() {
+        return;
+    }
+    let pixel = pixel as usize;
+    image.depth[pixel] = surface.t * direction.dot(context.camera_forward);
+    image.normal[pixel] = surface.shading_normal.to_array();
+    image.uv[pixel] = surface.st.to_array();
+}
+
+/// The albedo and the (normal-mapped) shading normal of the first camera sample's hit, if
+/// the render keeps them.
+fn write_material_aovs(image: &mut TileImage, pixel: u32, inputs: &SurfaceInputs) {
+    if image.albedo.is_empty() {
+        return;
+    }
+    let pixel = pixel as usize;
+    image.albedo[pixel] = inputs.albedo.to_array();
+    if !image.normal.is_empty() {
+        image.normal[pixel] = inputs.shading_normal.to_array();
+    }
+}
+
+/// The surface AOVs of the first camera sample's hit when fog in front of it scattered the
+/// path first: the pixel's depth, normal, texture coordinates and albedo describe the surface
+/// behind the fog, as Whitted's do, not a miss. Nothing is computed when the render keeps no
+/// surface AOVs.
+fn record_hidden_surface_aovs(
+    context: &RenderContext,
+    ray: &PathRay,
+    camera_footprint: Footprint,
+    hit: &TraceHit,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    if image.depth.is_empty() && image.albedo.is_empty() {
+        return;
+    }
+    let surface =
+        context
+            .surfaces
+            .surface_hit(ray.origin, ray.direction, hit, SurfaceDetail::Texturing);
+    write_geometry_aovs(context, image, ray.pixel, ray.direction, &surface);
+    if image.albedo.is_empty() {
+        return;
+    }
+    let mut footprint = camera_footprint;
+    if context.effects.footprints {
+        footprint.transfer(ray.direction, &surface);
+    }
+    let lookup = LookupRay {
+        direction: ray.direction,
+        footprint: &footprint,
+        pixel: ray.pixel,
+        first_sample: true,
+    };
+    let material = &context.scene.materials[surface.material as usize];
+    let inputs = texturing::surface_inputs(context, lookup, material, &surface, image, worker);
+    write_material_aovs(image, ray.pixel, &inputs);
 }
