@@ -416,8 +416,9 @@ enum CtStatus ct_render(struct CtScene scene,
 // Writes to `*out_bytes` the memory, in bytes, that `ct_render` of `scene` with `options`
 // (NULL: defaults) is estimated to need at its peak: the film and its copies for the
 // outputs, and every texture the library decodes with its mip levels, in the precision it
-// is stored in (from the file headers; nothing is decoded). Textures a texture callback
-// serves are not decoded and not counted. `ct_render` refuses a render whose estimate
+// is stored in (from the file headers; nothing is decoded), and the voxel pyramid when the
+// integrator is the voxel cone tracer. Textures a texture callback serves are not decoded
+// and not counted. `ct_render` refuses a render whose estimate
 // exceeds `max_memory` with `CT_ERROR_OUT_OF_MEMORY`.
 //
 // Returns `CT_ERROR_TEXTURE` when a texture's header cannot be read.

@@ -1270,6 +1270,23 @@ fn the_integrator_is_chosen_through_the_options() {
         CtStatus::CT_ERROR_INVALID_ARGUMENT
     );
     assert!(last_error().contains("integrator"), "{}", last_error());
+    // The voxel cone tracer's estimate holds its voxel pyramid on top of Whitted's.
+    let estimate_with = |integrator: u32| {
+        let mut options = small_options();
+        options.integrator = integrator;
+        let mut bytes = 0u64;
+        let status = unsafe { ct_render_memory_estimate(scene, &options, &mut bytes) };
+        assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
+        bytes
+    };
+    let (whitted_bytes, vct_bytes) = (
+        estimate_with(CT_INTEGRATOR_WHITTED),
+        estimate_with(CT_INTEGRATOR_VCT),
+    );
+    assert!(
+        vct_bytes > whitted_bytes,
+        "vct {vct_bytes} bytes, Whitted {whitted_bytes}"
+    );
 
     // A caller built against the header before `integrator` existed: its struct ends at the
     // field, and it renders with the scene's integrator.

@@ -329,7 +329,7 @@ pub unsafe extern "C" fn ct_render(
         let integrator = integrator_from_code(c_options.integrator, &scene.settings)?;
         // Refused before the film or any texture is allocated. A texture whose header cannot
         // be read is left to the preparation below, which reports it with its role.
-        if let Ok(estimate) = memory_estimate(&c_options, &scene, &render_options) {
+        if let Ok(estimate) = memory_estimate(&c_options, integrator, &scene, &render_options) {
             let limit = (c_options.max_memory > 0).then_some(c_options.max_memory);
             render::memory::check_against(&estimate, limit, "max_memory", &scene.source)
                 .map_err(|message| CapiError::new(CtStatus::CT_ERROR_OUT_OF_MEMORY, message))?;
@@ -463,8 +463,9 @@ pub unsafe extern "C" fn ct_render(
 /// Writes to `*out_bytes` the memory, in bytes, that `ct_render` of `scene` with `options`
 /// (NULL: defaults) is estimated to need at its peak: the film and its copies for the
 /// outputs, and every texture the library decodes with its mip levels, in the precision it
-/// is stored in (from the file headers; nothing is decoded). Textures a texture callback
-/// serves are not decoded and not counted. `ct_render` refuses a render whose estimate
+/// is stored in (from the file headers; nothing is decoded), and the voxel pyramid when the
+/// integrator is the voxel cone tracer. Textures a texture callback serves are not decoded
+/// and not counted. `ct_render` refuses a render whose estimate
 /// exceeds `max_memory` with `CT_ERROR_OUT_OF_MEMORY`.
 ///
 /// Returns `CT_ERROR_TEXTURE` when a texture's header cannot be read.
@@ -497,9 +498,9 @@ pub unsafe extern "C" fn ct_render_memory_estimate(
         };
         let object = handles::scene(scene)?;
         // The same checks as `ct_render`: an unknown integrator is an error here too.
-        integrator_from_code(c_options.integrator, &object.scene.settings)?;
+        let integrator = integrator_from_code(c_options.integrator, &object.scene.settings)?;
         let render_options = render_options(&c_options, &object.scene)?;
-        let estimate = memory_estimate(&c_options, &object.scene, &render_options)?;
+        let estimate = memory_estimate(&c_options, integrator, &object.scene, &render_options)?;
         // SAFETY: checked non-null above.
         unsafe { out_bytes.write(estimate.total()) };
         Ok(CtStatus::CT_OK)
@@ -507,9 +508,11 @@ pub unsafe extern "C" fn ct_render_memory_estimate(
 }
 
 /// The memory estimate of a render: with a texture callback, only the textures the library
-/// still decodes (alpha cut-out masks; all of them for the `lod` AOV) are counted.
+/// still decodes (alpha cut-out masks; all of them for the `lod` AOV) are counted; the
+/// voxel pyramid when `integrator` resolves to vct.
 fn memory_estimate(
     c: &CtRenderOptions,
+    integrator: IntegratorChoice,
     scene: &crate::scene::SceneDescription,
     options: &RenderOptions,
 ) -> Result<render::memory::MemoryEstimate, CapiError> {
@@ -521,8 +524,13 @@ fn memory_estimate(
             }
         }
     }
-    render::memory::estimate_decoding(scene, options, |i| decoded.get(i) == Some(&true))
-        .map_err(|e| CapiError::new(CtStatus::CT_ERROR_TEXTURE, e.to_string()))
+    let mut estimate =
+        render::memory::estimate_decoding(scene, options, |i| decoded.get(i) == Some(&true))
+            .map_err(|e| CapiError::new(CtStatus::CT_ERROR_TEXTURE, e.to_string()))?;
+    let kind = crate::integrator::selection::resolve(integrator, scene).kind;
+    estimate.voxels = crate::integrator::selection::integrator_memory(kind, scene)
+        .map_err(|e| CapiError::invalid(format!("{}: {e}", scene.source)))?;
+    Ok(estimate)
 }
 
 /// The renderer's options from the C options over the scene's settings, validated.

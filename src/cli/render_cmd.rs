@@ -220,6 +220,20 @@ pub(crate) fn select_integrator(
         .map_err(|e| CommandError::bad_input(format!("{}: {e}", context.scene.source)))
 }
 
+/// The memory estimate of rendering `scene` with `options` and the integrator its settings
+/// select (the voxel pyramid of vct included).
+pub(crate) fn memory_estimate(
+    scene: &SceneDescription,
+    options: &render::RenderOptions,
+) -> Result<render::memory::MemoryEstimate, CommandError> {
+    let mut estimate = render::memory::estimate(scene, options)
+        .map_err(|e| CommandError::bad_input(e.to_string()))?;
+    let kind = selection::resolve(scene.settings.integrator, scene).kind;
+    estimate.voxels = selection::integrator_memory(kind, scene)
+        .map_err(|e| CommandError::bad_input(format!("{}: {e}", scene.source)))?;
+    Ok(estimate)
+}
+
 /// Set by the Ctrl-C / SIGTERM handler; render workers stop taking new tiles.
 pub(crate) static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
@@ -348,8 +362,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     // Refused before anything large is allocated: an image or texture set that cannot fit
     // gets the estimate, not an allocation failure halfway.
-    let estimate = render::memory::estimate(&scene, &options)
-        .map_err(|e| CommandError::bad_input(e.to_string()))?;
+    let estimate = memory_estimate(&scene, &options)?;
     render::memory::check(&estimate, args.max_memory, &scene.source)
         .map_err(CommandError::bad_input)?;
 

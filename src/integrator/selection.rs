@@ -25,7 +25,8 @@ use crate::integrator::vct::Vct;
 use crate::integrator::whitted::{Waves, Whitted};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::{Integrator, RenderControl, RenderError, RenderResult};
-use crate::scene::SceneDescription;
+use crate::scene::{RenderSettings, SceneDescription};
+use crate::vct::build::pyramid_bytes_for;
 use crate::vct::{build_voxel_scene, VctBuildStats, VctError, VctSettings};
 
 /// A light-transport algorithm the renderer has.
@@ -210,14 +211,29 @@ pub fn select(
     Ok(match kind {
         IntegratorKind::Whitted => SelectedIntegrator::Whitted(Whitted),
         IntegratorKind::Path => SelectedIntegrator::Path(PathTracer::for_settings(settings)),
-        IntegratorKind::Vct => {
-            let vct = VctSettings {
-                resolution: settings.vct_resolution,
-                bounces: settings.vct_bounces,
-            };
-            SelectedIntegrator::Vct(Vct::new(build_voxel_scene(context, &vct)?))
-        }
+        IntegratorKind::Vct => SelectedIntegrator::Vct(Vct::new(build_voxel_scene(
+            context,
+            &vct_settings(settings),
+        )?)),
     })
+}
+
+/// The voxel cone tracer's settings from the scene's.
+fn vct_settings(settings: &RenderSettings) -> VctSettings {
+    VctSettings {
+        resolution: settings.vct_resolution,
+        bounces: settings.vct_bounces,
+    }
+}
+
+/// The bytes the integrator of `kind` needs for `scene` beyond the film, tiles and
+/// textures: the voxel pyramid for vct (known from the scene's bounds and settings before
+/// anything is built, so a memory limit can refuse it first), nothing for the others.
+pub fn integrator_memory(kind: IntegratorKind, scene: &SceneDescription) -> Result<u64, VctError> {
+    match kind {
+        IntegratorKind::Vct => pyramid_bytes_for(scene, &vct_settings(&scene.settings)),
+        IntegratorKind::Whitted | IntegratorKind::Path => Ok(0),
+    }
 }
 
 /// The per-thread state of the chosen integrator.

@@ -28,12 +28,19 @@ pub struct MemoryEstimate {
     pub outputs: u64,
     /// Per texture: its label and decoded size.
     pub textures: Vec<(String, u64)>,
+    /// The voxel pyramid of the voxel cone tracer (0 for the other integrators); the caller
+    /// that knows the integrator sets it.
+    pub voxels: u64,
 }
 
 impl MemoryEstimate {
     /// The sum of every part.
     pub fn total(&self) -> u64 {
-        self.film + self.tiles + self.outputs + self.textures.iter().map(|t| t.1).sum::<u64>()
+        self.film
+            + self.tiles
+            + self.outputs
+            + self.voxels
+            + self.textures.iter().map(|t| t.1).sum::<u64>()
     }
 }
 
@@ -106,6 +113,7 @@ pub fn estimate_decoding(
         tiles: workers * (tile_pixels + band_slices),
         outputs: film + pixels * 4,
         textures,
+        voxels: 0,
     })
 }
 
@@ -176,8 +184,13 @@ pub fn check_against(
         .max_by_key(|t| t.1)
         .map(|(name, bytes)| format!(", largest texture {name} {}", Bytes(*bytes)))
         .unwrap_or_default();
+    let voxels = if estimate.voxels > 0 {
+        format!(", voxel pyramid {}", Bytes(estimate.voxels))
+    } else {
+        String::new()
+    };
     Err(format!(
-        "{label}: the render needs about {} (film {}, tiles {}, outputs {}, textures {}{}), \
+        "{label}: the render needs about {} (film {}, tiles {}, outputs {}, textures {}{}{}), \
          more than the {} of {source}",
         Bytes(total),
         Bytes(estimate.film),
@@ -185,6 +198,7 @@ pub fn check_against(
         Bytes(estimate.outputs),
         Bytes(estimate.textures.iter().map(|t| t.1).sum()),
         largest_texture,
+        voxels,
         Bytes(limit),
     ))
 }
@@ -246,6 +260,7 @@ mod tests {
             tiles: 200 << 30,
             outputs: 216 << 30,
             textures: vec![("sky.png".into(), 1 << 20)],
+            voxels: 0,
         };
         let message = check(&estimate, Some(8 << 30), "scene.toml").unwrap_err();
         assert!(
@@ -257,5 +272,13 @@ mod tests {
             "{message}"
         );
         assert!(check(&estimate, Some(1 << 40), "scene.toml").is_ok());
+        assert!(!message.contains("voxel"), "{message}");
+        // A voxel pyramid counts towards the total and is named.
+        let with_voxels = MemoryEstimate {
+            voxels: 1 << 40,
+            ..estimate
+        };
+        let message = check(&with_voxels, Some(1 << 40), "scene.toml").unwrap_err();
+        assert!(message.contains("voxel pyramid 1024.0 GiB"), "{message}");
     }
 }

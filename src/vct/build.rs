@@ -14,6 +14,7 @@ use super::inject::{light_fragments, LitFragment};
 use super::mipmap::build_pyramid;
 use super::voxelise::{sphere_fragments, triangle_fragments, Fragment};
 use crate::render::context::RenderContext;
+use crate::scene::SceneDescription;
 
 /// Triangles voxelised per parallel task.
 const TRIANGLES_PER_TASK: usize = 256;
@@ -90,13 +91,13 @@ pub struct VoxelScene {
 
 /// Check the settings and pick the resolution for `context`'s scene.
 pub fn resolution_for(
-    context: &RenderContext,
+    scene: &SceneDescription,
     settings: &VctSettings,
 ) -> Result<(GridFrame, u32), VctError> {
     if !(1..=8).contains(&settings.bounces) {
         return Err(VctError::Bounces(settings.bounces));
     }
-    let (lo, hi) = context.scene.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+    let (lo, hi) = scene.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
     let resolution = match settings.resolution {
         Some(r) if !(2..=MAX_RESOLUTION).contains(&r) => return Err(VctError::Resolution(r)),
         Some(r) => r,
@@ -110,6 +111,15 @@ pub fn resolution_for(
     Ok((frame, resolution))
 }
 
+/// The bytes the voxel pyramid of `scene` under `settings` will take, known before anything
+/// is built (the memory estimate counts them), or why no grid can be built.
+pub fn pyramid_bytes_for(
+    scene: &SceneDescription,
+    settings: &VctSettings,
+) -> Result<u64, VctError> {
+    Ok(resolution_for(scene, settings)?.0.pyramid_bytes())
+}
+
 /// Voxelise `context`'s scene (triangles and spheres; curved patches are not voxelised),
 /// light it and build its pyramid, in parallel.
 pub fn build_voxel_scene(
@@ -117,7 +127,7 @@ pub fn build_voxel_scene(
     settings: &VctSettings,
 ) -> Result<VoxelScene, VctError> {
     let started = Instant::now();
-    let (frame, resolution) = resolution_for(context, settings)?;
+    let (frame, resolution) = resolution_for(&context.scene, settings)?;
     let scene = &context.scene;
 
     let voxelising = Instant::now();
