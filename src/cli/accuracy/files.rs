@@ -46,3 +46,36 @@ pub fn check_output_dir(dir: &Path) -> Result<(), CommandError> {
     let _ = fs::remove_file(&probe);
     Ok(())
 }
+
+/// The four files of one scene of an accuracy mode, named from `stem`: the table as CSV and
+/// markdown, the error-against-time plot (RGB8 pixels of [`super::plot::PLOT_SIZE`]) and
+/// the crops of every image side by side over `window`.
+pub fn write_scene_report(
+    out: &Path,
+    stem: &str,
+    tables: (&str, &str),
+    plot: Result<Vec<u8>, String>,
+    panels: &[super::crop::Panel],
+    window: crate::film::PixelRect,
+) -> Result<(), CommandError> {
+    let (csv, markdown) = tables;
+    write_text(&out.join(format!("{stem}.csv")), csv)?;
+    write_text(&out.join(format!("{stem}.md")), markdown)?;
+    let plot = plot.map_err(CommandError::internal)?;
+    let (plot_width, plot_height) = super::plot::PLOT_SIZE;
+    write_rgb_png(
+        &out.join(format!("{stem}_error_vs_time.png")),
+        plot_width,
+        plot_height,
+        &plot,
+    )?;
+    let labels = super::font::labels_available();
+    let (crop_width, crop_height, rgb) =
+        super::crop::compose(panels, window, labels).map_err(CommandError::internal)?;
+    write_rgb_png(
+        &out.join(format!("{stem}_crop.png")),
+        crop_width,
+        crop_height,
+        &rgb,
+    )
+}

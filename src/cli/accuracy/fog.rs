@@ -36,7 +36,7 @@ use crate::scene::SceneDescription;
 use conetrace::medium::{FogIntegration, FogModel};
 
 use super::metrics::{self, DisplayImage, ErrorMetrics};
-use super::plot::{draw_two_panels, PanelText, PlotPoint, PLOT_SIZE};
+use super::plot::{draw_two_panels, PanelText, PlotPoint};
 use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
 
 /// Scenes measured when none is named (run from the repository root).
@@ -331,7 +331,7 @@ pub fn markdown(report: &FogReport) -> String {
     text
 }
 
-/// The error-against-time plot of one scene as RGB8 pixels of [`PLOT_SIZE`]: RMSE on the
+/// The error-against-time plot of one scene as RGB8 pixels of [`super::plot::PLOT_SIZE`]: RMSE on the
 /// left, FLIP on the right, both over all pixels, the analytic render's time as a vertical
 /// line (its error is 0).
 pub fn draw_plot(report: &FogReport, labels: bool) -> Result<Vec<u8>, String> {
@@ -378,17 +378,6 @@ fn write_outputs(
     report: &FogReport,
     images: &[DisplayImage],
 ) -> Result<(), CommandError> {
-    let labels = font::labels_available();
-    let stem = format!("{}_fog", report.name);
-    files::write_text(&out.join(format!("{stem}.csv")), &csv(report))?;
-    files::write_text(&out.join(format!("{stem}.md")), &markdown(report))?;
-    let plot = draw_plot(report, labels).map_err(CommandError::internal)?;
-    files::write_rgb_png(
-        &out.join(format!("{stem}_error_vs_time.png")),
-        PLOT_SIZE.0,
-        PLOT_SIZE.1,
-        &plot,
-    )?;
     let panels: Vec<crop::Panel> = report
         .rows
         .iter()
@@ -399,13 +388,13 @@ fn write_outputs(
             image,
         })
         .collect();
-    let (crop_width, crop_height, rgb) =
-        crop::compose(&panels, report.crop, labels).map_err(CommandError::internal)?;
-    files::write_rgb_png(
-        &out.join(format!("{stem}_crop.png")),
-        crop_width,
-        crop_height,
-        &rgb,
+    files::write_scene_report(
+        out,
+        &format!("{}_fog", report.name),
+        (&csv(report), &markdown(report)),
+        draw_plot(report, font::labels_available()),
+        &panels,
+        report.crop,
     )
 }
 

@@ -44,7 +44,7 @@ use crate::render::{self, Integrator, RenderContext, RenderControl, RenderOption
 use conetrace::vct::{build_voxel_scene, VctSettings};
 
 use super::metrics::{self, DisplayImage, ErrorMetrics};
-use super::plot::{draw_two_panels, pareto_front, PanelText, PlotPoint, PLOT_SIZE};
+use super::plot::{draw_two_panels, pareto_front, PanelText, PlotPoint};
 use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
 
 /// Scenes measured when none is named (run from the repository root).
@@ -451,7 +451,7 @@ fn family_colour(method: &LightingMethod) -> RGBColor {
     }
 }
 
-/// The error-against-time plot of one scene as RGB8 pixels of [`PLOT_SIZE`]: RMSE on the
+/// The error-against-time plot of one scene as RGB8 pixels of [`super::plot::PLOT_SIZE`]: RMSE on the
 /// left, FLIP on the right, each with its own Pareto front; a marker per row at its total
 /// seconds, coloured by family and labelled.
 pub fn draw_plot(report: &LightingReport, labels: bool) -> Result<Vec<u8>, String> {
@@ -490,17 +490,6 @@ fn write_outputs(
     reference: &DisplayImage,
     images: &[DisplayImage],
 ) -> Result<(), CommandError> {
-    let labels = font::labels_available();
-    let stem = &report.name;
-    files::write_text(&out.join(format!("{stem}.csv")), &csv(report))?;
-    files::write_text(&out.join(format!("{stem}.md")), &markdown(report))?;
-    let plot = draw_plot(report, labels).map_err(CommandError::internal)?;
-    files::write_rgb_png(
-        &out.join(format!("{stem}_error_vs_time.png")),
-        PLOT_SIZE.0,
-        PLOT_SIZE.1,
-        &plot,
-    )?;
     let mut panels = vec![crop::Panel {
         title: "reference".to_string(),
         subtitle: format!("path {} spp", report.reference_spp),
@@ -513,13 +502,13 @@ fn write_outputs(
             image,
         });
     }
-    let (crop_width, crop_height, rgb) =
-        crop::compose(&panels, report.crop, labels).map_err(CommandError::internal)?;
-    files::write_rgb_png(
-        &out.join(format!("{stem}_crop.png")),
-        crop_width,
-        crop_height,
-        &rgb,
+    files::write_scene_report(
+        out,
+        &report.name,
+        (&csv(report), &markdown(report)),
+        draw_plot(report, font::labels_available()),
+        &panels,
+        report.crop,
     )
 }
 

@@ -41,7 +41,7 @@ use crate::scene::patch::tessellate::tessellate_all;
 use crate::scene::SceneDescription;
 
 use super::metrics::{self, DisplayImage, ErrorMetrics};
-use super::plot::{draw_two_panels, PanelText, PlotPoint, PLOT_SIZE};
+use super::plot::{draw_two_panels, PanelText, PlotPoint};
 use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
 
 /// Scenes measured when none is named (run from the repository root).
@@ -457,7 +457,7 @@ pub fn markdown(report: &PatchReport) -> String {
     text
 }
 
-/// The error-against-time plot of one scene as RGB8 pixels of [`PLOT_SIZE`]: RMSE over all
+/// The error-against-time plot of one scene as RGB8 pixels of [`super::plot::PLOT_SIZE`]: RMSE over all
 /// pixels on the left, FLIP on the right (over the textured pixels when there are some), the
 /// exact render's time as a vertical line (its error is 0).
 pub fn draw_plot(report: &PatchReport, labels: bool) -> Result<Vec<u8>, String> {
@@ -517,17 +517,6 @@ fn write_outputs(
     report: &PatchReport,
     images: &[DisplayImage],
 ) -> Result<(), CommandError> {
-    let labels = font::labels_available();
-    let stem = format!("{}_patches", report.name);
-    files::write_text(&out.join(format!("{stem}.csv")), &csv(report))?;
-    files::write_text(&out.join(format!("{stem}.md")), &markdown(report))?;
-    let plot = draw_plot(report, labels).map_err(CommandError::internal)?;
-    files::write_rgb_png(
-        &out.join(format!("{stem}_error_vs_time.png")),
-        PLOT_SIZE.0,
-        PLOT_SIZE.1,
-        &plot,
-    )?;
     let panels: Vec<crop::Panel> = report
         .rows
         .iter()
@@ -538,13 +527,13 @@ fn write_outputs(
             image,
         })
         .collect();
-    let (crop_width, crop_height, rgb) =
-        crop::compose(&panels, report.crop, labels).map_err(CommandError::internal)?;
-    files::write_rgb_png(
-        &out.join(format!("{stem}_crop.png")),
-        crop_width,
-        crop_height,
-        &rgb,
+    files::write_scene_report(
+        out,
+        &format!("{}_patches", report.name),
+        (&csv(report), &markdown(report)),
+        draw_plot(report, font::labels_available()),
+        &panels,
+        report.crop,
     )
 }
 
