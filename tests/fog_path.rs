@@ -55,17 +55,11 @@ fn worst_error(pixels: &[[f32; 3]], expected: f64) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// (a) An orthographic camera looks along -z through a slab of constant fog 2 units thick
-/// (`z` in [-1, 1], sigma 0.5) that absorbs everything it collides with (albedo 0), in front
-/// of a white environment. A path either collides (and ends: nothing is scattered) or
-/// passes with weight 1, so each sample is a Bernoulli draw of mean `exp(-sigma d) =
-/// exp(-1)`; 8x8 pixels at 1024 spp put the image's mean within 4 standard deviations,
-/// `4 sqrt(T (1 - T) / 65536) = 0.0075`.
-#[test]
-fn a_pure_absorber_passes_exp_minus_sigma_d() {
-    let dir = temp_dir();
-    let scene = load(
-        dir.path(),
+/// The absorber scene: an orthographic camera looking along -z at a white environment
+/// through constant fog of extinction `sigma` and albedo 0 filling `bounds`; the only
+/// surface lies outside the view and the fog.
+fn absorber_scene(sigma: f64, bounds: &str) -> String {
+    format!(
         r#"
 [render]
 width = 8
@@ -86,7 +80,6 @@ color = [1.0, 1.0, 1.0]
 name = "black"
 base_color = [0.0, 0.0, 0.0]
 
-# Outside the view and the fog: the scene's only surface.
 [[sphere]]
 center = [50.0, 0.0, -50.0]
 radius = 0.1
@@ -94,10 +87,28 @@ material = "black"
 
 [[fog]]
 density = "constant"
-sigma = 0.5
+sigma = {sigma}
 albedo = [0.0, 0.0, 0.0]
-bounds = { min = [-10.0, -10.0, -1.0], max = [10.0, 10.0, 1.0] }
-"#,
+bounds = {bounds}
+"#
+    )
+}
+
+/// (a) An orthographic camera looks along -z through a slab of constant fog 2 units thick
+/// (`z` in [-1, 1], sigma 0.5) that absorbs everything it collides with (albedo 0), in front
+/// of a white environment. A path either collides (and ends: nothing is scattered) or
+/// passes with weight 1, so each sample is a Bernoulli draw of mean `exp(-sigma d) =
+/// exp(-1)`; 8x8 pixels at 1024 spp put the image's mean within 4 standard deviations,
+/// `4 sqrt(T (1 - T) / 65536) = 0.0075`.
+#[test]
+fn a_pure_absorber_passes_exp_minus_sigma_d() {
+    let dir = temp_dir();
+    let scene = load(
+        dir.path(),
+        &absorber_scene(
+            0.5,
+            "{ min = [-10.0, -10.0, -1.0], max = [10.0, 10.0, 1.0] }",
+        ),
     );
     let (pixels, stats) = render_path(scene);
     let expected = (-1.0f64).exp();
@@ -313,38 +324,8 @@ fn fog_in_a_mesh_absorbs_and_scatters_like_fog_in_a_box() {
         "ball.obj",
         &uv_sphere_obj([0.0; 3], 1.0, 64, 32),
     );
-    let absorber = r#"
-[render]
-width = 8
-height = 8
-spp = 1024
-max_depth = 8
-
-[camera]
-type = "orthographic"
-eye = [0.0, 0.0, 5.0]
-target = [0.0, 0.0, 0.0]
-height = 2.0
-
-[environment]
-color = [1.0, 1.0, 1.0]
-
-[[material]]
-name = "black"
-base_color = [0.0, 0.0, 0.0]
-
-[[sphere]]
-center = [50.0, 0.0, -50.0]
-radius = 0.1
-material = "black"
-
-[[fog]]
-density = "constant"
-sigma = 1.0
-albedo = [0.0, 0.0, 0.0]
-bounds = { mesh = "slabs.obj" }
-"#;
-    let (pixels, stats) = render_path(load(dir.path(), absorber));
+    let absorber = absorber_scene(1.0, "{ mesh = \"slabs.obj\" }");
+    let (pixels, stats) = render_path(load(dir.path(), &absorber));
     let expected = (-1.0f64).exp();
     let m = mean(&pixels);
     let tolerance = 4.0 * (expected * (1.0 - expected) / 65536.0).sqrt();
