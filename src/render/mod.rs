@@ -162,6 +162,7 @@ pub fn work_tiles(width: u32, height: u32) -> Vec<PixelRect> {
 }
 
 /// Hooks a render reports to: progress after each tile and a cancellation flag.
+#[derive(Default)]
 pub struct RenderControl<'a> {
     /// Called with (finished tiles, total tiles) from worker threads.
     pub progress: Option<&'a (dyn Fn(usize, usize) + Sync)>,
@@ -172,17 +173,6 @@ pub struct RenderControl<'a> {
     /// Render only this region and range of samples (`--region`, `--samples`, `--part`);
     /// the film then covers the region only (see [`part::RenderPart`]).
     pub part: Option<&'a part::RenderPart>,
-}
-
-impl Default for RenderControl<'_> {
-    fn default() -> Self {
-        RenderControl {
-            progress: None,
-            cancel: None,
-            skip: None,
-            part: None,
-        }
-    }
 }
 
 /// A render that could not be trusted.

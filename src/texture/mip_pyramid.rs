@@ -97,7 +97,7 @@ fn halve(
     let dw = (sw / 2).max(1);
     let dh = (sh / 2).max(1);
     let mut texels = try_texel_vec(dw * dh, label)?;
-    if sw % 2 == 0 && sh % 2 == 0 {
+    if sw.is_multiple_of(2) && sh.is_multiple_of(2) {
         // Exact 2x2 box average.
         for y in 0..dh {
             for x in 0..dw {

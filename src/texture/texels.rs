@@ -282,7 +282,7 @@ impl<'a> TexelSource<'a> for ByteTexels<'a> {
     #[inline(always)]
     fn view(texels: &'a Texels) -> Option<Self> {
         match texels {
-            Texels::Byte { texels, colour, .. } => Some(ByteTexels::new(texels, *colour)),
+            Texels::Byte { texels, colour, .. } => Some(ByteTexels::new(texels, colour)),
             _ => None,
         }
     }

@@ -94,12 +94,10 @@ pub(super) fn shade_hit(
     let material: &Material = &context.scene.materials[surface.material as usize];
     let pixel = ray.pixel as usize;
 
-    if ray.kind == RayKind::Camera {
-        if ray.first_sample && !image.depth.is_empty() {
-            image.depth[pixel] = surface.t * ray.direction.dot(context.camera_forward);
-            image.normal[pixel] = surface.shading_normal.to_array();
-            image.uv[pixel] = surface.st.to_array();
-        }
+    if ray.kind == RayKind::Camera && ray.first_sample && !image.depth.is_empty() {
+        image.depth[pixel] = surface.t * ray.direction.dot(context.camera_forward);
+        image.normal[pixel] = surface.shading_normal.to_array();
+        image.uv[pixel] = surface.st.to_array();
     }
 
     // Fog between the ray's origin and the hit (seed 004, analytic fog density).
