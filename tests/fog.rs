@@ -541,6 +541,41 @@ fn gltf_files_bring_fog_through_extras() {
     );
 }
 
+/// A glTF file whose fog names the file itself as its bounding mesh: the bounds are read
+/// as triangles only, so loading ends (it overflowed the stack before) and the fog fills
+/// the file's closed tetrahedron.
+#[test]
+fn a_gltf_fog_bounded_by_its_own_file_loads() {
+    let dir = temp_dir();
+    let tetrahedron = r#"{
+  "asset": {"version": "2.0"},
+  "extras": {"fog": [{"density": "constant", "sigma": 0.5, "bounds": {"mesh": "self.gltf"}}]},
+  "buffers": [{"byteLength": 72, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAACAAEAAAABAAMAAAADAAIAAQACAAMA"}],
+  "bufferViews": [{"buffer": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 24}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 1]},
+                {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "nodes": [{"mesh": 0}],
+  "scenes": [{"nodes": [0]}],
+  "scene": 0
+}"#;
+    let path = write(dir.path(), "self.gltf", tetrahedron);
+    let scene = conetrace::scene::load::load_scene(&path).expect("loads");
+    assert_eq!(scene.fog.len(), 1);
+    assert!(scene.fog[0].contains(glam::DVec3::splat(0.2)));
+    assert!(!scene.fog[0].contains(glam::DVec3::splat(0.5)));
+    let out = run_in(
+        dir.path(),
+        &["render", "self.gltf", "-o", "o.exr", "--quiet"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// The path tracer simulates fog as a medium (tests/fog_path.rs): a fog scene it renders
 /// carries no note that the fog was left out, and its fog counters show the work.
 #[test]

@@ -177,7 +177,7 @@ fn fog_bounds(raw: &RawBounds, files: &Files) -> Result<FogBounds, String> {
             let transform = Transform::new(placement.matrix())
                 .ok_or("fog bounds mesh scale must not be zero")?;
             let path = files.resolve(file);
-            let part = super::load_part(files, &path).map_err(|e| match e {
+            let part = super::load_bounds_mesh(files, &path).map_err(|e| match e {
                 SceneError::Unreadable { reason, .. } => {
                     format!("cannot read fog bounds mesh '{}': {reason}", path.display())
                 }

@@ -33,8 +33,19 @@ use crate::scene::{
 };
 
 /// Loads the glTF file at `path` as a scene part: world-space meshes, materials, textures,
-/// punctual lights and the first camera met in the node graph.
+/// punctual lights and the first camera met in the node graph, and the fog of its `extras`.
 pub(crate) fn load_gltf(files: &Files, path: &Path) -> Result<SceneDescription, SceneError> {
+    load_gltf_with(files, path, true)
+}
+
+/// [`load_gltf`] without reading `extras.fog` when not `with_fog`: a file loaded as the
+/// closed mesh that bounds fog gives only its triangles (its own fog, which may name the
+/// file itself as its bounds, is not followed).
+pub(crate) fn load_gltf_with(
+    files: &Files,
+    path: &Path,
+    with_fog: bool,
+) -> Result<SceneDescription, SceneError> {
     let label = path.display().to_string();
     let bytes = files.read(path)?;
     let err = |m: String| SceneError::invalid(&label, m);
@@ -64,8 +75,10 @@ pub(crate) fn load_gltf(files: &Files, path: &Path) -> Result<SceneDescription, 
     if loader.part.meshes.is_empty() {
         return Err(err("no triangle meshes in the glTF file".into()));
     }
-    loader.part.fog =
-        super::fog::gltf_fog(gltf.document.as_json().extras.as_deref(), &local).map_err(err)?;
+    if with_fog {
+        loader.part.fog =
+            super::fog::gltf_fog(gltf.document.as_json().extras.as_deref(), &local).map_err(err)?;
+    }
     Ok(loader.part)
 }
 

@@ -127,6 +127,16 @@ fn load_part(files: &Files, path: &Path) -> Result<SceneDescription, SceneError>
     }
 }
 
+/// The triangles of the OBJ or glTF file at `path` as a part, for a closed mesh that bounds
+/// fog: like [`load_part`], but a glTF file's own fog is not read (it could name this very
+/// file as its bounds, and loading would never end).
+fn load_bounds_mesh(files: &Files, path: &Path) -> Result<SceneDescription, SceneError> {
+    match format_of(path)? {
+        Format::Gltf => gltf::load_gltf_with(files, path, false),
+        _ => load_part(files, path),
+    }
+}
+
 /// Adds a missing camera and lights, then validates.
 fn finish(mut scene: SceneDescription) -> Result<SceneDescription, SceneError> {
     framing::add_missing_camera_and_lights(&mut scene);
