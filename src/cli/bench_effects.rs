@@ -17,7 +17,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use clap::{Args, Parser};
+use clap::Args;
 
 use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
@@ -45,13 +45,6 @@ pub struct BenchEffectsArgs {
     /// Also write the markdown tables to this file.
     #[arg(long)]
     pub markdown: Option<PathBuf>,
-}
-
-/// The render options `conetrace render` would use, parsed from an argument list.
-#[derive(Parser, Debug)]
-struct RenderArgsOnly {
-    #[command(flatten)]
-    render: RenderArgs,
 }
 
 /// What one configuration switches on, relative to the scene's analysis.
@@ -179,9 +172,7 @@ fn render_args(scene: &Path, args: &BenchEffectsArgs) -> Result<RenderArgs, Comm
         argv.extend(["--height".into(), height.to_string().into()]);
     }
     argv.extend(["--".into(), scene.as_os_str().to_owned()]);
-    RenderArgsOnly::try_parse_from(argv)
-        .map(|parsed| parsed.render)
-        .map_err(|e| CommandError::internal(format!("bench effects: {e}")))
+    RenderArgs::from_argv(argv).map_err(|e| CommandError::internal(format!("bench effects: {e}")))
 }
 
 /// CPU time used so far by all threads of this process, from Linux's per-thread

@@ -17,7 +17,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use clap::{Args, Parser};
+use clap::Args;
 
 use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
@@ -53,13 +53,6 @@ pub struct BenchTilesArgs {
     /// Also write the table to this file.
     #[arg(long)]
     pub markdown: Option<PathBuf>,
-}
-
-/// The render options `conetrace render` would use, parsed from an argument list.
-#[derive(Parser, Debug)]
-struct RenderArgsOnly {
-    #[command(flatten)]
-    render: RenderArgs,
 }
 
 /// The strategy x filter rows, in table order: `mip0` first, the baseline the others save
@@ -107,9 +100,7 @@ fn render_args(args: &BenchTilesArgs) -> Result<RenderArgs, CommandError> {
         argv.extend(["--spp".into(), spp.to_string().into()]);
     }
     argv.extend(["--".into(), args.scene.as_os_str().to_owned()]);
-    RenderArgsOnly::try_parse_from(argv)
-        .map(|parsed| parsed.render)
-        .map_err(|e| CommandError::bad_input(format!("bench tiles: {e}")))
+    RenderArgs::from_argv(argv).map_err(|e| CommandError::bad_input(format!("bench tiles: {e}")))
 }
 
 fn render_once(

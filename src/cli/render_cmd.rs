@@ -161,6 +161,22 @@ pub struct RenderArgs {
     pub time_limit: Option<f64>,
 }
 
+/// `conetrace render`'s options alone, for commands that render scenes as `render` would.
+#[derive(clap::Parser, Debug)]
+struct RenderArgsOnly {
+    #[command(flatten)]
+    render: RenderArgs,
+}
+
+impl RenderArgs {
+    /// The options `conetrace render` would take from `argv` (its first element the program
+    /// name).
+    pub(crate) fn from_argv(argv: Vec<std::ffi::OsString>) -> Result<RenderArgs, clap::Error> {
+        use clap::Parser;
+        RenderArgsOnly::try_parse_from(argv).map(|parsed| parsed.render)
+    }
+}
+
 /// `--patch-mode`'s values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum PatchMode {
