@@ -527,8 +527,7 @@ fn memory_estimate(
     let mut estimate =
         render::memory::estimate_decoding(scene, options, |i| decoded.get(i) == Some(&true))
             .map_err(|e| CapiError::new(CtStatus::CT_ERROR_TEXTURE, e.to_string()))?;
-    let kind = crate::integrator::selection::resolve(integrator, scene).kind;
-    estimate.voxels = crate::integrator::selection::integrator_memory(kind, scene)
+    estimate.voxels = crate::integrator::selection::integrator_memory(integrator, scene)
         .map_err(|e| CapiError::invalid(format!("{}: {e}", scene.source)))?;
     Ok(estimate)
 }

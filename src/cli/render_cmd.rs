@@ -244,8 +244,7 @@ pub(crate) fn memory_estimate(
 ) -> Result<render::memory::MemoryEstimate, CommandError> {
     let mut estimate = render::memory::estimate(scene, options)
         .map_err(|e| CommandError::bad_input(e.to_string()))?;
-    let kind = selection::resolve(scene.settings.integrator, scene).kind;
-    estimate.voxels = selection::integrator_memory(kind, scene)
+    estimate.voxels = selection::integrator_memory(scene.settings.integrator, scene)
         .map_err(|e| CommandError::bad_input(format!("{}: {e}", scene.source)))?;
     Ok(estimate)
 }

@@ -226,11 +226,14 @@ fn vct_settings(settings: &RenderSettings) -> VctSettings {
     }
 }
 
-/// The bytes the integrator of `kind` needs for `scene` beyond the film, tiles and
-/// textures: the voxel pyramid for vct (known from the scene's bounds and settings before
-/// anything is built, so a memory limit can refuse it first), nothing for the others.
-pub fn integrator_memory(kind: IntegratorKind, scene: &SceneDescription) -> Result<u64, VctError> {
-    match kind {
+/// The bytes the integrator `choice` resolves to needs for `scene` beyond the film, tiles
+/// and textures: the voxel pyramid for vct (known from the scene's bounds and settings
+/// before anything is built, so a memory limit can refuse it first), nothing for the others.
+pub fn integrator_memory(
+    choice: IntegratorChoice,
+    scene: &SceneDescription,
+) -> Result<u64, VctError> {
+    match resolve(choice, scene).kind {
         IntegratorKind::Vct => pyramid_bytes_for(scene, &vct_settings(&scene.settings)),
         IntegratorKind::Whitted | IntegratorKind::Path => Ok(0),
     }

@@ -74,6 +74,17 @@ pub enum LightingMethod {
 }
 
 impl LightingMethod {
+    /// The vct grid resolution and bounces as table cells; empty for the other methods.
+    fn vct_columns(&self) -> (String, String) {
+        match self {
+            LightingMethod::Vct {
+                resolution,
+                bounces,
+            } => (resolution.to_string(), bounces.to_string()),
+            _ => (String::new(), String::new()),
+        }
+    }
+
     /// `whitted`, `path`, `vct`.
     pub fn name(&self) -> &'static str {
         match self {
@@ -369,13 +380,7 @@ render_seconds,total_seconds,rays,rmse,psnr_db,flip,pareto";
 pub fn csv(report: &LightingReport) -> String {
     let mut text = format!("{CSV_HEADER}\n");
     for row in &report.rows {
-        let (resolution, bounces) = match row.method {
-            LightingMethod::Vct {
-                resolution,
-                bounces,
-            } => (resolution.to_string(), bounces.to_string()),
-            _ => (String::new(), String::new()),
-        };
+        let (resolution, bounces) = row.method.vct_columns();
         text.push_str(&format!(
             "{},{},{},{},{},{:.6},{:.6},{:.6},{},{:.6},{:.2},{:.6},{}\n",
             report.name,
@@ -415,13 +420,7 @@ pub fn markdown(report: &LightingReport) -> String {
         report.runs,
     );
     for row in &report.rows {
-        let (resolution, bounces) = match row.method {
-            LightingMethod::Vct {
-                resolution,
-                bounces,
-            } => (resolution.to_string(), bounces.to_string()),
-            _ => (String::new(), String::new()),
-        };
+        let (resolution, bounces) = row.method.vct_columns();
         text.push_str(&format!(
             "| {} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {:.5} | {:.2} | {:.4} | {} |\n",
             row.method.label(),
