@@ -211,6 +211,51 @@ impl Camera {
         }
     }
 
+    /// Unit directions of pinhole rays through the pixel positions (`px[i]`, `py[i]`), lane
+    /// by lane the bits [`Camera::generate_ray`] gives (the same operations in the same
+    /// order), computed as structure-of-arrays so that the divisions and square roots of a
+    /// packet's lanes run as vector instructions. Every ray starts at [`Camera::eye`].
+    /// Returns `None` unless the camera is a pinhole.
+    pub fn pinhole_directions<const N: usize>(
+        &self,
+        px: &[f32; N],
+        py: &[f32; N],
+    ) -> Option<[[f32; N]; 3]> {
+        if self.model != CameraModel::Pinhole {
+            return None;
+        }
+        let (width, height) = (self.width as f32, self.height as f32);
+        let (w, u, v, fallback) = (self.w, self.u, self.v, self.forward);
+        let mut out = [[0.0f32; N]; 3];
+        for lane in 0..N {
+            // `sanitize_pixel`, then `rectangle_point`, then `unit_or`, written out per lane.
+            let x = if px[lane].is_finite() {
+                px[lane]
+            } else {
+                0.5 * width
+            };
+            let y = if py[lane].is_finite() {
+                py[lane]
+            } else {
+                0.5 * height
+            };
+            let x = 2.0 * x / width - 1.0;
+            let y = 1.0 - 2.0 * y / height;
+            let r = [
+                w.x + u.x * x + v.x * y,
+                w.y + u.y * x + v.y * y,
+                w.z + u.z * x + v.z * y,
+            ];
+            let length_squared = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+            let unit = length_squared.is_finite() && length_squared > 1.0e-30;
+            let scale = length_squared.sqrt().recip();
+            out[0][lane] = if unit { r[0] * scale } else { fallback.x };
+            out[1][lane] = if unit { r[1] * scale } else { fallback.y };
+            out[2][lane] = if unit { r[2] * scale } else { fallback.z };
+        }
+        Some(out)
+    }
+
     #[inline]
     fn sanitize_pixel(&self, px: f32, py: f32) -> (f32, f32) {
         let fix = |p: f32, size: u32| if p.is_finite() { p } else { 0.5 * size as f32 };
@@ -371,6 +416,62 @@ mod tests {
             target: Vec3::new(0.0, 1.0, 0.0),
             up: Vec3::Y,
             projection,
+        }
+    }
+
+    #[test]
+    fn pinhole_directions_are_generate_ray_bit_for_bit() {
+        // Lanes inside, on and outside the image, and non-finite positions (the image
+        // centre), for wide and narrow fields of view and image shapes.
+        let specials = [
+            0.0,
+            0.5,
+            -3.25,
+            1.0e7,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        let mut state = 12345u32;
+        let mut next = move || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) as f32 / (1u32 << 24) as f32
+        };
+        for (vfov, width, height) in [(40.0, 1280, 720), (170.0, 7, 3), (0.01, 64, 64)] {
+            let cam = Camera::new(
+                &desc(Projection::Pinhole { vfov_degrees: vfov }),
+                width,
+                height,
+            );
+            for round in 0..50 {
+                let px: [f32; 16] = std::array::from_fn(|lane| match (round, lane) {
+                    (0, l) if l < specials.len() => specials[l],
+                    _ => next() * (width as f32 + 2.0) - 1.0,
+                });
+                let py: [f32; 16] = std::array::from_fn(|lane| match (round, lane) {
+                    (1, l) if l < specials.len() => specials[l],
+                    _ => next() * (height as f32 + 2.0) - 1.0,
+                });
+                let d = cam.pinhole_directions(&px, &py).expect("a pinhole");
+                for lane in 0..16 {
+                    let (origin, direction) = cam.generate_ray(px[lane], py[lane], Vec2::ZERO);
+                    assert_eq!(origin, cam.eye());
+                    let packed = [d[0][lane], d[1][lane], d[2][lane]];
+                    assert_eq!(
+                        packed.map(f32::to_bits),
+                        direction.to_array().map(f32::to_bits)
+                    );
+                }
+            }
+        }
+        let lens = Projection::ThinLens {
+            vfov_degrees: 40.0,
+            aperture_radius: 0.1,
+            focus_distance: 5.0,
+        };
+        for projection in [lens, Projection::Orthographic { height: 2.0 }] {
+            let cam = Camera::new(&desc(projection), 64, 64);
+            assert!(cam.pinhole_directions(&[0.5; 16], &[0.5; 16]).is_none());
         }
     }
 

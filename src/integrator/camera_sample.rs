@@ -3,6 +3,8 @@
 //! the camera gives it and the pixel's sampler (which has drawn the camera's dimensions, so
 //! an integrator's own draws continue from there).
 
+use glam::{Vec2, Vec3};
+
 use crate::film::{block_order, PixelRect};
 use crate::footprint::Footprint;
 use crate::render::context::RenderContext;
@@ -25,6 +27,11 @@ pub(crate) struct CameraRay {
 
 /// Calls `emit` with the camera ray of every pixel of `tile` for sample `sample`, in 4x4
 /// block order.
+///
+/// A block's 16 rays are made together, as structure-of-arrays: the sampler's draws
+/// (`Sampler::camera_lanes`), then, for a pinhole camera, the directions
+/// (`Camera::pinhole_directions`), each the same bits as the one-ray functions give; then
+/// each ray's start and footprint.
 pub(crate) fn for_each_camera_ray(
     context: &RenderContext,
     tile: PixelRect,
@@ -32,36 +39,102 @@ pub(crate) fn for_each_camera_ray(
     image_width: u32,
     mut emit: impl FnMut(CameraRay),
 ) {
-    let camera = &context.camera;
-    let lod = context.options.lod;
-    let spp = context.options.spp.max(1);
-    let dof = context.effects.depth_of_field;
-    let sampler = Sampler::new(context.options.seed);
+    let mut block = CameraBlock::default();
     for (x, y) in block_order(tile) {
-        let (px, py) = (tile.x0 + x, tile.y0 + y);
-        let mut pixel_sampler = sampler.pixel(py * image_width + px, sample);
+        let lane = block.len;
+        block.x[lane] = tile.x0 + x;
+        block.y[lane] = tile.y0 + y;
+        block.pixel[lane] = y * tile.width + x;
+        block.len += 1;
+        if block.len == PACKET {
+            block.emit(context, sample, image_width, &mut emit);
+        }
+    }
+    if block.len > 0 {
+        block.emit(context, sample, image_width, &mut emit);
+    }
+}
+
+/// Lanes of one 4x4 block (`block_order` yields the pixels of a block in a run of 16, fewer
+/// at a tile's ragged edge).
+const PACKET: usize = 16;
+
+/// The pixels of up to 16 camera rays.
+#[derive(Default)]
+struct CameraBlock {
+    len: usize,
+    /// Image coordinates.
+    x: [u32; PACKET],
+    y: [u32; PACKET],
+    /// Index inside the tile.
+    pixel: [u32; PACKET],
+}
+
+impl CameraBlock {
+    /// Makes the block's rays, emits them in lane order and empties the block. Lanes past
+    /// `len` keep the previous block's pixels: computed and ignored.
+    fn emit(
+        &mut self,
+        context: &RenderContext,
+        sample: u32,
+        image_width: u32,
+        emit: &mut impl FnMut(CameraRay),
+    ) {
+        let camera = &context.camera;
+        let spp = context.options.spp.max(1);
+        let image_pixels: [u32; PACKET] =
+            std::array::from_fn(|lane| self.y[lane] * image_width + self.x[lane]);
         // Only the values the camera uses are computed (the lens centre without depth of
-        // field); the sampler's dimensions move on the same either way.
-        let camera_sample = pixel_sampler.camera_sample_drawing(spp, dof);
-        let offset = camera_sample.pixel_offset;
-        let lens = camera_sample.lens;
-        let (fx, fy) = (px as f32 + offset.x, py as f32 + offset.y);
-        let (origin, direction) = camera.generate_ray(fx, fy, lens);
-        let start = context.surfaces.bounds.map_or(0.0, |bounds| {
-            shading::entry_distance(origin, direction, bounds)
+        // field); the samplers' dimensions move on the same either way.
+        let draws = Sampler::new(context.options.seed).camera_lanes(
+            &image_pixels,
+            sample,
+            spp,
+            context.effects.depth_of_field,
+        );
+        let fx: [f32; PACKET] =
+            std::array::from_fn(|lane| self.x[lane] as f32 + draws.offset[0][lane]);
+        let fy: [f32; PACKET] =
+            std::array::from_fn(|lane| self.y[lane] as f32 + draws.offset[1][lane]);
+        let bounds = context.surfaces.bounds;
+        let directions = camera.pinhole_directions(&fx, &fy);
+        // A pinhole's rays share their origin: their starts are computed lane by lane too.
+        let pinhole_starts = directions.as_ref().map(|d| {
+            bounds.map_or([0.0; PACKET], |b| {
+                shading::entry_distances(camera.eye(), d, b)
+            })
         });
-        let footprint = if context.effects.footprints {
-            camera.sample_footprint(lod, fx, fy, origin, direction, spp)
-        } else {
-            Footprint::none()
-        };
-        emit(CameraRay {
-            origin,
-            direction,
-            start,
-            footprint,
-            pixel: y * tile.width + x,
-            sampler: pixel_sampler,
-        });
+        for lane in 0..self.len {
+            let (origin, direction, start) = match (&directions, &pinhole_starts) {
+                (Some(d), Some(starts)) => (
+                    camera.eye(),
+                    Vec3::new(d[0][lane], d[1][lane], d[2][lane]),
+                    starts[lane],
+                ),
+                _ => {
+                    let lens = Vec2::new(draws.lens[0][lane], draws.lens[1][lane]);
+                    let (origin, direction) = camera.generate_ray(fx[lane], fy[lane], lens);
+                    let start = bounds.map_or(0.0, |bounds| {
+                        shading::entry_distance(origin, direction, bounds)
+                    });
+                    (origin, direction, start)
+                }
+            };
+            let footprint = if context.effects.footprints {
+                let lod = context.options.lod;
+                camera.sample_footprint(lod, fx[lane], fy[lane], origin, direction, spp)
+            } else {
+                Footprint::none()
+            };
+            emit(CameraRay {
+                origin,
+                direction,
+                start,
+                footprint,
+                pixel: self.pixel[lane],
+                sampler: draws.samplers[lane],
+            });
+        }
+        self.len = 0;
     }
 }

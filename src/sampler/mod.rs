@@ -44,7 +44,9 @@ mod sobol;
 
 use glam::Vec2;
 
-use scramble::{hash_u32, hash_words, nested_uniform_scramble, scramble_mirrored, unit_float};
+use scramble::{
+    hash_u32, hash_words, nested_uniform_scramble, scramble_mirrored, unit_float, HASH_START,
+};
 
 /// The sampler of one render: the seed every sample position derives from (`--seed`,
 /// `[render] seed`). Equal seeds give bit-identical images.
@@ -72,6 +74,79 @@ impl Sampler {
             dimension: 0,
         }
     }
+}
+
+/// The camera draws of a packet of pixels for one sample index, lane by lane the values
+/// [`Sampler::pixel`] and [`PixelSampler::camera_sample_drawing`] give, computed as
+/// structure-of-arrays: the hashes and scrambles of the lanes are independent integer
+/// work, which runs as vector instructions where the target has them.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraLanes<const N: usize> {
+    /// Each lane's sampler, past the camera's four dimensions.
+    pub samplers: [PixelSampler; N],
+    /// Position inside the pixel, x and y.
+    pub offset: [[f32; N]; 2],
+    /// Position on the lens, x and y.
+    pub lens: [[f32; N]; 2],
+}
+
+impl Sampler {
+    /// [`PixelSampler::camera_sample_drawing`] of sample `index` of each of `pixels`
+    /// (numbered as for [`Sampler::pixel`]): the same values, bit for bit.
+    pub fn camera_lanes<const N: usize>(
+        &self,
+        pixels: &[u32; N],
+        index: u32,
+        samples_per_pixel: u32,
+        lens: bool,
+    ) -> CameraLanes<N> {
+        // `hash_words(&[seed, pixel])` written out, its first step shared by every lane.
+        let seed_state = hash_u32(HASH_START ^ hash_u32(self.seed));
+        let mut keys = [0u32; N];
+        for (key, &pixel) in keys.iter_mut().zip(pixels) {
+            *key = hash_u32(seed_state ^ hash_u32(pixel));
+        }
+        let centre = [[0.5f32; N]; 2];
+        let offset = if samples_per_pixel <= 1 {
+            centre
+        } else {
+            next_2d_lanes(&keys, index, 0)
+        };
+        let lens = if lens {
+            next_2d_lanes(&keys, index, 2)
+        } else {
+            centre
+        };
+        CameraLanes {
+            samplers: std::array::from_fn(|lane| PixelSampler {
+                pixel_key: keys[lane],
+                index,
+                dimension: 4,
+            }),
+            offset,
+            lens,
+        }
+    }
+}
+
+/// [`PixelSampler::next_2d`] at `dimension` for the pixel keys `keys`, lane by lane.
+#[inline]
+fn next_2d_lanes<const N: usize>(keys: &[u32; N], index: u32, dimension: u32) -> [[f32; N]; 2] {
+    let dimension_hash = hash_u32(dimension);
+    let mut out = [[0.0f32; N]; 2];
+    for lane in 0..N {
+        // `take`: `hash_words(&[pixel_key, dimension])` written out.
+        let key = hash_u32(hash_u32(HASH_START ^ hash_u32(keys[lane])) ^ dimension_hash);
+        let shuffled = nested_uniform_scramble(index, key);
+        let x = scramble_mirrored(shuffled, hash_u32(key ^ 0x5bd1_e995));
+        let y = scramble_mirrored(
+            sobol::dimension_1_mirrored(shuffled),
+            hash_u32(key ^ 0x1b87_3593),
+        );
+        out[0][lane] = unit_float(x);
+        out[1][lane] = unit_float(y);
+    }
+    out
 }
 
 /// Where a camera ray starts: the position inside the pixel and on the lens, each in

@@ -29,8 +29,11 @@ pub fn hash_u32(value: u32) -> u32 {
 pub fn hash_words(words: &[u32]) -> u32 {
     words
         .iter()
-        .fold(0x6A09_E667u32, |h, &w| hash_u32(h ^ hash_u32(w)))
+        .fold(HASH_START, |h, &w| hash_u32(h ^ hash_u32(w)))
 }
+
+/// The state [`hash_words`] starts from.
+pub const HASH_START: u32 = 0x6A09_E667;
 
 /// A permutation of 32-bit words in which output bit b depends only on input bits 0..=b
 /// (multiplying by an odd number, adding, and `x ^= x * even` all carry information only
