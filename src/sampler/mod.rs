@@ -69,7 +69,7 @@ impl Sampler {
     #[inline]
     pub fn pixel(&self, pixel: u32, index: u32) -> PixelSampler {
         PixelSampler {
-            pixel_key: hash_words(&[self.seed, pixel]),
+            pixel_state: pixel_state(hash_words(&[self.seed, pixel])),
             index,
             dimension: 0,
         }
@@ -102,24 +102,24 @@ impl Sampler {
     ) -> CameraLanes<N> {
         // `hash_words(&[seed, pixel])` written out, its first step shared by every lane.
         let seed_state = hash_u32(HASH_START ^ hash_u32(self.seed));
-        let mut keys = [0u32; N];
-        for (key, &pixel) in keys.iter_mut().zip(pixels) {
-            *key = hash_u32(seed_state ^ hash_u32(pixel));
+        let mut states = [0u32; N];
+        for (state, &pixel) in states.iter_mut().zip(pixels) {
+            *state = pixel_state(hash_u32(seed_state ^ hash_u32(pixel)));
         }
         let centre = [[0.5f32; N]; 2];
         let offset = if samples_per_pixel <= 1 {
             centre
         } else {
-            next_2d_lanes(&keys, index, 0)
+            next_2d_lanes(&states, index, 0)
         };
         let lens = if lens {
-            next_2d_lanes(&keys, index, 2)
+            next_2d_lanes(&states, index, 2)
         } else {
             centre
         };
         CameraLanes {
             samplers: std::array::from_fn(|lane| PixelSampler {
-                pixel_key: keys[lane],
+                pixel_state: states[lane],
                 index,
                 dimension: 4,
             }),
@@ -129,14 +129,14 @@ impl Sampler {
     }
 }
 
-/// [`PixelSampler::next_2d`] at `dimension` for the pixel keys `keys`, lane by lane.
+/// [`PixelSampler::next_2d`] at `dimension` for the pixel states `states`, lane by lane.
 #[inline]
-fn next_2d_lanes<const N: usize>(keys: &[u32; N], index: u32, dimension: u32) -> [[f32; N]; 2] {
+fn next_2d_lanes<const N: usize>(states: &[u32; N], index: u32, dimension: u32) -> [[f32; N]; 2] {
     let dimension_hash = hash_u32(dimension);
     let mut out = [[0.0f32; N]; 2];
     for lane in 0..N {
-        // `take`: `hash_words(&[pixel_key, dimension])` written out.
-        let key = hash_u32(hash_u32(HASH_START ^ hash_u32(keys[lane])) ^ dimension_hash);
+        // `take`, as `PixelSampler::take` computes it.
+        let key = hash_u32(states[lane] ^ dimension_hash);
         let shuffled = nested_uniform_scramble(index, key);
         let x = scramble_mirrored(shuffled, hash_u32(key ^ 0x5bd1_e995));
         let y = scramble_mirrored(
@@ -147,6 +147,13 @@ fn next_2d_lanes<const N: usize>(keys: &[u32; N], index: u32, dimension: u32) ->
         out[1][lane] = unit_float(y);
     }
     out
+}
+
+/// The state `hash_words(&[pixel_key, dimension])` has after folding in `pixel_key`: every
+/// draw's key starts from it (`PixelSampler::take`).
+#[inline]
+fn pixel_state(pixel_key: u32) -> u32 {
+    hash_u32(HASH_START ^ hash_u32(pixel_key))
 }
 
 /// Where a camera ray starts: the position inside the pixel and on the lens, each in
@@ -161,8 +168,9 @@ pub struct CameraSample {
 /// one or two dimensions. Small and `Copy`, so a path can carry it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PixelSampler {
-    /// The seed and the pixel, hashed together.
-    pixel_key: u32,
+    /// The seed and the pixel, hashed together (the pixel key), then carried through the
+    /// first step of every draw's key (`pixel_state`), which depends on the pixel alone.
+    pixel_state: u32,
     index: u32,
     dimension: u32,
 }
@@ -181,7 +189,8 @@ impl PixelSampler {
     /// Key of the draw starting at the current dimension, and the dimension moved on.
     #[inline]
     fn take(&mut self, count: u32) -> u32 {
-        let key = hash_words(&[self.pixel_key, self.dimension]);
+        // `hash_words(&[pixel_key, dimension])`, its first step done once per pixel.
+        let key = hash_u32(self.pixel_state ^ hash_u32(self.dimension));
         self.dimension += count;
         key
     }

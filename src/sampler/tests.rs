@@ -216,7 +216,7 @@ fn draws_equal_the_sobol_definitions() {
         for pixel in [0u32, 1, 517, 262_143, 4_000_000] {
             for index in [0u32, 1, 2, 3, 15, 16, 255, 1023, 65_537] {
                 let mut draws = sampler.pixel(pixel, index);
-                let pixel_key = draws.pixel_key;
+                let pixel_key = hash_words(&[seed, pixel]);
                 for dimension in (0..12u32).step_by(3) {
                     let key = hash_words(&[pixel_key, dimension]);
                     let shuffled = nested_uniform_scramble(index, key);
