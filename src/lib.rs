@@ -27,6 +27,8 @@ pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod shading;
+#[cfg(test)]
+mod test_rng;
 pub mod texture;
 pub mod vct;
 

@@ -201,9 +201,11 @@ fn fog_accuracy_rows_exist_and_marching_converges() {
         "stderr: {}",
         String::from_utf8_lossy(&result.stderr)
     );
-    check_report(&out, "fog_accuracy_inside", true);
-    check_report(&out, "fog_accuracy_outside", true);
-    check_report(&out, "fog_accuracy_edge", false);
+    // The report goes to `--out`/fog, as the lighting report goes to `--out`/lighting.
+    let report = out.join("fog");
+    check_report(&report, "fog_accuracy_inside", true);
+    check_report(&report, "fog_accuracy_outside", true);
+    check_report(&report, "fog_accuracy_edge", false);
 }
 
 #[test]

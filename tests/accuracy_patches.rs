@@ -115,6 +115,8 @@ fn patch_accuracy_rows_exist_and_error_falls_as_the_bound_tightens() {
         String::from_utf8_lossy(&result.stderr)
     );
 
+    // The report goes to `--out`/patches, as the lighting report goes to `--out`/lighting.
+    let out = out.join("patches");
     let teapot = rows(&out.join("teapot_mirror_patches.csv"));
     eprintln!("teapot: {teapot:?}");
     let modes: Vec<(&str, &str)> = teapot

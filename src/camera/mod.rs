@@ -409,6 +409,7 @@ pub fn sample_footprint_scale(samples_per_pixel: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_rng::{unit_f32, xorshift32};
 
     fn desc(projection: Projection) -> CameraDesc {
         CameraDesc {
@@ -433,10 +434,7 @@ mod tests {
             f32::NEG_INFINITY,
         ];
         let mut state = 12345u32;
-        let mut next = move || {
-            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (state >> 8) as f32 / (1u32 << 24) as f32
-        };
+        let mut next = move || unit_f32(xorshift32(&mut state));
         for (vfov, width, height) in [(40.0, 1280, 720), (170.0, 7, 3), (0.01, 64, 64)] {
             let cam = Camera::new(
                 &desc(Projection::Pinhole { vfov_degrees: vfov }),

@@ -20,6 +20,7 @@ use std::sync::Arc;
 use clap::Args;
 
 use crate::cli::render_cmd::{self, RenderArgs};
+use crate::cli::summary::quantile;
 use crate::cli::CommandError;
 use crate::film::Film;
 use crate::integrator::Whitted;
@@ -92,20 +93,13 @@ struct Spread {
 
 impl Spread {
     fn of(values: &[f64]) -> Spread {
-        let mut v = values.to_vec();
-        v.sort_by(|a, b| a.total_cmp(b));
-        // Linear interpolation between the closest ranks.
-        let at = |q: f64| {
-            let x = (v.len() - 1) as f64 * q;
-            let (i, f) = (x.floor() as usize, x - x.floor());
-            v[i] + (v[(i + 1).min(v.len() - 1)] - v[i]) * f
-        };
+        let at = |q: f64| quantile(values, q);
         Spread {
             q1: at(0.25),
             median: at(0.5),
             q3: at(0.75),
-            min: v[0],
-            max: v[v.len() - 1],
+            min: at(0.0),
+            max: at(1.0),
         }
     }
 

@@ -19,6 +19,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::cli::render_cmd::{self, RenderArgs};
+use crate::cli::summary::median;
 use crate::cli::CommandError;
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
@@ -205,17 +206,17 @@ impl WatertightCost {
             if rows.is_empty() {
                 continue;
             }
-            let robust = median(rows.iter().map(|r| r.1).collect());
-            let fast = median(rows.iter().map(|r| r.2).collect());
-            let ratio = median(rows.iter().map(|r| r.1 / r.2.max(1e-12)).collect());
+            let robust = median(&rows.iter().map(|r| r.1).collect::<Vec<_>>());
+            let fast = median(&rows.iter().map(|r| r.2).collect::<Vec<_>>());
+            let ratio = median(
+                &rows
+                    .iter()
+                    .map(|r| r.1 / r.2.max(1e-12))
+                    .collect::<Vec<_>>(),
+            );
             println!("| {pass} | {robust:.4} | {fast:.4} | {ratio:.3} |");
         }
     }
-}
-
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(|a, b| a.total_cmp(b));
-    values[values.len() / 2]
 }
 
 /// `bench render` measures and writes no image: options about output files would be ignored,
@@ -311,12 +312,12 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             check_traversal(&context)?;
             check_traversal(&fast_context)?;
         }
-        let raw = median(raw_times);
-        let full = median(full_times);
+        let raw = median(&raw_times);
+        let full = median(&full_times);
         let raw_rate = raw_rays as f64 / raw / 1e6;
         let full_camera_rate = full_counters.camera_rays as f64 / full / 1e6;
         let full_ray_rate = full_counters.total_rays() as f64 / full / 1e6;
-        let direct = median(direct_times);
+        let direct = median(&direct_times);
         let direct_camera_rate = direct_counters.camera_rays as f64 / direct / 1e6;
         let direct_ray_rate = direct_counters.total_rays() as f64 / direct / 1e6;
         println!(
@@ -330,7 +331,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         println!("| pass | seconds | camera Mrays/s | all Mrays/s |");
         println!("|---|---|---|---|");
         println!("| raw packet traversal (camera rays, no shading) | {raw:.4} | {raw_rate:.2} | {raw_rate:.2} |");
-        let traversal = median(traversal_times);
+        let traversal = median(&traversal_times);
         let traversal_rate = (traversal_rays.0 + traversal_rays.1) as f64 / traversal / 1e6;
         println!(
             "| camera + shadow rays traced, nothing shaded ({} camera, {} shadow rays) | {traversal:.4} | {:.2} | {traversal_rate:.2} |",

@@ -160,13 +160,8 @@ pub fn measure(
         }
         eprintln!("bench tiles: timed round {}/{runs} done", round + 1);
     }
-    for (row, mut seconds) in rows.iter_mut().zip(times) {
-        seconds.sort_by(f64::total_cmp);
-        row.seconds = match seconds.len() {
-            0 => f64::NAN,
-            n if n % 2 == 1 => seconds[n / 2],
-            n => 0.5 * (seconds[n / 2 - 1] + seconds[n / 2]),
-        };
+    for (row, seconds) in rows.iter_mut().zip(times) {
+        row.seconds = super::summary::median(&seconds);
     }
     Ok((rows, integrator))
 }

@@ -16,6 +16,7 @@ pub mod progressive;
 pub mod render_cmd;
 pub mod resume;
 pub mod sample_texture;
+pub mod summary;
 
 use clap::{Parser, Subcommand};
 

@@ -5,6 +5,7 @@
 use glam::DVec3;
 
 use super::*;
+use crate::test_rng::{unit_f64, xorshift64_star};
 
 /// Adaptive Simpson quadrature of `f` over `[a, b]`, to a relative tolerance of about
 /// `tolerance` of the estimate (Lyness's criterion `|S2 - S1| <= 15 eps`, with Richardson's
@@ -80,10 +81,7 @@ struct Random(u64);
 
 impl Random {
     fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+        unit_f64(xorshift64_star(&mut self.0))
     }
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.uniform()

@@ -353,6 +353,7 @@ fn unmatched_edges(triangles: &[[DVec3; 3]]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_rng::{unit_f64, xorshift64};
 
     /// The 12 triangles of the box `[lo, hi]`, outward-facing.
     fn cube(lo: DVec3, hi: DVec3) -> Vec<[DVec3; 3]> {
@@ -439,12 +440,7 @@ mod tests {
         let mesh = ClosedMesh::new(&cube(lo, hi)).unwrap();
         let boxed = FogBox { min: lo, max: hi };
         let mut state = 7u64;
-        let mut uniform = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = move || unit_f64(xorshift64(&mut state));
         for _ in 0..2000 {
             let origin = [0, 1, 2].map(|_| uniform() * 6.0 - 3.0);
             let direction = [0, 1, 2].map(|_| uniform() * 2.0 - 1.0);

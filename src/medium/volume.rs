@@ -248,6 +248,7 @@ pub fn free_flight(
 mod tests {
     use super::*;
     use crate::medium::{ConstantDensity, ExponentialDensity};
+    use crate::test_rng::{unit_f64, xorshift64_star};
     use glam::DVec3;
 
     fn constant(sigma: f64, color: Vec3, bounds: Option<FogBox>) -> FogVolume {
@@ -327,13 +328,7 @@ mod tests {
             direction: DVec3::X,
         };
         let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = move || {
-            // xorshift64*, deterministic.
-            state ^= state >> 12;
-            state ^= state << 25;
-            state ^= state >> 27;
-            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = move || unit_f64(xorshift64_star(&mut state));
         let n = 200_000;
         let mut passed = 0;
         let mut in_second = 0;

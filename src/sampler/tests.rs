@@ -267,12 +267,7 @@ fn camera_lanes_are_the_one_pixel_draws_bit_for_bit() {
     // state, that one pixel at a time gives: with and without a lens, at one sample per
     // pixel (the centre) and more.
     let mut state = 0x9e37_79b9u32;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 17;
-        state ^= state << 5;
-        state
-    };
+    let mut next = move || crate::test_rng::xorshift32(&mut state);
     for seed in [0u32, 7, u32::MAX] {
         let sampler = Sampler::new(seed);
         for spp in [1u32, 4, 16, 1000] {

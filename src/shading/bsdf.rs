@@ -103,17 +103,14 @@ fn concentric_disk(u: Vec2) -> Vec2 {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::test_rng::{unit_f32_of_u64, xorshift64_star};
 
     /// A small deterministic generator of uniform numbers in [0, 1) (xorshift64*).
     pub(crate) struct Uniforms(pub u64);
 
     impl Uniforms {
         pub(crate) fn next(&mut self) -> f32 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            let bits = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40;
-            bits as f32 / (1u64 << 24) as f32
+            unit_f32_of_u64(xorshift64_star(&mut self.0))
         }
         pub(crate) fn vec2(&mut self) -> Vec2 {
             Vec2::new(self.next(), self.next())

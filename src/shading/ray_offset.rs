@@ -303,6 +303,7 @@ fn away(x: f32, sign: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_rng::{unit_f32, xorshift32};
 
     #[test]
     fn entry_distances_are_entry_distance_bit_for_bit() {
@@ -318,12 +319,7 @@ mod tests {
             Vec3::new(f32::NAN, 0.0, 0.0),
         ];
         let mut state = 0x2545_f491u32;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            (state >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut next = move || unit_f32(xorshift32(&mut state)) * 2.0 - 1.0;
         for origin in origins {
             for round in 0..200 {
                 let mut directions = [[0.0f32; 16]; 3];

@@ -208,18 +208,14 @@ impl VoxelPyramid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_rng::{unit_f32, xorshift32};
     use crate::vct::mipmap::build_pyramid;
 
     /// A deterministic pseudo-random level 0 (xorshift), half the voxels empty.
     fn random_level(dims: [u32; 3]) -> VoxelLevel {
         let mut level = VoxelLevel::empty(dims);
         let mut state = 0x9E37_79B9u32;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            (state >> 8) as f32 / (1u32 << 24) as f32
-        };
+        let mut next = || unit_f32(xorshift32(&mut state));
         for v in &mut level.voxels {
             if next() < 0.5 {
                 let a = next();

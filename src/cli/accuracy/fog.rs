@@ -37,7 +37,8 @@ use conetrace::medium::{FogIntegration, FogModel};
 
 use super::metrics::{self, DisplayImage, ErrorMetrics};
 use super::plot::{draw_two_panels, PanelText, PlotPoint};
-use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
+use super::{crop, files, font, AccuracyArgs, SceneSetup};
+use crate::cli::summary::median;
 
 /// Scenes measured when none is named (run from the repository root).
 pub const DEFAULT_SCENES: [&str; 3] = [
@@ -45,6 +46,9 @@ pub const DEFAULT_SCENES: [&str; 3] = [
     "assets/scenes/fog_accuracy_outside.toml",
     "assets/scenes/fog_accuracy_edge.toml",
 ];
+
+/// The subdirectory of `--out` the fog report is written to.
+pub const OUTPUT_SUBDIR: &str = "fog";
 
 /// Ray-march steps per segment compared (coarsest first).
 pub const MARCH_STEPS: [u32; 4] = [4, 16, 64, 256];
@@ -414,15 +418,16 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
         }
         setups.push(setup);
     }
-    files::check_output_dir(&args.out)?;
+    let out = args.out.join(OUTPUT_SUBDIR);
+    files::check_output_dir(&out)?;
     let pool = crate::cli::worker_pool(args.threads)?;
     for setup in &setups {
         let (report, images) = pool.install(|| measure(setup, args))?;
-        write_outputs(&args.out, &report, &images)?;
+        write_outputs(&out, &report, &images)?;
         println!(
             "{}: wrote {}/{}_fog.csv, .md, _error_vs_time.png, _crop.png",
             setup.name,
-            args.out.display(),
+            out.display(),
             setup.name
         );
     }

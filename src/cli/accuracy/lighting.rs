@@ -45,7 +45,8 @@ use conetrace::vct::{build_voxel_scene, VctSettings};
 
 use super::metrics::{self, DisplayImage, ErrorMetrics};
 use super::plot::{draw_two_panels, pareto_front, PanelText, PlotPoint};
-use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
+use super::{crop, files, font, AccuracyArgs, SceneSetup};
+use crate::cli::summary::median;
 
 /// Scenes measured when none is named (run from the repository root).
 pub const DEFAULT_SCENES: [&str; 4] = [

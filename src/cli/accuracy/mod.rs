@@ -52,6 +52,7 @@ use std::sync::Arc;
 use clap::{Args, FromArgMatches};
 
 use crate::cli::render_cmd::{self, RenderArgs};
+use crate::cli::summary::median;
 use crate::cli::CommandError;
 use crate::film::AovSelection;
 use crate::film::Film;
@@ -307,16 +308,6 @@ fn consistent_pyramids(textures: &[Arc<Texture>]) -> Result<Vec<Arc<Texture>>, C
             })
         })
         .collect()
-}
-
-fn median(values: &[f64]) -> f64 {
-    let mut sorted = values.to_vec();
-    sorted.sort_by(|a, b| a.total_cmp(b));
-    match sorted.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => sorted[n / 2],
-        n => 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]),
-    }
 }
 
 fn tiles_touched(result: &RenderResult) -> u64 {
@@ -581,13 +572,6 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn median_of_odd_and_even_counts() {
-        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
-        assert!(median(&[]).is_nan());
-    }
 
     #[test]
     fn only_inconsistent_pyramids_are_rebuilt() {

@@ -42,7 +42,8 @@ use crate::scene::SceneDescription;
 
 use super::metrics::{self, DisplayImage, ErrorMetrics};
 use super::plot::{draw_two_panels, PanelText, PlotPoint};
-use super::{crop, files, font, median, AccuracyArgs, SceneSetup};
+use super::{crop, files, font, AccuracyArgs, SceneSetup};
+use crate::cli::summary::median;
 
 /// Scenes measured when none is named (run from the repository root).
 pub const DEFAULT_SCENES: [&str; 3] = [
@@ -50,6 +51,9 @@ pub const DEFAULT_SCENES: [&str; 3] = [
     "assets/scenes/teapot_textured.toml",
     "assets/scenes/height_patch.toml",
 ];
+
+/// The subdirectory of `--out` the patch report is written to.
+pub const OUTPUT_SUBDIR: &str = "patches";
 
 /// Tessellation error bounds compared, in world units (coarsest first).
 pub const TESSELLATION_BOUNDS: [f32; 5] = [1e-1, 3e-2, 1e-2, 1e-3, 1e-4];
@@ -561,15 +565,16 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
         }
         setups.push(setup);
     }
-    files::check_output_dir(&args.out)?;
+    let out = args.out.join(OUTPUT_SUBDIR);
+    files::check_output_dir(&out)?;
     let pool = crate::cli::worker_pool(args.threads)?;
     for setup in &setups {
         let (report, images) = pool.install(|| measure(setup, args))?;
-        write_outputs(&args.out, &report, &images)?;
+        write_outputs(&out, &report, &images)?;
         println!(
             "{}: wrote {}/{}_patches.csv, .md, _error_vs_time.png, _crop.png",
             setup.name,
-            args.out.display(),
+            out.display(),
             setup.name
         );
     }

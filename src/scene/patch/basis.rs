@@ -177,15 +177,13 @@ pub fn triangle_to_bezier(control: &[Vec3; 10]) -> [Vec3; 16] {
 mod tests {
     use super::*;
     use crate::scene::patch::{control_f64, evaluate};
+    use crate::test_rng::{unit_f64, xorshift64};
 
     /// A small deterministic generator (xorshift) for random grids and parameters.
     struct Rng(u64);
     impl Rng {
         fn next(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+            unit_f64(xorshift64(&mut self.0))
         }
         fn point(&mut self) -> Vec3 {
             Vec3::new(self.next() as f32, self.next() as f32, self.next() as f32) * 4.0 - 2.0

@@ -260,6 +260,7 @@ fn refine(g: impl Fn(f64) -> f64, (mut a, mut ga): (f64, f64), (mut b, mut gb): 
 mod tests {
     use super::*;
     use crate::scene::patch::intersect::PatchIntersector;
+    use crate::test_rng::{unit_f64, xorshift64};
 
     /// Hills and a valley over [-2, 2] x [-1.5, 1.5].
     fn hills(step: f32) -> HeightPatch {
@@ -303,12 +304,7 @@ mod tests {
         let patch = hills(0.01);
         let exact = PatchIntersector::new(&patch.to_bezier().control);
         let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = || unit_f64(xorshift64(&mut state));
         let (mut hits, mut largest) = (0, 0.0f64);
         for _ in 0..2000 {
             let origin = DVec3::new(-3.0 + 6.0 * next(), 3.0 + 2.0 * next(), -2.5 + 5.0 * next());
