@@ -8,16 +8,15 @@
 //!
 //! ```ignore
 //! let mut film = Film::new(w, h, &[Layer::Color, Layer::Depth]);
-//! let regions: Vec<FilmRegion> = film
-//!     .bands_mut(WORK_TILE_SIZE)
-//!     .into_iter()
-//!     .flat_map(|band| band.split_columns(WORK_TILE_SIZE))
-//!     .collect(); // row-major, like `render::work_tiles(w, h)`
-//! regions.into_par_iter().for_each(|mut region| {
-//!     for (x, y) in region.rect().pixels() {
-//!         region.set(Layer::Color, x, y, &[r, g, b, 1.0]);
-//!     }
-//! });
+//! film.bands_mut(WORK_TILE_SIZE).into_par_iter().for_each(|band| {
+//!     // One allocation per band for the row slices of all its regions.
+//!     let mut regions = band.split_columns(WORK_TILE_SIZE);
+//!     regions.par_regions().for_each(|mut region| {
+//!         for (x, y) in region.rect().pixels() {
+//!             region.set(Layer::Color, x, y, &[r, g, b, 1.0]);
+//!         }
+//!     });
+//! }); // bands top to bottom, regions left to right: `render::work_tiles(w, h)`'s order
 //! ```
 //! (`regions.rs` has this as a test.) A [`FilmTile`] is a small film of its own, copied in
 //! with [`Film::merge_tile`].
@@ -58,5 +57,5 @@ pub use exr_input::read_exr;
 pub use exr_output::{stage_exr, write_exr, ExrAttributes};
 pub use film::{Film, FilmLayout, FilmTile, PixelRect};
 pub use png_output::{display_value, linear_to_srgb, stage_png, tonemap_to_srgb8, write_png};
-pub use regions::{FilmBand, FilmRegion};
+pub use regions::{BandRegions, FilmBand, FilmRegion};
 pub use tile_image::{block_order, AovSelection, TileImage};

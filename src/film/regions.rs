@@ -10,6 +10,8 @@
 //!
 //! [`Film::bands_mut`]: super::Film::bands_mut
 
+use rayon::prelude::*;
+
 use super::channels::Layer;
 use super::film::{FilmLayout, PixelRect};
 
@@ -35,53 +37,109 @@ impl<'a> FilmBand<'a> {
     }
 
     /// The band cut into regions of `region_width` columns, left to right (the last one
-    /// narrower when the width is not a multiple).
-    pub fn split_columns(self, region_width: u32) -> Vec<FilmRegion<'a>> {
+    /// narrower when the width is not a multiple), held by one [`BandRegions`]: the row
+    /// slices of all its regions are made in one allocation per band, not one per region.
+    pub fn split_columns(self, region_width: u32) -> BandRegions<'a> {
         let region_width = region_width.max(1);
         let count = self.width.div_ceil(region_width) as usize;
-        let mut regions: Vec<FilmRegion<'a>> = (0..count)
-            .map(|i| {
+        let height = self.height as usize;
+        let per_region = self.planes.len() * height;
+        // Row `r` of channel `c` of region `i` goes to `i * per_region + c * height + r`:
+        // each region's rows are one run, channel-major inside it.
+        let mut keyed: Vec<(usize, &'a mut [f32])> = Vec::with_capacity(count * per_region);
+        if self.width > 0 {
+            for (c, plane) in self.planes.into_iter().enumerate() {
+                for (r, row) in plane.chunks_mut(self.width as usize).enumerate() {
+                    for (i, part) in row.chunks_mut(region_width as usize).enumerate() {
+                        keyed.push((i * per_region + c * height + r, part));
+                    }
+                }
+            }
+        }
+        keyed.sort_unstable_by_key(|(key, _)| *key);
+        BandRegions {
+            y0: self.y0,
+            width: self.width,
+            height: self.height,
+            region_width,
+            layout: self.layout,
+            per_region,
+            rows: keyed,
+        }
+    }
+}
+
+/// A band's rows regrouped into column regions (see [`FilmBand::split_columns`]).
+pub struct BandRegions<'a> {
+    y0: u32,
+    width: u32,
+    height: u32,
+    region_width: u32,
+    layout: FilmLayout,
+    /// Rows per region (`channels * height`).
+    per_region: usize,
+    /// Every region's rows, region by region, each tagged with its position (the sort key).
+    rows: Vec<(usize, &'a mut [f32])>,
+}
+
+impl<'a> BandRegions<'a> {
+    /// How many regions the band has.
+    pub fn len(&self) -> usize {
+        if self.width == 0 {
+            0
+        } else {
+            self.width.div_ceil(self.region_width) as usize
+        }
+    }
+
+    /// Whether the band has no region (an empty film's).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The regions, left to right, each writable on its own: a parallel iterator whose
+    /// items borrow this band's rows.
+    pub fn par_regions(&mut self) -> impl IndexedParallelIterator<Item = FilmRegion<'_, 'a>> {
+        let (y0, width, height, region_width, layout) = (
+            self.y0,
+            self.width,
+            self.height,
+            self.region_width,
+            self.layout,
+        );
+        let count = self.len();
+        // An empty band has no rows; a chunk size of zero is not allowed.
+        let per_region = self.per_region.max(1);
+        self.rows[..count * self.per_region]
+            .par_chunks_mut(per_region)
+            .enumerate()
+            .map(move |(i, rows)| {
                 let x0 = i as u32 * region_width;
                 FilmRegion {
                     rect: PixelRect {
                         x0,
-                        y0: self.y0,
-                        width: region_width.min(self.width - x0),
-                        height: self.height,
+                        y0,
+                        width: region_width.min(width - x0),
+                        height,
                     },
-                    layout: self.layout,
-                    rows: Vec::with_capacity(self.planes.len() * self.height as usize),
+                    layout,
+                    rows,
                 }
             })
-            .collect();
-        // Rows are pushed channel by channel, top to bottom: row `r` of channel `c` of a
-        // region is `rows[c * height + r]`.
-        for plane in self.planes {
-            if self.width == 0 {
-                break;
-            }
-            for row in plane.chunks_mut(self.width as usize) {
-                for (region, part) in regions
-                    .iter_mut()
-                    .zip(row.chunks_mut(region_width as usize))
-                {
-                    region.rows.push(part);
-                }
-            }
-        }
-        regions
     }
 }
 
-/// A rectangle of a film, writable on its own (see the module doc).
-pub struct FilmRegion<'a> {
+/// A rectangle of a film, writable on its own (see the module doc); it borrows its rows
+/// from the [`BandRegions`] it came from.
+pub struct FilmRegion<'r, 'a> {
     rect: PixelRect,
     layout: FilmLayout,
-    /// `layout.channel_count() * rect.height` rows of `rect.width` values, channel-major.
-    rows: Vec<&'a mut [f32]>,
+    /// `layout.channel_count() * rect.height` rows of `rect.width` values, channel-major,
+    /// each with its sort key.
+    rows: &'r mut [(usize, &'a mut [f32])],
 }
 
-impl FilmRegion<'_> {
+impl FilmRegion<'_, '_> {
     /// The pixels covered, in image coordinates.
     #[inline]
     pub fn rect(&self) -> PixelRect {
@@ -108,7 +166,7 @@ impl FilmRegion<'_> {
         let (row, column) = ((y - self.rect.y0) as usize, (x - self.rect.x0) as usize);
         let height = self.rect.height as usize;
         for (i, v) in values.iter().take(layer.channel_count()).enumerate() {
-            self.rows[(first + i) * height + row][column] = *v;
+            self.rows[(first + i) * height + row].1[column] = *v;
         }
     }
 }
@@ -117,7 +175,6 @@ impl FilmRegion<'_> {
 mod tests {
     use super::super::Film;
     use super::*;
-    use rayon::prelude::*;
 
     fn pattern(x: u32, y: u32, c: usize) -> f32 {
         (x * 1000 + y) as f32 + c as f32 * 0.25
@@ -146,40 +203,52 @@ mod tests {
 
         let mut film = Film::new(w, h, &layers);
         let tile = crate::render::WORK_TILE_SIZE;
-        let regions: Vec<FilmRegion> = film
+        let mut bands: Vec<BandRegions> = film
             .bands_mut(tile)
             .into_iter()
-            .flat_map(|band| band.split_columns(tile))
+            .map(|band| band.split_columns(tile))
             .collect();
         // Row-major like the renderer's one enumeration of work tiles.
-        let rects: Vec<PixelRect> = regions.iter().map(FilmRegion::rect).collect();
+        let rects: Vec<PixelRect> = bands
+            .iter_mut()
+            .flat_map(|band| band.par_regions().map(|r| r.rect()).collect::<Vec<_>>())
+            .collect();
         assert_eq!(rects, crate::render::work_tiles(w, h));
-        regions.into_par_iter().for_each(|mut region| {
-            let mut values = [0.0f32; 6];
-            for (x, y) in region.rect().pixels() {
-                for layer in layers {
-                    let n = layer.channel_count();
-                    for (c, v) in values.iter_mut().enumerate().take(n) {
-                        *v = pattern(x, y, c);
+        bands
+            .par_iter_mut()
+            .flat_map(|band| band.par_regions())
+            .for_each(|mut region| {
+                let mut values = [0.0f32; 6];
+                for (x, y) in region.rect().pixels() {
+                    for layer in layers {
+                        let n = layer.channel_count();
+                        for (c, v) in values.iter_mut().enumerate().take(n) {
+                            *v = pattern(x, y, c);
+                        }
+                        region.set(layer, x, y, &values[..n]);
                     }
-                    region.set(layer, x, y, &values[..n]);
                 }
-            }
-            // Outside the region and absent layers: ignored.
-            region.set(Layer::Depth, w + 5, 0, &[1.0]);
-            region.set(Layer::Uv, 0, 0, &[1.0, 1.0]);
-        });
+                // Outside the region and absent layers: ignored.
+                region.set(Layer::Depth, w + 5, 0, &[1.0]);
+                region.set(Layer::Uv, 0, 0, &[1.0, 1.0]);
+            });
         assert_eq!(film, serial);
     }
 
     #[test]
     fn an_empty_film_has_no_regions() {
         let mut film = Film::new(0, 5, &[Layer::Color]);
-        let regions: Vec<FilmRegion> = film
+        assert!(film.bands_mut(16).is_empty());
+        let mut narrow = Film::new(3, 0, &[Layer::Color]);
+        assert!(narrow.bands_mut(16).is_empty());
+        let mut one = Film::new(20, 3, &[Layer::Color, Layer::Depth]);
+        let mut bands: Vec<BandRegions> = one
             .bands_mut(16)
             .into_iter()
-            .flat_map(|band| band.split_columns(16))
+            .map(|band| band.split_columns(16))
             .collect();
-        assert!(regions.is_empty());
+        assert_eq!(bands.len(), 1);
+        assert_eq!(bands[0].len(), 2);
+        assert_eq!(bands[0].par_regions().count(), 2);
     }
 }

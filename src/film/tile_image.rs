@@ -38,7 +38,7 @@ impl AovSelection {
 
 /// Per-pixel values of a tile; AOVs are empty vectors when not selected.
 /// AOVs describe the first camera sample of each pixel (the pixel centre at 1 spp).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct TileImage {
     /// Which sample indices of each pixel to render; `None`: all of the render's samples.
     /// Set by the render loop for a render of a sample range.
@@ -71,29 +71,74 @@ pub struct TileImage {
 impl TileImage {
     /// A zeroed image for `tile` with the selected AOVs.
     pub fn new(tile: PixelRect, aovs: AovSelection) -> TileImage {
+        let mut image = TileImage::default();
+        image.reset(tile, aovs);
+        image
+    }
+
+    /// Makes this the zeroed image [`TileImage::new`] gives for `tile` and `aovs`, in the
+    /// buffers it already has: a worker renders all its tiles into one image, which
+    /// allocates nothing once its buffers have grown to a tile's size.
+    pub fn reset(&mut self, tile: PixelRect, aovs: AovSelection) {
+        fn refill<T: Clone>(buffer: &mut Vec<T>, len: usize, value: T) {
+            buffer.clear();
+            buffer.resize(len, value);
+        }
         let n = tile.area();
         let take = |on: bool| if on { n } else { 0 };
-        TileImage {
-            samples: None,
-            color: vec![[0.0; 3]; n],
-            color_sum: vec![[0; 3]; n],
-            alpha: vec![0.0; n],
-            depth: vec![f32::MAX; take(aovs.surface)],
-            normal: vec![[0.0; 3]; take(aovs.surface)],
-            albedo: vec![[0.0; 3]; take(aovs.surface)],
-            uv: vec![[0.0; 2]; take(aovs.surface)],
-            tex: vec![[0.0; 6]; take(aovs.texture_footprint)],
-            texcolor: vec![[0.0; 4]; take(aovs.texture_footprint)],
-            lod: vec![0.0; take(aovs.lod)],
-            footprint: vec![0.0; take(aovs.lod)],
-            lookup_done: vec![false; take(aovs.texture_footprint || aovs.lod)],
-        }
+        self.samples = None;
+        refill(&mut self.color, n, [0.0; 3]);
+        refill(&mut self.color_sum, n, [0; 3]);
+        refill(&mut self.alpha, n, 0.0);
+        refill(&mut self.depth, take(aovs.surface), f32::MAX);
+        refill(&mut self.normal, take(aovs.surface), [0.0; 3]);
+        refill(&mut self.albedo, take(aovs.surface), [0.0; 3]);
+        refill(&mut self.uv, take(aovs.surface), [0.0; 2]);
+        refill(&mut self.tex, take(aovs.texture_footprint), [0.0; 6]);
+        refill(&mut self.texcolor, take(aovs.texture_footprint), [0.0; 4]);
+        refill(&mut self.lod, take(aovs.lod), 0.0);
+        refill(&mut self.footprint, take(aovs.lod), 0.0);
+        refill(
+            &mut self.lookup_done,
+            take(aovs.texture_footprint || aovs.lod),
+            false,
+        );
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_reset_image_is_a_new_one_in_the_same_buffers() {
+        let big = PixelRect {
+            x0: 0,
+            y0: 0,
+            width: 16,
+            height: 16,
+        };
+        let small = PixelRect {
+            x0: 16,
+            y0: 0,
+            width: 5,
+            height: 3,
+        };
+        let mut image = TileImage::new(big, AovSelection::ALL);
+        image.color.fill([1.0; 3]);
+        image.depth.fill(2.0);
+        image.samples = Some(0..4);
+        let buffer = image.color.as_ptr();
+        image.reset(small, AovSelection::ALL);
+        assert_eq!(image, TileImage::new(small, AovSelection::ALL));
+        assert_eq!(
+            image.color.as_ptr(),
+            buffer,
+            "the colour buffer was reallocated"
+        );
+        image.reset(big, AovSelection::default());
+        assert_eq!(image, TileImage::new(big, AovSelection::default()));
+    }
 
     #[test]
     fn block_order_visits_every_pixel_once_in_4x4_blocks() {

@@ -20,11 +20,13 @@ pub mod stats;
 pub mod surface_textures;
 pub mod tracer;
 
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
 use rayon::prelude::*;
+use thread_local::ThreadLocal;
 
 use crate::film::{AovSelection, Film, FilmRegion, Layer, PixelRect, TileImage};
 use crate::scene::SceneDescription;
@@ -161,6 +163,15 @@ pub fn work_tiles(width: u32, height: u32) -> Vec<PixelRect> {
     tiles
 }
 
+/// What one worker thread keeps for the whole render: its counters, its integrator's state,
+/// the image its tiles are rendered into, and which tiles it finished.
+struct TileWorker<S> {
+    counters: WorkerState,
+    integrator: S,
+    image: TileImage,
+    finished: Vec<usize>,
+}
+
 /// Hooks a render reports to: progress after each tile and a cancellation flag.
 #[derive(Default)]
 pub struct RenderControl<'a> {
@@ -235,58 +246,70 @@ pub fn render<I: Integrator>(
     let origin = (part.region.x0, part.region.y0);
     let tiles_per_row = part.region.width.div_ceil(WORK_TILE_SIZE) as usize;
     // Each worker writes its finished tiles straight into its own region of the film and
-    // keeps its counters to itself; the workers' states are merged once at the end. Bands
-    // are cut into regions only when a worker reaches them.
-    let (total, finished) = film
-        .bands_mut(WORK_TILE_SIZE)
+    // keeps its counters, its integrator state and its tile image to itself, one of each per
+    // thread for the whole render (a thread-local slot, not rayon's per-split fold state, so
+    // buffers are reused across tiles and nothing is allocated per tile); the workers'
+    // states are merged once at the end. Bands are cut into regions only when a worker
+    // reaches them.
+    let workers: ThreadLocal<RefCell<TileWorker<I::ThreadState>>> = ThreadLocal::new();
+    let render_region = |index: usize, mut region: FilmRegion| {
+        let tile = tiles[index];
+        debug_assert_eq!(
+            (region.rect().x0 + origin.0, region.rect().y0 + origin.1),
+            (tile.x0, tile.y0)
+        );
+        let skipped = control
+            .skip
+            .is_some_and(|skip| skip.get(index) == Some(&true));
+        let stopped =
+            control.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) || context.tracer.failed();
+        if skipped || stopped {
+            return;
+        }
+        let cell = workers.get_or(|| {
+            crate::embree::enable_flush_denormals();
+            RefCell::new(TileWorker {
+                counters: new_worker(),
+                integrator: integrator.thread_state(context),
+                image: TileImage::default(),
+                finished: Vec::new(),
+            })
+        });
+        let mut worker = cell.borrow_mut();
+        let TileWorker {
+            counters,
+            integrator: state,
+            image,
+            finished,
+        } = &mut *worker;
+        image.reset(tile, options.aovs);
+        image.samples = sample_range.clone();
+        integrator.render_tile(context, tile, image, counters, state);
+        copy_tile_to_film(image, &mut region);
+        finished.push(index);
+        let done = finished_count.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Some(progress) = control.progress {
+            progress(done, tiles.len());
+        }
+    };
+    film.bands_mut(WORK_TILE_SIZE)
         .into_par_iter()
         .enumerate()
-        .flat_map(|(row, band)| {
-            band.split_columns(WORK_TILE_SIZE)
-                .into_par_iter()
+        .for_each(|(row, band)| {
+            let mut regions = band.split_columns(WORK_TILE_SIZE);
+            regions
+                .par_regions()
                 .enumerate()
-                .map(move |(column, region)| (row * tiles_per_row + column, region))
-        })
-        .fold(
-            || {
-                crate::embree::enable_flush_denormals();
-                (new_worker(), integrator.thread_state(context), Vec::new())
-            },
-            |(mut worker, mut state, mut finished): (WorkerState, I::ThreadState, Vec<usize>),
-             (index, mut region)| {
-                let tile = tiles[index];
-                debug_assert_eq!(
-                    (region.rect().x0 + origin.0, region.rect().y0 + origin.1),
-                    (tile.x0, tile.y0)
-                );
-                let skipped = control
-                    .skip
-                    .is_some_and(|skip| skip.get(index) == Some(&true));
-                let stopped = control.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
-                    || context.tracer.failed();
-                if !skipped && !stopped {
-                    let mut image = TileImage::new(tile, options.aovs);
-                    image.samples = sample_range.clone();
-                    integrator.render_tile(context, tile, &mut image, &mut worker, &mut state);
-                    copy_tile_to_film(&image, &mut region);
-                    finished.push(index);
-                    let done = finished_count.fetch_add(1, Ordering::Relaxed) + 1;
-                    if let Some(progress) = control.progress {
-                        progress(done, tiles.len());
-                    }
-                }
-                (worker, state, finished)
-            },
-        )
-        .map(|(worker, _, finished)| (worker, finished))
-        .reduce(
-            || (new_worker(), Vec::new()),
-            |(mut worker, mut finished), (other, other_finished)| {
-                worker.merge(other);
-                finished.extend(other_finished);
-                (worker, finished)
-            },
-        );
+                .for_each(|(column, region)| render_region(row * tiles_per_row + column, region));
+        });
+    let (total, finished) = workers.into_iter().map(RefCell::into_inner).fold(
+        (new_worker(), Vec::new()),
+        |(mut total, mut finished), worker| {
+            total.merge(worker.counters);
+            finished.extend(worker.finished);
+            (total, finished)
+        },
+    );
     let seconds = start.elapsed().as_secs_f64();
     if let Some(source) = context.tracer.take_failure() {
         return Err(RenderError::Traversal {
