@@ -334,8 +334,8 @@ mod tests {
                         _ => {}
                     }
                     let d = d.normalize_or(d);
-                    for axis in 0..3 {
-                        directions[axis][lane] = d[axis];
+                    for (axis, column) in directions.iter_mut().enumerate() {
+                        column[lane] = d[axis];
                     }
                 }
                 let starts = entry_distances(origin, &directions, bounds);
