@@ -20,7 +20,9 @@ pub trait Integrator: Sync {
     fn thread_state(&self, context: &RenderContext) -> Self::ThreadState;
 
     /// Render `tile` into `image` (already sized for it and zeroed), counting work in
-    /// `worker` and reusing `state`.
+    /// `worker` and reusing `state`. The render loop holds this thread's worker state while
+    /// the call runs, so it must not start rayon work of its own (a nested job stolen by
+    /// this thread would find that state taken).
     fn render_tile(
         &self,
         context: &RenderContext,
