@@ -224,36 +224,22 @@ impl Camera {
         if self.model != CameraModel::Pinhole {
             return None;
         }
-        let (width, height) = (self.width as f32, self.height as f32);
-        let (w, u, v, fallback) = (self.w, self.u, self.v, self.forward);
         let mut out = [[0.0f32; N]; 3];
         for lane in 0..N {
-            // `sanitize_pixel`, then `rectangle_point`, then `unit_or`, written out per lane.
-            let x = if px[lane].is_finite() {
-                px[lane]
-            } else {
-                0.5 * width
-            };
-            let y = if py[lane].is_finite() {
-                py[lane]
-            } else {
-                0.5 * height
-            };
-            let x = 2.0 * x / width - 1.0;
-            let y = 1.0 - 2.0 * y / height;
-            let r = [
-                w.x + u.x * x + v.x * y,
-                w.y + u.y * x + v.y * y,
-                w.z + u.z * x + v.z * y,
-            ];
-            let length_squared = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-            let unit = length_squared.is_finite() && length_squared > 1.0e-30;
-            let scale = length_squared.sqrt().recip();
-            out[0][lane] = if unit { r[0] * scale } else { fallback.x };
-            out[1][lane] = if unit { r[1] * scale } else { fallback.y };
-            out[2][lane] = if unit { r[2] * scale } else { fallback.z };
+            let direction = self.pinhole_direction(px[lane], py[lane]);
+            out[0][lane] = direction.x;
+            out[1][lane] = direction.y;
+            out[2][lane] = direction.z;
         }
         Some(out)
+    }
+
+    /// The unit direction of the pinhole ray through pixel position (px, py), as
+    /// [`Camera::generate_ray`] makes it.
+    #[inline]
+    fn pinhole_direction(&self, px: f32, py: f32) -> Vec3 {
+        let (px, py) = self.sanitize_pixel(px, py);
+        unit_or(self.rectangle_point(px, py), self.forward)
     }
 
     #[inline]

@@ -57,6 +57,8 @@ impl<'a> FilmBand<'a> {
             }
         }
         keyed.sort_unstable_by_key(|(key, _)| *key);
+        // The same allocation, reused in place without the keys.
+        let rows: Vec<&'a mut [f32]> = keyed.into_iter().map(|(_, row)| row).collect();
         BandRegions {
             y0: self.y0,
             width: self.width,
@@ -64,7 +66,7 @@ impl<'a> FilmBand<'a> {
             region_width,
             layout: self.layout,
             per_region,
-            rows: keyed,
+            rows,
         }
     }
 }
@@ -78,18 +80,14 @@ pub struct BandRegions<'a> {
     layout: FilmLayout,
     /// Rows per region (`channels * height`).
     per_region: usize,
-    /// Every region's rows, region by region, each tagged with its position (the sort key).
-    rows: Vec<(usize, &'a mut [f32])>,
+    /// Every region's rows, region by region.
+    rows: Vec<&'a mut [f32]>,
 }
 
 impl<'a> BandRegions<'a> {
     /// How many regions the band has.
     pub fn len(&self) -> usize {
-        if self.width == 0 {
-            0
-        } else {
-            self.width.div_ceil(self.region_width) as usize
-        }
+        self.width.div_ceil(self.region_width) as usize
     }
 
     /// Whether the band has no region (an empty film's).
@@ -107,11 +105,9 @@ impl<'a> BandRegions<'a> {
             self.region_width,
             self.layout,
         );
-        let count = self.len();
-        // An empty band has no rows; a chunk size of zero is not allowed.
-        let per_region = self.per_region.max(1);
-        self.rows[..count * self.per_region]
-            .par_chunks_mut(per_region)
+        // A band without rows has no regions; a chunk size of zero is not allowed.
+        self.rows
+            .par_chunks_mut(self.per_region.max(1))
             .enumerate()
             .map(move |(i, rows)| {
                 let x0 = i as u32 * region_width;
@@ -134,9 +130,8 @@ impl<'a> BandRegions<'a> {
 pub struct FilmRegion<'r, 'a> {
     rect: PixelRect,
     layout: FilmLayout,
-    /// `layout.channel_count() * rect.height` rows of `rect.width` values, channel-major,
-    /// each with its sort key.
-    rows: &'r mut [(usize, &'a mut [f32])],
+    /// `layout.channel_count() * rect.height` rows of `rect.width` values, channel-major.
+    rows: &'r mut [&'a mut [f32]],
 }
 
 impl FilmRegion<'_, '_> {
@@ -166,7 +161,7 @@ impl FilmRegion<'_, '_> {
         let (row, column) = ((y - self.rect.y0) as usize, (x - self.rect.x0) as usize);
         let height = self.rect.height as usize;
         for (i, v) in values.iter().take(layer.channel_count()).enumerate() {
-            self.rows[(first + i) * height + row].1[column] = *v;
+            self.rows[(first + i) * height + row][column] = *v;
         }
     }
 }

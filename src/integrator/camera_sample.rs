@@ -97,21 +97,21 @@ impl CameraBlock {
         let fy: [f32; PACKET] =
             std::array::from_fn(|lane| self.y[lane] as f32 + draws.offset[1][lane]);
         let bounds = context.surfaces.bounds;
-        let directions = camera.pinhole_directions(&fx, &fy);
         // A pinhole's rays share their origin: their starts are computed lane by lane too.
-        let pinhole_starts = directions.as_ref().map(|d| {
-            bounds.map_or([0.0; PACKET], |b| {
-                shading::entry_distances(camera.eye(), d, b)
-            })
+        let pinhole = camera.pinhole_directions(&fx, &fy).map(|d| {
+            let starts = bounds.map_or([0.0; PACKET], |b| {
+                shading::entry_distances(camera.eye(), &d, b)
+            });
+            (d, starts)
         });
         for lane in 0..self.len {
-            let (origin, direction, start) = match (&directions, &pinhole_starts) {
-                (Some(d), Some(starts)) => (
+            let (origin, direction, start) = match &pinhole {
+                Some((d, starts)) => (
                     camera.eye(),
                     Vec3::new(d[0][lane], d[1][lane], d[2][lane]),
                     starts[lane],
                 ),
-                _ => {
+                None => {
                     let lens = Vec2::new(draws.lens[0][lane], draws.lens[1][lane]);
                     let (origin, direction) = camera.generate_ray(fx[lane], fy[lane], lens);
                     let start = bounds.map_or(0.0, |bounds| {

@@ -132,21 +132,34 @@ impl Sampler {
 /// [`PixelSampler::next_2d`] at `dimension` for the pixel states `states`, lane by lane.
 #[inline]
 fn next_2d_lanes<const N: usize>(states: &[u32; N], index: u32, dimension: u32) -> [[f32; N]; 2] {
-    let dimension_hash = hash_u32(dimension);
     let mut out = [[0.0f32; N]; 2];
     for lane in 0..N {
-        // `take`, as `PixelSampler::take` computes it.
-        let key = hash_u32(states[lane] ^ dimension_hash);
-        let shuffled = nested_uniform_scramble(index, key);
-        let x = scramble_mirrored(shuffled, hash_u32(key ^ 0x5bd1_e995));
-        let y = scramble_mirrored(
-            sobol::dimension_1_mirrored(shuffled),
-            hash_u32(key ^ 0x1b87_3593),
-        );
-        out[0][lane] = unit_float(x);
-        out[1][lane] = unit_float(y);
+        let point = draw_2d(draw_key(states[lane], dimension), index);
+        out[0][lane] = point.x;
+        out[1][lane] = point.y;
     }
     out
+}
+
+/// The key of the draw at `dimension`: `hash_words(&[pixel_key, dimension])`, its first
+/// step (`pixel_state`) done once per pixel.
+#[inline]
+fn draw_key(pixel_state: u32, dimension: u32) -> u32 {
+    hash_u32(pixel_state ^ hash_u32(dimension))
+}
+
+/// Sample `index` of the Owen-scrambled first two Sobol dimensions, keyed by `key`.
+#[inline]
+fn draw_2d(key: u32, index: u32) -> Vec2 {
+    let shuffled = nested_uniform_scramble(index, key);
+    // The scramble works on mirrored bits: Sobol dimension 0 mirrored is the index, and
+    // dimension 1 mirrored has a closed form (`sobol::dimension_1_mirrored`).
+    let x = scramble_mirrored(shuffled, hash_u32(key ^ 0x5bd1_e995));
+    let y = scramble_mirrored(
+        sobol::dimension_1_mirrored(shuffled),
+        hash_u32(key ^ 0x1b87_3593),
+    );
+    Vec2::new(unit_float(x), unit_float(y))
 }
 
 /// The state `hash_words(&[pixel_key, dimension])` has after folding in `pixel_key`: every
@@ -189,8 +202,7 @@ impl PixelSampler {
     /// Key of the draw starting at the current dimension, and the dimension moved on.
     #[inline]
     fn take(&mut self, count: u32) -> u32 {
-        // `hash_words(&[pixel_key, dimension])`, its first step done once per pixel.
-        let key = hash_u32(self.pixel_state ^ hash_u32(self.dimension));
+        let key = draw_key(self.pixel_state, self.dimension);
         self.dimension += count;
         key
     }
@@ -215,15 +227,7 @@ impl PixelSampler {
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
         let key = self.take(2);
-        let shuffled = nested_uniform_scramble(self.index, key);
-        // The scramble works on mirrored bits: Sobol dimension 0 mirrored is the index, and
-        // dimension 1 mirrored has a closed form (`sobol::dimension_1_mirrored`).
-        let x = scramble_mirrored(shuffled, hash_u32(key ^ 0x5bd1_e995));
-        let y = scramble_mirrored(
-            sobol::dimension_1_mirrored(shuffled),
-            hash_u32(key ^ 0x1b87_3593),
-        );
-        Vec2::new(unit_float(x), unit_float(y))
+        draw_2d(key, self.index)
     }
 
     /// The camera's dimensions 0-3 (see the module's doc). With one sample per pixel the

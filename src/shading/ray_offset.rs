@@ -213,39 +213,17 @@ pub fn shadow_ray_end(distance: f32, light: Vec3) -> f32 {
 /// thousandth of the box's diagonal plus the rounding of `origin + start * direction`.
 #[inline]
 pub fn entry_distance(origin: Vec3, direction: Vec3, bounds: (Vec3, Vec3)) -> f32 {
-    let (lo, hi) = bounds;
-    if !(origin.is_finite() && direction.is_finite() && lo.is_finite() && hi.is_finite()) {
-        return 0.0;
-    }
-    // An origin inside the bounds enters at 0 whatever the direction: on every axis one of
-    // the two slab distances below is <= 0, so `enter` stays 0. Said without dividing.
-    if origin.cmpge(lo).all() && origin.cmple(hi).all() {
-        return 0.0;
-    }
-    let mut enter = 0.0f32;
-    let mut exit = f32::INFINITY;
-    for axis in 0..3 {
-        let (o, d) = (origin[axis], direction[axis]);
-        if d == 0.0 {
-            if o < lo[axis] || o > hi[axis] {
-                return 0.0;
-            }
-            continue;
-        }
-        let (a, b) = ((lo[axis] - o) / d, (hi[axis] - o) / d);
-        enter = enter.max(a.min(b));
-        exit = exit.min(a.max(b));
-    }
-    if !(enter > 0.0 && enter <= exit && enter.is_finite()) {
-        return 0.0;
-    }
-    let margin = 1e-3 * (hi - lo).length() + gamma(8) * (origin.abs().max_element() + enter);
-    (enter - margin).max(0.0)
+    let [start] = entry_distances(
+        origin,
+        &[[direction.x], [direction.y], [direction.z]],
+        bounds,
+    );
+    start
 }
 
 /// [`entry_distance`] of the rays from one `origin` along each of `directions` (unit
-/// vectors as structure-of-arrays: x, y and z of every lane), lane by lane the same bits,
-/// the lanes' divisions running as vector instructions.
+/// vectors as structure-of-arrays: x, y and z of every lane), each lane on its own, the
+/// lanes' divisions running as vector instructions.
 pub fn entry_distances<const N: usize>(
     origin: Vec3,
     directions: &[[f32; N]; 3],
@@ -253,6 +231,8 @@ pub fn entry_distances<const N: usize>(
 ) -> [f32; N] {
     let (lo, hi) = bounds;
     let mut out = [0.0f32; N];
+    // An origin inside the bounds enters at 0 whatever the direction: on every axis one of
+    // the two slab distances below is <= 0, so `enter` stays 0. Said without dividing.
     let inside = origin.cmpge(lo).all() && origin.cmple(hi).all();
     if !(origin.is_finite() && lo.is_finite() && hi.is_finite()) || inside {
         return out;
