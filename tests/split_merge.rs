@@ -29,9 +29,14 @@ fn scene() -> PathBuf {
 
 /// Renders the shipped scene to `dir/name` with `extra` options; panics with stderr on failure.
 fn render(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
+    render_spp(dir, name, SPP, extra)
+}
+
+/// [`render`] at `spp` samples per pixel.
+fn render_spp(dir: &Path, name: &str, spp: u32, extra: &[&str]) -> PathBuf {
     let out = dir.join(name);
     let scene = scene();
-    let (w, h, spp) = (WIDTH.to_string(), HEIGHT.to_string(), SPP.to_string());
+    let (w, h, spp) = (WIDTH.to_string(), HEIGHT.to_string(), spp.to_string());
     let mut args = vec![
         "render",
         scene.to_str().unwrap(),
@@ -143,6 +148,34 @@ fn region_parts_merge_into_the_single_render() {
         render(dir.path(), "left_bottom.exr", &["--region", "0,32,48,64"]),
     ];
     assert_same_image(&whole, &merged(dir.path(), &parts, "regions.exr"));
+}
+
+#[test]
+fn sample_ranges_that_cut_a_packet_block_merge_into_the_single_render() {
+    // Whitted traces up to 16 samples of a pixel together (blocks 0..16, 16..24 here); parts
+    // that begin or end inside a block trace that block's packets as the whole render does.
+    let dir = temp_dir();
+    let whole = render_spp(dir.path(), "whole24.exr", 24, &[]);
+    let splits: [&[&str]; 2] = [
+        &["0..5", "5..17", "17..24"],
+        &["0..1", "1..16", "16..23", "23..24"],
+    ];
+    for (k, ranges) in splits.iter().enumerate() {
+        let parts: Vec<PathBuf> = ranges
+            .iter()
+            .enumerate()
+            .map(|(i, range)| {
+                render_spp(
+                    dir.path(),
+                    &format!("b{k}_{i}.exr"),
+                    24,
+                    &["--samples", range],
+                )
+            })
+            .collect();
+        let out = merged(dir.path(), &parts, &format!("blocks{k}.exr"));
+        assert_same_image(&whole, &out);
+    }
 }
 
 #[test]

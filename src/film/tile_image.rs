@@ -1,6 +1,8 @@
 //! The pixels of one work tile ([`crate::render::work_tiles`]) as an integrator produces
 //! them: colour, alpha and the AOVs the render asked for.
 
+use std::ops::Range;
+
 use super::PixelRect;
 
 /// The pixels of `tile` (offsets inside it) ordered so that each run of 16 is one 4x4 block:
@@ -43,8 +45,9 @@ pub struct TileImage {
     /// Which sample indices of each pixel to render; `None`: all of the render's samples.
     /// Set by the render loop for a render of a sample range.
     pub samples: Option<std::ops::Range<u32>>,
-    /// Linear RGB radiance: while a sample is traced, that sample's radiance; when the tile
-    /// is done, the mean over the samples rendered (`film::sample_sum::mean_of_sum`).
+    /// Linear RGB radiance: while samples are traced, each sample in flight's radiance, one
+    /// run of the tile's pixels per sample ([`TileImage::begin_samples`]); when the tile is
+    /// done, the mean over the samples rendered (`film::sample_sum::mean_of_sum`).
     pub color: Vec<[f32; 3]>,
     /// Exact fixed-point sums of each pixel's sample radiances (`film::sample_sum`), in the
     /// same grouping-free form whatever range of samples the tile covers.
@@ -103,6 +106,53 @@ impl TileImage {
             take(aovs.texture_footprint || aovs.lod),
             false,
         );
+    }
+
+    /// The pixels of the tile.
+    fn pixel_count(&self) -> usize {
+        self.color_sum.len()
+    }
+
+    /// Makes room for `in_flight` samples of every pixel, each starting at zero radiance:
+    /// sample `place` of pixel `p` goes to `color[p + place * pixels]`
+    /// (`integrator::camera_sample::sample_slot`).
+    pub fn begin_samples(&mut self, in_flight: usize) {
+        let len = self.pixel_count() * in_flight;
+        self.color.clear();
+        self.color.resize(len, [0.0; 3]);
+    }
+
+    /// Adds the radiance of the samples in flight at `places` to each pixel's exact sum
+    /// (`film::sample_sum`); with `drop_nonfinite`, a sample with a NaN or infinite channel
+    /// is left out instead. Returns how many were left out.
+    pub fn add_samples_in_flight(&mut self, places: Range<usize>, drop_nonfinite: bool) -> u64 {
+        let pixels = self.pixel_count();
+        let mut dropped = 0;
+        if pixels == 0 {
+            return 0;
+        }
+        let samples = &self.color[places.start * pixels..places.end * pixels];
+        for sample in samples.chunks_exact(pixels) {
+            for (sum, color) in self.color_sum.iter_mut().zip(sample) {
+                if drop_nonfinite && !color.iter().all(|c| c.is_finite()) {
+                    dropped += 1;
+                } else {
+                    super::sample_sum::add_sample(sum, *color);
+                }
+            }
+        }
+        dropped
+    }
+
+    /// Ends the tile: every pixel's colour becomes the mean of its `sample_count` summed
+    /// samples.
+    pub fn finish_mean(&mut self, sample_count: u32) {
+        let pixels = self.pixel_count();
+        self.color.truncate(pixels);
+        self.color.resize(pixels, [0.0; 3]);
+        for (color, sum) in self.color.iter_mut().zip(&self.color_sum) {
+            *color = sum.map(|s| super::sample_sum::mean_of_sum(s, sample_count));
+        }
     }
 }
 

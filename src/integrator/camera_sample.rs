@@ -1,7 +1,17 @@
-//! Camera rays of a tile for one sample index, shared by the integrators: one per pixel, in
-//! 4x4 blocks so that each run of 16 rays is one coherent packet, each with the footprint
-//! the camera gives it and the pixel's sampler (which has drawn the camera's dimensions, so
-//! an integrator's own draws continue from there).
+//! Camera rays of a tile for a run of sample indices, shared by the integrators: one per
+//! pixel and sample, each with the footprint the camera gives it and the pixel's sampler
+//! (which has drawn the camera's dimensions, so an integrator's own draws continue from
+//! there).
+//!
+//! The rays are ordered so that each run of 16 is one coherent packet: a pixel's samples
+//! follow one another, and the pixels go in 4x4 blocks. With 16 samples in flight a packet
+//! is one pixel's 16 samples, rays that part only inside one pixel, which Embree's packet
+//! traversal follows through the same BVH nodes and triangles (more than twice as fast
+//! as a packet of 16 neighbouring pixels on the direct-lighting peer scene,
+//! docs/benchmarks.md); with fewer, a packet is a run of pixels of one block, each with its
+//! samples.
+
+use std::ops::Range;
 
 use glam::{Vec2, Vec3};
 
@@ -19,55 +29,140 @@ pub(crate) struct CameraRay {
     /// Where tracing may start (`shading::entry_distance`).
     pub start: f32,
     pub footprint: Footprint,
-    /// Index of the pixel inside the tile.
-    pub pixel: u32,
+    /// Where the ray's radiance goes in the tile's colour buffer ([`sample_slot`]). The
+    /// first sample of a run has the pixel's own index.
+    pub slot: u32,
+    /// The sample's index.
+    pub sample: u32,
+    /// Whether the sample is one the render asked for. The others are traced only to fill
+    /// their packets the same way in every render (see [`SampleRun`]) and are then dropped.
+    pub kept: bool,
     /// The pixel's sampler for this sample, past the camera's dimensions.
     pub sampler: PixelSampler,
 }
 
-/// Calls `emit` with the camera ray of every pixel of `tile` for sample `sample`, in 4x4
-/// block order.
+/// The most samples of a pixel traced together: a packet's worth.
+pub(crate) const MAX_SAMPLES_IN_FLIGHT: u32 = 16;
+
+/// Samples of every pixel of a tile traced together.
 ///
-/// A block's 16 rays are made together, as structure-of-arrays: the sampler's draws
+/// A render's samples fall into fixed blocks of `min(in_flight, spp)` consecutive indices
+/// (`in_flight` at most [`MAX_SAMPLES_IN_FLIGHT`], fixed per integrator), and the
+/// camera rays of a whole block are traced as packets whichever of its samples the render
+/// keeps. So a packet always holds the same rays, and a render of a sample range (a
+/// `--samples` part, a progressive pass) traces every ray it keeps exactly as the whole
+/// render does: Embree's choice between two triangles hit at the same distance (a ray
+/// through a shared edge) depends on the packet a ray is traced in, and a split render must
+/// merge into the whole one bit for bit.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct SampleRun {
+    /// The block's samples, all traced.
+    pub traced: Range<u32>,
+    /// The samples of `traced` the render keeps.
+    pub kept: Range<u32>,
+}
+
+impl SampleRun {
+    /// How many samples of each pixel are in flight.
+    pub fn len(&self) -> usize {
+        self.traced.len()
+    }
+
+    /// The places ([`sample_slot`]) of the kept samples.
+    pub fn kept_places(&self) -> Range<usize> {
+        (self.kept.start - self.traced.start) as usize..(self.kept.end - self.traced.start) as usize
+    }
+}
+
+/// The runs that render `samples` of a render of `samples_per_pixel` samples per pixel, in
+/// order, with up to `in_flight` samples of a pixel traced together ([`SampleRun`]).
+pub(crate) fn sample_runs(
+    samples: Range<u32>,
+    samples_per_pixel: u32,
+    in_flight: u32,
+) -> impl Iterator<Item = SampleRun> {
+    let block = in_flight
+        .clamp(1, MAX_SAMPLES_IN_FLIGHT)
+        .min(samples_per_pixel.max(1));
+    let last = samples_per_pixel.max(samples.end);
+    let blocks = if samples.is_empty() {
+        0..0
+    } else {
+        samples.start / block..(samples.end - 1) / block + 1
+    };
+    blocks.map(move |index| {
+        let start = index * block;
+        let traced = start..start.saturating_add(block).min(last);
+        let kept = traced.start.max(samples.start)..traced.end.min(samples.end);
+        SampleRun { traced, kept }
+    })
+}
+
+/// Where the radiance of sample `place` (counted from the first sample of its run) of the
+/// tile's pixel `pixel` goes in a colour buffer of `tile_pixels` pixels per sample.
+#[inline]
+pub(crate) fn sample_slot(pixel: u32, place: u32, tile_pixels: u32) -> u32 {
+    pixel + place * tile_pixels
+}
+
+/// The place ([`sample_slot`]) of the sample whose radiance goes to `slot`.
+#[inline]
+pub(crate) fn slot_place(slot: u32, tile_pixels: u32) -> u32 {
+    slot / tile_pixels
+}
+
+/// Calls `emit` with the camera ray of every pixel of `tile` for every sample of `run`, a
+/// pixel's samples one after another, the pixels in 4x4 block order.
+///
+/// Sixteen rays are made together, as structure-of-arrays: the sampler's draws
 /// (`Sampler::camera_lanes`), then, for a pinhole camera, the directions
 /// (`Camera::pinhole_directions`), each the same bits as the one-ray functions give; then
 /// each ray's start and footprint.
 pub(crate) fn for_each_camera_ray(
     context: &RenderContext,
     tile: PixelRect,
-    sample: u32,
+    run: &SampleRun,
     image_width: u32,
     mut emit: impl FnMut(CameraRay),
 ) {
+    let tile_pixels = tile.area() as u32;
     let mut block = CameraBlock::default();
     for (x, y) in block_order(tile) {
-        let lane = block.len;
-        block.x[lane] = tile.x0 + x;
-        block.y[lane] = tile.y0 + y;
-        block.pixel[lane] = y * tile.width + x;
-        block.len += 1;
-        if block.len == PACKET {
-            block.emit(context, sample, image_width, &mut emit);
+        let pixel = y * tile.width + x;
+        for sample in run.traced.clone() {
+            let lane = block.len;
+            block.x[lane] = tile.x0 + x;
+            block.y[lane] = tile.y0 + y;
+            block.index[lane] = sample;
+            block.kept[lane] = run.kept.contains(&sample);
+            block.slot[lane] = sample_slot(pixel, sample - run.traced.start, tile_pixels);
+            block.len += 1;
+            if block.len == PACKET {
+                block.emit(context, image_width, &mut emit);
+            }
         }
     }
     if block.len > 0 {
-        block.emit(context, sample, image_width, &mut emit);
+        block.emit(context, image_width, &mut emit);
     }
 }
 
-/// Lanes of one 4x4 block (`block_order` yields the pixels of a block in a run of 16, fewer
-/// at a tile's ragged edge).
+/// Lanes of one packet.
 const PACKET: usize = 16;
 
-/// The pixels of up to 16 camera rays.
+/// The pixels and samples of up to 16 camera rays.
 #[derive(Default)]
 struct CameraBlock {
     len: usize,
     /// Image coordinates.
     x: [u32; PACKET],
     y: [u32; PACKET],
-    /// Index inside the tile.
-    pixel: [u32; PACKET],
+    /// Sample index.
+    index: [u32; PACKET],
+    /// Slot in the tile's colour buffer ([`sample_slot`]).
+    slot: [u32; PACKET],
+    /// Whether the render keeps the sample.
+    kept: [bool; PACKET],
 }
 
 impl CameraBlock {
@@ -76,7 +171,6 @@ impl CameraBlock {
     fn emit(
         &mut self,
         context: &RenderContext,
-        sample: u32,
         image_width: u32,
         emit: &mut impl FnMut(CameraRay),
     ) {
@@ -88,7 +182,7 @@ impl CameraBlock {
         // field); the samplers' dimensions move on the same either way.
         let draws = Sampler::new(context.options.seed).camera_lanes(
             &image_pixels,
-            sample,
+            &self.index,
             spp,
             context.effects.depth_of_field,
         );
@@ -131,10 +225,59 @@ impl CameraBlock {
                 direction,
                 start,
                 footprint,
-                pixel: self.pixel[lane],
+                slot: self.slot[lane],
+                sample: self.index[lane],
+                kept: self.kept[lane],
                 sampler: draws.samplers[lane],
             });
         }
         self.len = 0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn runs(samples: Range<u32>, spp: u32, in_flight: u32) -> Vec<(Range<u32>, Range<u32>)> {
+        sample_runs(samples, spp, in_flight)
+            .map(|run| (run.traced, run.kept))
+            .collect()
+    }
+
+    #[test]
+    fn runs_are_fixed_blocks_whatever_range_is_rendered() {
+        // The whole render: blocks of 16, the last one short.
+        assert_eq!(
+            runs(0..40, 40, 16),
+            vec![(0..16, 0..16), (16..32, 16..32), (32..40, 32..40)]
+        );
+        // A part traces the same blocks and keeps its own samples.
+        assert_eq!(runs(5..20, 40, 16), vec![(0..16, 5..16), (16..32, 16..20)]);
+        assert_eq!(runs(17..18, 40, 16), vec![(16..32, 17..18)]);
+        // Fewer samples per pixel than a packet: blocks of the render's count.
+        assert_eq!(runs(1..3, 4, 16), vec![(0..4, 1..3)]);
+        // One sample in flight: one run per sample.
+        assert_eq!(runs(2..4, 8, 1), vec![(2..3, 2..3), (3..4, 3..4)]);
+        // Nothing to render; an open-ended progressive render.
+        assert!(runs(3..3, 8, 16).is_empty());
+        assert_eq!(runs(8..12, u32::MAX, 16), vec![(0..16, 8..12)]);
+        assert_eq!(
+            runs(u32::MAX - 2..u32::MAX, u32::MAX, 16),
+            vec![(u32::MAX - 15..u32::MAX, u32::MAX - 2..u32::MAX)]
+        );
+    }
+
+    #[test]
+    fn kept_places_and_slots_follow_the_block() {
+        let run = SampleRun {
+            traced: 16..32,
+            kept: 20..23,
+        };
+        assert_eq!(run.len(), 16);
+        assert_eq!(run.kept_places(), 4..7);
+        assert_eq!(sample_slot(5, 4, 256), 5 + 4 * 256);
+        assert_eq!(slot_place(sample_slot(255, 15, 256), 256), 15);
+        assert_eq!(slot_place(sample_slot(3, 0, 256), 256), 0);
     }
 }

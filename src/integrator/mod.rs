@@ -7,7 +7,8 @@
 //! footprints, BSDFs and lights ([`crate::shading`]) and film. Integrators depend on the
 //! render stage, never the reverse. [`selection`] picks one for a scene (`--integrator`,
 //! `[render] integrator`) and says why; `camera_sample` and `texturing` hold what every
-//! integrator shares (camera rays, filtered texture lookups).
+//! integrator shares (camera rays, filtered texture lookups); `trace_wave` and `wave_order`
+//! how the wave integrators trace a wave and in which order their waves run.
 
 mod camera_sample;
 pub mod path;
@@ -15,6 +16,7 @@ pub mod selection;
 mod texturing;
 mod trace_wave;
 pub mod vct;
+mod wave_order;
 pub mod whitted;
 
 pub use path::PathTracer;

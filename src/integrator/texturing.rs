@@ -21,7 +21,9 @@ use crate::shading::surface_inputs::{SurfaceInputs, TextureSlot};
 pub(crate) struct LookupRay<'a> {
     pub direction: Vec3,
     pub footprint: &'a Footprint,
-    pub pixel: u32,
+    /// The slot of the ray's pixel and sample in the tile's colour buffer
+    /// (`integrator::camera_sample::sample_slot`); the pixel's index for its first sample.
+    pub slot: u32,
     pub first_sample: bool,
 }
 
@@ -67,7 +69,8 @@ pub(crate) fn surface_inputs(
     } else {
         [0.0; 4]
     };
-    let pixel = ray.pixel as usize;
+    // Only a first sample records, and its slot is its pixel.
+    let pixel = ray.slot as usize;
     let record = ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel];
     let mut base_color_lookup = None;
     let inputs = surface_textures::shading_inputs(

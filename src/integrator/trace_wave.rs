@@ -1,4 +1,4 @@
-//! Tracing one wave of rays, shared by the integrators: camera waves as coherent 4x4
+//! Tracing one wave of rays, shared by the integrators: camera waves as coherent 16-wide
 //! packets, later waves as incoherent ray streams (see `render::tracer`), each ray with its
 //! footprint's cone for alpha cut-out callbacks and traced from its start distance.
 

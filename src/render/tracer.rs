@@ -325,24 +325,55 @@ impl Tracer {
         if coherent {
             self.intersect_packets(rays, hits);
         } else {
-            STREAM.with(|stream| {
-                let mut stream = stream.borrow_mut();
-                let (ray_hits, payload) = &mut *stream;
-                fill_stream(rays, ray_hits, payload);
-                self.note(
-                    self.scene.intersect_stream(
-                        ray_hits,
-                        TraceOptions::incoherent().with_payload(payload),
-                    ),
-                );
-                for (out, ray_hit) in hits.iter_mut().zip(ray_hits.iter()) {
-                    if let Some(hit) = ray_hit.hit() {
-                        *out = trace_hit(&hit);
-                    }
-                }
-            });
+            self.intersect_stream_into(rays, hits);
         }
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
+    }
+
+    /// [`Tracer::intersect`] of an incoherent batch cut into groups, each traced as its own
+    /// stream: the rays of `rays[..group_ends[0]]`, then of `rays[group_ends[0]..group_ends[1]]`,
+    /// and so on (the last end is `rays.len()`).
+    ///
+    /// Embree packs a stream's rays into packets of its own choosing, and which of two
+    /// triangles hit at the same distance a ray reports can depend on its packet. The
+    /// integrators trace each sample's rays as one group, so a ray's hit does not depend on
+    /// which other samples are traced with it (`integrator::camera_sample::SampleRun`).
+    pub fn intersect_grouped(
+        &self,
+        rays: &[TraceRay],
+        group_ends: &[usize],
+        hits: &mut Vec<TraceHit>,
+        counters: &mut WorkCounters,
+    ) {
+        hits.clear();
+        hits.resize(rays.len(), TraceHit::MISS);
+        let mut start = 0;
+        for &end in group_ends {
+            if end > start {
+                self.intersect_stream_into(&rays[start..end], &mut hits[start..end]);
+            }
+            start = end;
+        }
+        debug_assert_eq!(start, rays.len(), "the groups cover the batch");
+        counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
+    }
+
+    /// Closest hits of `rays` as one incoherent stream into `hits` (misses left as they are).
+    fn intersect_stream_into(&self, rays: &[TraceRay], hits: &mut [TraceHit]) {
+        STREAM.with(|stream| {
+            let mut stream = stream.borrow_mut();
+            let (ray_hits, payload) = &mut *stream;
+            fill_stream(rays, ray_hits, payload);
+            self.note(
+                self.scene
+                    .intersect_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
+            );
+            for (out, ray_hit) in hits.iter_mut().zip(ray_hits.iter()) {
+                if let Some(hit) = ray_hit.hit() {
+                    *out = trace_hit(&hit);
+                }
+            }
+        });
     }
 
     /// The same closest-hit query as [`Tracer::intersect`], one `rtcIntersect1` call per ray
@@ -400,6 +431,42 @@ impl Tracer {
                 }
             }
         }
+    }
+
+    /// [`Tracer::occluded`] of coherent rays, traced as 16-wide packets: the shadow rays of a
+    /// camera wave, where a packet holds one pixel's samples (`integrator::camera_sample`)
+    /// and its rays leave nearly one point for nearly one light point. Whether a ray is
+    /// blocked does not depend on its packet: any hit blocks it, and the watertight test
+    /// finds one whichever triangle of a shared edge comes first.
+    pub fn occluded_coherent(
+        &self,
+        rays: &[TraceRay],
+        blocked: &mut Vec<bool>,
+        counters: &mut WorkCounters,
+    ) {
+        blocked.clear();
+        let mut packet = RayPacket::<16>::new();
+        let mut payload = [RayPayload::default(); 16];
+        for chunk in rays.chunks(16) {
+            for (lane, lane_payload) in payload.iter_mut().enumerate() {
+                match chunk.get(lane) {
+                    Some(ray) => {
+                        packet.set_ray(lane, &embree_ray(ray));
+                        *lane_payload = RayPayload {
+                            cone_width: ray.cone_width,
+                            cone_spread: ray.cone_spread,
+                        };
+                    }
+                    None => packet.set_valid(lane, false),
+                }
+            }
+            self.note(
+                self.scene
+                    .occluded_tile(&mut packet, TraceOptions::coherent().with_payload(&payload)),
+            );
+            blocked.extend((0..chunk.len()).map(|lane| packet.is_occluded(lane)));
+        }
+        counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
     /// Whether each of `rays` is blocked before its `tfar` (an `rtcOccluded1M` stream: shadow

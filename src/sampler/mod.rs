@@ -91,12 +91,13 @@ pub struct CameraLanes<const N: usize> {
 }
 
 impl Sampler {
-    /// [`PixelSampler::camera_sample_drawing`] of sample `index` of each of `pixels`
-    /// (numbered as for [`Sampler::pixel`]): the same values, bit for bit.
+    /// [`PixelSampler::camera_sample_drawing`] of sample `indices[lane]` of each of
+    /// `pixels[lane]` (numbered as for [`Sampler::pixel`]): the same values, bit for bit.
+    /// The lanes may be different pixels, different samples of one pixel, or both.
     pub fn camera_lanes<const N: usize>(
         &self,
         pixels: &[u32; N],
-        index: u32,
+        indices: &[u32; N],
         samples_per_pixel: u32,
         lens: bool,
     ) -> CameraLanes<N> {
@@ -110,17 +111,17 @@ impl Sampler {
         let offset = if samples_per_pixel <= 1 {
             centre
         } else {
-            next_2d_lanes(&states, index, 0)
+            next_2d_lanes(&states, indices, 0)
         };
         let lens = if lens {
-            next_2d_lanes(&states, index, 2)
+            next_2d_lanes(&states, indices, 2)
         } else {
             centre
         };
         CameraLanes {
             samplers: std::array::from_fn(|lane| PixelSampler {
                 pixel_state: states[lane],
-                index,
+                index: indices[lane],
                 dimension: 4,
             }),
             offset,
@@ -129,12 +130,17 @@ impl Sampler {
     }
 }
 
-/// [`PixelSampler::next_2d`] at `dimension` for the pixel states `states`, lane by lane.
+/// [`PixelSampler::next_2d`] at `dimension` for the pixel states `states` and sample
+/// indices `indices`, lane by lane.
 #[inline]
-fn next_2d_lanes<const N: usize>(states: &[u32; N], index: u32, dimension: u32) -> [[f32; N]; 2] {
+fn next_2d_lanes<const N: usize>(
+    states: &[u32; N],
+    indices: &[u32; N],
+    dimension: u32,
+) -> [[f32; N]; 2] {
     let mut out = [[0.0f32; N]; 2];
     for lane in 0..N {
-        let point = draw_2d(draw_key(states[lane], dimension), index);
+        let point = draw_2d(draw_key(states[lane], dimension), indices[lane]);
         out[0][lane] = point.x;
         out[1][lane] = point.y;
     }

@@ -273,25 +273,31 @@ fn camera_lanes_are_the_one_pixel_draws_bit_for_bit() {
         for spp in [1u32, 4, 16, 1000] {
             for lens in [false, true] {
                 for _ in 0..20 {
+                    // Different pixels, then one pixel's different samples.
                     let pixels: [u32; 16] = std::array::from_fn(|_| next() % 4_000_000);
                     let index = next() % spp;
-                    let lanes = sampler.camera_lanes(&pixels, index, spp, lens);
-                    for (lane, &pixel) in pixels.iter().enumerate() {
-                        let mut one = sampler.pixel(pixel, index);
-                        let sample = one.camera_sample_drawing(spp, lens);
-                        let offset = Vec2::new(lanes.offset[0][lane], lanes.offset[1][lane]);
-                        let on_lens = Vec2::new(lanes.lens[0][lane], lanes.lens[1][lane]);
-                        assert_eq!(
-                            offset.to_array().map(f32::to_bits),
-                            sample.pixel_offset.to_array().map(f32::to_bits)
-                        );
-                        assert_eq!(
-                            on_lens.to_array().map(f32::to_bits),
-                            sample.lens.to_array().map(f32::to_bits)
-                        );
-                        let mut packed = lanes.samplers[lane];
-                        assert_eq!(packed, one, "seed {seed}, pixel {pixel}, index {index}");
-                        assert_eq!(packed.next_2d(), one.next_2d());
+                    let same_index = [index; 16];
+                    let one_pixel = [pixels[0]; 16];
+                    let indices: [u32; 16] = std::array::from_fn(|_| next() % spp);
+                    for (pixels, indices) in [(&pixels, &same_index), (&one_pixel, &indices)] {
+                        let lanes = sampler.camera_lanes(pixels, indices, spp, lens);
+                        for (lane, (&pixel, &index)) in pixels.iter().zip(indices).enumerate() {
+                            let mut one = sampler.pixel(pixel, index);
+                            let sample = one.camera_sample_drawing(spp, lens);
+                            let offset = Vec2::new(lanes.offset[0][lane], lanes.offset[1][lane]);
+                            let on_lens = Vec2::new(lanes.lens[0][lane], lanes.lens[1][lane]);
+                            assert_eq!(
+                                offset.to_array().map(f32::to_bits),
+                                sample.pixel_offset.to_array().map(f32::to_bits)
+                            );
+                            assert_eq!(
+                                on_lens.to_array().map(f32::to_bits),
+                                sample.lens.to_array().map(f32::to_bits)
+                            );
+                            let mut packed = lanes.samplers[lane];
+                            assert_eq!(packed, one, "seed {seed}, pixel {pixel}, index {index}");
+                            assert_eq!(packed.next_2d(), one.next_2d());
+                        }
                     }
                 }
             }

@@ -136,6 +136,7 @@ impl MaterialBsdf {
     /// [`MaterialBsdf::new`] with the (textured) shading inputs of the hit
     /// (`crate::shading::surface_inputs`): its albedo, roughness, metallic and normal-mapped
     /// shading normal.
+    #[inline]
     pub fn from_surface_inputs(
         material: &Material,
         inputs: &SurfaceInputs,
@@ -158,6 +159,7 @@ impl MaterialBsdf {
         )
     }
 
+    #[inline]
     fn with_inputs(
         material: &Material,
         inputs: LobeInputs,

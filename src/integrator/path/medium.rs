@@ -122,7 +122,7 @@ pub(super) fn scatter(
             scatterer: Scatterer::Medium(phase),
             throughput,
             footprint: &footprint,
-            pixel: ray.pixel,
+            slot: ray.slot,
             last: !continues,
         };
         sample_light(
@@ -154,14 +154,14 @@ pub(super) fn scatter(
     // Scattered rays are counted with the reflection rays (rays a vertex scattered).
     worker.counters.count_rays(RayKind::Reflection, 1);
     worker.counters.path_bounces += 1;
-    waves.next.push(PathRay {
+    waves.rays.next.push(PathRay {
         origin: position,
         direction: sample.wi,
         start: 0.0,
         throughput,
         footprint,
         approximate_footprint: true,
-        pixel: ray.pixel,
+        slot: ray.slot,
         depth,
         diffuse_depth: ray.diffuse_depth + 1,
         bsdf_pdf: Some(sample.pdf),

@@ -22,9 +22,10 @@
 //! (light choice, point on the light, BSDF lobe, BSDF direction, roulette), so an image is a
 //! pure function of the seed.
 //!
-//! Like Whitted, a tile is rendered breadth first: the camera rays of a sample form 16-wide
-//! packets, the shadow rays of a wave one occlusion stream, and the continuing paths the
-//! next wave, traced as an incoherent stream.
+//! Like Whitted, a tile is rendered breadth first (`integrator::wave_order`), but one sample
+//! at a time: the camera rays of a sample form 16-wide packets of 4x4 pixels, the shadow
+//! rays of a wave one occlusion stream (packets for the camera wave), and the continuing
+//! paths the next wave, traced as an incoherent stream.
 //!
 //! Footprints follow every bounce: mirror and refraction bounces reflect or refract the
 //! ray's cone (or differential) as Whitted does; a non-delta bounce widens the cone by the
@@ -49,11 +50,11 @@ mod vertex;
 
 use glam::Vec3;
 
-use crate::film::sample_sum;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
-use crate::integrator::camera_sample::for_each_camera_ray;
+use crate::integrator::camera_sample::{for_each_camera_ray, sample_runs, slot_place};
 use crate::integrator::trace_wave::{trace_wave, WaveRay};
+use crate::integrator::wave_order::{drop_unkept, run_waves, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
@@ -120,8 +121,9 @@ struct PathRay {
     /// Differentials only: the footprint is to be replaced at the next hit by the camera's
     /// footprint there (after a non-delta bounce).
     approximate_footprint: bool,
-    /// Index of the pixel inside the tile.
-    pixel: u32,
+    /// The slot of the ray's pixel and sample in the tile's colour buffer
+    /// (`integrator::camera_sample::sample_slot`); the pixel's index for its first sample.
+    slot: u32,
     /// Bounces so far (0 for camera rays), and how many of them were non-delta.
     depth: u32,
     diffuse_depth: u32,
@@ -142,13 +144,58 @@ struct PathRay {
 /// The path tracer's per-thread state: the buffers of a tile's waves, reused.
 #[derive(Default)]
 pub struct PathWaves {
-    current: Vec<PathRay>,
-    next: Vec<PathRay>,
+    /// The camera rays of a run of samples and the paths they lead to.
+    rays: WaveQueues<PathRay>,
     trace_rays: Vec<TraceRay>,
     trace_hits: Vec<TraceHit>,
     shadows: Vec<ShadowRay>,
     shadow_rays: Vec<TraceRay>,
     shadow_blocked: Vec<bool>,
+}
+
+impl PathTracer {
+    /// Traces the current wave (a camera wave as packets, then without the rays the render
+    /// does not keep; a later one as an incoherent stream), shades its hits and traces their
+    /// shadow rays. The paths that continue are left in `waves.rays.next`.
+    fn trace_and_shade_wave(
+        &self,
+        context: &RenderContext,
+        waves: &mut PathWaves,
+        wave: &Wave,
+        image: &mut TileImage,
+        worker: &mut WorkerState,
+    ) {
+        let camera = matches!(wave, Wave::Camera(_));
+        let rays = waves.rays.current.iter().map(|ray| WaveRay {
+            origin: ray.origin,
+            direction: ray.direction,
+            start: ray.start,
+            footprint: &ray.footprint,
+        });
+        trace_wave(
+            context,
+            rays,
+            camera,
+            &mut waves.trace_rays,
+            &mut waves.trace_hits,
+            &mut worker.counters,
+        );
+        if let Wave::Camera(range) = wave {
+            let rays = &mut waves.rays;
+            drop_unkept(
+                &mut rays.current,
+                &mut waves.trace_hits,
+                &rays.kept[range.clone()],
+            );
+        }
+        waves.shadows.clear();
+        for index in 0..waves.rays.current.len() {
+            let ray = waves.rays.current[index];
+            let hit = waves.trace_hits[index];
+            vertex::shade(self, context, ray, &hit, image, waves, worker);
+        }
+        trace_shadow_rays(context, waves, camera, image, worker);
+    }
 }
 
 impl Integrator for PathTracer {
@@ -170,77 +217,59 @@ impl Integrator for PathTracer {
         let spp = options.spp.max(1);
         let samples = image.samples.clone().unwrap_or(0..spp);
         let sample_count = samples.len() as u32;
-        for sample in samples {
-            waves.current.clear();
-            for_each_camera_ray(context, tile, sample, options.width, |ray| {
-                waves.current.push(PathRay {
+        // One sample of every pixel at a time: camera rays are a small share of a path
+        // tracer's rays, and 16 samples in flight cost more in memory traffic than their
+        // coherent packets save (docs/benchmarks.md).
+        for run in sample_runs(samples, spp, 1) {
+            image.begin_samples(run.len());
+            let (current, kept) = (&mut waves.rays.camera, &mut waves.rays.kept);
+            current.clear();
+            kept.clear();
+            for_each_camera_ray(context, tile, &run, options.width, |ray| {
+                kept.push(ray.kept);
+                current.push(PathRay {
                     origin: ray.origin,
                     direction: ray.direction,
                     start: ray.start,
                     throughput: Vec3::ONE,
                     footprint: ray.footprint,
                     approximate_footprint: false,
-                    pixel: ray.pixel,
+                    slot: ray.slot,
                     depth: 0,
                     diffuse_depth: 0,
                     bsdf_pdf: None,
                     from: ray.origin,
                     kind: RayKind::Camera,
                     sigma: Vec3::ZERO,
-                    first_sample: sample == 0,
+                    first_sample: ray.sample == 0,
                     sampler: ray.sampler,
                 })
             });
-            let camera_rays = waves.current.len() as u64;
+            let camera_rays = waves.rays.kept.iter().filter(|&&k| k).count() as u64;
             worker.counters.count_rays(RayKind::Camera, camera_rays);
             worker.counters.paths += camera_rays;
-            while !waves.current.is_empty() {
-                let coherent = waves.current[0].kind == RayKind::Camera;
-                let rays = waves.current.iter().map(|ray| WaveRay {
-                    origin: ray.origin,
-                    direction: ray.direction,
-                    start: ray.start,
-                    footprint: &ray.footprint,
-                });
-                trace_wave(
-                    context,
-                    rays,
-                    coherent,
-                    &mut waves.trace_rays,
-                    &mut waves.trace_hits,
-                    &mut worker.counters,
-                );
-                waves.shadows.clear();
-                for index in 0..waves.current.len() {
-                    let ray = waves.current[index];
-                    let hit = waves.trace_hits[index];
-                    vertex::shade(self, context, ray, &hit, image, waves, worker);
-                }
-                trace_shadow_rays(context, waves, image, worker);
-                std::mem::swap(&mut waves.current, &mut waves.next);
-                waves.next.clear();
-            }
-            // The sample's radiance joins the exact sums (`film::sample_sum`); a sample whose
-            // radiance is not finite is counted and dropped.
-            for (sum, color) in image.color_sum.iter_mut().zip(image.color.iter_mut()) {
-                if color.iter().all(|c| c.is_finite()) {
-                    sample_sum::add_sample(sum, *color);
-                } else {
-                    worker.counters.nonfinite_samples += 1;
-                }
-                *color = [0.0; 3];
-            }
+            // Camera waves, then each sample's paths on their own (`wave_order`).
+            let tile_pixels = tile.area() as u32;
+            run_waves(
+                waves,
+                |waves| &mut waves.rays,
+                run.len(),
+                |ray| slot_place(ray.slot, tile_pixels) as usize,
+                |waves, wave| self.trace_and_shade_wave(context, waves, &wave, image, worker),
+            );
+            // These samples' radiance joins the exact sums (`film::sample_sum`); a sample
+            // whose radiance is not finite is counted and dropped.
+            worker.counters.nonfinite_samples +=
+                image.add_samples_in_flight(run.kept_places(), true);
         }
-        for (color, sum) in image.color.iter_mut().zip(&image.color_sum) {
-            *color = sum.map(|s| sample_sum::mean_of_sum(s, sample_count));
-        }
+        image.finish_mean(sample_count);
         image.alpha.fill(1.0);
     }
 }
 
 #[inline]
-fn add_radiance(image: &mut TileImage, pixel: u32, radiance: Vec3) {
-    let c = &mut image.color[pixel as usize];
+fn add_radiance(image: &mut TileImage, slot: u32, radiance: Vec3) {
+    let c = &mut image.color[slot as usize];
     c[0] += radiance.x;
     c[1] += radiance.y;
     c[2] += radiance.z;

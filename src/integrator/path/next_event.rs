@@ -26,7 +26,8 @@ pub(super) struct ShadowRay {
     /// Where the ray stops short of the light (`shading::shadow_ray_end`), or infinity.
     pub(super) tfar: f32,
     pub(super) contribution: Vec3,
-    pub(super) pixel: u32,
+    /// The colour-buffer slot the contribution goes to.
+    pub(super) slot: u32,
 }
 
 /// What scatters light at a shading point: a surface's BSDF or a fog volume's phase
@@ -81,7 +82,8 @@ pub(super) struct ShadingPoint<'a> {
     pub(super) scatterer: Scatterer<'a>,
     pub(super) throughput: Vec3,
     pub(super) footprint: &'a Footprint,
-    pub(super) pixel: u32,
+    /// The colour-buffer slot of the path.
+    pub(super) slot: u32,
     /// True when no BSDF ray continues from this hit (the last bounce): light sampling then
     /// stands alone and is not weighted.
     pub(super) last: bool,
@@ -172,7 +174,7 @@ pub(super) fn sample_light(
         direction: wi,
         tfar,
         contribution,
-        pixel: point.pixel,
+        slot: point.slot,
     });
 }
 
@@ -183,6 +185,7 @@ pub(super) fn sample_light(
 pub(super) fn trace_shadow_rays(
     context: &RenderContext,
     waves: &mut PathWaves,
+    camera_wave: bool,
     image: &mut TileImage,
     worker: &mut WorkerState,
 ) {
@@ -197,11 +200,20 @@ pub(super) fn trace_shadow_rays(
         &mut waves.shadow_rays,
         &mut worker.counters,
     );
-    context.tracer.occluded(
-        &waves.shadow_rays,
-        &mut waves.shadow_blocked,
-        &mut worker.counters,
-    );
+    // The camera wave's shadow rays leave one pixel's samples together: packets.
+    if camera_wave {
+        context.tracer.occluded_coherent(
+            &waves.shadow_rays,
+            &mut waves.shadow_blocked,
+            &mut worker.counters,
+        );
+    } else {
+        context.tracer.occluded(
+            &waves.shadow_rays,
+            &mut waves.shadow_blocked,
+            &mut worker.counters,
+        );
+    }
     for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
         if *blocked {
             continue;
@@ -220,6 +232,6 @@ pub(super) fn trace_shadow_rays(
             // clamped blend is Whitted's model of seed 004, not a transmittance).
             contribution *= fog.transmittance(FogModel::Exact);
         }
-        add_radiance(image, shadow.pixel, contribution);
+        add_radiance(image, shadow.slot, contribution);
     }
 }

@@ -55,7 +55,7 @@ pub(super) fn shade(
         let weight = found_light_weight(tracer, &ray, lights.pmf(environment), || {
             lights.environment.pdf_li(ray.direction)
         });
-        add_radiance(image, ray.pixel, ray.throughput * radiance * weight);
+        add_radiance(image, ray.slot, ray.throughput * radiance * weight);
         return;
     }
     let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
@@ -65,7 +65,7 @@ pub(super) fn shade(
         .surface_hit(ray.origin, ray.direction, hit, detail);
     let material = &context.scene.materials[surface.material as usize];
     if camera_first {
-        write_geometry_aovs(context, image, ray.pixel, ray.direction, &surface);
+        write_geometry_aovs(context, image, ray.slot, ray.direction, &surface);
     }
     // Beer's law over the distance travelled inside the medium (seed 004).
     if context.effects.absorption && ray.sigma != Vec3::ZERO {
@@ -88,12 +88,12 @@ pub(super) fn shade(
     let lookup = LookupRay {
         direction: ray.direction,
         footprint: &ray.footprint,
-        pixel: ray.pixel,
+        slot: ray.slot,
         first_sample: ray.first_sample,
     };
     let inputs = texturing::surface_inputs(context, lookup, material, &surface, image, worker);
     if camera_first {
-        write_material_aovs(image, ray.pixel, &inputs);
+        write_material_aovs(image, ray.slot, &inputs);
     }
 
     // Emission, from the front side only (one-sided emitters, `shading::area_lights`).
@@ -119,7 +119,7 @@ pub(super) fn shade(
             // ray's footprint. Emitters that are not lights are found by BSDF rays alone.
             _ => (inputs.emission, 1.0),
         };
-        add_radiance(image, ray.pixel, ray.throughput * emission * weight);
+        add_radiance(image, ray.slot, ray.throughput * emission * weight);
     }
 
     // The same seven dimensions at every vertex, whichever are used.
@@ -157,7 +157,7 @@ pub(super) fn shade(
             },
             throughput: ray.throughput,
             footprint: &ray.footprint,
-            pixel: ray.pixel,
+            slot: ray.slot,
             // No BSDF ray competes when none continues along a non-delta lobe.
             last: !continues || ray.diffuse_depth >= tracer.diffuse_bounces,
         };
@@ -224,7 +224,7 @@ pub(super) fn shade(
     };
     worker.counters.count_rays(kind, 1);
     worker.counters.path_bounces += 1;
-    waves.next.push(PathRay {
+    waves.rays.next.push(PathRay {
         origin: spawn.offset_origin(if crosses { -ng } else { ng }),
         direction: wi,
         start: 0.0,
@@ -232,7 +232,7 @@ pub(super) fn shade(
         footprint,
         // After a delta bounce the footprint was rebuilt at this hit and carried on.
         approximate_footprint,
-        pixel: ray.pixel,
+        slot: ray.slot,
         depth,
         diffuse_depth: ray.diffuse_depth + u32::from(!delta),
         bsdf_pdf: (!delta).then_some(sample.pdf),
@@ -358,7 +358,7 @@ fn record_hidden_surface_aovs(
         context
             .surfaces
             .surface_hit(ray.origin, ray.direction, hit, SurfaceDetail::Texturing);
-    write_geometry_aovs(context, image, ray.pixel, ray.direction, &surface);
+    write_geometry_aovs(context, image, ray.slot, ray.direction, &surface);
     if image.albedo.is_empty() {
         return;
     }
@@ -369,10 +369,10 @@ fn record_hidden_surface_aovs(
     let lookup = LookupRay {
         direction: ray.direction,
         footprint: &footprint,
-        pixel: ray.pixel,
+        slot: ray.slot,
         first_sample: true,
     };
     let material = &context.scene.materials[surface.material as usize];
     let inputs = texturing::surface_inputs(context, lookup, material, &surface, image, worker);
-    write_material_aovs(image, ray.pixel, &inputs);
+    write_material_aovs(image, ray.slot, &inputs);
 }

@@ -1,36 +1,42 @@
-//! Camera rays of a tile: one per pixel and sample, in 4x4 blocks so that each run of 16
-//! rays is one coherent packet, with the footprint the camera gives them
+//! Camera rays of a tile: one per pixel and sample in flight, ordered so that each run of
+//! 16 rays is one coherent packet, with the footprint the camera gives them
 //! (`integrator::camera_sample`).
 
 use glam::Vec3;
 
-use super::PathRay;
+use super::{PathRay, Waves};
 use crate::film::PixelRect;
-use crate::integrator::camera_sample::for_each_camera_ray;
+use crate::integrator::camera_sample::{for_each_camera_ray, SampleRun};
 use crate::render::context::RenderContext;
 use crate::render::stats::RayKind;
 
-/// Camera rays of one sample for a tile, ordered so that each run of 16 is a 4x4 block.
+/// Camera rays of the samples of `run` for a tile, in packet order, into
+/// `waves.rays.camera`, and whether the render keeps each into `waves.rays.kept`
+/// (`integrator::camera_sample`).
 pub(super) fn generate_camera_rays(
     context: &RenderContext,
     tile: PixelRect,
-    sample: u32,
+    run: &SampleRun,
     image_width: u32,
-    out: &mut Vec<PathRay>,
+    waves: &mut Waves,
 ) {
+    let out = &mut waves.rays.camera;
+    let kept = &mut waves.rays.kept;
     out.clear();
-    for_each_camera_ray(context, tile, sample, image_width, |ray| {
+    kept.clear();
+    for_each_camera_ray(context, tile, run, image_width, |ray| {
+        kept.push(ray.kept);
         out.push(PathRay {
             origin: ray.origin,
             direction: ray.direction,
             start: ray.start,
             throughput: Vec3::ONE,
             footprint: ray.footprint,
-            pixel: ray.pixel,
+            slot: ray.slot,
             depth: 0,
             kind: RayKind::Camera,
             sigma: Vec3::ZERO,
-            first_sample: sample == 0,
+            first_sample: ray.sample == 0,
         });
     });
 }

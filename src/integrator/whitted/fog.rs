@@ -54,7 +54,7 @@ pub(super) fn fog_ray_segment(
         let transmittance = fog.transmittance(context.scene.settings.fog_model);
         add_radiance(
             image,
-            ray.pixel,
+            ray.slot,
             ray.throughput * (1.0 - transmittance) * fog.color,
         );
         ray.throughput *= transmittance;

@@ -20,7 +20,8 @@ pub(super) struct ShadowRay {
     /// transmissive occluders measure their far end from it.
     pub(super) light: Option<Vec3>,
     pub(super) contribution: Vec3,
-    pub(super) pixel: u32,
+    /// The colour-buffer slot the contribution goes to.
+    pub(super) slot: u32,
 }
 
 pub(super) fn shade_miss(
@@ -35,10 +36,10 @@ pub(super) fn shade_miss(
         // Fogged up to the last volume's exit: an escaping ray's depth to infinity.
         let mut fogged = *ray;
         super::fog::fog_ray_segment(context, &mut fogged, f32::INFINITY, image, worker);
-        add_radiance(image, ray.pixel, fogged.throughput * radiance);
+        add_radiance(image, ray.slot, fogged.throughput * radiance);
         return;
     }
-    add_radiance(image, ray.pixel, ray.throughput * radiance);
+    add_radiance(image, ray.slot, ray.throughput * radiance);
 }
 
 /// Queue one shadow ray per light that lights the opaque lobe `bsdf` (weight `opaque`) of a
@@ -78,7 +79,7 @@ pub(super) fn queue_shadow_rays(
             tfar: shadow_tfar(sample.distance, light_position),
             light: light_position,
             contribution,
-            pixel: ray.pixel,
+            slot: ray.slot,
         });
     }
 }

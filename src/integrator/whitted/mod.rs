@@ -1,10 +1,12 @@
 //! Whitted ray tracing (seed 001's recursion, seed 004's Fresnel and Beer's law), traced in
 //! waves.
 //!
-//! Instead of recursing ray by ray, a tile is rendered breadth first: the camera rays of
-//! each 4x4 pixel block form one 16-wide packet; every hit is shaded, its shadow rays are
-//! batched and traced as one occlusion stream, and the reflection and refraction rays it
-//! spawns form the next wave, traced as an incoherent ray stream. A ray carries its
+//! Instead of recursing ray by ray, a tile is rendered breadth first, up to 16 samples of
+//! every pixel at a time (`integrator::wave_order`): the camera rays form 16-wide packets,
+//! each one pixel's samples; every hit is shaded, its shadow rays are batched and traced
+//! (the camera wave's as packets, later ones as one occlusion stream), and the reflection
+//! and refraction rays it spawns form the next wave, traced, one sample at a time, as an
+//! incoherent ray stream. A ray carries its
 //! throughput (the product of the coefficients on its way from the camera), so the sum over
 //! all waves equals the
 //! recursive formulation `local + k_r * trace(reflected) + k_t * trace(refracted)`.
@@ -36,10 +38,11 @@ mod surface;
 
 use glam::Vec3;
 
-use crate::film::sample_sum;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
+use crate::integrator::camera_sample::{sample_runs, slot_place, MAX_SAMPLES_IN_FLIGHT};
 use crate::integrator::trace_wave::WaveRay;
+use crate::integrator::wave_order::{drop_unkept, run_waves, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
@@ -66,8 +69,9 @@ struct PathRay {
     start: f32,
     throughput: Vec3,
     footprint: Footprint,
-    /// Index of the pixel inside the tile.
-    pixel: u32,
+    /// The slot of the ray's pixel and sample in the tile's colour buffer
+    /// (`integrator::camera_sample::sample_slot`); the pixel's index for its first sample.
+    slot: u32,
     depth: u32,
     kind: RayKind,
     /// Absorption coefficient of the medium the ray travels in (zero outside media).
@@ -80,13 +84,21 @@ struct PathRay {
 /// worker renders.
 #[derive(Default)]
 pub struct Waves {
-    current: Vec<PathRay>,
-    next: Vec<PathRay>,
+    /// The camera rays of a run of samples and the waves they lead to.
+    rays: WaveQueues<PathRay>,
     trace_rays: Vec<TraceRay>,
     trace_hits: Vec<TraceHit>,
     shadows: Vec<ShadowRay>,
     shadow_rays: Vec<TraceRay>,
     shadow_blocked: Vec<bool>,
+    /// Reordering a camera wave's shadow rays by sample (`wave_order::group_by_place`).
+    shadow_scratch: Vec<ShadowRay>,
+    group_ends: Vec<usize>,
+    /// Pixels of the tile being rendered, and samples of each in flight.
+    tile_pixels: u32,
+    in_flight: usize,
+    /// Whether the current wave is a camera wave.
+    camera_wave: bool,
     /// Walks of shadow rays through transmissive occluders.
     walk: ShadowWalk,
 }
@@ -126,41 +138,42 @@ pub(crate) fn render_tile_with(
     let image_width = options.width;
     let samples = image.samples.clone().unwrap_or(0..spp);
     let sample_count = samples.len() as u32;
-    for sample in samples {
-        generate_camera_rays(context, tile, sample, image_width, &mut waves.current);
-        worker
-            .counters
-            .count_rays(RayKind::Camera, waves.current.len() as u64);
-        while !waves.current.is_empty() {
-            trace_wave(context, waves, worker);
-            shade_wave(context, waves, image, worker, indirect);
-            trace_shadows(context, waves, image, worker);
-            std::mem::swap(&mut waves.current, &mut waves.next);
-            waves.next.clear();
-        }
-        // This sample's radiance joins the exact sums (`film::sample_sum`): any split of
+    // Up to 16 samples of every pixel are traced together (`camera_sample`).
+    waves.tile_pixels = tile.area() as u32;
+    for run in sample_runs(samples, spp, MAX_SAMPLES_IN_FLIGHT) {
+        image.begin_samples(run.len());
+        waves.in_flight = run.len();
+        generate_camera_rays(context, tile, &run, image_width, waves);
+        let kept = waves.rays.kept.iter().filter(|&&k| k).count();
+        worker.counters.count_rays(RayKind::Camera, kept as u64);
+        let tile_pixels = waves.tile_pixels;
+        run_waves(
+            waves,
+            |waves| &mut waves.rays,
+            run.len(),
+            |ray| slot_place(ray.slot, tile_pixels) as usize,
+            |waves, wave| {
+                trace_wave(context, waves, &wave, worker);
+                shade_wave(context, waves, image, worker, indirect);
+                trace_shadows(context, waves, image, worker);
+            },
+        );
+        // These samples' radiance joins the exact sums (`film::sample_sum`): any split of
         // the samples into ranges then adds up to the same bits.
-        for (sum, color) in image.color_sum.iter_mut().zip(image.color.iter_mut()) {
-            sample_sum::add_sample(sum, *color);
-            *color = [0.0; 3];
-        }
+        image.add_samples_in_flight(run.kept_places(), false);
     }
-    for (color, sum) in image.color.iter_mut().zip(&image.color_sum) {
-        *color = sum.map(|s| sample_sum::mean_of_sum(s, sample_count));
-    }
+    image.finish_mean(sample_count);
     // The background is rendered too: a finished pixel is opaque. (Alpha 0 marks pixels
     // an interrupted render did not reach.)
     image.alpha.fill(1.0);
 }
 
-/// Trace the current wave: camera waves as coherent 4x4 packets, later waves as incoherent
-/// ray streams (see `render::tracer`).
-fn trace_wave(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerState) {
-    let coherent = waves
-        .current
-        .first()
-        .is_some_and(|r| r.kind == RayKind::Camera);
-    let rays = waves.current.iter().map(|ray| WaveRay {
+/// Trace the current wave: a camera wave as coherent packets, and then without the rays
+/// the render does not keep; a later wave as an incoherent ray stream (see `render::tracer`
+/// and `wave_order`).
+fn trace_wave(context: &RenderContext, waves: &mut Waves, wave: &Wave, worker: &mut WorkerState) {
+    waves.camera_wave = matches!(wave, Wave::Camera(_));
+    let rays = waves.rays.current.iter().map(|ray| WaveRay {
         origin: ray.origin,
         direction: ray.direction,
         start: ray.start,
@@ -169,11 +182,19 @@ fn trace_wave(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerSta
     crate::integrator::trace_wave::trace_wave(
         context,
         rays,
-        coherent,
+        waves.camera_wave,
         &mut waves.trace_rays,
         &mut waves.trace_hits,
         &mut worker.counters,
     );
+    if let Wave::Camera(range) = wave {
+        let rays = &mut waves.rays;
+        drop_unkept(
+            &mut rays.current,
+            &mut waves.trace_hits,
+            &rays.kept[range.clone()],
+        );
+    }
 }
 
 fn shade_wave(
@@ -184,8 +205,8 @@ fn shade_wave(
     indirect: &dyn IndirectLight,
 ) {
     waves.shadows.clear();
-    for index in 0..waves.current.len() {
-        let ray = waves.current[index];
+    for index in 0..waves.rays.current.len() {
+        let ray = waves.rays.current[index];
         let hit = waves.trace_hits[index];
         if !hit.is_hit() {
             shade_miss(context, &ray, image, worker);
@@ -200,8 +221,8 @@ fn shade_wave(
 }
 
 #[inline]
-fn add_radiance(image: &mut TileImage, pixel: u32, radiance: Vec3) {
-    let c = &mut image.color[pixel as usize];
+fn add_radiance(image: &mut TileImage, slot: u32, radiance: Vec3) {
+    let c = &mut image.color[slot as usize];
     c[0] += radiance.x;
     c[1] += radiance.y;
     c[2] += radiance.z;

@@ -7,7 +7,9 @@ use glam::Vec3;
 use super::lights::{shadow_tfar, ShadowRay};
 use super::{add_radiance, Waves};
 use crate::film::TileImage;
+use crate::integrator::camera_sample::slot_place;
 use crate::integrator::trace_wave::shadow_trace_rays;
+use crate::integrator::wave_order::group_by_place;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::SurfaceDetail;
 use crate::render::stats::RayKind;
@@ -41,6 +43,28 @@ pub(super) fn trace_shadows(
     if waves.shadows.is_empty() {
         return;
     }
+    // A camera wave's shadow rays belong to all samples in flight, a later wave's to one.
+    let camera_wave = waves.camera_wave;
+    let places = if camera_wave { waves.in_flight } else { 1 };
+    let tile_pixels = waves.tile_pixels;
+    let place = |shadow: &ShadowRay| {
+        if places > 1 {
+            slot_place(shadow.slot, tile_pixels) as usize
+        } else {
+            0
+        }
+    };
+    if context.effects.transmissive_shadows && places > 1 {
+        // The walk finds closest hits: each sample's shadow rays are traced as their own
+        // stream (`Tracer::intersect_grouped`), as a render of that sample alone traces them.
+        group_by_place(
+            &mut waves.shadows,
+            &mut waves.shadow_scratch,
+            place,
+            places,
+            &mut waves.group_ends,
+        );
+    }
     shadow_trace_rays(
         waves
             .shadows
@@ -50,14 +74,23 @@ pub(super) fn trace_shadows(
         &mut worker.counters,
     );
     if !context.effects.transmissive_shadows {
-        context.tracer.occluded(
-            &waves.shadow_rays,
-            &mut waves.shadow_blocked,
-            &mut worker.counters,
-        );
+        // A camera wave's shadow rays are coherent: a packet holds one pixel's samples.
+        if camera_wave {
+            context.tracer.occluded_coherent(
+                &waves.shadow_rays,
+                &mut waves.shadow_blocked,
+                &mut worker.counters,
+            );
+        } else {
+            context.tracer.occluded(
+                &waves.shadow_rays,
+                &mut waves.shadow_blocked,
+                &mut worker.counters,
+            );
+        }
         for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
             if !blocked {
-                add_radiance(image, shadow.pixel, delivered(context, shadow, worker));
+                add_radiance(image, shadow.slot, delivered(context, shadow, worker));
             }
         }
         return;
@@ -81,10 +114,19 @@ pub(super) fn trace_shadows(
         walk.batch
             .extend(walk.active.iter().map(|&i| waves.shadow_rays[i]));
         worker.counters.shadow_walk_queries += walk.batch.len() as u64;
-        context.tracer.intersect(
+        // The batch keeps the shadows' order, grouped by sample: where each group ends.
+        waves.group_ends.clear();
+        for (index, &i) in walk.active.iter().enumerate() {
+            let p = place(&waves.shadows[i]);
+            while waves.group_ends.len() < p {
+                waves.group_ends.push(index);
+            }
+        }
+        waves.group_ends.resize(places, walk.batch.len());
+        context.tracer.intersect_grouped(
             &walk.batch,
+            &waves.group_ends,
             &mut waves.trace_hits,
-            false,
             &mut worker.counters,
         );
         walk.still_active.clear();
@@ -158,7 +200,7 @@ pub(super) fn trace_shadows(
     }
     for (shadow, s) in waves.shadows.iter().zip(&walk.strength) {
         if s.max_element() > 0.0 {
-            add_radiance(image, shadow.pixel, delivered(context, shadow, worker) * *s);
+            add_radiance(image, shadow.slot, delivered(context, shadow, worker) * *s);
         }
     }
 }

@@ -38,13 +38,13 @@ impl Spawner<'_> {
             return;
         }
         worker.counters.count_rays(kind, 1);
-        waves.next.push(PathRay {
+        waves.rays.next.push(PathRay {
             origin: self.spawn.offset_origin(leave_normal),
             direction,
             start: 0.0,
             throughput,
             footprint,
-            pixel: self.parent.pixel,
+            slot: self.parent.slot,
             depth: self.parent.depth + 1,
             kind,
             sigma,

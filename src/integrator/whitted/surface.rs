@@ -92,7 +92,8 @@ pub(super) fn shade_hit(
     let effects = &context.effects;
     let options = &context.options;
     let material: &Material = &context.scene.materials[surface.material as usize];
-    let pixel = ray.pixel as usize;
+    // The AOVs are written by first samples only, whose slot is their pixel.
+    let pixel = ray.slot as usize;
 
     if ray.kind == RayKind::Camera && ray.first_sample && !image.depth.is_empty() {
         image.depth[pixel] = surface.t * ray.direction.dot(context.camera_forward);
@@ -154,7 +155,7 @@ pub(super) fn shade_hit(
         };
         radiance += indirect.opaque_indirect(context, &query, worker);
     }
-    add_radiance(image, ray.pixel, ray.throughput * radiance);
+    add_radiance(image, ray.slot, ray.throughput * radiance);
 
     let can_spawn = ray.depth < options.max_depth;
     if !can_spawn {
@@ -193,7 +194,7 @@ pub(super) fn surface_inputs(
     let lookup = LookupRay {
         direction: ray.direction,
         footprint: &ray.footprint,
-        pixel: ray.pixel,
+        slot: ray.slot,
         first_sample: ray.first_sample,
     };
     texturing::surface_inputs(context, lookup, material, surface, image, worker)
