@@ -152,7 +152,8 @@ fn region_parts_merge_into_the_single_render() {
 
 #[test]
 fn sample_ranges_that_cut_a_packet_block_merge_into_the_single_render() {
-    // Whitted traces up to 16 samples of a pixel together (blocks 0..16, 16..24 here); parts
+    // Whitted traces up to 16 samples of a pixel together (blocks 0, 1, 2-3, 4-7, 8-15 and
+    // 16-23 here); parts
     // that begin or end inside a block trace that block's packets as the whole render does.
     let dir = temp_dir();
     let whole = render_spp(dir.path(), "whole24.exr", 24, &[]);

@@ -46,14 +46,16 @@ pub(crate) const MAX_SAMPLES_IN_FLIGHT: u32 = 16;
 
 /// Samples of every pixel of a tile traced together.
 ///
-/// A render's samples fall into fixed blocks of `min(in_flight, spp)` consecutive indices
-/// (`in_flight` at most [`MAX_SAMPLES_IN_FLIGHT`], fixed per integrator), and the
-/// camera rays of a whole block are traced as packets whichever of its samples the render
-/// keeps. So a packet always holds the same rays, and a render of a sample range (a
-/// `--samples` part, a progressive pass) traces every ray it keeps exactly as the whole
-/// render does: Embree's choice between two triangles hit at the same distance (a ray
-/// through a shared edge) depends on the packet a ray is traced in, and a split render must
-/// merge into the whole one bit for bit.
+/// A render's samples fall into fixed blocks: with up to 16 in flight, sample 0, sample 1,
+/// samples 2-3, 4-7 and 8-15, then blocks of 16 (with fewer in flight, the same up to that
+/// count, then blocks of it), the last one cut at the render's sample count. The camera rays
+/// of a whole block are traced as packets whichever of its samples the render keeps. So a
+/// packet always holds the same rays, and a render of a sample range (a `--samples` part, a
+/// progressive pass) traces every ray it keeps exactly as the whole render does: Embree's
+/// choice between two triangles hit at the same distance (a ray through a shared edge)
+/// depends on the packet a ray is traced in, and a split render must merge into the whole
+/// one bit for bit. The passes of a progressive render (1, 1, 2, 4, 8, 16, 32, ... samples)
+/// are whole blocks, so they trace no camera ray twice.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) struct SampleRun {
     /// The block's samples, all traced.
@@ -74,6 +76,20 @@ impl SampleRun {
     }
 }
 
+/// The block of sample indices `sample` belongs to ([`SampleRun`]) with up to `in_flight`
+/// (a power of two) samples in flight, before it is cut at the render's sample count.
+fn sample_block(sample: u32, in_flight: u32) -> Range<u32> {
+    if sample >= in_flight {
+        let start = sample / in_flight * in_flight;
+        start..start.saturating_add(in_flight)
+    } else if sample == 0 {
+        0..1
+    } else {
+        let start = 1u32 << (31 - sample.leading_zeros());
+        start..(2 * start).min(in_flight)
+    }
+}
+
 /// The runs that render `samples` of a render of `samples_per_pixel` samples per pixel, in
 /// order, with up to `in_flight` samples of a pixel traced together ([`SampleRun`]).
 pub(crate) fn sample_runs(
@@ -81,20 +97,21 @@ pub(crate) fn sample_runs(
     samples_per_pixel: u32,
     in_flight: u32,
 ) -> impl Iterator<Item = SampleRun> {
-    let block = in_flight
+    let in_flight = in_flight
         .clamp(1, MAX_SAMPLES_IN_FLIGHT)
-        .min(samples_per_pixel.max(1));
+        .next_power_of_two()
+        .min(MAX_SAMPLES_IN_FLIGHT);
     let last = samples_per_pixel.max(samples.end);
-    let blocks = if samples.is_empty() {
-        0..0
-    } else {
-        samples.start / block..(samples.end - 1) / block + 1
-    };
-    blocks.map(move |index| {
-        let start = index * block;
-        let traced = start..start.saturating_add(block).min(last);
-        let kept = traced.start.max(samples.start)..traced.end.min(samples.end);
-        SampleRun { traced, kept }
+    let mut next = samples.start;
+    std::iter::from_fn(move || {
+        if next >= samples.end {
+            return None;
+        }
+        let block = sample_block(next, in_flight);
+        let traced = block.start..block.end.min(last);
+        let kept = next..traced.end.min(samples.end);
+        next = traced.end;
+        Some(SampleRun { traced, kept })
     })
 }
 
@@ -247,21 +264,38 @@ mod tests {
 
     #[test]
     fn runs_are_fixed_blocks_whatever_range_is_rendered() {
-        // The whole render: blocks of 16, the last one short.
+        // The whole render: 0, 1, 2-3, 4-7, 8-15, then blocks of 16, the last one short.
         assert_eq!(
             runs(0..40, 40, 16),
-            vec![(0..16, 0..16), (16..32, 16..32), (32..40, 32..40)]
+            vec![
+                (0..1, 0..1),
+                (1..2, 1..2),
+                (2..4, 2..4),
+                (4..8, 4..8),
+                (8..16, 8..16),
+                (16..32, 16..32),
+                (32..40, 32..40)
+            ]
         );
         // A part traces the same blocks and keeps its own samples.
-        assert_eq!(runs(5..20, 40, 16), vec![(0..16, 5..16), (16..32, 16..20)]);
+        assert_eq!(
+            runs(5..20, 40, 16),
+            vec![(4..8, 5..8), (8..16, 8..16), (16..32, 16..20)]
+        );
         assert_eq!(runs(17..18, 40, 16), vec![(16..32, 17..18)]);
-        // Fewer samples per pixel than a packet: blocks of the render's count.
-        assert_eq!(runs(1..3, 4, 16), vec![(0..4, 1..3)]);
+        // Progressive passes are whole blocks.
+        for pass in [0..1, 1..2, 2..4, 4..8, 8..16, 16..32, 32..64] {
+            assert!(runs(pass.clone(), u32::MAX, 16)
+                .iter()
+                .all(|(traced, kept)| traced == kept));
+        }
+        // A block is cut at the render's sample count.
+        assert_eq!(runs(1..3, 3, 16), vec![(1..2, 1..2), (2..3, 2..3)]);
+        assert_eq!(runs(9..10, 10, 16), vec![(8..10, 9..10)]);
         // One sample in flight: one run per sample.
         assert_eq!(runs(2..4, 8, 1), vec![(2..3, 2..3), (3..4, 3..4)]);
-        // Nothing to render; an open-ended progressive render.
+        // Nothing to render; the end of the index range.
         assert!(runs(3..3, 8, 16).is_empty());
-        assert_eq!(runs(8..12, u32::MAX, 16), vec![(0..16, 8..12)]);
         assert_eq!(
             runs(u32::MAX - 2..u32::MAX, u32::MAX, 16),
             vec![(u32::MAX - 15..u32::MAX, u32::MAX - 2..u32::MAX)]
