@@ -13,7 +13,10 @@
 
 use std::ops::Range;
 
-use crate::render::tracer::TraceHit;
+use crate::integrator::trace_wave::{trace_wave, WaveRay};
+use crate::render::stats::WorkCounters;
+use crate::render::tracer::{TraceHit, TraceRay};
+use crate::render::RenderContext;
 
 /// Camera rays per camera wave: 16 packets.
 pub(crate) const CAMERA_WAVE_RAYS: usize = 256;
@@ -55,6 +58,26 @@ pub(crate) enum Wave {
     Camera(Range<usize>),
     /// Rays of one sample leaving surfaces: trace them as one incoherent stream, shade.
     Scattered,
+}
+
+/// Traces the wave in `queues.current`, each ray seen through `wave_ray`, its hits into
+/// `hits`: a camera wave as packets, then without the rays the render does not keep (and
+/// their hits); a later wave as one incoherent stream (`trace_wave`).
+pub(crate) fn trace_current<R>(
+    context: &RenderContext,
+    queues: &mut WaveQueues<R>,
+    wave: &Wave,
+    wave_ray: for<'r> fn(&'r R) -> WaveRay<'r>,
+    trace_rays: &mut Vec<TraceRay>,
+    hits: &mut Vec<TraceHit>,
+    counters: &mut WorkCounters,
+) {
+    let camera = matches!(wave, Wave::Camera(_));
+    let rays = queues.current.iter().map(wave_ray);
+    trace_wave(context, rays, camera, trace_rays, hits, counters);
+    if let Wave::Camera(range) = wave {
+        drop_unkept(&mut queues.current, hits, &queues.kept[range.clone()]);
+    }
 }
 
 /// Runs the waves of one sample run. `queues(state)` gives the state's queues, with its

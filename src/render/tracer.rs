@@ -360,10 +360,7 @@ impl Tracer {
 
     /// Closest hits of `rays` as one incoherent stream into `hits` (misses left as they are).
     fn intersect_stream_into(&self, rays: &[TraceRay], hits: &mut [TraceHit]) {
-        STREAM.with(|stream| {
-            let mut stream = stream.borrow_mut();
-            let (ray_hits, payload) = &mut *stream;
-            fill_stream(rays, ray_hits, payload);
+        with_stream(rays, |ray_hits, payload| {
             self.note(
                 self.scene
                     .intersect_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
@@ -478,10 +475,7 @@ impl Tracer {
         counters: &mut WorkCounters,
     ) {
         blocked.clear();
-        STREAM.with(|stream| {
-            let mut stream = stream.borrow_mut();
-            let (ray_hits, payload) = &mut *stream;
-            fill_stream(rays, ray_hits, payload);
+        with_stream(rays, |ray_hits, payload| {
             self.note(
                 self.scene
                     .occluded_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
@@ -490,6 +484,32 @@ impl Tracer {
         });
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
+
+    /// A wave's shadow rays: [`Tracer::occluded_coherent`] for a camera wave's (`coherent`),
+    /// [`Tracer::occluded`] for a later wave's.
+    pub fn occluded_wave(
+        &self,
+        rays: &[TraceRay],
+        blocked: &mut Vec<bool>,
+        coherent: bool,
+        counters: &mut WorkCounters,
+    ) {
+        if coherent {
+            self.occluded_coherent(rays, blocked, counters);
+        } else {
+            self.occluded(rays, blocked, counters);
+        }
+    }
+}
+
+/// Runs `trace` on this thread's stream buffers filled with `rays` and their payloads.
+fn with_stream(rays: &[TraceRay], trace: impl FnOnce(&mut [RayHit], &[RayPayload])) {
+    STREAM.with(|stream| {
+        let mut stream = stream.borrow_mut();
+        let (ray_hits, payload) = &mut *stream;
+        fill_stream(rays, ray_hits, payload);
+        trace(ray_hits, payload);
+    });
 }
 
 thread_local! {

@@ -53,8 +53,8 @@ use glam::Vec3;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
 use crate::integrator::camera_sample::{for_each_camera_ray, sample_runs, slot_place};
-use crate::integrator::trace_wave::{trace_wave, WaveRay};
-use crate::integrator::wave_order::{drop_unkept, run_waves, Wave, WaveQueues};
+use crate::integrator::trace_wave::WaveRay;
+use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
@@ -166,28 +166,20 @@ impl PathTracer {
         worker: &mut WorkerState,
     ) {
         let camera = matches!(wave, Wave::Camera(_));
-        let rays = waves.rays.current.iter().map(|ray| WaveRay {
-            origin: ray.origin,
-            direction: ray.direction,
-            start: ray.start,
-            footprint: &ray.footprint,
-        });
-        trace_wave(
+        trace_current(
             context,
-            rays,
-            camera,
+            &mut waves.rays,
+            wave,
+            |ray| WaveRay {
+                origin: ray.origin,
+                direction: ray.direction,
+                start: ray.start,
+                footprint: &ray.footprint,
+            },
             &mut waves.trace_rays,
             &mut waves.trace_hits,
             &mut worker.counters,
         );
-        if let Wave::Camera(range) = wave {
-            let rays = &mut waves.rays;
-            drop_unkept(
-                &mut rays.current,
-                &mut waves.trace_hits,
-                &rays.kept[range.clone()],
-            );
-        }
         waves.shadows.clear();
         for index in 0..waves.rays.current.len() {
             let ray = waves.rays.current[index];

@@ -200,20 +200,13 @@ pub(super) fn trace_shadow_rays(
         &mut waves.shadow_rays,
         &mut worker.counters,
     );
-    // The camera wave's shadow rays leave one pixel's samples together: packets.
-    if camera_wave {
-        context.tracer.occluded_coherent(
-            &waves.shadow_rays,
-            &mut waves.shadow_blocked,
-            &mut worker.counters,
-        );
-    } else {
-        context.tracer.occluded(
-            &waves.shadow_rays,
-            &mut waves.shadow_blocked,
-            &mut worker.counters,
-        );
-    }
+    // The camera wave's shadow rays are coherent: packets.
+    context.tracer.occluded_wave(
+        &waves.shadow_rays,
+        &mut waves.shadow_blocked,
+        camera_wave,
+        &mut worker.counters,
+    );
     for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
         if *blocked {
             continue;

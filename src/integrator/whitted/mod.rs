@@ -42,7 +42,7 @@ use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
 use crate::integrator::camera_sample::{sample_runs, slot_place, MAX_SAMPLES_IN_FLIGHT};
 use crate::integrator::trace_wave::WaveRay;
-use crate::integrator::wave_order::{drop_unkept, run_waves, Wave, WaveQueues};
+use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
@@ -168,33 +168,23 @@ pub(crate) fn render_tile_with(
     image.alpha.fill(1.0);
 }
 
-/// Trace the current wave: a camera wave as coherent packets, and then without the rays
-/// the render does not keep; a later wave as an incoherent ray stream (see `render::tracer`
-/// and `wave_order`).
+/// Trace the current wave (`wave_order::trace_current`).
 fn trace_wave(context: &RenderContext, waves: &mut Waves, wave: &Wave, worker: &mut WorkerState) {
     waves.camera_wave = matches!(wave, Wave::Camera(_));
-    let rays = waves.rays.current.iter().map(|ray| WaveRay {
-        origin: ray.origin,
-        direction: ray.direction,
-        start: ray.start,
-        footprint: &ray.footprint,
-    });
-    crate::integrator::trace_wave::trace_wave(
+    trace_current(
         context,
-        rays,
-        waves.camera_wave,
+        &mut waves.rays,
+        wave,
+        |ray| WaveRay {
+            origin: ray.origin,
+            direction: ray.direction,
+            start: ray.start,
+            footprint: &ray.footprint,
+        },
         &mut waves.trace_rays,
         &mut waves.trace_hits,
         &mut worker.counters,
     );
-    if let Wave::Camera(range) = wave {
-        let rays = &mut waves.rays;
-        drop_unkept(
-            &mut rays.current,
-            &mut waves.trace_hits,
-            &rays.kept[range.clone()],
-        );
-    }
 }
 
 fn shade_wave(

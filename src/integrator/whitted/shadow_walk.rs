@@ -75,19 +75,12 @@ pub(super) fn trace_shadows(
     );
     if !context.effects.transmissive_shadows {
         // A camera wave's shadow rays are coherent: a packet holds one pixel's samples.
-        if camera_wave {
-            context.tracer.occluded_coherent(
-                &waves.shadow_rays,
-                &mut waves.shadow_blocked,
-                &mut worker.counters,
-            );
-        } else {
-            context.tracer.occluded(
-                &waves.shadow_rays,
-                &mut waves.shadow_blocked,
-                &mut worker.counters,
-            );
-        }
+        context.tracer.occluded_wave(
+            &waves.shadow_rays,
+            &mut waves.shadow_blocked,
+            camera_wave,
+            &mut worker.counters,
+        );
         for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
             if !blocked {
                 add_radiance(image, shadow.slot, delivered(context, shadow, worker));
