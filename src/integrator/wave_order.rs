@@ -1,9 +1,10 @@
 //! The order a run of samples is traced in, shared by the wave integrators.
 //!
 //! A run ([`crate::integrator::camera_sample::SampleRun`]) holds up to 16 samples of every
-//! pixel of a tile (Whitted and voxel cone tracing take 16, the path tracer one). Its camera rays are traced first, in waves of [`CAMERA_WAVE_RAYS`] rays
-//! cut from the packet order (a pixel's samples together), so that each packet is one
-//! pixel's samples and a wave's rays, hits and shadow rays stay in the core's caches. The
+//! pixel of a tile (Whitted and voxel cone tracing take 16, the path tracer one). Its
+//! camera rays are traced first, in waves of [`CAMERA_WAVE_RAYS`] rays cut from the packet
+//! order (a pixel's samples together), so that each packet is one pixel's samples and a
+//! wave's rays, hits and shadow rays stay in the core's caches. The
 //! rays those waves spawn are then grouped by sample, and each sample continues on its own,
 //! wave after wave, over the whole tile: exactly the waves, in the same order, that a render
 //! of that sample alone traces. Embree packs an incoherent stream into packets of its own
@@ -111,12 +112,7 @@ pub(crate) fn run_waves<S, R: Copy>(
         // One sample in flight: its rays continue as they are.
         std::mem::swap(&mut q.current, &mut q.next);
         q.next.clear();
-        while !queues(state).current.is_empty() {
-            wave(state, Wave::Scattered);
-            let q = queues(state);
-            std::mem::swap(&mut q.current, &mut q.next);
-            q.next.clear();
-        }
+        continue_waves(state, &queues, &mut wave);
         return;
     }
     std::mem::swap(&mut q.pending, &mut q.next);
@@ -137,12 +133,21 @@ pub(crate) fn run_waves<S, R: Copy>(
         q.current
             .extend(q.order[start..end].iter().map(|&i| pending[i as usize]));
         start = end;
-        while !queues(state).current.is_empty() {
-            wave(state, Wave::Scattered);
-            let q = queues(state);
-            std::mem::swap(&mut q.current, &mut q.next);
-            q.next.clear();
-        }
+        continue_waves(state, &queues, &mut wave);
+    }
+}
+
+/// Traces and shades `current` and the waves that follow it until no ray continues.
+fn continue_waves<S, R>(
+    state: &mut S,
+    queues: &impl Fn(&mut S) -> &mut WaveQueues<R>,
+    wave: &mut impl FnMut(&mut S, Wave),
+) {
+    while !queues(state).current.is_empty() {
+        wave(state, Wave::Scattered);
+        let q = queues(state);
+        std::mem::swap(&mut q.current, &mut q.next);
+        q.next.clear();
     }
 }
 
@@ -191,35 +196,15 @@ fn sort_by_place<R>(
 pub(crate) fn group_by_place<T: Copy>(
     rays: &mut [T],
     scratch: &mut Vec<T>,
+    order: &mut Vec<u32>,
     place: impl Fn(&T) -> usize,
     places: usize,
     group_ends: &mut Vec<usize>,
 ) {
-    group_ends.clear();
-    group_ends.resize(places, 0);
-    for ray in rays.iter() {
-        group_ends[place(ray)] += 1;
-    }
-    // Counts to the end of each group, then fill each group from its start.
-    let mut end = 0;
-    for count in group_ends.iter_mut() {
-        end += *count;
-        *count = end;
-    }
-    if places <= 1 {
-        return;
-    }
+    sort_by_place(rays, place, places, order, group_ends);
     scratch.clear();
-    scratch.extend_from_slice(rays);
-    // Back to front, each ray into the last free place of its group: the ends become the
-    // groups' starts, and each group keeps its rays' order.
-    for ray in scratch.iter().rev() {
-        let p = place(ray);
-        group_ends[p] -= 1;
-        rays[group_ends[p]] = *ray;
-    }
-    group_ends.rotate_left(1);
-    group_ends[places - 1] = rays.len();
+    scratch.extend(order.iter().map(|&i| rays[i as usize]));
+    rays.copy_from_slice(scratch);
 }
 
 /// Drops the camera rays the render does not keep (`CameraRay::kept`), with their hits,
@@ -247,8 +232,9 @@ mod tests {
             .map(|(i, &p)| (p, i))
             .collect();
         let mut scratch = Vec::new();
+        let mut order = Vec::new();
         let mut ends = Vec::new();
-        group_by_place(&mut rays, &mut scratch, |r| r.0, 4, &mut ends);
+        group_by_place(&mut rays, &mut scratch, &mut order, |r| r.0, 4, &mut ends);
         assert_eq!(
             rays,
             vec![
@@ -265,7 +251,7 @@ mod tests {
         assert_eq!(ends, vec![3, 5, 8, 8]);
         // One place: nothing moves.
         let mut one = vec![(0usize, 5usize), (0, 3)];
-        group_by_place(&mut one, &mut scratch, |r| r.0, 1, &mut ends);
+        group_by_place(&mut one, &mut scratch, &mut order, |r| r.0, 1, &mut ends);
         assert_eq!((one, ends), (vec![(0, 5), (0, 3)], vec![2]));
     }
 

@@ -405,18 +405,7 @@ impl Tracer {
         let mut packet = RayPacket::<16>::new();
         let mut payload = [RayPayload::default(); 16];
         for (chunk_index, chunk) in rays.chunks(16).enumerate() {
-            for lane in 0..16 {
-                match chunk.get(lane) {
-                    Some(ray) => {
-                        packet.set_ray(lane, &embree_ray(ray));
-                        payload[lane] = RayPayload {
-                            cone_width: ray.cone_width,
-                            cone_spread: ray.cone_spread,
-                        };
-                    }
-                    None => packet.set_valid(lane, false),
-                }
-            }
+            fill_packet(chunk, &mut packet, &mut payload);
             self.note(
                 self.scene
                     .intersect_tile(&mut packet, TraceOptions::coherent().with_payload(&payload)),
@@ -445,18 +434,7 @@ impl Tracer {
         let mut packet = RayPacket::<16>::new();
         let mut payload = [RayPayload::default(); 16];
         for chunk in rays.chunks(16) {
-            for (lane, lane_payload) in payload.iter_mut().enumerate() {
-                match chunk.get(lane) {
-                    Some(ray) => {
-                        packet.set_ray(lane, &embree_ray(ray));
-                        *lane_payload = RayPayload {
-                            cone_width: ray.cone_width,
-                            cone_spread: ray.cone_spread,
-                        };
-                    }
-                    None => packet.set_valid(lane, false),
-                }
-            }
+            fill_packet(chunk, &mut packet, &mut payload);
             self.note(
                 self.scene
                     .occluded_tile(&mut packet, TraceOptions::coherent().with_payload(&payload)),
@@ -498,6 +476,23 @@ impl Tracer {
             self.occluded_coherent(rays, blocked, counters);
         } else {
             self.occluded(rays, blocked, counters);
+        }
+    }
+}
+
+/// Puts up to 16 `rays` into `packet` and their cones into `payload`; lanes past them are
+/// switched off.
+fn fill_packet(rays: &[TraceRay], packet: &mut RayPacket<16>, payload: &mut [RayPayload; 16]) {
+    for (lane, lane_payload) in payload.iter_mut().enumerate() {
+        match rays.get(lane) {
+            Some(ray) => {
+                packet.set_ray(lane, &embree_ray(ray));
+                *lane_payload = RayPayload {
+                    cone_width: ray.cone_width,
+                    cone_spread: ray.cone_spread,
+                };
+            }
+            None => packet.set_valid(lane, false),
         }
     }
 }

@@ -93,6 +93,7 @@ pub struct Waves {
     shadow_blocked: Vec<bool>,
     /// Reordering a camera wave's shadow rays by sample (`wave_order::group_by_place`).
     shadow_scratch: Vec<ShadowRay>,
+    shadow_order: Vec<u32>,
     group_ends: Vec<usize>,
     /// Pixels of the tile being rendered, and samples of each in flight.
     tile_pixels: u32,

@@ -60,6 +60,7 @@ pub(super) fn trace_shadows(
         group_by_place(
             &mut waves.shadows,
             &mut waves.shadow_scratch,
+            &mut waves.shadow_order,
             place,
             places,
             &mut waves.group_ends,
