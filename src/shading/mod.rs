@@ -24,8 +24,9 @@
 //! - [`lights`]: direction, distance and irradiance scale towards each punctual light, for
 //!   shadow rays (seed 001, "Shadow Rays"); punctual lights are delta lights.
 //! - [`environment_light`]: the environment as a light (mean radiance, direction sampling).
-//! - [`area_lights`]: emissive triangles and spheres as one-sided area lights (solid-angle
-//!   sampling of spheres, area sampling of triangles).
+//! - [`area_lights`]: emissive triangles and spheres as one-sided area lights, sampled by
+//!   solid angle (area sampling for triangles too small or too wide for it).
+//! - [`spherical_triangle`]: directions uniform in a triangle's solid angle (Arvo 1995).
 //! - [`alias_table`]: Walker/Vose alias tables, choosing among many items in constant time.
 //! - [`environment_light`]: the environment as a light (mean radiance, direction sampling,
 //!   importance sampled for lat-long maps).
@@ -65,6 +66,7 @@ pub mod ray_offset;
 pub mod reflection;
 pub mod refraction;
 pub mod rough_dielectric;
+pub mod spherical_triangle;
 pub mod surface_inputs;
 
 pub use alias_table::AliasTable;
