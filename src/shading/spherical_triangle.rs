@@ -52,7 +52,7 @@ pub fn sample(a: Vec3, b: Vec3, c: Vec3, u: Vec2) -> Option<Vec3> {
     let beta = angle_between(n_bc, -n_ab);
     let gamma = angle_between(n_ca, -n_bc);
     let area = alpha + beta + gamma - PI;
-    if !(area > 0.0) {
+    if area.is_nan() || area <= 0.0 {
         return None;
     }
     // The sub-triangle (a, b, c') of area u.x * area: Arvo's closed form for cos of the arc
