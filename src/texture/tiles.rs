@@ -6,14 +6,14 @@
 //! `Texture::sample` pays nothing for this; `sample_recording` passes a
 //! [`TextureTileRecorder`]. A [`TextureTileSet`] is kept per thread and keyed by
 //! (texture id, level, tile x, tile y), so one set can hold tiles of many textures;
-//! merge the per-thread sets at the end of a render.
+//! merge the per-thread sets at the end of a render. The set is a bitmap per texture and mip
+//! level, grown on demand, so recording a tile is a bit test and a bit set: `--stats` turns
+//! recording on, and the render times it reports must stay those of a plain render.
 //!
 //! Besides the distinct tiles, a set counts *tile touches*: for every lookup, the number of
 //! distinct tiles that lookup reads, summed over lookups. That is how many tile requests a
 //! demand-loaded cache (OpenImageIO's `TextureSystem` with 64x64 tiles) would serve, while
 //! the distinct tiles are what it would have to load.
-
-use std::collections::HashSet;
 
 /// Edge length of a texture tile, a texture cache's unit, in texels (OpenImageIO's `maketx`
 /// default). Not to be confused with the render's 16x16-pixel work tiles.
@@ -42,8 +42,9 @@ const TILES_REMEMBERED: usize = 8;
 /// The observer of recording lookups: adds the texel's tile to a [`TextureTileSet`]. One
 /// recorder serves one lookup, so it also counts that lookup's distinct tiles (touches).
 pub(crate) struct TextureTileRecorder<'a> {
-    texture_id: u64,
-    tiles: &'a mut TextureTileSet,
+    /// The bitmaps of the looked-up texture, found once per lookup.
+    texture: &'a mut TextureTiles,
+    touches: &'a mut u64,
     /// The last `TILES_REMEMBERED` tiles this lookup recorded, in a ring (slot `seen_count %
     /// TILES_REMEMBERED` is written next).
     seen: [(usize, usize, usize); TILES_REMEMBERED],
@@ -52,9 +53,10 @@ pub(crate) struct TextureTileRecorder<'a> {
 
 impl<'a> TextureTileRecorder<'a> {
     pub(crate) fn new(texture_id: u64, tiles: &'a mut TextureTileSet) -> Self {
+        let TextureTileSet { textures, touches } = tiles;
         TextureTileRecorder {
-            texture_id,
-            tiles,
+            texture: TextureTileSet::texture_in(textures, texture_id),
+            touches,
             seen: [(0, 0, 0); TILES_REMEMBERED],
             seen_count: 0,
         }
@@ -69,7 +71,7 @@ impl TexelObserver for TextureTileRecorder<'_> {
             x / TEXTURE_TILE_SIZE as usize,
             y / TEXTURE_TILE_SIZE as usize,
         );
-        // Neighbouring texels mostly share a tile: skip the hash (and the touch count) for
+        // Neighbouring texels mostly share a tile: skip the bitmap (and the touch count) for
         // tiles this lookup already read.
         let remembered = self.seen_count.min(TILES_REMEMBERED);
         if self.seen[..remembered].contains(&key) {
@@ -77,15 +79,78 @@ impl TexelObserver for TextureTileRecorder<'_> {
         }
         self.seen[self.seen_count % TILES_REMEMBERED] = key;
         self.seen_count += 1;
-        self.tiles.touches += 1;
-        self.tiles.record(self.texture_id, key.0, key.1, key.2);
+        *self.touches += 1;
+        self.texture.insert(key.0, key.1, key.2);
+    }
+}
+
+/// The touched tiles of one texture: per mip level, one bitmap row of tile columns per row
+/// of tiles, each grown when a tile beyond it is recorded.
+#[derive(Clone, Debug, Default)]
+struct TextureTiles {
+    texture_id: u64,
+    /// `levels[level][tile_y]`: bit `tile_x` of that row's words.
+    levels: Vec<Vec<Vec<u64>>>,
+    /// Number of bits set over all levels.
+    count: u64,
+}
+
+impl TextureTiles {
+    /// Sets the tile's bit; counts it if it was not set.
+    #[inline]
+    fn insert(&mut self, level: usize, tile_x: usize, tile_y: usize) {
+        if self.levels.len() <= level {
+            self.levels.resize_with(level + 1, Vec::new);
+        }
+        let rows = &mut self.levels[level];
+        if rows.len() <= tile_y {
+            rows.resize_with(tile_y + 1, Vec::new);
+        }
+        let words = &mut rows[tile_y];
+        let word = tile_x / 64;
+        if words.len() <= word {
+            words.resize(word + 1, 0);
+        }
+        let bit = 1u64 << (tile_x % 64);
+        if words[word] & bit == 0 {
+            words[word] |= bit;
+            self.count += 1;
+        }
+    }
+
+    /// Adds every tile of `other` (the same texture's).
+    fn merge(&mut self, other: &TextureTiles) {
+        for (level, rows) in other.levels.iter().enumerate() {
+            for (tile_y, words) in rows.iter().enumerate() {
+                for (word, &bits) in words.iter().enumerate() {
+                    let mut rest = bits;
+                    while rest != 0 {
+                        let tile_x = word * 64 + rest.trailing_zeros() as usize;
+                        self.insert(level, tile_x, tile_y);
+                        rest &= rest - 1;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Distinct tiles of one level.
+    fn count_at(&self, level: usize) -> u64 {
+        self.levels.get(level).map_or(0, |rows| {
+            rows.iter()
+                .flatten()
+                .map(|w| u64::from(w.count_ones()))
+                .sum()
+        })
     }
 }
 
 /// A set of touched tiles over any number of textures (one per thread, then merged).
 #[derive(Clone, Debug, Default)]
 pub struct TextureTileSet {
-    tiles: HashSet<(u64, u32, u32, u32)>,
+    /// One entry per texture recorded, in the order first seen (a worker's set usually
+    /// holds one texture: the render keeps a set per texture).
+    textures: Vec<TextureTiles>,
     /// Tile touches: distinct tiles per lookup, summed over the lookups recorded.
     touches: u64,
 }
@@ -96,26 +161,37 @@ impl TextureTileSet {
         Self::default()
     }
 
+    /// The bitmaps of texture `texture_id` in `textures`, added if missing.
+    fn texture_in(textures: &mut Vec<TextureTiles>, texture_id: u64) -> &mut TextureTiles {
+        let index = match textures.iter().position(|t| t.texture_id == texture_id) {
+            Some(index) => index,
+            None => {
+                textures.push(TextureTiles {
+                    texture_id,
+                    ..TextureTiles::default()
+                });
+                textures.len() - 1
+            }
+        };
+        &mut textures[index]
+    }
+
     /// Marks tile (tile_x, tile_y) of `level` of texture `texture_id` as touched.
     pub fn record(&mut self, texture_id: u64, level: usize, tile_x: usize, tile_y: usize) {
-        self.tiles
-            .insert((texture_id, level as u32, tile_x as u32, tile_y as u32));
+        Self::texture_in(&mut self.textures, texture_id).insert(level, tile_x, tile_y);
     }
 
     /// Adds every tile of `other`.
     pub fn merge(&mut self, other: TextureTileSet) {
         self.touches += other.touches;
-        if self.tiles.len() < other.tiles.len() {
-            let mine = std::mem::replace(&mut self.tiles, other.tiles);
-            self.tiles.extend(mine);
-        } else {
-            self.tiles.extend(other.tiles);
+        for texture in &other.textures {
+            Self::texture_in(&mut self.textures, texture.texture_id).merge(texture);
         }
     }
 
     /// Number of distinct tiles over all textures and levels.
     pub fn count(&self) -> u64 {
-        self.tiles.len() as u64
+        self.textures.iter().map(|t| t.count).sum()
     }
 
     /// Tile touches: for every recorded lookup, the distinct tiles it read, summed.
@@ -125,15 +201,15 @@ impl TextureTileSet {
 
     /// Distinct tiles per mip level (summed over textures); index = level.
     pub fn count_per_level(&self) -> Vec<u64> {
-        let mut counts = Vec::new();
-        for &(_, level, _, _) in &self.tiles {
-            let level = level as usize;
-            if counts.len() <= level {
-                counts.resize(level + 1, 0);
-            }
-            counts[level] += 1;
-        }
-        counts
+        let levels = self
+            .textures
+            .iter()
+            .map(|t| t.levels.len())
+            .max()
+            .unwrap_or(0);
+        (0..levels)
+            .map(|level| self.textures.iter().map(|t| t.count_at(level)).sum())
+            .collect()
     }
 }
 
@@ -169,5 +245,39 @@ mod tests {
         assert_eq!(a.count(), 4);
         assert_eq!(a.touches(), 5, "record() adds a tile, not a touch");
         assert_eq!(a.count_per_level(), vec![3, 0, 1]);
+    }
+
+    #[test]
+    fn bitmaps_count_what_a_set_of_keys_counts_over_random_records_and_merges() {
+        use std::collections::HashSet;
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |bound: u64| crate::test_rng::xorshift64_star(&mut state) % bound;
+        let mut parts = Vec::new();
+        let mut reference = HashSet::new();
+        for _ in 0..3 {
+            let mut part = TextureTileSet::new();
+            for _ in 0..2000 {
+                // Three textures, 12 levels, rows and columns past one 64-bit word.
+                let key = (
+                    next(3),
+                    next(12) as usize,
+                    next(150) as usize,
+                    next(40) as usize,
+                );
+                part.record(key.0, key.1, key.2, key.3);
+                reference.insert(key);
+            }
+            parts.push(part);
+        }
+        let mut total = TextureTileSet::new();
+        for part in parts {
+            total.merge(part);
+        }
+        assert_eq!(total.count(), reference.len() as u64);
+        let mut per_level = vec![0u64; 12];
+        for &(_, level, _, _) in &reference {
+            per_level[level] += 1;
+        }
+        assert_eq!(total.count_per_level(), per_level);
     }
 }
