@@ -74,12 +74,13 @@ impl IndirectLight for Vct {
         };
         let lobe = diffuse_and_specular(query.bsdf);
         let n = query.bsdf.normal();
+        let position = query.surface.spawn_point().position;
         let counters = &mut worker.counters;
         // Seed 003: L_o = k_d sum_j W_j L_v(x, w_j, a_j); what the cones leave open sees the
         // environment.
         let mut radiance = Vec3::ZERO;
         if lobe.diffuse.max_element() > 0.0 {
-            let g = gather_diffuse(pyramid, query.position, n, CONE_START, STEP_FRACTION);
+            let g = gather_diffuse(pyramid, position, n, CONE_START, STEP_FRACTION);
             counters.vct_cones_traced += 6;
             counters.vct_cone_steps += g.steps;
             radiance += lobe.diffuse * (g.radiance + g.open * environment);
@@ -91,7 +92,7 @@ impl IndirectLight for Vct {
             let reflected = 2.0 * n.dot(wo) * n - wo;
             if reflected.dot(query.geometric_normal) > 0.0 {
                 let aperture = specular_cone_aperture(lobe.shininess);
-                let origin = query.position + n * (CONE_START.normal_voxels * voxel);
+                let origin = position + n * (CONE_START.normal_voxels * voxel);
                 let start = CONE_START.along_voxels * voxel;
                 let r = trace_cone(pyramid, origin, reflected, aperture, start, f32::INFINITY);
                 counters.vct_cones_traced += 1;

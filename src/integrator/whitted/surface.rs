@@ -23,8 +23,9 @@ use crate::shading::{self, MaterialBsdf, OpaqueLobe};
 
 /// A hit's opaque lobe, as the light beyond the punctual lights' shadow rays sees it.
 pub(crate) struct IndirectQuery<'a> {
-    /// The hit point.
-    pub(crate) position: Vec3,
+    /// The hit (its spawn point is where light is gathered from; only an indirect light that
+    /// needs it computes it).
+    pub(crate) surface: &'a SurfaceHit,
     /// Unit geometric normal on the incident side.
     pub(crate) geometric_normal: Vec3,
     /// Unit direction towards the viewer (`-ray.direction`).
@@ -125,7 +126,9 @@ pub(super) fn shade_hit(
     }
 
     let mut radiance = inputs.emission;
-    let spawn = surface.spawn_point();
+    // The spawn point (with its error bounds) only when a ray leaves the hit.
+    let spawn_cell = std::cell::OnceCell::new();
+    let spawn = || *spawn_cell.get_or_init(|| surface.spawn_point());
     // The index-matched case (the `fresnel` effect is off when every medium has ior 1)
     // reflects nothing but total internal reflection.
     let bsdf = MaterialBsdf::from_surface_inputs(
@@ -143,10 +146,10 @@ pub(super) fn shade_hit(
     let opaque = bsdf.opaque_weight;
     if opaque > 0.0 {
         if effects.shadows {
-            queue_shadow_rays(context, &ray, &bsdf.opaque, opaque, spawn, ng, waves);
+            queue_shadow_rays(context, &ray, &bsdf.opaque, opaque, spawn(), ng, waves);
         }
         let query = IndirectQuery {
-            position: spawn.position,
+            surface,
             geometric_normal: ng,
             outgoing: -ray.direction,
             bsdf: &bsdf.opaque,
@@ -157,22 +160,23 @@ pub(super) fn shade_hit(
     }
     add_radiance(image, ray.slot, ray.throughput * radiance);
 
-    let can_spawn = ray.depth < options.max_depth;
-    if !can_spawn {
+    let reflects = effects.mirror_reflection && bsdf.mirror_weight > 0.0;
+    let refracts = effects.refraction && bsdf.dielectric_weight > 0.0;
+    if ray.depth >= options.max_depth || !(reflects || refracts) {
         return;
     }
     let spawner = Spawner {
         parent: &ray,
-        spawn,
+        spawn: spawn(),
         min_throughput: options.min_throughput,
     };
-    if effects.mirror_reflection && bsdf.mirror_weight > 0.0 {
+    if reflects {
         let reflected = bsdf.mirror.direction(-ray.direction);
         let weight = bsdf.mirror_weight;
         spawner.spawn_reflection(context, surface, reflected, ng, weight, waves, worker);
     }
 
-    if effects.refraction && bsdf.dielectric_weight > 0.0 {
+    if refracts {
         let dielectric = &bsdf.dielectric;
         scatter_dielectric(
             context, &ray, surface, material, dielectric, &spawner, waves, worker,
