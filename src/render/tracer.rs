@@ -28,13 +28,18 @@ pub struct TraceRay {
 }
 
 /// The closest hit of a [`TraceRay`], or a miss (`geometry == u32::MAX`).
+///
+/// `u` and `v` come first: a copied hit is written as 16 bytes plus 4, and the barycentrics,
+/// read together as 8 bytes, must lie within one of those stores. Read across both they
+/// cannot be forwarded from the store buffer, which stalled every hit reconstruction for
+/// 2.5 % of the albedo plane's render time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TraceHit {
+    pub u: f32,
+    pub v: f32,
     pub t: f32,
     pub geometry: u32,
     pub primitive: u32,
-    pub u: f32,
-    pub v: f32,
 }
 
 impl TraceHit {

@@ -198,15 +198,15 @@ fn shade_wave(
     waves.shadows.clear();
     for index in 0..waves.rays.current.len() {
         let ray = waves.rays.current[index];
-        let hit = waves.trace_hits[index];
+        let hit = &waves.trace_hits[index];
         if !hit.is_hit() {
             shade_miss(context, &ray, image, worker);
             continue;
         }
-        let detail = surface_detail(context, &ray, &hit);
+        let detail = surface_detail(context, &ray, hit);
         let surface = context
             .surfaces
-            .surface_hit(ray.origin, ray.direction, &hit, detail);
+            .surface_hit(ray.origin, ray.direction, hit, detail);
         shade_hit(context, ray, &surface, image, waves, worker, indirect);
     }
 }
