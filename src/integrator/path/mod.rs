@@ -181,11 +181,15 @@ impl PathTracer {
             &mut worker.counters,
         );
         waves.shadows.clear();
-        for index in 0..waves.rays.current.len() {
-            let ray = waves.rays.current[index];
-            let hit = waves.trace_hits[index];
-            vertex::shade(self, context, ray, &hit, image, waves, worker);
+        // Each path is shaded where it lies in the wave, not copied out of it: a `PathRay`
+        // is 152 bytes, and a copy read back in other widths stalls on store forwarding.
+        let mut current = std::mem::take(&mut waves.rays.current);
+        let hits = std::mem::take(&mut waves.trace_hits);
+        for (ray, hit) in current.iter_mut().zip(&hits) {
+            vertex::shade(self, context, ray, hit, image, waves, worker);
         }
+        waves.rays.current = current;
+        waves.trace_hits = hits;
         trace_shadow_rays(context, waves, camera, image, worker);
     }
 }

@@ -29,7 +29,7 @@ const ROULETTE_MIN_END: f32 = 0.05;
 pub(super) fn shade(
     tracer: &PathTracer,
     context: &RenderContext,
-    mut ray: PathRay,
+    ray: &mut PathRay,
     hit: &TraceHit,
     image: &mut TileImage,
     waves: &mut PathWaves,
@@ -41,18 +41,18 @@ pub(super) fn shade(
     if context.effects.fog {
         let t_end = if hit.is_hit() { hit.t } else { f32::INFINITY };
         let camera_footprint = ray.footprint;
-        if let Some(collision) = medium::sample_collision(context, &mut ray, t_end, worker) {
+        if let Some(collision) = medium::sample_collision(context, ray, t_end, worker) {
             if ray.kind == RayKind::Camera && ray.first_sample && hit.is_hit() {
-                record_hidden_surface_aovs(context, &ray, camera_footprint, hit, image, worker);
+                record_hidden_surface_aovs(context, ray, camera_footprint, hit, image, worker);
             }
-            medium::scatter(tracer, context, ray, collision, waves, worker);
+            medium::scatter(tracer, context, *ray, collision, waves, worker);
             return;
         }
     }
     if !hit.is_hit() {
         let radiance = environment_lookup(context, ray.direction, &ray.footprint, worker);
         let environment = LightRef::Environment;
-        let weight = found_light_weight(tracer, &ray, lights.pmf(environment), || {
+        let weight = found_light_weight(tracer, ray, lights.pmf(environment), || {
             lights.environment.pdf_li(ray.direction)
         });
         add_radiance(image, ray.slot, ray.throughput * radiance * weight);
@@ -109,7 +109,7 @@ pub(super) fn shade(
             Some(index) if ray.bsdf_pdf.is_some() => {
                 let pmf = lights.pmf(LightRef::Area(index));
                 let area_light = &lights.area.lights[index];
-                let weight = found_light_weight(tracer, &ray, pmf, || {
+                let weight = found_light_weight(tracer, ray, pmf, || {
                     area_light.pdf(ray.from, surface.position)
                 });
                 let emission = area_light_radiance(context, area_light, surface.st, worker);
