@@ -102,10 +102,16 @@ impl Sampler {
         lens: bool,
     ) -> CameraLanes<N> {
         // `hash_words(&[seed, pixel])` written out, its first step shared by every lane.
+        // Lanes of one pixel (a pixel's samples in one packet) share its state: hashed once.
         let seed_state = hash_u32(HASH_START ^ hash_u32(self.seed));
         let mut states = [0u32; N];
+        let mut last: Option<(u32, u32)> = None;
         for (state, &pixel) in states.iter_mut().zip(pixels) {
-            *state = pixel_state(hash_u32(seed_state ^ hash_u32(pixel)));
+            *state = match last {
+                Some((last_pixel, last_state)) if last_pixel == pixel => last_state,
+                _ => pixel_state(hash_u32(seed_state ^ hash_u32(pixel))),
+            };
+            last = Some((pixel, *state));
         }
         let centre = [[0.5f32; N]; 2];
         let offset = if samples_per_pixel <= 1 {
@@ -131,16 +137,28 @@ impl Sampler {
 }
 
 /// [`PixelSampler::next_2d`] at `dimension` for the pixel states `states` and sample
-/// indices `indices`, lane by lane.
+/// indices `indices`, lane by lane. A lane of the same pixel as the lane before it reuses
+/// that lane's keys, which depend on the pixel and the dimension alone.
 #[inline]
 fn next_2d_lanes<const N: usize>(
     states: &[u32; N],
     indices: &[u32; N],
     dimension: u32,
 ) -> [[f32; N]; 2] {
+    // The keys first (a branch per lane), then the draws in a loop without branches, which
+    // the compiler turns into vector instructions.
+    let mut keys = [DrawKeys::default(); N];
+    let mut last: Option<(u32, DrawKeys)> = None;
+    for (lane_keys, &state) in keys.iter_mut().zip(states) {
+        *lane_keys = match last {
+            Some((last_state, last_keys)) if last_state == state => last_keys,
+            _ => DrawKeys::new(draw_key(state, dimension)),
+        };
+        last = Some((state, *lane_keys));
+    }
     let mut out = [[0.0f32; N]; 2];
     for lane in 0..N {
-        let point = draw_2d(draw_key(states[lane], dimension), indices[lane]);
+        let point = keys[lane].draw_2d(indices[lane]);
         out[0][lane] = point.x;
         out[1][lane] = point.y;
     }
@@ -157,15 +175,38 @@ fn draw_key(pixel_state: u32, dimension: u32) -> u32 {
 /// Sample `index` of the Owen-scrambled first two Sobol dimensions, keyed by `key`.
 #[inline]
 fn draw_2d(key: u32, index: u32) -> Vec2 {
-    let shuffled = nested_uniform_scramble(index, key);
-    // The scramble works on mirrored bits: Sobol dimension 0 mirrored is the index, and
-    // dimension 1 mirrored has a closed form (`sobol::dimension_1_mirrored`).
-    let x = scramble_mirrored(shuffled, hash_u32(key ^ 0x5bd1_e995));
-    let y = scramble_mirrored(
-        sobol::dimension_1_mirrored(shuffled),
-        hash_u32(key ^ 0x1b87_3593),
-    );
-    Vec2::new(unit_float(x), unit_float(y))
+    DrawKeys::new(key).draw_2d(index)
+}
+
+/// The scrambles of one 2D draw: of the sample index and of each coordinate, all derived
+/// from the draw's key.
+#[derive(Clone, Copy, Default)]
+struct DrawKeys {
+    index: u32,
+    x: u32,
+    y: u32,
+}
+
+impl DrawKeys {
+    #[inline]
+    fn new(key: u32) -> DrawKeys {
+        DrawKeys {
+            index: key,
+            x: hash_u32(key ^ 0x5bd1_e995),
+            y: hash_u32(key ^ 0x1b87_3593),
+        }
+    }
+
+    /// Sample `index` of the scrambled first two Sobol dimensions.
+    #[inline]
+    fn draw_2d(&self, index: u32) -> Vec2 {
+        let shuffled = nested_uniform_scramble(index, self.index);
+        // The scramble works on mirrored bits: Sobol dimension 0 mirrored is the index, and
+        // dimension 1 mirrored has a closed form (`sobol::dimension_1_mirrored`).
+        let x = scramble_mirrored(shuffled, self.x);
+        let y = scramble_mirrored(sobol::dimension_1_mirrored(shuffled), self.y);
+        Vec2::new(unit_float(x), unit_float(y))
+    }
 }
 
 /// The state `hash_words(&[pixel_key, dimension])` has after folding in `pixel_key`: every

@@ -279,7 +279,14 @@ fn camera_lanes_are_the_one_pixel_draws_bit_for_bit() {
                     let same_index = [index; 16];
                     let one_pixel = [pixels[0]; 16];
                     let indices: [u32; 16] = std::array::from_fn(|_| next() % spp);
-                    for (pixels, indices) in [(&pixels, &same_index), (&one_pixel, &indices)] {
+                    // Runs of lanes of one pixel, a pixel coming back after another.
+                    let runs: [u32; 16] =
+                        std::array::from_fn(|lane| pixels[[0, 1, 0, 2][lane / 4]]);
+                    for (pixels, indices) in [
+                        (&pixels, &same_index),
+                        (&one_pixel, &indices),
+                        (&runs, &indices),
+                    ] {
                         let lanes = sampler.camera_lanes(pixels, indices, spp, lens);
                         for (lane, (&pixel, &index)) in pixels.iter().zip(indices).enumerate() {
                             let mut one = sampler.pixel(pixel, index);
