@@ -136,7 +136,7 @@ impl MaterialBsdf {
     /// [`MaterialBsdf::new`] with the (textured) shading inputs of the hit
     /// (`crate::shading::surface_inputs`): its albedo, roughness, metallic and normal-mapped
     /// shading normal.
-    #[inline]
+    #[inline(always)]
     pub fn from_surface_inputs(
         material: &Material,
         inputs: &SurfaceInputs,
@@ -159,7 +159,7 @@ impl MaterialBsdf {
         )
     }
 
-    #[inline]
+    #[inline(always)]
     fn with_inputs(
         material: &Material,
         inputs: LobeInputs,
