@@ -126,9 +126,6 @@ pub(super) fn shade_hit(
     }
 
     let mut radiance = inputs.emission;
-    // The spawn point (with its error bounds) only when a ray leaves the hit.
-    let spawn_cell = std::cell::OnceCell::new();
-    let spawn = || *spawn_cell.get_or_init(|| surface.spawn_point());
     // The index-matched case (the `fresnel` effect is off when every medium has ior 1)
     // reflects nothing but total internal reflection.
     let bsdf = MaterialBsdf::from_surface_inputs(
@@ -144,9 +141,15 @@ pub(super) fn shade_hit(
     // The geometric normal on the incident side: rays leaving on that side start above it.
     let ng = bsdf.mirror.ng;
     let opaque = bsdf.opaque_weight;
+    let shadows = effects.shadows && opaque > 0.0;
+    let reflects = effects.mirror_reflection && bsdf.mirror_weight > 0.0;
+    let refracts = effects.refraction && bsdf.dielectric_weight > 0.0;
+    let spawns = ray.depth < options.max_depth && (reflects || refracts);
+    // The spawn point (with its error bounds) only when a ray leaves the hit.
+    let spawn = (shadows || spawns).then(|| surface.spawn_point());
     if opaque > 0.0 {
-        if effects.shadows {
-            queue_shadow_rays(context, &ray, &bsdf.opaque, opaque, spawn(), ng, waves);
+        if let (true, Some(spawn)) = (shadows, spawn) {
+            queue_shadow_rays(context, &ray, &bsdf.opaque, opaque, spawn, ng, waves);
         }
         let query = IndirectQuery {
             surface,
@@ -160,14 +163,12 @@ pub(super) fn shade_hit(
     }
     add_radiance(image, ray.slot, ray.throughput * radiance);
 
-    let reflects = effects.mirror_reflection && bsdf.mirror_weight > 0.0;
-    let refracts = effects.refraction && bsdf.dielectric_weight > 0.0;
-    if ray.depth >= options.max_depth || !(reflects || refracts) {
+    let (true, Some(spawn)) = (spawns, spawn) else {
         return;
-    }
+    };
     let spawner = Spawner {
         parent: &ray,
-        spawn: spawn(),
+        spawn,
         min_throughput: options.min_throughput,
     };
     if reflects {
