@@ -394,9 +394,11 @@ fn slurm_array_render_merges_into_the_local_render_and_recovers_a_killed_task() 
     assert_same_file(&outdir.join("merged.exr"), &local);
 
     // A run with a task killed while it renders: enough samples that a part takes seconds
-    // even on an idle machine (at 512 a part could finish between squeue reporting it
-    // running and scancel reaching it).
-    let spp = "2048";
+    // even on an idle machine. A render stops at its next work tile once signalled, and one
+    // whose every tile had started finishes and writes its part: at 512, and once in a full
+    // local run at 2048 (a part of 5 tiles, about 4 s of rendering), the signal came after
+    // the last tile had started and the part file was written.
+    let spp = "4096";
     let outdir = d.join("killed");
     let mut extra = vec!["--spp", spp];
     extra.extend(SIZE);
