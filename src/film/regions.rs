@@ -45,20 +45,25 @@ impl<'a> FilmBand<'a> {
         let height = self.height as usize;
         let per_region = self.planes.len() * height;
         // Row `r` of channel `c` of region `i` goes to `i * per_region + c * height + r`:
-        // each region's rows are one run, channel-major inside it.
-        let mut keyed: Vec<(usize, &'a mut [f32])> = Vec::with_capacity(count * per_region);
-        if self.width > 0 {
-            for (c, plane) in self.planes.into_iter().enumerate() {
-                for (r, row) in plane.chunks_mut(self.width as usize).enumerate() {
-                    for (i, part) in row.chunks_mut(region_width as usize).enumerate() {
-                        keyed.push((i * per_region + c * height + r, part));
-                    }
-                }
-            }
+        // each region's rows are one run, channel-major inside it. One iterator per row of
+        // every channel hands out that row's parts left to right, so taking one part from
+        // each iterator in turn, region after region, makes that order without sorting.
+        let mut row_parts: Vec<std::slice::ChunksMut<'a, f32>> = if self.width > 0 {
+            self.planes
+                .into_iter()
+                .flat_map(|plane| {
+                    plane
+                        .chunks_mut(self.width as usize)
+                        .map(|row| row.chunks_mut(region_width as usize))
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let mut rows: Vec<&'a mut [f32]> = Vec::with_capacity(count * per_region);
+        for _ in 0..count {
+            rows.extend(row_parts.iter_mut().filter_map(|parts| parts.next()));
         }
-        keyed.sort_unstable_by_key(|(key, _)| *key);
-        // The same allocation, reused in place without the keys.
-        let rows: Vec<&'a mut [f32]> = keyed.into_iter().map(|(_, row)| row).collect();
         BandRegions {
             y0: self.y0,
             width: self.width,
@@ -145,6 +150,27 @@ impl FilmRegion<'_, '_> {
     #[inline]
     pub fn has(&self, layer: Layer) -> bool {
         self.layout.first_channel(layer).is_some()
+    }
+
+    /// Writes `layer` over the whole region: channel `c` of the pixel `i` (counted row by
+    /// row from the region's top left) is `value(i)[c]`. Channel by channel and row by row,
+    /// so the writes run along the film's rows; nothing happens when the film has no such
+    /// layer.
+    #[inline]
+    pub fn set_all<const N: usize>(&mut self, layer: Layer, value: impl Fn(usize) -> [f32; N]) {
+        debug_assert_eq!(N, layer.channel_count());
+        let Some(first) = self.layout.first_channel(layer) else {
+            return;
+        };
+        let (width, height) = (self.rect.width as usize, self.rect.height as usize);
+        for c in 0..N.min(layer.channel_count()) {
+            let rows = &mut self.rows[(first + c) * height..(first + c + 1) * height];
+            for (y, row) in rows.iter_mut().enumerate() {
+                for (x, out) in row.iter_mut().take(width).enumerate() {
+                    *out = value(y * width + x)[c];
+                }
+            }
+        }
     }
 
     /// Writes one pixel of `layer` at image coordinates `(x, y)`; the rules of

@@ -382,39 +382,39 @@ pub fn render<I: Integrator>(
     })
 }
 
-/// Copy an integrator's tile into its region of the film, layer by layer.
+/// Copy an integrator's tile into its region of the film, layer by layer (the tile covers
+/// the region).
 fn copy_tile_to_film(image: &TileImage, region: &mut FilmRegion) {
     let rect = region.rect();
-    let sums = region.has(Layer::SampleSum);
-    for y in 0..rect.height {
-        for x in 0..rect.width {
-            let i = (y * rect.width + x) as usize;
-            let (fx, fy) = (rect.x0 + x, rect.y0 + y);
-            if sums {
-                use crate::film::sample_sum::{encode, DIGITS};
+    if region.has(Layer::SampleSum) {
+        use crate::film::sample_sum::{encode, DIGITS};
+        for y in 0..rect.height {
+            for x in 0..rect.width {
+                let i = (y * rect.width + x) as usize;
                 let mut digits = [0.0f32; 3 * DIGITS];
                 for (chunk, &sum) in digits.chunks_exact_mut(DIGITS).zip(&image.color_sum[i]) {
                     chunk.copy_from_slice(&encode(sum));
                 }
-                region.set(Layer::SampleSum, fx, fy, &digits);
-            }
-            let c = image.color[i];
-            let a = image.alpha[i];
-            region.set(Layer::Color, fx, fy, &[c[0], c[1], c[2], a]);
-            if !image.depth.is_empty() {
-                region.set(Layer::Depth, fx, fy, &[image.depth[i]]);
-                region.set(Layer::Normal, fx, fy, &image.normal[i]);
-                region.set(Layer::Albedo, fx, fy, &image.albedo[i]);
-                region.set(Layer::Uv, fx, fy, &image.uv[i]);
-            }
-            if !image.tex.is_empty() {
-                region.set(Layer::TexFootprint, fx, fy, &image.tex[i]);
-                region.set(Layer::TexColor, fx, fy, &image.texcolor[i]);
-            }
-            if !image.lod.is_empty() {
-                region.set(Layer::Lod, fx, fy, &[image.lod[i]]);
-                region.set(Layer::Footprint, fx, fy, &[image.footprint[i]]);
+                region.set(Layer::SampleSum, rect.x0 + x, rect.y0 + y, &digits);
             }
         }
+    }
+    region.set_all(Layer::Color, |i| {
+        let c = image.color[i];
+        [c[0], c[1], c[2], image.alpha[i]]
+    });
+    if !image.depth.is_empty() {
+        region.set_all(Layer::Depth, |i| [image.depth[i]]);
+        region.set_all(Layer::Normal, |i| image.normal[i]);
+        region.set_all(Layer::Albedo, |i| image.albedo[i]);
+        region.set_all(Layer::Uv, |i| image.uv[i]);
+    }
+    if !image.tex.is_empty() {
+        region.set_all(Layer::TexFootprint, |i| image.tex[i]);
+        region.set_all(Layer::TexColor, |i| image.texcolor[i]);
+    }
+    if !image.lod.is_empty() {
+        region.set_all(Layer::Lod, |i| [image.lod[i]]);
+        region.set_all(Layer::Footprint, |i| [image.footprint[i]]);
     }
 }
