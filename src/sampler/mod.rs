@@ -178,6 +178,11 @@ fn draw_2d(key: u32, index: u32) -> Vec2 {
     DrawKeys::new(key).draw_2d(index)
 }
 
+/// Mixed into a draw's key for the scramble of its first coordinate (also a 1D draw's).
+const X_SCRAMBLE_SALT: u32 = 0x5bd1_e995;
+/// Mixed into a draw's key for the scramble of its second coordinate.
+const Y_SCRAMBLE_SALT: u32 = 0x1b87_3593;
+
 /// The scrambles of one 2D draw: of the sample index and of each coordinate, all derived
 /// from the draw's key.
 #[derive(Clone, Copy, Default)]
@@ -192,8 +197,8 @@ impl DrawKeys {
     fn new(key: u32) -> DrawKeys {
         DrawKeys {
             index: key,
-            x: hash_u32(key ^ 0x5bd1_e995),
-            y: hash_u32(key ^ 0x1b87_3593),
+            x: hash_u32(key ^ X_SCRAMBLE_SALT),
+            y: hash_u32(key ^ Y_SCRAMBLE_SALT),
         }
     }
 
@@ -267,7 +272,7 @@ impl PixelSampler {
         let key = self.take(1);
         let shuffled = nested_uniform_scramble(self.index, key);
         // Sobol dimension 0 mirrored is the (shuffled) index itself.
-        unit_float(scramble_mirrored(shuffled, hash_u32(key ^ 0x5bd1_e995)))
+        unit_float(scramble_mirrored(shuffled, hash_u32(key ^ X_SCRAMBLE_SALT)))
     }
 
     /// The next two dimensions: a point in [0, 1)^2.

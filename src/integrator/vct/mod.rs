@@ -74,7 +74,7 @@ impl IndirectLight for Vct {
         };
         let lobe = diffuse_and_specular(query.bsdf);
         let n = query.bsdf.normal();
-        let position = query.surface.spawn_point().position;
+        let position = query.position();
         let counters = &mut worker.counters;
         // Seed 003: L_o = k_d sum_j W_j L_v(x, w_j, a_j); what the cones leave open sees the
         // environment.

@@ -19,13 +19,14 @@ use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
 use crate::scene::Material;
 use crate::shading::surface_inputs::SurfaceInputs;
-use crate::shading::{self, MaterialBsdf, OpaqueLobe};
+use crate::shading::{self, MaterialBsdf, OpaqueLobe, SpawnPoint};
 
 /// A hit's opaque lobe, as the light beyond the punctual lights' shadow rays sees it.
 pub(crate) struct IndirectQuery<'a> {
-    /// The hit (its spawn point is where light is gathered from; only an indirect light that
-    /// needs it computes it).
+    /// The hit, and its spawn point when the shading already computed it (see
+    /// [`IndirectQuery::position`]).
     pub(crate) surface: &'a SurfaceHit,
+    pub(crate) spawn: Option<SpawnPoint>,
     /// Unit geometric normal on the incident side.
     pub(crate) geometric_normal: Vec3,
     /// Unit direction towards the viewer (`-ray.direction`).
@@ -36,6 +37,16 @@ pub(crate) struct IndirectQuery<'a> {
     pub(crate) albedo: Vec3,
     /// The lobe's weight in the material.
     pub(crate) weight: f32,
+}
+
+impl IndirectQuery<'_> {
+    /// Where light is gathered from: the hit's spawn point, computed here only when the
+    /// shading did not need it (only an indirect light that asks pays for it).
+    pub(crate) fn position(&self) -> Vec3 {
+        self.spawn
+            .unwrap_or_else(|| self.surface.spawn_point())
+            .position
+    }
 }
 
 /// Light reaching a hit's opaque lobe from everything but the punctual lights (whose shadow
@@ -153,6 +164,7 @@ pub(super) fn shade_hit(
         }
         let query = IndirectQuery {
             surface,
+            spawn,
             geometric_normal: ng,
             outgoing: -ray.direction,
             bsdf: &bsdf.opaque,
