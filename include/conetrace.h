@@ -70,6 +70,9 @@
 // AOV flag: add `lod` and `footprint`.
 #define CT_AOV_LOD 2
 
+// AOV flag: leave out Z, N, albedo and uv (not computed then); colour and alpha remain.
+#define CT_AOV_NO_SURFACE 4
+
 // Integrator: the scene's `[render] integrator` (`auto` unless the scene names one); the
 // default, and what callers built before the `integrator` field get.
 #define CT_INTEGRATOR_SCENE 0
@@ -214,7 +217,8 @@ typedef struct CtRenderOptions {
   uint32_t filter;
   // Anisotropy limit (>= 1) of the aniso and ewa filters.
   float max_aniso;
-  // Extra AOV layers (`CT_AOV_*` flags); colour, Z, N, albedo and uv are always there.
+  // AOV layers (`CT_AOV_*` flags); colour is always there, and Z, N, albedo and uv are
+  // unless `CT_AOV_NO_SURFACE` is set.
   uint32_t aovs;
   // Optional progress callback (NULL: none).
   CtProgressFn progress;

@@ -1319,3 +1319,63 @@ fn the_integrator_is_chosen_through_the_options() {
 fn size_of_options() -> usize {
     std::mem::size_of::<CtRenderOptions>()
 }
+
+#[test]
+fn without_surface_aovs_the_image_has_colour_alone_and_the_same_colour() {
+    // `CT_AOV_NO_SURFACE` drops Z, N, albedo and uv; the colour planes are those of a render
+    // with them, bit for bit. Unknown flag bits next to it are still refused.
+    let scene = default_scene();
+    let channel_names = |image: CtImage| -> Vec<String> {
+        let mut count = 0u32;
+        assert_eq!(
+            unsafe { ct_image_channel_count(image, &mut count) },
+            CtStatus::CT_OK
+        );
+        (0..count)
+            .map(|index| {
+                let mut name: *const c_char = std::ptr::null();
+                assert_eq!(
+                    unsafe { ct_image_channel_name(image, index, &mut name) },
+                    CtStatus::CT_OK
+                );
+                unsafe { CStr::from_ptr(name) }
+                    .to_string_lossy()
+                    .into_owned()
+            })
+            .collect()
+    };
+    let mut with = CtImage::default();
+    let mut without = CtImage::default();
+    let options = small_options();
+    assert_eq!(
+        unsafe { ct_render(scene, &options, &mut with) },
+        CtStatus::CT_OK
+    );
+    let mut bare = small_options();
+    bare.aovs = CT_AOV_NO_SURFACE;
+    assert_eq!(
+        unsafe { ct_render(scene, &bare, &mut without) },
+        CtStatus::CT_OK
+    );
+    assert!(channel_names(with).contains(&"albedo.R".to_string()));
+    assert_eq!(channel_names(without), ["R", "G", "B", "A"]);
+    for channel in ["R", "G", "B", "A"] {
+        let (a, b) = (image_plane(with, channel), image_plane(without, channel));
+        assert!(a.iter().any(|&v| v > 0.0), "{channel} is black");
+        assert!(
+            a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+            "{channel} differs without the surface AOVs"
+        );
+    }
+    let mut unknown = small_options();
+    unknown.aovs = CT_AOV_NO_SURFACE | 8;
+    let mut image = CtImage::default();
+    assert_eq!(
+        unsafe { ct_render(scene, &unknown, &mut image) },
+        CtStatus::CT_ERROR_INVALID_ARGUMENT
+    );
+    assert!(last_error().contains("aovs"), "{}", last_error());
+    assert_eq!(ct_image_free(with), CtStatus::CT_OK);
+    assert_eq!(ct_image_free(without), CtStatus::CT_OK);
+    assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
+}

@@ -207,6 +207,16 @@ fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
         std::fs::read(dir.path().join("render.partial.exr")).unwrap(),
         before
     );
+    // So is one without the surface AOVs the partial file has.
+    let mut bare = render_args(spp, "render.exr");
+    bare.extend(["--aov", "none", "--resume"].map(String::from));
+    let (status, stderr) = finish(start(dir.path(), &bare));
+    assert_eq!(status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("aov-surface changed"), "{stderr}");
+    assert_eq!(
+        std::fs::read(dir.path().join("render.partial.exr")).unwrap(),
+        before
+    );
 
     // --resume finishes it into the output and removes the partial file.
     let mut resume = render_args(spp, "render.exr");

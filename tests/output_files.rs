@@ -265,3 +265,57 @@ fn the_command_line_explains_itself() {
     assert_eq!(zero.status.code(), Some(2), "{}", stderr(&zero));
     assert!(stderr(&zero).contains("--max-aniso"), "{}", stderr(&zero));
 }
+
+#[test]
+fn aov_none_writes_only_colour_and_alpha_with_the_same_pixels() {
+    // `--aov none` leaves out Z, N, albedo and uv (they are not computed); the colour of
+    // every pixel is the default render's, bit for bit, for both integrators and for one
+    // and several samples per pixel. Combining `none` with another layer is refused.
+    let dir = temp_dir();
+    let scene = write(
+        dir.path(),
+        "lamp.toml",
+        "[render]\nwidth = 40\nheight = 24\n\n[camera]\neye = [0.0, 1.0, 3.0]\n\
+         target = [0.0, 0.0, 0.0]\nfov = 50.0\n\n[[material]]\nname = \"lamp\"\n\
+         emission = [4.0, 4.0, 4.0]\n\n[[sphere]]\ncenter = [0.0, 1.5, 0.0]\nradius = 0.4\n\
+         material = \"lamp\"\n\n[[sphere]]\ncenter = [0.0, -100.0, 0.0]\nradius = 100.0\n",
+    );
+    let scene = scene.to_str().unwrap();
+    let cases: [(&str, &[&str]); 3] = [
+        ("built-in scene, whitted, 1 spp", &[]),
+        ("built-in scene, whitted, 4 spp", &["--spp", "4"]),
+        (
+            "area light, path, 4 spp",
+            &[scene, "--spp", "4", "--integrator", "path"],
+        ),
+    ];
+    for (case, extra) in cases {
+        let mut default_args = vec!["-o", "default.exr", "--no-png"];
+        default_args.extend_from_slice(extra);
+        let out = render(dir.path(), &default_args);
+        assert!(out.status.success(), "{case}: {}", stderr(&out));
+        let mut none_args = vec!["-o", "none.exr", "--no-png", "--aov", "none"];
+        none_args.extend_from_slice(extra);
+        let out = render(dir.path(), &none_args);
+        assert!(out.status.success(), "{case}: {}", stderr(&out));
+        let default = read_exr(&dir.path().join("default.exr"));
+        let none = read_exr(&dir.path().join("none.exr"));
+        assert!(default.names().contains(&"albedo.R".to_string()), "{case}");
+        let mut names = none.names();
+        names.sort();
+        assert_eq!(names, ["A", "B", "G", "R"], "{case}");
+        for channel in ["R", "G", "B", "A"] {
+            let (a, b) = (default.channel(channel), none.channel(channel));
+            assert!(a.iter().any(|&v| v > 0.0), "{case}: {channel} is black");
+            let same = a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+            assert!(same, "{case}: {channel} differs without the surface AOVs");
+        }
+    }
+    let out = render(
+        dir.path(),
+        &["-o", "both.exr", "--aov", "none", "--aov", "lod"],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--aov none"), "{}", stderr(&out));
+    assert!(!dir.path().join("both.exr").exists());
+}

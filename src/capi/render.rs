@@ -54,6 +54,8 @@ pub const CT_WRAP_MIRROR: u32 = 3;
 pub const CT_AOV_FOOTPRINT: u32 = 1;
 /// AOV flag: add `lod` and `footprint`.
 pub const CT_AOV_LOD: u32 = 2;
+/// AOV flag: leave out Z, N, albedo and uv (not computed then); colour and alpha remain.
+pub const CT_AOV_NO_SURFACE: u32 = 4;
 
 /// Integrator: the scene's `[render] integrator` (`auto` unless the scene names one); the
 /// default, and what callers built before the `integrator` field get.
@@ -93,7 +95,8 @@ pub struct CtRenderOptions {
     pub filter: u32,
     /// Anisotropy limit (>= 1) of the aniso and ewa filters.
     pub max_aniso: f32,
-    /// Extra AOV layers (`CT_AOV_*` flags); colour, Z, N, albedo and uv are always there.
+    /// AOV layers (`CT_AOV_*` flags); colour is always there, and Z, N, albedo and uv are
+    /// unless `CT_AOV_NO_SURFACE` is set.
     pub aovs: u32,
     /// Optional progress callback (NULL: none).
     pub progress: CtProgressFn,
@@ -566,7 +569,7 @@ fn render_options(
             )))
         }
     };
-    if c.aovs & !(CT_AOV_FOOTPRINT | CT_AOV_LOD) != 0 {
+    if c.aovs & !(CT_AOV_FOOTPRINT | CT_AOV_LOD | CT_AOV_NO_SURFACE) != 0 {
         return Err(CapiError::invalid(format!(
             "aovs has unknown flags {:#x} (CT_AOV_*)",
             c.aovs
@@ -586,7 +589,7 @@ fn render_options(
         },
         fresnel: scene.settings.fresnel,
         aovs: AovSelection {
-            surface: true,
+            surface: c.aovs & CT_AOV_NO_SURFACE == 0,
             texture_footprint: c.aovs & CT_AOV_FOOTPRINT != 0,
             lod: c.aovs & CT_AOV_LOD != 0,
         },

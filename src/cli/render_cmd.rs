@@ -33,9 +33,11 @@ use crate::scene::load::{default_scene, frame_camera, load_scene};
 use crate::scene::{FresnelMode, SceneDescription, ToneMap};
 use crate::texture::{FilterMode, FilterOptions};
 
-/// Extra EXR layers `--aov` can add.
+/// The EXR layers `--aov` can add, or `none` to drop the surface layers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum AovName {
+    /// Colour and alpha only: not even Z, N, albedo and uv, which are then not computed.
+    None,
     /// tex.s tex.t tex.dsdx tex.dtdx tex.dsdy tex.dtdy and texcolor.R/G/B/A of the first camera-path lookup.
     Footprint,
     /// `lod` (mip level of that lookup) and `footprint` (its world-space width).
@@ -95,7 +97,7 @@ pub struct RenderArgs {
     /// Maximum anisotropy of the aniso and ewa filters (a number >= 1).
     #[arg(long, default_value_t = 16.0, allow_negative_numbers = true)]
     pub max_aniso: f32,
-    /// Extra EXR layers (Z, N, albedo and uv are always written).
+    /// Extra EXR layers (Z, N, albedo and uv are written unless `--aov none`).
     #[arg(long, value_enum)]
     pub aov: Vec<AovName>,
     /// Fresnel equations at dielectric boundaries (default: the scene's, else exact).
@@ -313,6 +315,12 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
             )))
         }
     };
+    let colour_only = args.aov.contains(&AovName::None);
+    if colour_only && args.aov.len() > 1 {
+        return Err(CommandError::bad_input(
+            "--aov none (colour and alpha only) cannot be combined with other --aov layers",
+        ));
+    }
     let extra = |name: AovName| args.aov.contains(&name) || args.aov.contains(&AovName::All);
     Ok(RenderOptions {
         width,
@@ -328,7 +336,7 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
         },
         fresnel,
         aovs: AovSelection {
-            surface: true,
+            surface: !colour_only,
             texture_footprint: extra(AovName::Footprint),
             lod: extra(AovName::Lod),
         },

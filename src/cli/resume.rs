@@ -162,6 +162,7 @@ impl RenderSignature {
             .to_string(),
         );
         let flag = |on: bool| if on { "on" } else { "off" }.to_string();
+        option("aov-surface", flag(options.aovs.surface));
         option("aov-footprint", flag(options.aovs.texture_footprint));
         option("aov-lod", flag(options.aovs.lod));
         option("all-effects", flag(options.all_effects));

@@ -50,11 +50,12 @@ def load_average():
 
 
 def conetrace_render(binary, scene, out_exr, spp, seed, threads, extra=()):
-    """One path-traced render; returns (image, render seconds from --stats)."""
+    """One path-traced render, colour alone (`--aov none`: Mitsuba computes no AOVs either);
+    returns (image, render seconds from --stats)."""
     stats_path = out_exr + ".json"
     command = [binary, "render", scene, "-o", out_exr, "--no-png", "--quiet",
                "--integrator", "path", "--spp", str(spp), "--seed", str(seed),
-               "--threads", str(threads), "--stats", stats_path, *extra]
+               "--threads", str(threads), "--aov", "none", "--stats", stats_path, *extra]
     done = subprocess.run(command, capture_output=True, text=True)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed: {done.stderr.strip()}")

@@ -130,12 +130,13 @@ def check_toml():
 
 
 def conetrace_render(binary, out_exr, width, height, spp, lod, filt, threads, seed=0):
-    """One render; returns (image, render seconds from --stats, camera rays)."""
+    """One render, colour alone (`--aov none`: Mitsuba's `direct` computes no AOVs either);
+    returns (image, render seconds from --stats, camera rays)."""
     stats_path = out_exr + ".json"
     command = [binary, "render", SCENE_TOML, "-o", out_exr, "--no-png", "--quiet",
                "--width", str(width), "--height", str(height), "--spp", str(spp),
                "--max-depth", "0", "--lod", lod, "--filter", filt, "--threads", str(threads),
-               "--seed", str(seed), "--stats", stats_path]
+               "--seed", str(seed), "--aov", "none", "--stats", stats_path]
     done = subprocess.run(command, capture_output=True, text=True)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed: {done.stderr.strip()}")

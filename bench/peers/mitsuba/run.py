@@ -15,7 +15,8 @@ pixel filter on both sides.
 Ground truth: conetrace at --spp 4096 (64 x 64 jittered strata per pixel), --lod mip0
 --filter bilinear; its averaged colour equals the texture colour because the scene has no
 lights and a white environment (colour = albedo x environment mean). Ours: conetrace at
-1 spp with ray cones / differentials and mip-mapped filters, its texcolor AOV. Mitsuba: the
+1 spp with ray cones / differentials and mip-mapped filters, its colour (which equals its
+texcolor AOV bit for bit here; timed renders write colour alone, `--aov none`). Mitsuba: the
 `aov` integrator's albedo output at N spp (the bitmap texture evaluated at each sample's
 hit point, averaged by the box filter).
 """
@@ -112,16 +113,19 @@ def write_png(path, image):
 # --------------------------------------------------------------------------- conetrace
 
 
-def conetrace_arguments(spp, lod, filt, threads):
+def conetrace_arguments(spp, lod, filt, threads, aov="none"):
+    """The render options of every conetrace run here. Timed renders write colour and alpha
+    alone (`--aov none`: Mitsuba's `aov` integrator computes the albedo and nothing else);
+    the ground truth adds the footprint layers, whose texcolor.A marks textured pixels."""
     return ["--width", str(WIDTH), "--height", str(HEIGHT), "--no-png", "--quiet",
-            "--spp", str(spp), "--lod", lod, "--filter", filt, "--aov", "footprint",
+            "--spp", str(spp), "--lod", lod, "--filter", filt, "--aov", aov,
             "--threads", str(threads)]
 
 
-def conetrace_render(binary, out_exr, stats_json, spp, lod, filt, threads):
+def conetrace_render(binary, out_exr, stats_json, spp, lod, filt, threads, aov="none"):
     """Runs one conetrace render; returns (render seconds from --stats, wall seconds)."""
     command = ([binary, "render", SCENE_TOML, "-o", out_exr]
-               + conetrace_arguments(spp, lod, filt, threads) + ["--stats", stats_json])
+               + conetrace_arguments(spp, lod, filt, threads, aov) + ["--stats", stats_json])
     start = time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True)
     wall = time.perf_counter() - start
@@ -246,12 +250,13 @@ def main():
         gt_seconds = gt_wall = float(stats["seconds"])
     if not reused:
         gt_seconds, gt_wall = conetrace_render(
-            args.conetrace, gt_exr, gt_exr + ".json", args.gt_spp, "mip0", "bilinear", threads)
+            args.conetrace, gt_exr, gt_exr + ".json", args.gt_spp, "mip0", "bilinear", threads,
+            aov="footprint")
     gt = read_exr(gt_exr)
     truth = rgb(gt)
     mask = gt["texcolor.A"] > 0.5
     shown = ["conetrace", "render", "bench/peers/scene/grazing_plane.toml", "-o", "gt.exr"]
-    shown += conetrace_arguments(args.gt_spp, "mip0", "bilinear", threads)
+    shown += conetrace_arguments(args.gt_spp, "mip0", "bilinear", threads, aov="footprint")
     info["ground_truth"] = f"`{' '.join(shown)}` ({gt_seconds:.2f} s render, {gt_wall:.2f} s wall" \
         + (", reused from an earlier run)" if reused else ")")
     info["textured_pixels"] = int(mask.sum())
@@ -289,7 +294,7 @@ def main():
     configs = []
     for lod, filt in OURS:
         configs.append(dict(renderer="conetrace", method=f"{lod}+{filt}", sampler="centre",
-                            spp=1, lod=lod, filt=filt, image="texcolor."))
+                            spp=1, lod=lod, filt=filt))
     # conetrace brute force (its own supersampling, the same work Mitsuba does). Perfect
     # squares, as in the committed results (conetrace's grids for other counts left cells
     # unsampled before the fix described in README.md, caveats). The averaged colour =
@@ -298,7 +303,7 @@ def main():
         if n * n <= args.brute_max_spp:
             configs.append(dict(renderer="conetrace", method="mip0+bilinear",
                                 sampler="stratified" if n > 1 else "centre", spp=n * n,
-                                lod="mip0", filt="bilinear", image=""))
+                                lod="mip0", filt="bilinear"))
     for sampler in ("independent", "multijitter"):
         requested = 1
         while requested <= args.max_spp:
@@ -313,11 +318,7 @@ def main():
             exr = os.path.join(args.work, name)
             seconds, wall = conetrace_render(args.conetrace, exr, exr + ".json", config["spp"],
                                              config["lod"], config["filt"], threads)
-            channels = read_exr(exr)
-            if config["image"]:
-                gap = float(np.max(np.abs(rgb(channels, config["image"]) - rgb(channels))))
-                config["colour_gap"] = max(config.get("colour_gap", 0.0), gap)
-            return seconds, wall, rgb(channels, config["image"])
+            return seconds, wall, rgb(read_exr(exr))
         scene = scenes[config["sampler"]]
         start = time.perf_counter()
         image = np.array(mi.render(scene, spp=config["spp"], seed=0), dtype=np.float64)
@@ -336,12 +337,9 @@ def main():
         images[(config["renderer"], config["method"], config["sampler"], config["spp"])] = image
         config["errors"] = errors(image, truth, mask)
         note = f" (asked {requested})" if config["spp"] != requested else ""
-        gap = f", max |texcolor - colour| {config['colour_gap']:.2g}" \
-            if "colour_gap" in config else ""
         log(f"{config['renderer']} {config['method']} {config['sampler']} "
             f"{config['spp']} spp{note}: {seconds:.3f} s first, RMSE "
-            f"{config['errors']['rmse_all']:.5f} (far band {config['errors']['rmse_far']:.5f})"
-            f"{gap}")
+            f"{config['errors']['rmse_all']:.5f} (far band {config['errors']['rmse_far']:.5f})")
     for round_index in range(args.repeats):
         for config in configs:
             if round_index > 0 and max(config["times"] + [config["first"]]) > 2.0:
