@@ -52,6 +52,9 @@ pub struct Camera {
     /// Half the view rectangle's width (to the right) and height (upwards).
     u: Vec3,
     v: Vec3,
+    /// |U| and |V|, which every camera ray's footprint needs (computed once).
+    half_width: f32,
+    half_height: f32,
     width: u32,
     height: u32,
 }
@@ -131,6 +134,8 @@ impl Camera {
                 (CameraModel::Orthographic, target_distance, 0.5 * h)
             }
         };
+        let u = right * (half_height * aspect);
+        let v = up * half_height;
         Camera {
             model,
             eye,
@@ -138,8 +143,10 @@ impl Camera {
             right,
             up,
             w: forward * plane_distance,
-            u: right * (half_height * aspect),
-            v: up * half_height,
+            u,
+            v,
+            half_width: u.length(),
+            half_height: v.length(),
             width,
             height,
         }
@@ -172,7 +179,7 @@ impl Camera {
     /// Width of one pixel on the view rectangle: 2 min(|U| / w_img, |V| / h_img).
     #[inline]
     pub fn pixel_size(&self) -> f32 {
-        2.0 * (self.u.length() / self.width as f32).min(self.v.length() / self.height as f32)
+        2.0 * (self.half_width / self.width as f32).min(self.half_height / self.height as f32)
     }
 
     /// The point on the view rectangle under pixel coordinates (px, py), relative to the eye.
@@ -289,7 +296,7 @@ impl Camera {
     ) -> Footprint {
         let scale = sample_footprint_scale(samples_per_pixel);
         let d = unit_or(dir, self.forward);
-        let (hu, hv) = (self.u.length(), self.v.length());
+        let (hu, hv) = (self.half_width, self.half_height);
         let pinhole = || {
             let cone = RayCone::pinhole(d, self.w, hu, hv, self.width, self.height);
             RayCone::new(cone.width, cone.angle * scale)
