@@ -27,7 +27,8 @@ pub(crate) struct LookupRay<'a> {
     pub first_sample: bool,
 }
 
-/// Texture coordinates are needed for textured materials and for the camera hit's AOVs.
+/// Texture coordinates are needed for textured materials and for the camera hit's AOVs;
+/// dP/ds and dP/dt only where footprints are filtered or a normal map bends the normal.
 #[inline]
 pub(crate) fn surface_detail(
     context: &RenderContext,
@@ -35,10 +36,12 @@ pub(crate) fn surface_detail(
     hit: &TraceHit,
 ) -> SurfaceDetail {
     let aov = camera_ray_of_first_sample && context.options.aovs.surface;
-    if aov || context.surfaces.is_textured(hit) {
+    if !(aov || context.surfaces.is_textured(hit)) {
+        SurfaceDetail::Geometry
+    } else if context.effects.footprints || context.surfaces.is_normal_mapped(hit) {
         SurfaceDetail::Texturing
     } else {
-        SurfaceDetail::Geometry
+        SurfaceDetail::TextureCoordinates
     }
 }
 

@@ -91,6 +91,8 @@ pub struct SurfaceLookup {
     pub geometries: Vec<GeometryRef>,
     /// Per material: whether shading it reads a texture (so hits need texture coordinates).
     pub textured_materials: Vec<bool>,
+    /// Per material: whether it has a normal map (whose tangent frame needs dP/ds, dP/dt).
+    pub normal_mapped_materials: Vec<bool>,
     /// Bounds of every surface (`None` for an empty scene): camera rays start tracing
     /// where they enter them (`crate::shading::entry_distance`).
     pub bounds: Option<(Vec3, Vec3)>,
@@ -101,7 +103,10 @@ pub struct SurfaceLookup {
 pub enum SurfaceDetail {
     /// Position and normals only (shadow-ray walks, untextured materials).
     Geometry,
-    /// Also texture coordinates and dP/ds, dP/dt (texture lookups, footprints, AOVs).
+    /// Also texture coordinates, without dP/ds and dP/dt (lookups that no footprint filters
+    /// and no normal map bends, the uv AOV).
+    TextureCoordinates,
+    /// Also texture coordinates and dP/ds, dP/dt (footprints, normal maps).
     Texturing,
 }
 
@@ -112,11 +117,17 @@ impl SurfaceLookup {
             .iter()
             .map(crate::render::surface_textures::reads_textures)
             .collect();
+        let normal_mapped_materials = scene
+            .materials
+            .iter()
+            .map(|material| material.normal_texture.is_some())
+            .collect();
         let bounds = scene.bounds();
         SurfaceLookup {
             scene,
             geometries,
             textured_materials,
+            normal_mapped_materials,
             bounds,
         }
     }
@@ -124,15 +135,26 @@ impl SurfaceLookup {
     /// Whether the material at `hit` reads a texture.
     #[inline]
     pub fn is_textured(&self, hit: &TraceHit) -> bool {
-        let material = match self.geometries[hit.geometry as usize] {
+        self.textured_materials[self.material_index(hit)]
+    }
+
+    /// Whether the material at `hit` has a normal map.
+    #[inline]
+    pub fn is_normal_mapped(&self, hit: &TraceHit) -> bool {
+        self.normal_mapped_materials[self.material_index(hit)]
+    }
+
+    /// The index of the material at `hit`.
+    #[inline]
+    fn material_index(&self, hit: &TraceHit) -> usize {
+        match self.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(index) => self.scene.meshes[index].material,
             GeometryRef::Spheres => self.scene.spheres[hit.primitive as usize].material,
             GeometryRef::Patches => self.scene.patches[hit.primitive as usize].material,
             GeometryRef::HeightPatches => {
                 self.scene.height_patches[hit.primitive as usize].material
             }
-        };
-        self.textured_materials[material]
+        }
     }
 
     /// The surface at `hit` of the ray (`origin`, unit `direction`).
@@ -149,7 +171,8 @@ impl SurfaceLookup {
         hit: &TraceHit,
         detail: SurfaceDetail,
     ) -> SurfaceHit {
-        let texturing = detail == SurfaceDetail::Texturing;
+        let texturing = detail != SurfaceDetail::Geometry;
+        let derivatives = detail == SurfaceDetail::Texturing;
         match self.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(index) => {
                 let mesh = &self.scene.meshes[index];
@@ -184,7 +207,11 @@ impl SurfaceLookup {
                 let (st, dpds, dpdt) = match st_vertices {
                     Some(t) if texturing => {
                         let st = t[0] * w + t[1] * u + t[2] * v;
-                        let (dpds, dpdt) = triangle_position_derivatives(p, t);
+                        let (dpds, dpdt) = if derivatives {
+                            triangle_position_derivatives(p, t)
+                        } else {
+                            (Vec3::ZERO, Vec3::ZERO)
+                        };
                         (st, dpds, dpdt)
                     }
                     _ => (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO),
