@@ -36,13 +36,9 @@ pub(crate) fn surface_detail(
     hit: &TraceHit,
 ) -> SurfaceDetail {
     let aov = camera_ray_of_first_sample && context.options.aovs.surface;
-    if !(aov || context.surfaces.is_textured(hit)) {
-        SurfaceDetail::Geometry
-    } else if context.effects.footprints || context.surfaces.is_normal_mapped(hit) {
-        SurfaceDetail::Texturing
-    } else {
-        SurfaceDetail::TextureCoordinates
-    }
+    context
+        .surfaces
+        .detail_needed(hit, aov, context.effects.footprints)
 }
 
 /// The material's shading inputs at the hit (`crate::shading::surface_inputs`): albedo,

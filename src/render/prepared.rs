@@ -132,16 +132,25 @@ impl SurfaceLookup {
         }
     }
 
-    /// Whether the material at `hit` reads a texture.
+    /// How much of the surface at `hit` is needed: texture coordinates when its material
+    /// reads a texture or `coordinates_wanted` (the camera hit's AOVs); dP/ds and dP/dt as
+    /// well when `footprints` are filtered or the material's normal map needs its tangent
+    /// frame.
     #[inline]
-    pub fn is_textured(&self, hit: &TraceHit) -> bool {
-        self.textured_materials[self.material_index(hit)]
-    }
-
-    /// Whether the material at `hit` has a normal map.
-    #[inline]
-    pub fn is_normal_mapped(&self, hit: &TraceHit) -> bool {
-        self.normal_mapped_materials[self.material_index(hit)]
+    pub fn detail_needed(
+        &self,
+        hit: &TraceHit,
+        coordinates_wanted: bool,
+        footprints: bool,
+    ) -> SurfaceDetail {
+        let material = self.material_index(hit);
+        if !(coordinates_wanted || self.textured_materials[material]) {
+            SurfaceDetail::Geometry
+        } else if footprints || self.normal_mapped_materials[material] {
+            SurfaceDetail::Texturing
+        } else {
+            SurfaceDetail::TextureCoordinates
+        }
     }
 
     /// The index of the material at `hit`.
