@@ -29,8 +29,7 @@ pub(crate) fn trace_wave<'a>(
     hits: &mut Vec<TraceHit>,
     counters: &mut WorkCounters,
 ) {
-    trace_rays.clear();
-    trace_rays.extend(rays.clone().map(|ray| {
+    let trace_ray = |ray: WaveRay| {
         let (cone_width, cone_spread) = ray.footprint.cone_at_origin();
         // Traced from `start`: the cone is as wide there as it has grown by then.
         TraceRay {
@@ -40,10 +39,17 @@ pub(crate) fn trace_wave<'a>(
             cone_width: cone_width + cone_spread * ray.start,
             cone_spread,
         }
-    }));
-    context
-        .tracer
-        .intersect(trace_rays, hits, coherent, counters);
+    };
+    if coherent {
+        trace_rays.clear();
+        trace_rays.extend(rays.clone().map(trace_ray));
+        context.tracer.intersect(trace_rays, hits, true, counters);
+    } else {
+        // An incoherent wave fills Embree's stream straight from the rays.
+        context
+            .tracer
+            .intersect_stream(rays.clone().map(trace_ray), hits, counters);
+    }
     // Distances count from the ray's origin again.
     for (hit, ray) in hits.iter_mut().zip(rays) {
         if ray.start > 0.0 && hit.is_hit() {
@@ -61,11 +67,18 @@ pub(crate) fn shadow_trace_rays(
 ) {
     counters.count_rays(RayKind::Shadow, segments.len() as u64);
     trace_rays.clear();
-    trace_rays.extend(segments.map(|(origin, direction, tfar)| TraceRay {
+    trace_rays
+        .extend(segments.map(|(origin, direction, tfar)| shadow_ray(origin, direction, tfar)));
+}
+
+/// The occlusion ray of one shadow segment: it carries no cone.
+#[inline]
+pub(crate) fn shadow_ray(origin: Vec3, direction: Vec3, tfar: f32) -> TraceRay {
+    TraceRay {
         origin,
         direction,
         tfar,
         cone_width: 0.0,
         cone_spread: 0.0,
-    }));
+    }
 }

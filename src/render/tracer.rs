@@ -363,6 +363,73 @@ impl Tracer {
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
+    /// Closest hits of the incoherent `rays` as one stream into `hits` (resized to match),
+    /// the stream filled straight from the iterator: [`Tracer::intersect`] of a later wave
+    /// without first collecting its rays. A failed trace is recorded as there.
+    pub fn intersect_stream(
+        &self,
+        rays: impl Iterator<Item = TraceRay>,
+        hits: &mut Vec<TraceHit>,
+        counters: &mut WorkCounters,
+    ) {
+        hits.clear();
+        self.with_stream_of(rays, |ray_hits, payload| {
+            self.note(
+                self.scene
+                    .intersect_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
+            );
+            hits.extend(ray_hits.iter().map(|ray_hit| match ray_hit.hit() {
+                Some(hit) => trace_hit(&hit),
+                None => TraceHit::MISS,
+            }));
+        });
+        counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
+    }
+
+    /// [`Tracer::occluded`] of `rays` filled straight from the iterator.
+    pub fn occluded_stream(
+        &self,
+        rays: impl Iterator<Item = TraceRay>,
+        blocked: &mut Vec<bool>,
+        counters: &mut WorkCounters,
+    ) {
+        blocked.clear();
+        self.with_stream_of(rays, |ray_hits, payload| {
+            self.note(
+                self.scene
+                    .occluded_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
+            );
+            blocked.extend(ray_hits.iter().map(|r| r.is_occluded()));
+        });
+        counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
+    }
+
+    /// Runs `trace` on this thread's stream buffers filled with `rays`, and with their cones
+    /// as payloads when an alpha test may read them (no filter callback runs otherwise).
+    fn with_stream_of(
+        &self,
+        rays: impl Iterator<Item = TraceRay>,
+        trace: impl FnOnce(&mut [RayHit], &[RayPayload]),
+    ) {
+        let cones = self.settings.alpha_tests != AlphaTests::Off;
+        STREAM.with(|stream| {
+            let mut stream = stream.borrow_mut();
+            let (ray_hits, payload) = &mut *stream;
+            ray_hits.clear();
+            payload.clear();
+            for ray in rays {
+                ray_hits.push(RayHit::new(&embree_ray(&ray)));
+                if cones {
+                    payload.push(RayPayload {
+                        cone_width: ray.cone_width,
+                        cone_spread: ray.cone_spread,
+                    });
+                }
+            }
+            trace(ray_hits, payload);
+        });
+    }
+
     /// Closest hits of `rays` as one incoherent stream into `hits` (misses left as they are).
     fn intersect_stream_into(&self, rays: &[TraceRay], hits: &mut [TraceHit]) {
         with_stream(rays, |ray_hits, payload| {

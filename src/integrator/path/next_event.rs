@@ -12,9 +12,10 @@ use super::{add_radiance, LightStrategy, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::footprint::Footprint;
 use crate::integrator::texturing::environment_lookup;
-use crate::integrator::trace_wave::shadow_trace_rays;
+use crate::integrator::trace_wave::{shadow_ray, shadow_trace_rays};
 use crate::medium::{segment_fog, FogModel, HenyeyGreenstein};
 use crate::render::context::{RenderContext, WorkerState};
+use crate::render::stats::RayKind;
 use crate::render::surface_textures::area_light_radiance;
 use crate::shading::{self, Bsdf, LightRef, MaterialBsdf};
 
@@ -192,21 +193,30 @@ pub(super) fn trace_shadow_rays(
     if waves.shadows.is_empty() {
         return;
     }
-    shadow_trace_rays(
-        waves
-            .shadows
-            .iter()
-            .map(|s| (s.origin, s.direction, s.tfar)),
-        &mut waves.shadow_rays,
-        &mut worker.counters,
-    );
-    // The camera wave's shadow rays are coherent: packets.
-    context.tracer.occluded_wave(
-        &waves.shadow_rays,
-        &mut waves.shadow_blocked,
-        camera_wave,
-        &mut worker.counters,
-    );
+    let segments = waves
+        .shadows
+        .iter()
+        .map(|s| (s.origin, s.direction, s.tfar));
+    if camera_wave {
+        // The camera wave's shadow rays are coherent: packets.
+        shadow_trace_rays(segments, &mut waves.shadow_rays, &mut worker.counters);
+        context.tracer.occluded_wave(
+            &waves.shadow_rays,
+            &mut waves.shadow_blocked,
+            true,
+            &mut worker.counters,
+        );
+    } else {
+        // A later wave's fill Embree's stream straight from the segments.
+        worker
+            .counters
+            .count_rays(RayKind::Shadow, waves.shadows.len() as u64);
+        context.tracer.occluded_stream(
+            segments.map(|(origin, direction, tfar)| shadow_ray(origin, direction, tfar)),
+            &mut waves.shadow_blocked,
+            &mut worker.counters,
+        );
+    }
     for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
         if *blocked {
             continue;
