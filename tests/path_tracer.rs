@@ -780,3 +780,64 @@ translate = [0.0, 1.0, 0.0]
         "differential: camera {camera_level}, bounce {bounce_level}"
     );
 }
+
+/// The depth limit counts paths whatever their last vertex: with `max_depth` 0 (direct
+/// light only, a path of at most two segments), a mirror shows the lamp it reflects, as a
+/// diffuse surface shows the lamp's light by light sampling (pbrt-v4's `maxDepth` 1,
+/// Mitsuba 3's `max_depth` 2). The path tracer used to end every path at the last hit
+/// without the delta lobe's ray, leaving the mirror black there.
+#[test]
+fn at_the_depth_limit_a_mirror_still_shows_the_light_it_reflects() {
+    let dir = temp_dir();
+    let text = |max_depth: u32| {
+        format!(
+            r#"
+[render]
+width = 16
+height = 16
+spp = 4
+max_depth = {max_depth}
+
+[camera]
+type = "pinhole"
+eye = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+fov = 4
+
+[[material]]
+name = "mirror"
+base_color = [0.0, 0.0, 0.0]
+mirror = 1.0
+
+[[material]]
+name = "lamp"
+base_color = [0.0, 0.0, 0.0]
+emission = [3.0, 2.0, 1.0]
+
+# The mirror fills the view; straight back from it, behind the camera, the lamp.
+[[sphere]]
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+material = "mirror"
+
+[[sphere]]
+center = [0.0, 0.0, 20.0]
+radius = 12.0
+material = "lamp"
+"#
+        )
+    };
+    for max_depth in [0, 1, 3] {
+        let scene = load(dir.path(), &text(max_depth));
+        let (pixels, _) = render_with(scene, &PathTracer::default(), |_| {});
+        for (index, pixel) in pixels.iter().enumerate() {
+            for (c, expected) in [3.0f32, 2.0, 1.0].into_iter().enumerate() {
+                assert!(
+                    (pixel[c] - expected).abs() <= 1e-4 * expected,
+                    "max_depth {max_depth}, pixel {index}: {pixel:?}, expected the lamp's \
+                     [3, 2, 1]"
+                );
+            }
+        }
+    }
+}

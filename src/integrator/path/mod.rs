@@ -14,7 +14,8 @@
 //! `max(0.05, 1 - max(throughput))` when its throughput has fallen below 1, and divides the
 //! survivors' throughput by the survival probability. `max_depth` bounds the number of
 //! bounces; light sampling still runs at the last hit, unweighted, as no BSDF ray
-//! continues from it to compete. Beer's law attenuates paths inside absorbing dielectrics as
+//! continues from it along a non-delta lobe to compete, and a delta lobe's ray continues
+//! only to collect the emission it reaches. Beer's law attenuates paths inside absorbing dielectrics as
 //! in Whitted.
 //!
 //! Every random number comes from the pixel's [`crate::sampler::PixelSampler`], which the

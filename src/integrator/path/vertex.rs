@@ -42,6 +42,11 @@ pub(super) fn shade(
         let t_end = if hit.is_hit() { hit.t } else { f32::INFINITY };
         let camera_footprint = ray.footprint;
         if let Some(collision) = medium::sample_collision(context, ray, t_end, worker) {
+            if ray.depth > context.options.max_depth {
+                // A ray past the last bounce only looks for emission, which the fog
+                // stops here (collisions are sampled by the transmittance).
+                return;
+            }
             if ray.kind == RayKind::Camera && ray.first_sample && hit.is_hit() {
                 record_hidden_surface_aovs(context, ray, camera_footprint, hit, image, worker);
             }
@@ -121,6 +126,10 @@ pub(super) fn shade(
         };
         add_radiance(image, ray.slot, ray.throughput * emission * weight);
     }
+    if ray.depth > context.options.max_depth {
+        // Past the last bounce a delta lobe's ray only collects emission (below).
+        return;
+    }
 
     // The same seven dimensions at every vertex, whichever are used.
     let u_light = ray.sampler.next_1d();
@@ -172,14 +181,18 @@ pub(super) fn shade(
         );
     }
 
-    if !continues {
+    // At the last bounce light sampling alone covers the non-delta lobes; a delta lobe
+    // (mirror, smooth glass) still sends its ray, which only collects the emission or
+    // environment it reaches: a path of `max_depth + 2` segments counts whichever kind of
+    // lobe its last vertex has, as in pbrt-v4 and Mitsuba 3.
+    if !continues && !bsdf.has_delta() {
         return;
     }
     let Some(sample) = bsdf.sample(wo, u_lobe, u_direction) else {
         return;
     };
     let delta = sample.lobe.is_delta();
-    if !delta && ray.diffuse_depth >= tracer.diffuse_bounces {
+    if !delta && (!continues || ray.diffuse_depth >= tracer.diffuse_bounces) {
         return;
     }
     let throughput = ray.throughput * sample.weight;
