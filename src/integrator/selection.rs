@@ -127,7 +127,12 @@ pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution
         .patches
         .iter()
         .filter(|p| emissive(p.material))
-        .count();
+        .count()
+        + scene
+            .height_patches
+            .iter()
+            .filter(|p| emissive(p.material))
+            .count();
     let counted = [
         (triangles, "triangle"),
         (spheres, "sphere"),
@@ -140,11 +145,23 @@ pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution
     if !counted.is_empty() {
         reasons.push(format!("emissive geometry ({})", counted.join(", ")));
     }
+    // Only materials some geometry uses: a rough material nothing wears changes no image.
+    let mut used = vec![false; scene.materials.len()];
+    let worn = scene.meshes.iter().map(|m| m.material);
+    let worn = worn.chain(scene.spheres.iter().map(|s| s.material));
+    let worn = worn.chain(scene.patches.iter().map(|p| p.material));
+    let worn = worn.chain(scene.height_patches.iter().map(|p| p.material));
+    for material in worn {
+        if let Some(flag) = used.get_mut(material) {
+            *flag = true;
+        }
+    }
     let rough: Vec<&str> = scene
         .materials
         .iter()
-        .filter(|m| m.roughness.is_some())
-        .map(|m| m.name.as_str())
+        .zip(&used)
+        .filter(|(m, &worn)| worn && m.roughness.is_some())
+        .map(|(m, _)| m.name.as_str())
         .collect();
     if !rough.is_empty() {
         reasons.push(format!(

@@ -226,6 +226,13 @@ impl MaterialBsdf {
         }
     }
 
+    /// Whether the BSDF transmits light through the surface with a density (a weighted
+    /// rough boundary), which light sampling can then reach from the far side.
+    #[inline]
+    pub fn transmits_with_density(&self) -> bool {
+        self.rough_dielectric.is_some() && self.dielectric_weight > 0.0
+    }
+
     /// The lobe weights, clamped at zero, in the order opaque, mirror, dielectric.
     fn weights(&self) -> [f32; 3] {
         [

@@ -118,10 +118,12 @@ pub(super) fn scatter(
     if throughput.max_element() > 0.0 {
         let point = ShadingPoint {
             origin: position,
+            origin_through: position,
+            sigma: ray.sigma,
+            sigma_through: ray.sigma,
             wo: -travel,
             scatterer: Scatterer::Medium(phase),
             throughput,
-            footprint: &footprint,
             slot: ray.slot,
             last: !continues,
         };

@@ -40,17 +40,33 @@ pub(super) enum Scatterer<'a> {
         /// Shading normal on the viewer's side.
         ns: Vec3,
         bsdf: &'a MaterialBsdf,
+        /// Whether the BSDF transmits with a density (a rough boundary), so that light
+        /// from the far side reaches the viewer too.
+        transmits: bool,
     },
     Medium(HenyeyGreenstein),
 }
 
 impl Scatterer<'_> {
-    /// Whether light can arrive from `wi` at all (a surface only from its viewer's side).
+    /// Whether light can arrive from `wi` at all: a surface takes it from its viewer's side,
+    /// and from the far side when it transmits with a density.
     #[inline]
     fn admits(&self, wi: Vec3) -> bool {
         match self {
-            Scatterer::Surface { ng, .. } => wi.dot(*ng) > 0.0,
+            Scatterer::Surface { ng, transmits, .. } => {
+                let cos = wi.dot(*ng);
+                cos > 0.0 || (*transmits && cos < 0.0)
+            }
             Scatterer::Medium(_) => true,
+        }
+    }
+
+    /// Whether `wi` leaves a surface on its far side.
+    #[inline]
+    fn crosses(&self, wi: Vec3) -> bool {
+        match self {
+            Scatterer::Surface { ng, .. } => wi.dot(*ng) < 0.0,
+            Scatterer::Medium(_) => false,
         }
     }
 
@@ -79,10 +95,16 @@ pub(super) struct ShadingPoint<'a> {
     /// Where shadow rays start: the hit's spawn point moved off the surface on the side of
     /// `ng`, or the scattering point inside fog.
     pub(super) origin: Vec3,
+    /// Where shadow rays through a transmitting surface start: the spawn point moved off on
+    /// the far side (unused otherwise).
+    pub(super) origin_through: Vec3,
+    /// Absorption coefficients of the media on the viewer's side and on the far side, for
+    /// Beer's law along shadow rays (zero outside media).
+    pub(super) sigma: Vec3,
+    pub(super) sigma_through: Vec3,
     pub(super) wo: Vec3,
     pub(super) scatterer: Scatterer<'a>,
     pub(super) throughput: Vec3,
-    pub(super) footprint: &'a Footprint,
     /// The colour-buffer slot of the path.
     pub(super) slot: u32,
     /// True when no BSDF ray continues from this hit (the last bounce): light sampling then
@@ -123,7 +145,12 @@ pub(super) fn sample_light(
         _ if strategy == LightStrategy::BsdfSampling => return,
         LightRef::Environment => {
             let sample = lights.environment.sample_li(u_point);
-            let radiance = environment_lookup(context, sample.wi, point.footprint, worker);
+            if !point.scatterer.admits(sample.wi) {
+                return;
+            }
+            // The environment as a light, unfiltered: what a BSDF ray that finds it reads
+            // too (`vertex::shade`), so that both strategies estimate one function.
+            let radiance = environment_lookup(context, sample.wi, &Footprint::Mip0, worker);
             (sample.wi, f32::INFINITY, None, radiance, sample.pdf)
         }
         LightRef::Area(index) => {
@@ -162,6 +189,19 @@ pub(super) fn sample_light(
         };
         point.throughput * f * radiance * (weight / light_pdf)
     };
+    // Beer's law along the shadow ray inside an absorbing medium on its side.
+    let crosses = point.scatterer.crosses(wi);
+    let sigma = if crosses {
+        point.sigma_through
+    } else {
+        point.sigma
+    };
+    let contribution = if context.effects.absorption && sigma != Vec3::ZERO {
+        worker.counters.absorption_evaluations += 1;
+        contribution * shading::transmittance(sigma, distance)
+    } else {
+        contribution
+    };
     let largest = contribution.max_element();
     if largest.is_nan() || largest <= 0.0 {
         return;
@@ -171,7 +211,11 @@ pub(super) fn sample_light(
         None => f32::INFINITY,
     };
     waves.shadows.push(ShadowRay {
-        origin: point.origin,
+        origin: if crosses {
+            point.origin_through
+        } else {
+            point.origin
+        },
         direction: wi,
         tfar,
         contribution,

@@ -55,7 +55,17 @@ pub(super) fn shade(
         }
     }
     if !hit.is_hit() {
-        let radiance = environment_lookup(context, ray.direction, &ray.footprint, worker);
+        // A ray that sees the environment whole (from the camera or a delta lobe) reads it
+        // through its footprint. One a non-delta lobe sampled finds the environment as a
+        // light, weighted against light sampling, and reads what light sampling reads: the
+        // unfiltered map. A filtered lookup there would count a sharp sun's blurred glow
+        // under both strategies, and shift it to coarse texel centres.
+        let footprint = if ray.bsdf_pdf.is_some() {
+            &Footprint::Mip0
+        } else {
+            &ray.footprint
+        };
+        let radiance = environment_lookup(context, ray.direction, footprint, worker);
         let environment = LightRef::Environment;
         let weight = found_light_weight(tracer, ray, lights.pmf(environment), || {
             lights.environment.pdf_li(ray.direction)
@@ -156,16 +166,24 @@ pub(super) fn shade(
     let continues = ray.depth < context.options.max_depth;
 
     if bsdf_has_smooth_part(&bsdf, wo, ns) {
+        let transmits = bsdf.transmits_with_density();
         let point = ShadingPoint {
             origin: spawn.offset_origin(ng),
+            origin_through: if transmits {
+                spawn.offset_origin(-ng)
+            } else {
+                Vec3::ZERO
+            },
+            sigma: ray.sigma,
+            sigma_through: medium_beyond(context, &surface, front),
             wo,
             scatterer: Scatterer::Surface {
                 ng,
                 ns,
                 bsdf: &bsdf,
+                transmits,
             },
             throughput: ray.throughput,
-            footprint: &ray.footprint,
             slot: ray.slot,
             // No BSDF ray competes when none continues along a non-delta lobe.
             last: !continues || ray.diffuse_depth >= tracer.diffuse_bounces,
@@ -216,13 +234,8 @@ pub(super) fn shade(
         let f = bsdf.eval(wo, wi);
         ray.footprint.scatter(bsdf_spread_angle(luminance(f)))
     };
-    // Crossing the surface enters the material's medium (from the front) or leaves it.
     let sigma = if crosses {
-        if front {
-            context.materials.sigma[surface.material as usize]
-        } else {
-            Vec3::ZERO
-        }
+        medium_beyond(context, &surface, front)
     } else {
         ray.sigma
     };
@@ -255,6 +268,18 @@ pub(super) fn shade(
         first_sample: ray.first_sample,
         sampler: ray.sampler,
     });
+}
+
+/// The absorption coefficient of the medium on the far side of `surface` seen from its
+/// front (`front`) or back: crossing the surface enters the material's medium from the
+/// front, and leaves it for the outside (no medium) from the back.
+#[inline]
+fn medium_beyond(context: &RenderContext, surface: &SurfaceHit, front: bool) -> Vec3 {
+    if front {
+        context.materials.sigma[surface.material as usize]
+    } else {
+        Vec3::ZERO
+    }
 }
 
 /// The throughput a path continues with after its `depth`-th bounce, or `None` when it
