@@ -8,7 +8,7 @@ use crate::film::TileImage;
 use crate::footprint::Footprint;
 use crate::hit::SurfaceHit;
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::prepared::{environment_radiance, SurfaceDetail};
+use crate::render::prepared::{environment_light_radiance, environment_radiance, SurfaceDetail};
 use crate::render::surface_textures;
 use crate::render::tracer::TraceHit;
 use crate::scene::Material;
@@ -128,6 +128,29 @@ pub(crate) fn environment_lookup(
         &context.textures,
         direction,
         gradients,
+        &context.texture_filters,
+        context.external_textures.as_deref(),
+    )
+}
+
+/// The environment as a light in `direction` (`environment_light_radiance`): what light
+/// sampling reads and what a ray the power heuristic weights against it reads when it
+/// escapes.
+pub(crate) fn environment_light_lookup(
+    context: &RenderContext,
+    direction: Vec3,
+    worker: &mut WorkerState,
+) -> Vec3 {
+    if matches!(
+        context.scene.environment,
+        crate::scene::Environment::LatLong { .. }
+    ) {
+        worker.counters.texture_lookups += 1;
+    }
+    environment_light_radiance(
+        &context.scene.environment,
+        &context.textures,
+        direction,
         &context.texture_filters,
         context.external_textures.as_deref(),
     )

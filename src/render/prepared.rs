@@ -9,7 +9,7 @@ use crate::hit::{Patch, SurfaceHit};
 use crate::render::tracer::TraceHit;
 use crate::scene::{Environment, Material, SceneDescription, TextureDesc, TextureSource};
 use crate::shading::ray_offset::SpawnPoint;
-use crate::texture::{FilterOptions, Texture, TextureQuery};
+use crate::texture::{FilterMode, FilterOptions, Texture, TextureQuery};
 
 /// What an Embree geometry id stands for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -346,10 +346,41 @@ pub fn environment_radiance(
     texture_filters: &[FilterOptions],
     external: Option<&dyn crate::render::ExternalTextures>,
 ) -> Vec3 {
+    let options = |texture: usize| texture_filters[texture];
+    environment_radiance_with(environment, textures, dir, gradients, options, external)
+}
+
+/// The environment as a light: the radiance of the level-0 texel `dir` falls in, the
+/// piecewise-constant function its importance sampling is built on
+/// (`crate::shading::environment_light`; pbrt-v4's image infinite light reads its nearest
+/// texel too). A filtered lookup would spread a small sun into texels the sampling rarely
+/// visits, and light sampling and a BSDF ray that escapes must read one function.
+pub fn environment_light_radiance(
+    environment: &Environment,
+    textures: &[Arc<Texture>],
+    dir: Vec3,
+    texture_filters: &[FilterOptions],
+    external: Option<&dyn crate::render::ExternalTextures>,
+) -> Vec3 {
+    let options = |texture: usize| FilterOptions {
+        filter: FilterMode::Closest,
+        ..texture_filters[texture]
+    };
+    environment_radiance_with(environment, textures, dir, [0.0; 4], options, external)
+}
+
+fn environment_radiance_with(
+    environment: &Environment,
+    textures: &[Arc<Texture>],
+    dir: Vec3,
+    gradients: [f32; 4],
+    texture_options: impl Fn(usize) -> FilterOptions,
+    external: Option<&dyn crate::render::ExternalTextures>,
+) -> Vec3 {
     match environment {
         Environment::Color(c) => *c,
         Environment::LatLong { texture, intensity } => {
-            let options = &texture_filters[*texture];
+            let options = &texture_options(*texture);
             let st = crate::footprint::direction_to_lat_long(dir);
             let q = TextureQuery {
                 s: st.x,

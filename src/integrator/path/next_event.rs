@@ -10,8 +10,7 @@ use glam::{Vec2, Vec3};
 use super::mis::power_heuristic;
 use super::{add_radiance, LightStrategy, PathTracer, PathWaves};
 use crate::film::TileImage;
-use crate::footprint::Footprint;
-use crate::integrator::texturing::environment_lookup;
+use crate::integrator::texturing::environment_light_lookup;
 use crate::integrator::trace_wave::{shadow_ray, shadow_trace_rays};
 use crate::medium::{segment_fog, FogModel, HenyeyGreenstein};
 use crate::render::context::{RenderContext, WorkerState};
@@ -148,9 +147,9 @@ pub(super) fn sample_light(
             if !point.scatterer.admits(sample.wi) {
                 return;
             }
-            // The environment as a light, unfiltered: what a BSDF ray that finds it reads
-            // too (`vertex::shade`), so that both strategies estimate one function.
-            let radiance = environment_lookup(context, sample.wi, &Footprint::Mip0, worker);
+            // The environment as a light: what a BSDF ray that finds it reads too
+            // (`vertex::shade`), so that both strategies estimate one function.
+            let radiance = environment_light_lookup(context, sample.wi, worker);
             (sample.wi, f32::INFINITY, None, radiance, sample.pdf)
         }
         LightRef::Area(index) => {

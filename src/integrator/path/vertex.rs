@@ -11,7 +11,7 @@ use super::{add_radiance, LightStrategy, PathRay, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::footprint::{bsdf_spread_angle, Footprint, LodStrategy, RayDifferential};
 use crate::hit::SurfaceHit;
-use crate::integrator::texturing::{self, environment_lookup, LookupRay};
+use crate::integrator::texturing::{self, environment_light_lookup, environment_lookup, LookupRay};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{GeometryRef, SurfaceDetail};
 use crate::render::stats::RayKind;
@@ -58,14 +58,13 @@ pub(super) fn shade(
         // A ray that sees the environment whole (from the camera or a delta lobe) reads it
         // through its footprint. One a non-delta lobe sampled finds the environment as a
         // light, weighted against light sampling, and reads what light sampling reads: the
-        // unfiltered map. A filtered lookup there would count a sharp sun's blurred glow
-        // under both strategies, and shift it to coarse texel centres.
-        let footprint = if ray.bsdf_pdf.is_some() {
-            &Footprint::Mip0
+        // map's nearest level-0 texel. A filtered lookup there would count a sharp sun's
+        // blurred glow under both strategies, and shift it to coarse texel centres.
+        let radiance = if ray.bsdf_pdf.is_some() {
+            environment_light_lookup(context, ray.direction, worker)
         } else {
-            &ray.footprint
+            environment_lookup(context, ray.direction, &ray.footprint, worker)
         };
-        let radiance = environment_lookup(context, ray.direction, footprint, worker);
         let environment = LightRef::Environment;
         let weight = found_light_weight(tracer, ray, lights.pmf(environment), || {
             lights.environment.pdf_li(ray.direction)
