@@ -357,6 +357,23 @@ translate = [0.0, 1.0, 0.0]
     );
 }
 
+/// The image means of the scene `text` under multiple importance sampling, light sampling
+/// alone and BSDF sampling alone, in that order (printed).
+fn strategy_means(dir: &Path, text: &str) -> ([f64; 3], [f64; 3], [f64; 3]) {
+    let estimate = |strategy| {
+        let tracer = PathTracer {
+            strategy,
+            ..PathTracer::default()
+        };
+        mean(&render_with(load(dir, text), &tracer, |_| {}).0)
+    };
+    let mis = estimate(LightStrategy::MultipleImportance);
+    let light = estimate(LightStrategy::LightSampling);
+    let bsdf = estimate(LightStrategy::BsdfSampling);
+    eprintln!("means: MIS {mis:?}, light sampling {light:?}, BSDF sampling {bsdf:?}");
+    (mis, light, bsdf)
+}
+
 /// (c) Light sampling alone, BSDF sampling alone and their combination estimate the same
 /// image: a plane lit by the quad, seen obliquely with a diffuse sphere on it.
 #[test]
@@ -410,18 +427,7 @@ material = "lamp"
 rotate = [180.0, 0.0, 0.0]
 translate = [0.0, 1.6, 0.0]
 "#;
-    let estimate = |strategy| {
-        let tracer = PathTracer {
-            strategy,
-            ..PathTracer::default()
-        };
-        render_with(load(dir.path(), text), &tracer, |_| {}).0
-    };
-    let mis = estimate(LightStrategy::MultipleImportance);
-    let light = estimate(LightStrategy::LightSampling);
-    let bsdf = estimate(LightStrategy::BsdfSampling);
-    let (m, l, b) = (mean(&mis), mean(&light), mean(&bsdf));
-    eprintln!("means: MIS {m:?}, light sampling {l:?}, BSDF sampling {b:?}");
+    let (m, l, b) = strategy_means(dir.path(), text);
     for c in 0..3 {
         assert!(
             (m[c] - l[c]).abs() < 0.02 * m[c],
@@ -901,18 +907,7 @@ material = "lamp"
 rotate = [180.0, 0.0, 0.0]
 translate = [0.0, 1.5, 0.0]
 "#;
-    let estimate = |strategy| {
-        let tracer = PathTracer {
-            strategy,
-            ..PathTracer::default()
-        };
-        render_with(load(dir.path(), text), &tracer, |_| {}).0
-    };
-    let mis = estimate(LightStrategy::MultipleImportance);
-    let light = estimate(LightStrategy::LightSampling);
-    let bsdf = estimate(LightStrategy::BsdfSampling);
-    let (m, l, b) = (mean(&mis), mean(&light), mean(&bsdf));
-    eprintln!("means: MIS {m:?}, light sampling {l:?}, BSDF sampling {b:?}");
+    let (m, l, b) = strategy_means(dir.path(), text);
     // Light sampling alone is the noisy one here (a uniform sky sampled over the sphere,
     // seen through a lobe that scales radiance by ior^2): 5 seeds at 256 spp spread over
     // 1.09-1.16 against 1.10-1.11 for the other two.
