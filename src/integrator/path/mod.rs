@@ -15,8 +15,8 @@
 //! survivors' throughput by the survival probability. `max_depth` bounds the number of
 //! bounces; light sampling still runs at the last hit, unweighted, as no BSDF ray
 //! continues from it along a non-delta lobe to compete, and a delta lobe's ray continues
-//! only to collect the emission it reaches. Beer's law attenuates paths inside absorbing dielectrics as
-//! in Whitted.
+//! only to collect the emission it reaches. Beer's law attenuates paths inside absorbing
+//! dielectrics as in Whitted.
 //!
 //! Every random number comes from the pixel's [`crate::sampler::PixelSampler`], which the
 //! path carries: after the camera's four dimensions, each hit draws seven in a fixed order

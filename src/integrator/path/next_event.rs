@@ -250,7 +250,7 @@ pub(super) fn trace_shadow_rays(
             &mut worker.counters,
         );
     } else {
-        // A later wave's fill Embree's stream straight from the segments.
+        // A later wave's shadow rays fill Embree's stream straight from the segments.
         worker
             .counters
             .count_rays(RayKind::Shadow, waves.shadows.len() as u64);
