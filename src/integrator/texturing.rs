@@ -117,12 +117,7 @@ pub(crate) fn environment_lookup(
     } else {
         [0.0; 4]
     };
-    if matches!(
-        context.scene.environment,
-        crate::scene::Environment::LatLong { .. }
-    ) {
-        worker.counters.texture_lookups += 1;
-    }
+    count_environment_lookup(context, worker);
     environment_radiance(
         &context.scene.environment,
         &context.textures,
@@ -141,12 +136,7 @@ pub(crate) fn environment_light_lookup(
     direction: Vec3,
     worker: &mut WorkerState,
 ) -> Vec3 {
-    if matches!(
-        context.scene.environment,
-        crate::scene::Environment::LatLong { .. }
-    ) {
-        worker.counters.texture_lookups += 1;
-    }
+    count_environment_lookup(context, worker);
     environment_light_radiance(
         &context.scene.environment,
         &context.textures,
@@ -154,4 +144,15 @@ pub(crate) fn environment_light_lookup(
         &context.texture_filters,
         context.external_textures.as_deref(),
     )
+}
+
+/// Counts a lookup of the environment's texture, when it has one.
+#[inline]
+fn count_environment_lookup(context: &RenderContext, worker: &mut WorkerState) {
+    if matches!(
+        context.scene.environment,
+        crate::scene::Environment::LatLong { .. }
+    ) {
+        worker.counters.texture_lookups += 1;
+    }
 }

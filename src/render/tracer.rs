@@ -386,7 +386,8 @@ impl Tracer {
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
-    /// [`Tracer::occluded`] of `rays` filled straight from the iterator.
+    /// Whether each of `rays` is blocked before its `tfar`, one incoherent stream filled
+    /// straight from the iterator ([`Tracer::occluded`] of a slice).
     pub fn occluded_stream(
         &self,
         rays: impl Iterator<Item = TraceRay>,
@@ -432,7 +433,7 @@ impl Tracer {
 
     /// Closest hits of `rays` as one incoherent stream into `hits` (misses left as they are).
     fn intersect_stream_into(&self, rays: &[TraceRay], hits: &mut [TraceHit]) {
-        with_stream(rays, |ray_hits, payload| {
+        self.with_stream_of(rays.iter().copied(), |ray_hits, payload| {
             self.note(
                 self.scene
                     .intersect_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
@@ -524,15 +525,7 @@ impl Tracer {
         blocked: &mut Vec<bool>,
         counters: &mut WorkCounters,
     ) {
-        blocked.clear();
-        with_stream(rays, |ray_hits, payload| {
-            self.note(
-                self.scene
-                    .occluded_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
-            );
-            blocked.extend(ray_hits.iter().map(|r| r.is_occluded()));
-        });
-        counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
+        self.occluded_stream(rays.iter().copied(), blocked, counters);
     }
 
     /// A wave's shadow rays: [`Tracer::occluded_coherent`] for a camera wave's (`coherent`),
@@ -569,16 +562,6 @@ fn fill_packet(rays: &[TraceRay], packet: &mut RayPacket<16>, payload: &mut [Ray
     }
 }
 
-/// Runs `trace` on this thread's stream buffers filled with `rays` and their payloads.
-fn with_stream(rays: &[TraceRay], trace: impl FnOnce(&mut [RayHit], &[RayPayload])) {
-    STREAM.with(|stream| {
-        let mut stream = stream.borrow_mut();
-        let (ray_hits, payload) = &mut *stream;
-        fill_stream(rays, ray_hits, payload);
-        trace(ray_hits, payload);
-    });
-}
-
 thread_local! {
     /// Per-thread stream buffers, reused across calls so tracing allocates nothing.
     static STREAM: RefCell<(Vec<RayHit>, Vec<RayPayload>)> = const { RefCell::new((Vec::new(), Vec::new())) };
@@ -598,16 +581,6 @@ fn trace_hit(hit: &crate::embree::Hit) -> TraceHit {
         u: hit.u,
         v: hit.v,
     }
-}
-
-fn fill_stream(rays: &[TraceRay], ray_hits: &mut Vec<RayHit>, payload: &mut Vec<RayPayload>) {
-    ray_hits.clear();
-    payload.clear();
-    ray_hits.extend(rays.iter().map(|r| RayHit::new(&embree_ray(r))));
-    payload.extend(rays.iter().map(|r| RayPayload {
-        cone_width: r.cone_width,
-        cone_spread: r.cone_spread,
-    }));
 }
 
 /// The alpha test of a cut-out material on mesh `mesh_index`, run by Embree for every
