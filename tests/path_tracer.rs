@@ -48,14 +48,22 @@ fn mean(pixels: &[[f32; 3]]) -> [f64; 3] {
 }
 
 /// Materials the white furnace holds to "reflects everything": one line each.
-/// The rough conductor is white (F0 = 1) GGX at roughness 0.2 (alpha 0.04), where the
-/// single-scattering lobe keeps more than 99% of the light at the view angles this camera
-/// sees (docs/materials.md); rougher lobes lose more, as no multiple-scattering term is added.
+/// The rough conductors are white (F0 = 1) GGX metals from nearly smooth to glTF's roughest;
+/// their single-scattering lobes alone keep as little as 0.31 of the light at roughness 1
+/// (docs/materials.md), and the multiple-scattering compensation gives the rest back.
 const FURNACE_MATERIALS: &[(&str, &str)] = &[
     ("lambert", "base_color = [1.0, 1.0, 1.0]"),
     (
         "rough_conductor",
         "base_color = [1.0, 1.0, 1.0]\nmetallic = 1.0\nroughness = 0.2",
+    ),
+    (
+        "rougher_conductor",
+        "base_color = [1.0, 1.0, 1.0]\nmetallic = 1.0\nroughness = 0.5",
+    ),
+    (
+        "roughest_conductor",
+        "base_color = [1.0, 1.0, 1.0]\nmetallic = 1.0\nroughness = 1.0",
     ),
 ];
 
@@ -112,6 +120,79 @@ material = "{name}"
             .fold(0.0f32, f32::max);
         eprintln!("furnace {name}: mean {m:?}, worst pixel error {worst}");
         assert!(worst < 0.05, "{name}: a pixel is {worst} off");
+        assert_eq!(stats.counters.nonfinite_samples, 0);
+    }
+}
+
+/// An opaque surface hides what is behind it from the path tracer, however tilted its
+/// shading normals: a metal quad whose smooth vertex normals lean 60 degrees off its face,
+/// in front of an emissive sphere, against a black environment, shows black. Before the
+/// fix a rough reflection about the leaning normal that left below the face was traced as
+/// a transmission and saw the lamp (mean 0.008, pixels up to 0.25).
+#[test]
+fn an_opaque_surface_with_leaning_normals_does_not_leak_light_from_behind() {
+    let dir = temp_dir();
+    for (name, material) in [
+        (
+            "metal",
+            "base_color = [1.0, 1.0, 1.0]\nmetallic = 1.0\nroughness = 0.3",
+        ),
+        ("plastic", "base_color = [0.8, 0.8, 0.8]\nroughness = 0.5"),
+        (
+            "classic",
+            "base_color = [0.8, 0.8, 0.8]\nspecular = 0.5\nshininess = 20.0",
+        ),
+    ] {
+        write(
+            dir.path(),
+            "quad.obj",
+            "v -2 -2 0\nv 2 -2 0\nv 2 2 0\nv -2 2 0\n\
+             vn 0.866 0 0.5\n\
+             f 1//1 2//1 3//1\nf 1//1 3//1 4//1\n",
+        );
+        let scene = load(
+            dir.path(),
+            &format!(
+                r#"
+[render]
+width = 16
+height = 16
+spp = 64
+max_depth = 4
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+height = 2.0
+
+[[material]]
+name = "{name}"
+{material}
+
+[[material]]
+name = "lamp"
+base_color = [0.0, 0.0, 0.0]
+emission = [10.0, 10.0, 10.0]
+
+[[mesh]]
+file = "quad.obj"
+material = "{name}"
+
+[[sphere]]
+center = [0.0, 0.0, -3.0]
+radius = 1.5
+material = "lamp"
+"#
+            ),
+        );
+        let (pixels, stats) = render_with(scene, &PathTracer::default(), |_| {});
+        let brightest = pixels
+            .iter()
+            .flat_map(|p| p.iter())
+            .fold(0.0f32, |m, &v| m.max(v));
+        eprintln!("{name}: brightest pixel {brightest}");
+        assert_eq!(brightest, 0.0, "{name}: light leaks through the quad");
         assert_eq!(stats.counters.nonfinite_samples, 0);
     }
 }

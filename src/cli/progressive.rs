@@ -106,11 +106,11 @@ pub fn next_pass(done: u32, bound: u32, fits: Option<u64>) -> std::ops::Range<u3
     done..done + size as u32
 }
 
-/// Checks `--time-limit`: a finite number of seconds above zero.
+/// Checks `--time-limit`: a number of seconds above zero and below 1e9 (about 31 years).
 pub fn check_time_limit(seconds: f64) -> Result<Duration, CommandError> {
     if !(seconds.is_finite() && seconds > 0.0 && seconds < 1e9) {
         return Err(CommandError::bad_input(format!(
-            "--time-limit must be a number of seconds above 0, got {seconds}"
+            "--time-limit must be a number of seconds above 0 and below 1e9, got {seconds}"
         )));
     }
     Ok(Duration::from_secs_f64(seconds))

@@ -9,15 +9,23 @@
 //! Jacobian, Walter et al. 2007, eq. 14) and the weight `f cos / pdf` reduces to
 //! `F G2 / G1(wo)`, close to `F` whatever the roughness.
 //!
-//! The lobe is single-scattering: light that would bounce between microfacets is lost,
-//! which darkens very rough metals (the figures are in docs/materials.md). Roughness near
-//! zero is kept finite by [`super::microfacet::MIN_ALPHA`].
+//! That lobe is single-scattering: light that would bounce between microfacets is lost,
+//! which darkens rough metals (to 0.31 of white at normal incidence for roughness 1). The
+//! lost energy comes back through [`super::multiple_scattering`]'s compensation lobe
+//! `F_ms f_ms`, added to `f`; the figures are in docs/materials.md. Sampling then picks the
+//! visible normals or the compensation's own directions with probabilities proportional
+//! to the two lobes' albedos seen from `wo`,
+//! `mean(F(cos_o)) E(cos_o)` and `mean(F_ms) (1 - E(cos_o))`; the density is their
+//! mixture and the weight `f cos / pdf` (one-sample multiple importance sampling with the
+//! balance heuristic, Veach 1997, section 9.2.4). Roughness near zero is kept finite by
+//! [`super::microfacet::MIN_ALPHA`].
 
 use glam::{Vec2, Vec3};
 
 use super::bsdf::{Bsdf, BsdfSample, Lobe};
 use super::frame::ShadingFrame;
 use super::microfacet::Ggx;
+use super::multiple_scattering::MultipleScattering;
 
 /// Schlick's Fresnel `F0 + (1 - F0)(1 - cos)^5` for a colour `F0` (glTF 2.0 Appendix B,
 /// "fresnel_mix" and "conductor_fresnel").
@@ -35,15 +43,41 @@ pub struct RoughConductor {
     pub ggx: Ggx,
     /// Reflectance at normal incidence.
     pub f0: Vec3,
+    /// The multiple-scattering compensation and its colour `F_ms` for `f0`.
+    pub multiple: MultipleScattering,
+    pub multiple_colour: Vec3,
 }
 
 impl RoughConductor {
     /// The conductor about the unit normal `n` with glTF perceptual `roughness` and `f0`.
     pub fn new(n: Vec3, roughness: f32, f0: Vec3) -> RoughConductor {
+        let ggx = Ggx::from_roughness(roughness);
+        let multiple = MultipleScattering::new(ggx);
         RoughConductor {
             frame: ShadingFrame::from_normal(n),
-            ggx: Ggx::from_roughness(roughness),
+            ggx,
             f0,
+            multiple,
+            multiple_colour: multiple.schlick_colour(f0),
+        }
+    }
+
+    /// The probability of sampling the visible normals rather than the compensation's
+    /// cosine lobe from the local `wo` (see the module doc).
+    #[inline]
+    fn specular_probability(&self, wo: Vec3) -> f32 {
+        let lost = self.multiple.lost(wo.z);
+        if lost == 0.0 {
+            return 1.0;
+        }
+        let mean = Vec3::splat(1.0 / 3.0);
+        let specular = schlick_f0(self.f0, wo.z).dot(mean) * (1.0 - lost);
+        let compensation = self.multiple_colour.dot(mean) * lost;
+        let total = specular + compensation;
+        if total > 0.0 {
+            (specular / total).clamp(0.0, 1.0)
+        } else {
+            1.0
         }
     }
 
@@ -59,6 +93,7 @@ impl RoughConductor {
         }
         let scale = self.ggx.d(h) * self.ggx.g2(wo, wi) / (4.0 * wo.z * wi.z);
         schlick_f0(self.f0, wo.dot(h)) * scale
+            + self.multiple_colour * self.multiple.eval(wo.z, wi.z)
     }
 
     /// The sampling density in the local frame.
@@ -67,37 +102,65 @@ impl RoughConductor {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
+        let p_specular = self.specular_probability(wo);
         let h = (wo + wi).normalize_or_zero();
         let wo_dot_h = wo.dot(h);
-        if h == Vec3::ZERO || wo_dot_h <= 0.0 {
-            return 0.0;
+        let specular = if h != Vec3::ZERO && wo_dot_h > 0.0 {
+            self.ggx.visible_normal_pdf(wo, h) / (4.0 * wo_dot_h)
+        } else {
+            0.0
+        };
+        if p_specular >= 1.0 {
+            return specular;
         }
-        self.ggx.visible_normal_pdf(wo, h) / (4.0 * wo_dot_h)
+        p_specular * specular + (1.0 - p_specular) * self.multiple.pdf(wi.z)
     }
 
     /// A local sample (`wi`, weight, pdf).
     #[inline]
-    pub(crate) fn sample_local(&self, wo: Vec3, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+    pub(crate) fn sample_local(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
         if wo.z <= 0.0 {
             return None;
         }
-        let h = self.ggx.sample_visible_normal(wo, u);
-        let wo_dot_h = wo.dot(h);
-        if wo_dot_h <= 0.0 {
-            return None;
+        let p_specular = self.specular_probability(wo);
+        if p_specular >= 1.0 {
+            // No compensation: the visible normals alone, whose weight reduces to
+            // `F G2 / G1`.
+            let h = self.ggx.sample_visible_normal(wo, u);
+            let wo_dot_h = wo.dot(h);
+            if wo_dot_h <= 0.0 {
+                return None;
+            }
+            let wi = 2.0 * wo_dot_h * h - wo;
+            if wi.z <= 0.0 {
+                // The reflection off this microfacet leaves below the surface.
+                return None;
+            }
+            let pdf = self.ggx.visible_normal_pdf(wo, h) / (4.0 * wo_dot_h);
+            if !(pdf > 0.0 && pdf.is_finite()) {
+                return None;
+            }
+            let weight = schlick_f0(self.f0, wo_dot_h) * (self.ggx.g2(wo, wi) / self.ggx.g1(wo));
+            return Some((wi, weight, pdf));
         }
-        let wi = 2.0 * wo_dot_h * h - wo;
+        let wi = if u_lobe < p_specular {
+            let h = self.ggx.sample_visible_normal(wo, u);
+            let wo_dot_h = wo.dot(h);
+            if wo_dot_h <= 0.0 {
+                return None;
+            }
+            2.0 * wo_dot_h * h - wo
+        } else {
+            self.multiple.sample(u)
+        };
         if wi.z <= 0.0 {
-            // The reflection off this microfacet leaves below the surface: the light is lost
-            // to the single-scattering model.
             return None;
         }
-        let pdf = self.ggx.visible_normal_pdf(wo, h) / (4.0 * wo_dot_h);
+        let pdf = self.pdf_local(wo, wi);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
-        let weight = schlick_f0(self.f0, wo_dot_h) * (self.ggx.g2(wo, wi) / self.ggx.g1(wo));
-        Some((wi, weight, pdf))
+        Some((wi, self.eval_local(wo, wi) * (wi.z / pdf), pdf))
     }
 }
 
@@ -106,8 +169,8 @@ impl Bsdf for RoughConductor {
         self.eval_local(self.frame.to_local(wo), self.frame.to_local(wi))
     }
 
-    fn sample(&self, wo: Vec3, _u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        let (wi, weight, pdf) = self.sample_local(self.frame.to_local(wo), u)?;
+    fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let (wi, weight, pdf) = self.sample_local(self.frame.to_local(wo), u_lobe, u)?;
         Some(BsdfSample {
             wi: self.frame.to_world(wi),
             weight,

@@ -10,6 +10,10 @@
 //!   `F_d(x) = 0.04 + 0.96 (1 - x)^5` (`fresnel_mix` with ior 1.5);
 //! - `f = (1 - metallic) dielectric + metallic metal`.
 //!
+//! The metal also gets the energy its single-scattering lobe loses between microfacets
+//! back, as [`super::multiple_scattering`]'s compensation `F_ms(base) f_ms` (as
+//! [`super::conductor`] does): a white metal of any roughness reflects everything.
+//!
 //! The diffuse weight departs from the specification's example, which weights the diffuse
 //! term by `1 - F_d(c)` at the half vector: that lets a white dielectric reflect more than
 //! it receives at grazing views (an albedo of 1.20 at 75 degrees and roughness 0.05,
@@ -23,9 +27,10 @@
 //! Sampling picks the specular lobe (visible-normal sampling, [`super::conductor`]'s
 //! density) or the diffuse one (cosine) with probabilities proportional to their
 //! approximate albedos seen from `wo`: `(1 - metallic) F_d(cos_o) + metallic mean(F_m(cos_o))`
-//! for the specular and `(1 - metallic)(1 - F_d(cos_o)) mean(base)` for the diffuse. The
-//! density is the mixture `p_s pdf_specular + (1 - p_s) cos_i / pi` whichever lobe drew
-//! the sample, and the weight `f cos_i / pdf` (one-sample multiple importance sampling
+//! for the specular, `(1 - metallic)(1 - F_d(cos_o)) mean(base)` for the diffuse, and
+//! `metallic mean(F_ms) (1 - E(cos_o))` for the metal's compensation (sampled by its own
+//! density). The density is the mixture
+//! `p_s pdf_specular + p_d cos_i / pi + p_ms pdf_ms` whichever lobe drew the sample, and the weight `f cos_i / pdf` (one-sample multiple importance sampling
 //! with the balance heuristic, Veach 1997, section 9.2.4).
 
 use std::f32::consts::PI;
@@ -36,6 +41,7 @@ use super::bsdf::{sample_cosine_hemisphere, Bsdf, BsdfSample, Lobe};
 use super::conductor::schlick_f0;
 use super::frame::ShadingFrame;
 use super::microfacet::Ggx;
+use super::multiple_scattering::MultipleScattering;
 
 /// The glTF dielectric's reflectance at normal incidence (ior 1.5: `((1.5 - 1) / 2.5)^2`).
 pub const DIELECTRIC_F0: f32 = 0.04;
@@ -47,6 +53,10 @@ pub struct MetallicRoughnessBsdf {
     pub ggx: Ggx,
     pub base_color: Vec3,
     pub metallic: f32,
+    /// The metal's multiple-scattering compensation ([`MultipleScattering::NONE`] when
+    /// `metallic` is 0) and its colour `F_ms` for the base colour.
+    pub multiple: MultipleScattering,
+    pub multiple_colour: Vec3,
 }
 
 impl MetallicRoughnessBsdf {
@@ -58,11 +68,19 @@ impl MetallicRoughnessBsdf {
         } else {
             0.0
         };
+        let ggx = Ggx::from_roughness(roughness);
+        let multiple = if metallic > 0.0 {
+            MultipleScattering::new(ggx)
+        } else {
+            MultipleScattering::NONE
+        };
         MetallicRoughnessBsdf {
             frame: ShadingFrame::from_normal(n),
-            ggx: Ggx::from_roughness(roughness),
+            ggx,
             base_color,
             metallic,
+            multiple,
+            multiple_colour: multiple.schlick_colour(base_color),
         }
     }
 
@@ -72,19 +90,25 @@ impl MetallicRoughnessBsdf {
         self.frame.n
     }
 
-    /// Probability of sampling the specular lobe for the local `wo`.
+    /// Probabilities of sampling the specular lobe and the diffuse one for the local `wo`
+    /// (the metal's compensation takes the rest).
     #[inline]
-    fn specular_probability(&self, wo: Vec3) -> f32 {
+    fn lobe_probabilities(&self, wo: Vec3) -> (f32, f32) {
         let m = self.metallic;
+        let mean = Vec3::splat(1.0 / 3.0);
         let fd = schlick_f0(Vec3::splat(DIELECTRIC_F0), wo.z).x;
-        let fm = schlick_f0(self.base_color, wo.z).dot(Vec3::splat(1.0 / 3.0));
+        let fm = schlick_f0(self.base_color, wo.z).dot(mean);
         let specular = (1.0 - m) * fd + m * fm;
-        let diffuse = (1.0 - m) * (1.0 - fd) * self.base_color.dot(Vec3::splat(1.0 / 3.0));
-        let total = specular + diffuse;
+        let diffuse = (1.0 - m) * (1.0 - fd) * self.base_color.dot(mean);
+        let compensation = m * self.multiple_colour.dot(mean) * self.multiple.lost(wo.z);
+        let total = specular + diffuse + compensation;
         if total > 0.0 {
-            (specular / total).clamp(0.0, 1.0)
+            (
+                (specular / total).clamp(0.0, 1.0),
+                (diffuse / total).clamp(0.0, 1.0),
+            )
         } else {
-            1.0
+            (1.0, 0.0)
         }
     }
 
@@ -102,7 +126,8 @@ impl MetallicRoughnessBsdf {
         let transmitted = (1.0 - fresnel(wo.z)) * (1.0 - fresnel(wi.z));
         let dielectric =
             transmitted * self.base_color * (1.0 / PI) + Vec3::splat(fresnel(c) * specular);
-        let metal = schlick_f0(self.base_color, c) * specular;
+        let metal = schlick_f0(self.base_color, c) * specular
+            + self.multiple_colour * self.multiple.eval(wo.z, wi.z);
         (1.0 - self.metallic) * dielectric + self.metallic * metal
     }
 
@@ -110,7 +135,7 @@ impl MetallicRoughnessBsdf {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
-        let p_specular = self.specular_probability(wo);
+        let (p_specular, p_diffuse) = self.lobe_probabilities(wo);
         let h = (wo + wi).normalize_or_zero();
         let wo_dot_h = wo.dot(h);
         let specular = if h != Vec3::ZERO && wo_dot_h > 0.0 {
@@ -118,22 +143,31 @@ impl MetallicRoughnessBsdf {
         } else {
             0.0
         };
-        p_specular * specular + (1.0 - p_specular) * wi.z / PI
+        let p_compensation = (1.0 - p_specular - p_diffuse).max(0.0);
+        let compensation = if p_compensation > 0.0 {
+            p_compensation * self.multiple.pdf(wi.z)
+        } else {
+            0.0
+        };
+        p_specular * specular + p_diffuse * wi.z / PI + compensation
     }
 
     pub(crate) fn sample_local(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
         if wo.z <= 0.0 {
             return None;
         }
-        let wi = if u_lobe < self.specular_probability(wo) {
+        let (p_specular, p_diffuse) = self.lobe_probabilities(wo);
+        let wi = if u_lobe < p_specular {
             let h = self.ggx.sample_visible_normal(wo, u);
             let wo_dot_h = wo.dot(h);
             if wo_dot_h <= 0.0 {
                 return None;
             }
             2.0 * wo_dot_h * h - wo
-        } else {
+        } else if u_lobe < p_specular + p_diffuse || !self.multiple.is_on() {
             sample_cosine_hemisphere(Vec3::Z, u)
+        } else {
+            self.multiple.sample(u)
         };
         if wi.z <= 0.0 {
             return None;
@@ -198,10 +232,18 @@ mod tests {
     fn lobe_choice_follows_the_albedos() {
         let wo = Vec3::Z;
         let metal = MetallicRoughnessBsdf::new(Vec3::Z, Vec3::splat(0.5), 0.5, 1.0);
-        assert_eq!(metal.specular_probability(wo), 1.0);
+        // F_m(1) = 0.5 against the compensation's mean(F_ms) (1 - E(1)); no diffuse.
+        let compensation = metal.multiple_colour.x * metal.multiple.lost(1.0);
+        assert!(compensation > 0.0 && compensation < 0.05, "{compensation}");
+        let (p, p_diffuse) = metal.lobe_probabilities(wo);
+        assert!((p - 0.5 / (0.5 + compensation)).abs() < 1e-5, "{p}");
+        assert_eq!(p_diffuse, 0.0);
+        let smooth_metal = MetallicRoughnessBsdf::new(Vec3::Z, Vec3::splat(0.5), 0.0, 1.0);
+        assert!(smooth_metal.lobe_probabilities(wo).0 > 0.9999);
         let plastic = MetallicRoughnessBsdf::new(Vec3::Z, Vec3::splat(0.5), 0.5, 0.0);
         // 0.04 against 0.96 * 0.5.
-        let p = plastic.specular_probability(wo);
+        let (p, p_diffuse) = plastic.lobe_probabilities(wo);
         assert!((p - 0.04 / (0.04 + 0.48)).abs() < 1e-5, "{p}");
+        assert!((p + p_diffuse - 1.0).abs() < 1e-6);
     }
 }

@@ -17,6 +17,8 @@
 //! - [`mirror`] and [`dielectric`]: the smooth mirror and the smooth dielectric boundary
 //!   (exact or Schlick Fresnel, total internal reflection), both delta lobes.
 //! - [`conductor`]: the rough GGX metal (Schlick Fresnel from `F0`).
+//! - [`multiple_scattering`]: the energy a GGX metal loses between its microfacets, given
+//!   back as a compensation lobe (Kulla and Conty 2017).
 //! - [`rough_dielectric`]: the rough GGX boundary that reflects and transmits (Walter et
 //!   al. 2007, exact Fresnel, total internal reflection).
 //! - [`metallic_roughness`]: the glTF 2.0 metallic-roughness opaque lobe.
@@ -62,6 +64,7 @@ pub mod material_bsdf;
 pub mod metallic_roughness;
 pub mod microfacet;
 pub mod mirror;
+pub mod multiple_scattering;
 pub mod ray_offset;
 pub mod reflection;
 pub mod refraction;

@@ -212,9 +212,17 @@ pub(super) fn shade(
     if !delta && (!continues || ray.diffuse_depth >= tracer.diffuse_bounces) {
         return;
     }
-    let throughput = ray.throughput * sample.weight;
     let wi = sample.wi;
     let crosses = wi.dot(ng) < 0.0;
+    // A lobe sampled about a tilted shading normal (normal map, smooth vertex normals) can
+    // reflect below the geometric surface. Only a boundary that transmits with a density
+    // sends light through; for any other such sample the light would leak through an
+    // opaque surface, so the path ends (as light sampling, which `admits` only the
+    // viewer's side, already treats that direction).
+    if crosses && !delta && !bsdf.transmits_with_density() {
+        return;
+    }
+    let throughput = ray.throughput * sample.weight;
     // Footprint of the continuing ray: mirror and refraction as in Whitted, a widened cone
     // for a rough bounce (seed 000, "BSDF scattering").
     let mut approximate_footprint = false;
