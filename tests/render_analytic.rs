@@ -4,6 +4,9 @@
 mod common;
 
 use common::*;
+use conetrace::shading::microfacet::Ggx;
+use conetrace::shading::multiple_scattering::MultipleScattering;
+use glam::Vec3;
 
 /// A 10x10 Lambert plane at y = 0 lit by a point light 4 units above its centre, seen from
 /// above by an orthographic camera: every pixel is albedo/pi * I cos(theta) / r^2.
@@ -291,9 +294,11 @@ fn glass_slab_shifts_rays_by_the_predicted_amount() {
 
 /// A glTF metal plane (metallic 1, roughness 0.5) under a point light, seen from straight
 /// above: Whitted's direct light evaluates the GGX lobe, so every pixel is
-/// `F D G2 / (4 cos_o cos_i) * I cos_i / r^2` (GGX written out here independently of the
-/// renderer: Walter et al. 2007, eq. 33; Smith's height-correlated masking; Schlick with
-/// F0 = the base colour).
+/// `(F D G2 / (4 cos_o cos_i) + F_ms f_ms) * I cos_i / r^2` (GGX written out here
+/// independently of the renderer: Walter et al. 2007, eq. 33; Smith's height-correlated
+/// masking; Schlick with F0 = the base colour). The multiple-scattering term `F_ms f_ms`
+/// is the library's own (`shading::multiple_scattering`, tested against its definition
+/// there); this test checks that the render adds it to the highlight.
 #[test]
 fn metallic_roughness_plane_under_point_light_matches_the_ggx_highlight() {
     let dir = temp_dir();
@@ -352,6 +357,8 @@ material = "metal"
     let image = read_exr(&dir.path().join("plane.exr"));
     let (u, v) = (image.channel("uv.U"), image.channel("uv.V"));
     let f0 = [0.9f64, 0.6, 0.3];
+    let compensation = MultipleScattering::new(Ggx::from_roughness(0.5));
+    let compensation_colour = compensation.schlick_colour(Vec3::new(0.9, 0.6, 0.3));
     let alpha2 = 0.5f64.powi(4);
     let lambda = |cos: f64| {
         let tan2 = (1.0 - cos * cos) / (cos * cos);
@@ -374,7 +381,8 @@ material = "metal"
         let g2 = 1.0 / (1.0 + lambda(wo[1]) + lambda(wi[1]));
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
             let fresnel = f0[c] + (1.0 - f0[c]) * (1.0 - wo_dot_h).powi(5);
-            let f = fresnel * d * g2 / (4.0 * wo[1] * wi[1]);
+            let f = fresnel * d * g2 / (4.0 * wo[1] * wi[1])
+                + (compensation_colour[c] * compensation.eval(1.0, wi[1] as f32)) as f64;
             let expected = f * wi[1] * 10.0 / r2;
             let got = image.channel(name)[i] as f64;
             peak = peak.max(expected);
