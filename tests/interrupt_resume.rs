@@ -388,3 +388,60 @@ fn resume_names_what_changed_and_accepts_the_same_scene_by_another_path() {
     assert!(status.success(), "{stderr}");
     assert!(dir.path().join("s.exr").exists());
 }
+
+/// Ctrl-C stops a render within a run of samples, not at the end of a work tile: one
+/// 16x16 tile of 100 million samples per pixel (hours of work) stops promptly with status
+/// 3, writes nothing, and says so. Before the fix the tile ran on and the signal was
+/// ignored until it finished.
+#[test]
+fn sigint_stops_a_tile_with_many_samples_mid_way() {
+    let dir = temp_dir();
+    let args: Vec<String> = [
+        "render",
+        "-o",
+        "slow.exr",
+        "--no-png",
+        "--quiet",
+        "--threads",
+        "1",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "100000000",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let mut delay_ms = 500;
+    for _attempt in 0..5 {
+        let mut child = start(dir.path(), &args);
+        sleep(Duration::from_millis(delay_ms));
+        signal(&child, Signal::SIGINT);
+        // A generous bound that only a render ignoring the signal reaches.
+        let mut waited = Duration::ZERO;
+        while child.try_wait().expect("poll conetrace").is_none() {
+            if waited > Duration::from_secs(120) {
+                child.kill().ok();
+                panic!("the render ignored SIGINT for {waited:?}");
+            }
+            sleep(Duration::from_millis(50));
+            waited += Duration::from_millis(50);
+        }
+        let (status, stderr) = finish(child);
+        match status.code() {
+            // The signal landed before the handler was installed: try later.
+            None => delay_ms *= 2,
+            Some(3) => {
+                assert!(stderr.contains("nothing written"), "{stderr}");
+                assert!(!dir.path().join("slow.exr").exists());
+                assert!(!dir.path().join("slow.partial.exr").exists());
+                eprintln!("stopped {waited:?} after the signal");
+                return;
+            }
+            other => panic!("status {other:?}: {stderr}"),
+        }
+    }
+    panic!("the signal never reached a running render");
+}

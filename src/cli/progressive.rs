@@ -12,7 +12,7 @@
 //! samples. After every pass but the first, the pass size is also cut to the samples the
 //! remaining time can hold at the speed measured on the previous pass, after the time the last
 //! write of the outputs took. A pass that the
-//! deadline still overtakes is abandoned at its next work tile and the outputs keep the
+//! deadline still overtakes is abandoned within its current run of samples and the outputs keep the
 //! previous pass; the first pass always finishes (only Ctrl-C stops it), so a time limit
 //! always gives an image.
 //!
@@ -42,7 +42,7 @@
 //!
 //! # Interruption
 //!
-//! Ctrl-C or SIGTERM abandons the pass in flight at its next work tile; the outputs keep the
+//! Ctrl-C or SIGTERM abandons the pass in flight within its current run of samples; the outputs keep the
 //! last completed pass (already on disk) and the command exits with status 3
 //! (`cli::EXIT_INTERRUPTED`), as an interrupted `conetrace render` does. Interrupted during
 //! the first pass, nothing is written. There is no partial file to `--resume` from: every

@@ -18,6 +18,7 @@
 
 use std::fmt;
 use std::str::FromStr;
+use std::sync::atomic::AtomicBool;
 
 use crate::film::{PixelRect, TileImage};
 use crate::integrator::path::{PathTracer, PathWaves};
@@ -281,21 +282,22 @@ impl Integrator for SelectedIntegrator {
         image: &mut TileImage,
         worker: &mut WorkerState,
         state: &mut SelectedState,
-    ) {
+        stop: Option<&AtomicBool>,
+    ) -> bool {
         match (self, state) {
             (SelectedIntegrator::Whitted(i), SelectedState::Whitted(s)) => {
-                i.render_tile(context, tile, image, worker, s)
+                i.render_tile(context, tile, image, worker, s, stop)
             }
             (SelectedIntegrator::Path(i), SelectedState::Path(s)) => {
-                i.render_tile(context, tile, image, worker, s)
+                i.render_tile(context, tile, image, worker, s, stop)
             }
             (SelectedIntegrator::Vct(i), SelectedState::Whitted(s)) => {
-                i.render_tile(context, tile, image, worker, s)
+                i.render_tile(context, tile, image, worker, s, stop)
             }
             // A state is only ever made by its own integrator's `thread_state`.
             (integrator, state) => {
                 *state = integrator.thread_state(context);
-                integrator.render_tile(context, tile, image, worker, state)
+                integrator.render_tile(context, tile, image, worker, state, stop)
             }
         }
     }

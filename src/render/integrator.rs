@@ -7,6 +7,8 @@
 //! integrators themselves live in `crate::integrator`, which depends on this stage; this
 //! module knows none of them.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use crate::film::{PixelRect, TileImage};
 use crate::render::context::{RenderContext, WorkerState};
 
@@ -23,6 +25,11 @@ pub trait Integrator: Sync {
     /// `worker` and reusing `state`. The render loop holds this thread's worker state while
     /// the call runs, so it must not start rayon work of its own (a nested job stolen by
     /// this thread would find that state taken).
+    ///
+    /// `stop`, when set, is read between runs of samples: once it is raised the call
+    /// returns early with `false`, and the tile's image is incomplete (the render loop
+    /// drops it). A tile with many samples per pixel then stops within one run of samples,
+    /// not at its end. `true` means the tile was rendered whole.
     fn render_tile(
         &self,
         context: &RenderContext,
@@ -30,5 +37,12 @@ pub trait Integrator: Sync {
         image: &mut TileImage,
         worker: &mut WorkerState,
         state: &mut Self::ThreadState,
-    );
+        stop: Option<&AtomicBool>,
+    ) -> bool;
+}
+
+/// True when `stop` is raised.
+#[inline]
+pub fn stop_requested(stop: Option<&AtomicBool>) -> bool {
+    stop.is_some_and(|s| s.load(Ordering::Relaxed))
 }

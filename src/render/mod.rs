@@ -177,7 +177,8 @@ struct TileWorker<S> {
 pub struct RenderControl<'a> {
     /// Called with (finished tiles, total tiles) from worker threads.
     pub progress: Option<&'a (dyn Fn(usize, usize) + Sync)>,
-    /// Set to stop the render after the tiles in flight.
+    /// Set to stop the render: tiles in flight stop within their current run of samples
+    /// and are left out with those never started.
     pub cancel: Option<&'a AtomicBool>,
     /// Tiles already finished by an earlier run (`--resume`): skipped.
     pub skip: Option<&'a [bool]>,
@@ -284,7 +285,11 @@ pub fn render<I: Integrator>(
         } = &mut *worker;
         image.reset(tile, options.aovs);
         image.samples = sample_range.clone();
-        integrator.render_tile(context, tile, image, counters, state);
+        // A cancelled tile stops within a run of samples and is left out, as a tile never
+        // started is.
+        if !integrator.render_tile(context, tile, image, counters, state, control.cancel) {
+            return;
+        }
         copy_tile_to_film(image, &mut region);
         finished.push(index);
         let done = finished_count.fetch_add(1, Ordering::Relaxed) + 1;

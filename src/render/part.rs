@@ -117,7 +117,14 @@ pub fn estimate_tile_row_costs<I: Integrator>(context: &RenderContext, integrato
                     };
                     let mut image = TileImage::new(probe, Default::default());
                     image.samples = Some(0..1);
-                    integrator.render_tile(context, probe, &mut image, &mut worker, &mut state);
+                    integrator.render_tile(
+                        context,
+                        probe,
+                        &mut image,
+                        &mut worker,
+                        &mut state,
+                        None,
+                    );
                 }
             }
             let c = &worker.counters;

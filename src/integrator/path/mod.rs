@@ -49,6 +49,8 @@ mod mis;
 mod next_event;
 mod vertex;
 
+use std::sync::atomic::AtomicBool;
+
 use glam::Vec3;
 
 use crate::film::{PixelRect, TileImage};
@@ -57,6 +59,7 @@ use crate::integrator::camera_sample::{for_each_camera_ray, sample_runs, slot_pl
 use crate::integrator::trace_wave::WaveRay;
 use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
+use crate::render::integrator::stop_requested;
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::Integrator;
@@ -209,7 +212,8 @@ impl Integrator for PathTracer {
         image: &mut TileImage,
         worker: &mut WorkerState,
         waves: &mut PathWaves,
-    ) {
+        stop: Option<&AtomicBool>,
+    ) -> bool {
         let options = &context.options;
         let spp = options.spp.max(1);
         let samples = image.samples.clone().unwrap_or(0..spp);
@@ -218,6 +222,9 @@ impl Integrator for PathTracer {
         // tracer's rays, and 16 samples in flight cost more in memory traffic than their
         // coherent packets save (docs/benchmarks.md).
         for run in sample_runs(samples, spp, 1) {
+            if stop_requested(stop) {
+                return false;
+            }
             image.begin_samples(run.len());
             let (current, kept) = (&mut waves.rays.camera, &mut waves.rays.kept);
             current.clear();
@@ -261,6 +268,7 @@ impl Integrator for PathTracer {
         }
         image.finish_mean(sample_count);
         image.alpha.fill(1.0);
+        true
     }
 }
 

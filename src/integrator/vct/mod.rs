@@ -11,6 +11,7 @@
 
 mod glossy;
 
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -53,8 +54,9 @@ impl Integrator for Vct {
         image: &mut TileImage,
         worker: &mut WorkerState,
         waves: &mut Waves,
-    ) {
-        render_tile_with(context, tile, image, worker, waves, self);
+        stop: Option<&AtomicBool>,
+    ) -> bool {
+        render_tile_with(context, tile, image, worker, waves, self, stop)
     }
 }
 

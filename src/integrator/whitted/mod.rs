@@ -36,6 +36,8 @@ mod shadow_walk;
 mod spawn;
 mod surface;
 
+use std::sync::atomic::AtomicBool;
+
 use glam::Vec3;
 
 use crate::film::{PixelRect, TileImage};
@@ -44,6 +46,7 @@ use crate::integrator::camera_sample::{sample_runs, slot_place, MAX_SAMPLES_IN_F
 use crate::integrator::trace_wave::WaveRay;
 use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
+use crate::render::integrator::stop_requested;
 use crate::render::stats::RayKind;
 use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::Integrator;
@@ -118,14 +121,24 @@ impl Integrator for Whitted {
         image: &mut TileImage,
         worker: &mut WorkerState,
         waves: &mut Waves,
-    ) {
-        render_tile_with(context, tile, image, worker, waves, &AmbientEnvironment);
+        stop: Option<&AtomicBool>,
+    ) -> bool {
+        render_tile_with(
+            context,
+            tile,
+            image,
+            worker,
+            waves,
+            &AmbientEnvironment,
+            stop,
+        )
     }
 }
 
 /// Render `tile` with Whitted's waves, the opaque lobe of every hit lit by the punctual
 /// lights' shadow rays plus `indirect` (Whitted's constant ambient, or cones through the
-/// voxels for `crate::integrator::vct`).
+/// voxels for `crate::integrator::vct`); `stop` and the result as for
+/// [`Integrator::render_tile`].
 pub(crate) fn render_tile_with(
     context: &RenderContext,
     tile: PixelRect,
@@ -133,7 +146,8 @@ pub(crate) fn render_tile_with(
     worker: &mut WorkerState,
     waves: &mut Waves,
     indirect: &dyn IndirectLight,
-) {
+    stop: Option<&AtomicBool>,
+) -> bool {
     let options = &context.options;
     let spp = options.spp.max(1);
     let image_width = options.width;
@@ -142,6 +156,9 @@ pub(crate) fn render_tile_with(
     // Up to 16 samples of every pixel are traced together (`camera_sample`).
     waves.tile_pixels = tile.area() as u32;
     for run in sample_runs(samples, spp, MAX_SAMPLES_IN_FLIGHT) {
+        if stop_requested(stop) {
+            return false;
+        }
         image.begin_samples(run.len());
         waves.in_flight = run.len();
         generate_camera_rays(context, tile, &run, image_width, waves);
@@ -167,6 +184,7 @@ pub(crate) fn render_tile_with(
     // The background is rendered too: a finished pixel is opaque. (Alpha 0 marks pixels
     // an interrupted render did not reach.)
     image.alpha.fill(1.0);
+    true
 }
 
 /// Trace the current wave (`wave_order::trace_current`).
