@@ -122,34 +122,8 @@ impl RoughConductor {
         if wo.z <= 0.0 {
             return None;
         }
-        let p_specular = self.specular_probability(wo);
-        if p_specular >= 1.0 {
-            // No compensation: the visible normals alone, whose weight reduces to
-            // `F G2 / G1`.
-            let h = self.ggx.sample_visible_normal(wo, u);
-            let wo_dot_h = wo.dot(h);
-            if wo_dot_h <= 0.0 {
-                return None;
-            }
-            let wi = 2.0 * wo_dot_h * h - wo;
-            if wi.z <= 0.0 {
-                // The reflection off this microfacet leaves below the surface.
-                return None;
-            }
-            let pdf = self.ggx.visible_normal_pdf(wo, h) / (4.0 * wo_dot_h);
-            if !(pdf > 0.0 && pdf.is_finite()) {
-                return None;
-            }
-            let weight = schlick_f0(self.f0, wo_dot_h) * (self.ggx.g2(wo, wi) / self.ggx.g1(wo));
-            return Some((wi, weight, pdf));
-        }
-        let wi = if u_lobe < p_specular {
-            let h = self.ggx.sample_visible_normal(wo, u);
-            let wo_dot_h = wo.dot(h);
-            if wo_dot_h <= 0.0 {
-                return None;
-            }
-            2.0 * wo_dot_h * h - wo
+        let wi = if u_lobe < self.specular_probability(wo) {
+            self.ggx.sample_reflection(wo, u)?.0
         } else {
             self.multiple.sample(u)
         };

@@ -158,12 +158,7 @@ impl MetallicRoughnessBsdf {
         }
         let (p_specular, p_diffuse) = self.lobe_probabilities(wo);
         let wi = if u_lobe < p_specular {
-            let h = self.ggx.sample_visible_normal(wo, u);
-            let wo_dot_h = wo.dot(h);
-            if wo_dot_h <= 0.0 {
-                return None;
-            }
-            2.0 * wo_dot_h * h - wo
+            self.ggx.sample_reflection(wo, u)?.0
         } else if u_lobe < p_specular + p_diffuse || !self.multiple.is_on() {
             sample_cosine_hemisphere(Vec3::Z, u)
         } else {

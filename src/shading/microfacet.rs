@@ -109,6 +109,19 @@ impl Ggx {
         self.g1(w) * w_dot_h * self.d(h) / cos_w
     }
 
+    /// The reflection of the local `wo` (above the surface) off a visible normal drawn
+    /// with `u`: `(wi, h)`, or `None` when the normal faces away (`wi` may be below the
+    /// surface; the caller decides what that means).
+    #[inline]
+    pub fn sample_reflection(&self, wo: Vec3, u: Vec2) -> Option<(Vec3, Vec3)> {
+        let h = self.sample_visible_normal(wo, u);
+        let wo_dot_h = wo.dot(h);
+        if wo_dot_h <= 0.0 {
+            return None;
+        }
+        Some((2.0 * wo_dot_h * h - wo, h))
+    }
+
     /// A microfacet normal drawn from `D_w` for the local unit `w` with the uniform `u`
     /// (Heitz 2018, section 3 and its listing).
     pub fn sample_visible_normal(&self, w: Vec3, u: Vec2) -> Vec3 {

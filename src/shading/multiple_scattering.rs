@@ -140,25 +140,24 @@ pub(crate) fn single_scattering_albedo(ggx: Ggx, mu: f32, grid: usize) -> f64 {
     let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let g1 = ggx.g1(wo);
     let mut sum = 0.0f64;
-    for a in 0..grid {
-        for b in 0..grid {
-            let u = Vec2::new(
-                (a as f32 + 0.5) / grid as f32,
-                (b as f32 + 0.5) / grid as f32,
-            );
-            let h = ggx.sample_visible_normal(wo, u);
-            let wo_dot_h = wo.dot(h);
-            if wo_dot_h <= 0.0 {
-                continue;
+    for u in midpoint_grid(grid) {
+        if let Some((wi, _)) = ggx.sample_reflection(wo, u) {
+            if wi.z > 0.0 {
+                sum += (ggx.g2(wo, wi) / g1) as f64;
             }
-            let wi = 2.0 * wo_dot_h * h - wo;
-            if wi.z <= 0.0 {
-                continue;
-            }
-            sum += (ggx.g2(wo, wi) / g1) as f64;
         }
     }
     sum / (grid * grid) as f64
+}
+
+/// The midpoints of a `side x side` grid over the unit square.
+pub(crate) fn midpoint_grid(side: usize) -> impl Iterator<Item = Vec2> {
+    (0..side * side).map(move |k| {
+        Vec2::new(
+            ((k / side) as f32 + 0.5) / side as f32,
+            ((k % side) as f32 + 0.5) / side as f32,
+        )
+    })
 }
 
 /// The GGX width of roughness row `j`: `MIN_ALPHA^(1 - j / (ROUGHNESS_NODES - 1))`.
@@ -520,17 +519,11 @@ mod tests {
                 let side = 400;
                 let mut sum = 0.0f64;
                 let mut largest = 0.0f32;
-                for a in 0..side {
-                    for b in 0..side {
-                        let u = Vec2::new(
-                            (a as f32 + 0.5) / side as f32,
-                            (b as f32 + 0.5) / side as f32,
-                        );
-                        let wi = ms.sample(u);
-                        let weight = ms.eval(mu_o, wi.z) * wi.z / ms.pdf(wi.z);
-                        sum += weight as f64;
-                        largest = largest.max(weight);
-                    }
+                for u in midpoint_grid(side) {
+                    let wi = ms.sample(u);
+                    let weight = ms.eval(mu_o, wi.z) * wi.z / ms.pdf(wi.z);
+                    sum += weight as f64;
+                    largest = largest.max(weight);
                 }
                 let mean = sum / (side * side) as f64;
                 let expected = ms.lost(mu_o) as f64;
