@@ -46,7 +46,7 @@
 
 use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 use super::bsdf::orthonormal_basis;
 use super::spherical_triangle;
@@ -97,7 +97,7 @@ pub const MAX_SPHERICAL_SOLID_ANGLE: f32 = 6.22;
 /// `d_min` at least `h` and at least the distance to the centroid minus the centroid's
 /// farthest corner.
 #[inline]
-fn spherical_corners(p: Vec3, triangle: &AreaShape) -> Option<([Vec3; 3], f32)> {
+fn spherical_corners(p: Vec3, triangle: &AreaShape) -> Option<([DVec3; 3], f32)> {
     let AreaShape::Triangle {
         p: v,
         normal,
@@ -113,11 +113,7 @@ fn spherical_corners(p: Vec3, triangle: &AreaShape) -> Option<([Vec3; 3], f32)> 
     if nearest > 0.0 && area * height < MIN_SPHERICAL_SOLID_ANGLE * nearest * nearest * nearest {
         return None;
     }
-    let [a, b, c] = [
-        (v[0] - p).try_normalize()?,
-        (v[1] - p).try_normalize()?,
-        (v[2] - p).try_normalize()?,
-    ];
+    let [a, b, c] = spherical_triangle::corner_directions(p, v)?;
     let omega = spherical_triangle::solid_angle(a, b, c);
     (omega.is_finite() && (MIN_SPHERICAL_SOLID_ANGLE..=MAX_SPHERICAL_SOLID_ANGLE).contains(&omega))
         .then_some(([a, b, c], omega))
@@ -555,6 +551,38 @@ mod tests {
         );
     }
 
+    #[test]
+    fn a_point_close_under_a_huge_triangle_light_gets_its_irradiance() {
+        // A triangle 20 000 units wide, 20 and 2 units above points under its long side and
+        // beside it: light samples give L times the projected solid angle.
+        for height in [20.0f32, 2.0] {
+            let light = AreaLight {
+                // Wound clockwise seen from above: it faces down.
+                shape: AreaShape::triangle([
+                    Vec3::new(-1e4, height, -1e4),
+                    Vec3::new(1e4, height, 1e4),
+                    Vec3::new(-1e4, height, 1e4),
+                ]),
+                radiance: Vec3::ONE,
+                textured: None,
+            };
+            let AreaShape::Triangle { p: v, .. } = light.shape else {
+                unreachable!()
+            };
+            for offset in [0.0, 3.0] {
+                let p = Vec3::new(offset * height, 0.0, -offset * height);
+                let exact = spherical_triangle::tests::projected_solid_angle(
+                    v.map(|q| q.as_dvec3() - p.as_dvec3()),
+                );
+                let e = irradiance(&light, p, Vec3::Y, 400_000) as f64;
+                assert!(
+                    (e / exact - 1.0).abs() < 5e-3,
+                    "height {height}, offset {offset}: {e} against {exact}"
+                );
+            }
+        }
+    }
+
     /// Irradiance at `p` (normal `n`) from `light`, estimated by sampling its area
     /// uniformly whatever its solid angle: the mean and the variance of the estimate.
     fn area_sampled_irradiance(light: &AreaLight, p: Vec3, n: Vec3, count: usize) -> (f64, f64) {
@@ -653,11 +681,8 @@ mod tests {
             let v = [point(2.0), point(2.0), point(2.0)];
             let p = point(5.0);
             let shape = AreaShape::triangle(v);
-            let exact = spherical_triangle::solid_angle(
-                (v[0] - p).normalize(),
-                (v[1] - p).normalize(),
-                (v[2] - p).normalize(),
-            );
+            let [a, b, c] = spherical_triangle::corner_directions(p, v).unwrap();
+            let exact = spherical_triangle::solid_angle(a, b, c);
             match spherical_corners(p, &shape) {
                 Some((_, omega)) => {
                     spherical += 1;
