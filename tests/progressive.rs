@@ -227,3 +227,91 @@ fn bad_time_limits_are_refused_before_anything_is_written() {
         assert!(!dir.path().join("p.exr").exists(), "{extra:?}");
     }
 }
+
+/// User plus system CPU time of process `pid`, in clock ticks (fields 14 and 15 of
+/// /proc/PID/stat, counted after the parenthesised command name).
+fn cpu_ticks(pid: u32) -> u64 {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).expect("read /proc stat");
+    let fields: Vec<&str> = stat[stat.rfind(')').expect("stat line") + 2..]
+        .split(' ')
+        .collect();
+    fields[11].parse::<u64>().unwrap() + fields[12].parse::<u64>().unwrap()
+}
+
+#[test]
+fn a_pass_the_deadline_overtakes_is_reported_as_left_out() {
+    // The process is stopped (SIGSTOP) once its first pass is on disk, in the second pass,
+    // and continued (SIGCONT) after the deadline: as on a machine whose other work
+    // took the time the pass was planned with. The second pass is left out, and the summary
+    // line and the statistics say so.
+    let dir = temp_dir();
+    let exr = dir.path().join("p.exr");
+    let started = Instant::now();
+    let child = start(
+        dir.path(),
+        &[
+            "render",
+            "-o",
+            "p.exr",
+            "--quiet",
+            "--no-png",
+            "--threads",
+            "1",
+            "--width",
+            "512",
+            "--height",
+            "512",
+            "--time-limit",
+            "10",
+            "--stats",
+            "p.json",
+        ],
+    );
+    let pid = Pid::from_raw(i32::try_from(child.id()).unwrap());
+    while !exr.exists() {
+        assert!(
+            started.elapsed() < Duration::from_secs(9),
+            "the first pass took more than 9 of the 10 seconds"
+        );
+        sleep(Duration::from_millis(2));
+    }
+    // The outputs are renamed into place before the backups are removed and the directory
+    // synced, which can wait on the disk; the pass that follows is the first CPU time spent
+    // after them (a tenth of a second at least).
+    let first_pass = started.elapsed();
+    let cpu_at_write = cpu_ticks(child.id());
+    while cpu_ticks(child.id()) < cpu_at_write + 5 {
+        assert!(
+            started.elapsed() < Duration::from_secs(9),
+            "no second pass within 9 of the 10 seconds (first pass on disk after {:?})",
+            first_pass
+        );
+        sleep(Duration::from_millis(2));
+    }
+    kill(pid, Signal::SIGSTOP).expect("send SIGSTOP");
+    let (_, samples_before) = samples_of(&exr);
+    sleep(Duration::from_secs(11).saturating_sub(started.elapsed()));
+    kill(pid, Signal::SIGCONT).expect("send SIGCONT");
+    let output = child.wait_with_output().expect("wait");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{output:?}");
+    let (_, samples) = samples_of(&exr);
+    assert_eq!(
+        samples, samples_before,
+        "the outputs changed after the deadline"
+    );
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("p.json")).unwrap()).unwrap();
+    let progressive = &stats["progressive"];
+    assert_eq!(progressive["stopped_by"], "time");
+    let abandoned = progressive["abandoned_samples"]
+        .as_u64()
+        .unwrap_or_else(|| panic!("no abandoned_samples in {progressive}"));
+    assert!(abandoned >= 1, "{progressive}");
+    assert!(
+        stdout.contains(&format!(
+            "a pass of {abandoned} spp was overtaken and left out"
+        )),
+        "{stdout}"
+    );
+}

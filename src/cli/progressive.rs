@@ -9,12 +9,15 @@
 //! Pass `k` renders a range of sample indices of every pixel: `0..1`, `1..2`, `2..4`,
 //! `4..8`, ... (each pass as many samples as all before it), so the first image appears
 //! after one sample and writing the outputs costs at most one write per doubling of the
-//! samples. After every pass but the first, the pass size is also cut to the samples the
-//! remaining time can hold at the speed measured on the previous pass, after the time the last
-//! write of the outputs took. A pass that the
-//! deadline still overtakes is abandoned within its current run of samples and the outputs keep the
-//! previous pass; the first pass always finishes (only Ctrl-C stops it), so a time limit
-//! always gives an image.
+//! samples. After every pass but the first, the pass size is also cut to the samples that fit
+//! in [`TIME_CAPPED_PASS_SHARE`] of the time left after a write as long as the last one, at
+//! the speed measured on the previous pass ([`samples_that_fit`]): the share leaves room for
+//! a pass that runs slower than the one before (a machine shared with other work), and the
+//! time it leaves over goes to smaller passes after it. A pass that the deadline still
+//! overtakes is abandoned within its current run of samples and the outputs keep the
+//! previous pass; the summary line and `--stats` (`progressive.abandoned_samples`) say how
+//! many samples were left out that way. The first pass always finishes (only Ctrl-C stops
+//! it), so a time limit always gives an image.
 //!
 //! Samples are a pure function of (seed, pixel, sample index, dimension) (`crate::sampler`)
 //! and every pass keeps the exact fixed-point sums of its samples (`film::sample_sum`), which
@@ -84,6 +87,9 @@ pub struct ProgressiveStats {
     pub samples: u32,
     /// Why the render stopped: "samples" (the bound was reached), "time" or "interrupted".
     pub stopped_by: String,
+    /// Samples per pixel of the pass the deadline or Ctrl-C overtook and that was left out
+    /// (0 when none was).
+    pub abandoned_samples: u32,
 }
 
 /// The statistics file of a progressive render: the render's statistics (over all
@@ -104,6 +110,16 @@ pub fn next_pass(done: u32, bound: u32, fits: Option<u64>) -> std::ops::Range<u3
         size = size.min(fits);
     }
     done..done + size as u32
+}
+
+/// The share of the time left that a pass whose size the time caps is planned to fill.
+pub const TIME_CAPPED_PASS_SHARE: f64 = 0.8;
+
+/// The samples per pixel that fit in [`TIME_CAPPED_PASS_SHARE`] of `seconds_left` after a
+/// write of `write_seconds`, at `seconds_per_sample`.
+pub fn samples_that_fit(seconds_left: f64, write_seconds: f64, seconds_per_sample: f64) -> u64 {
+    let usable = (seconds_left - write_seconds).max(0.0) * TIME_CAPPED_PASS_SHARE;
+    (usable / seconds_per_sample.max(1e-12)).floor() as u64
 }
 
 /// Checks `--time-limit`: a number of seconds above zero and below 1e9 (about 31 years).
@@ -256,6 +272,7 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
     let mut last_stats: Option<RenderStats> = None;
     let mut seconds_per_sample: Option<f64> = None;
     let mut last_write_seconds = 0.0;
+    let mut abandoned_samples = 0u32;
     let stopped_by = loop {
         if accumulated.samples >= bound {
             break "samples";
@@ -263,12 +280,11 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
         if INTERRUPTED.load(Ordering::SeqCst) {
             break "interrupted";
         }
-        // The pass must also leave time to write its outputs, as long as the last write.
         let fits = seconds_per_sample.map(|per_sample| {
             let left = deadline
                 .saturating_duration_since(Instant::now())
                 .as_secs_f64();
-            ((left - last_write_seconds).max(0.0) / per_sample.max(1e-12)).floor() as u64
+            samples_that_fit(left, last_write_seconds, per_sample)
         });
         let samples = next_pass(accumulated.samples, bound, fits);
         if samples.is_empty() {
@@ -297,6 +313,7 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
         });
         let result = result.map_err(crate::cli::render_failed)?;
         if !result.finished_tiles.iter().all(|&f| f) {
+            abandoned_samples = samples.len() as u32;
             break if INTERRUPTED.load(Ordering::SeqCst) {
                 "interrupted"
             } else {
@@ -330,6 +347,7 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
             passes,
             samples: accumulated.samples,
             stopped_by: "running".to_string(),
+            abandoned_samples: 0,
         };
         write_outputs(
             &outputs,
@@ -364,6 +382,7 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
         passes,
         samples: accumulated.samples,
         stopped_by: stopped_by.to_string(),
+        abandoned_samples,
     };
     // The statistics get their final word (why the render stopped, the total time); the
     // images on disk are the last pass's already.
@@ -379,6 +398,11 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
          {time_limit} s)",
         accumulated.samples
     ));
+    if abandoned_samples > 0 {
+        line.push_str(&format!(
+            "; a pass of {abandoned_samples} spp was overtaken and left out"
+        ));
+    }
     line.push_str(&format!("; wrote {}", outputs.exr.display()));
     if let Some(png_path) = &outputs.png {
         line.push_str(&format!(" and {}", png_path.display()));
@@ -496,6 +520,14 @@ mod tests {
             next_pass(1 << 31, UNBOUNDED_SPP, None),
             (1 << 31)..UNBOUNDED_SPP
         );
+    }
+
+    #[test]
+    fn a_pass_the_time_caps_leaves_a_fifth_of_the_time_spare() {
+        // 10 s left, a 1 s write, 0.1 s a sample: 9 s usable, 7.2 s planned, 72 samples.
+        assert_eq!(samples_that_fit(10.0, 1.0, 0.1), 72);
+        assert_eq!(samples_that_fit(0.5, 1.0, 0.1), 0);
+        assert_eq!(samples_that_fit(1.0, 0.0, 0.0), 800_000_000_000);
     }
 
     #[test]
