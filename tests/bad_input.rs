@@ -183,6 +183,102 @@ fn unreadable_texture() {
 }
 
 #[test]
+fn a_corrupt_image_is_called_undecodable_not_badly_sized() {
+    // A PNG signature followed by garbage, and bytes of no known format, each as a TOML
+    // texture, a glTF image file and a glTF image embedded as a data URI.
+    let dir = temp_dir();
+    let mut corrupt_png = b"\x89PNG\r\n\x1a\n".to_vec();
+    corrupt_png.extend((0..200u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8));
+    std::fs::write(dir.path().join("corrupt.png"), &corrupt_png).unwrap();
+    std::fs::write(
+        dir.path().join("noise.png"),
+        [7u8, 1, 200, 3, 99, 42, 0, 13, 8],
+    )
+    .unwrap();
+    let expectations = [
+        ("corrupt.png", "cannot decode image"),
+        ("noise.png", "unrecognised image format"),
+    ];
+    for (image, problem) in expectations {
+        let toml = GOOD_SCENE
+            .replace(
+                "[[material]]",
+                &format!("[[texture]]\nname = \"t\"\nfile = \"{image}\"\n\n[[material]]"),
+            )
+            .replace(
+                "base_color = [0.5, 0.5, 0.5]",
+                "base_color = [0.5, 0.5, 0.5]\nbase_color_texture = \"t\"",
+            );
+        write(dir.path(), "s.toml", &toml);
+        let uri = format!("\"{image}\"");
+        let embedded = format!(
+            "\"data:image/png;base64,{}\"",
+            base64_of(&std::fs::read(dir.path().join(image)).unwrap())
+        );
+        write(dir.path(), "file.gltf", &textured_triangle_gltf(&uri));
+        write(
+            dir.path(),
+            "embedded.gltf",
+            &textured_triangle_gltf(&embedded),
+        );
+        for (scene, names) in [
+            ("s.toml", image),
+            ("file.gltf", image),
+            ("embedded.gltf", "embedded.gltf"),
+        ] {
+            assert_rejected(dir.path(), scene, &[], names);
+            let out = run_in(dir.path(), &["render", scene, "-o", "out.exr", "--quiet"]);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                stderr.contains(problem) && !stderr.contains("dimensions"),
+                "{scene} with {image}: {stderr}"
+            );
+        }
+    }
+}
+
+/// Standard base64 (with padding) of `bytes`.
+fn base64_of(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut text = String::new();
+    for chunk in bytes.chunks(3) {
+        let n = chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |n, (i, &b)| n | u32::from(b) << (16 - 8 * i));
+        for i in 0..4 {
+            if i <= chunk.len() {
+                text.push(ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                text.push('=');
+            }
+        }
+    }
+    text
+}
+
+/// A glTF with one textured triangle whose base colour texture's image has the URI `uri`
+/// (JSON string, quoted).
+fn textured_triangle_gltf(uri: &str) -> String {
+    // Positions (0,0,0) (1,0,0) (0,1,0) then texture coordinates (0,0) (1,0) (0,1), as f32.
+    let floats: [f32; 15] = [
+        0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0,
+    ];
+    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1}},"material":0}}]}}],
+"materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}}}}],
+"textures":[{{"source":0}}],"images":[{{"uri":{uri}}}],
+"buffers":[{{"byteLength":60,"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}}]}}"#,
+        base64_of(&bytes)
+    )
+}
+
+#[test]
 fn a_failed_render_never_replaces_the_previous_output() {
     let dir = temp_dir();
     write(dir.path(), "good.toml", GOOD_SCENE);

@@ -30,7 +30,9 @@ fn image_header<R: Read + Seek + std::io::BufRead>(
     mut reader: R,
     label: &str,
 ) -> Result<TextureHeader, TextureError> {
-    let bad = |message: String| TextureError::Dimensions {
+    // A header that cannot be read is an image that cannot be decoded, whatever the
+    // reader's complaint (it is not a question of dimensions).
+    let bad = |message: String| TextureError::Decode {
         label: label.to_string(),
         message,
     };
@@ -87,6 +89,11 @@ fn image_header<R: Read + Seek + std::io::BufRead>(
             width,
             height,
             bytes_per_texel,
+        })
+    } else if !(magic.starts_with(b"\x89PNG\r\n\x1a\n") || magic.starts_with(&[0xff, 0xd8, 0xff])) {
+        // The formats `image_load::decode` reads; anything else is not a texture.
+        Err(TextureError::UnknownFormat {
+            label: label.to_string(),
         })
     } else {
         use image::ImageDecoder;
