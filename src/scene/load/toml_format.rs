@@ -500,6 +500,14 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             }
             material.metallic = x as f32;
         }
+        // `metallic` or a metallic-roughness texture without `roughness` selects the model
+        // with glTF's default roughness factor, 1, as MTL's `Pm` and `map_Pm` do (it was
+        // ignored: a classic Lambert material).
+        if material.roughness.is_none()
+            && (m.metallic.is_some() || m.metallic_roughness_texture.is_some())
+        {
+            material.roughness = Some(1.0);
+        }
         if let Some(s) = &m.shininess {
             if s.get_ref().0 < 0.0 {
                 return Err(loc.at(s, "shininess must be >= 0"));
@@ -643,7 +651,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
 /// The keys of a material's textured inputs (metallic-roughness, emission, normal map), all
 /// with the material's texture transform. Data textures (metallic-roughness, normal) must be
 /// declared linear; the metallic-roughness texture belongs to the metallic-roughness model
-/// and needs `roughness`.
+/// (selected with roughness 1 when the material does not set `roughness`).
 fn textured_inputs(
     loc: &Located,
     textures: &[TextureDesc],
@@ -669,12 +677,6 @@ fn textured_inputs(
         })
     };
     if let Some(t) = &m.metallic_roughness_texture {
-        if material.roughness.is_none() {
-            return Err(loc.at(
-                t,
-                "metallic_roughness_texture needs roughness (the metallic-roughness model)",
-            ));
-        }
         material.metallic_roughness_texture = Some(linear(t, "metallic_roughness_texture")?);
     }
     if let Some(t) = &m.emission_texture {
@@ -1171,10 +1173,6 @@ material = "glass"
                 "normal_texture = 'glow'",
                 "s.toml:10:18: normal_texture 'glow' must be declared with color_space = \"linear\"",
             ),
-            (
-                "metallic_roughness_texture = 'n'",
-                "s.toml:10:30: metallic_roughness_texture needs roughness",
-            ),
             ("normal_scale = nan", "s.toml:10:"),
             ("emission_texture = 'nothere'", "unknown texture 'nothere'"),
         ] {
@@ -1331,6 +1329,12 @@ material = "glass"
         let s = parse_here(&scene("roughness = 0.3\nmetallic = 1.0")).unwrap();
         assert_eq!(s.materials[0].roughness, Some(0.3));
         assert_eq!(s.materials[0].metallic, 1.0);
+        // `metallic` alone selects the model with glTF's default roughness, as MTL's `Pm`.
+        let s = parse_here(&scene("metallic = 1.0")).unwrap();
+        assert_eq!(
+            (s.materials[0].roughness, s.materials[0].metallic),
+            (Some(1.0), 1.0)
+        );
         let classic = parse_here(&scene("base_color = [0.5, 0.5, 0.5]")).unwrap();
         assert_eq!(
             (
