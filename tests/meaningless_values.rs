@@ -342,3 +342,34 @@ fn gltf_ior_zero_is_rendered_with_a_note() {
         "{printed}"
     );
 }
+
+#[test]
+fn radiance_above_what_the_film_holds_is_rendered_with_a_note() {
+    // An emitter and an environment brighter than 2^31, the largest sample value the film's
+    // exact sums hold: the render goes ahead, the summary line and --stats say they are
+    // clamped, and the pixels that see them hold 2^31.
+    let dir = temp_dir();
+    let text = SCENE
+        .replace("emission = [0, 0, 0]", "emission = [0, 5e9, 0]")
+        .replace("color = [0.1, 0.1, 0.1]", "color = [4e9, 0, 0]");
+    write(dir.path(), "s.toml", &text);
+    let out = run_in(
+        dir.path(),
+        &["render", "s.toml", "-o", "out.exr", "--stats", "s.json"],
+    );
+    let printed =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{printed}");
+    for expected in [
+        "material 'matte': emission 5000000000 is above the film's largest sample value 2^31",
+        "environment color 4000000000 is above the film's largest sample value 2^31",
+    ] {
+        assert!(printed.contains(expected), "{printed}");
+        let stats = std::fs::read_to_string(dir.path().join("s.json")).unwrap();
+        assert!(stats.contains(expected), "{stats}");
+    }
+    let image = read_exr(&dir.path().join("out.exr"));
+    let limit = 2_147_483_648.0f32;
+    assert_eq!(image.at("G", 4, 4), limit, "the sphere's emission");
+    assert_eq!(image.at("R", 0, 0), limit, "the environment in a corner");
+}

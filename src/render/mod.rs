@@ -364,7 +364,13 @@ pub fn render<I: Integrator>(
             .sum(),
         texture_tiles,
         effects,
-        notes: context.scene.notes.clone(),
+        notes: context
+            .scene
+            .notes
+            .iter()
+            .cloned()
+            .chain(film_clamp_notes(&context.scene))
+            .collect(),
         complete: finished_tiles.iter().all(|&f| f),
         phases: None,
         texture_memory: context
@@ -422,4 +428,34 @@ fn copy_tile_to_film(image: &TileImage, region: &mut FilmRegion) {
         region.set_all(Layer::Lod, |i| [image.lod[i]]);
         region.set_all(Layer::Footprint, |i| [image.footprint[i]]);
     }
+}
+
+/// Notes for radiance the film cannot hold: an emission or environment colour brighter than
+/// the largest sample value (`film::sample_sum::MAX_SAMPLE_MAGNITUDE`, 2^31) is clamped to
+/// it wherever a camera path meets it.
+fn film_clamp_notes(scene: &crate::scene::SceneDescription) -> Vec<String> {
+    let limit = crate::film::sample_sum::MAX_SAMPLE_MAGNITUDE as f32;
+    let mut notes: Vec<String> = scene
+        .materials
+        .iter()
+        .filter(|m| m.emission.max_element() > limit)
+        .map(|m| {
+            format!(
+                "material '{}': emission {} is above the film's largest sample value 2^31 and \
+                 is clamped to it",
+                m.name,
+                m.emission.max_element()
+            )
+        })
+        .collect();
+    if let crate::scene::Environment::Color(c) = scene.environment {
+        if c.max_element() > limit {
+            notes.push(format!(
+                "environment color {} is above the film's largest sample value 2^31 and is \
+                 clamped to it",
+                c.max_element()
+            ));
+        }
+    }
+    notes
 }
