@@ -213,7 +213,7 @@ fn a_corrupt_image_is_called_undecodable_not_badly_sized() {
         let uri = format!("\"{image}\"");
         let embedded = format!(
             "\"data:image/png;base64,{}\"",
-            base64_of(&std::fs::read(dir.path().join(image)).unwrap())
+            base64(&std::fs::read(dir.path().join(image)).unwrap())
         );
         write(dir.path(), "file.gltf", &textured_triangle_gltf(&uri));
         write(
@@ -237,26 +237,6 @@ fn a_corrupt_image_is_called_undecodable_not_badly_sized() {
     }
 }
 
-/// Standard base64 (with padding) of `bytes`.
-fn base64_of(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut text = String::new();
-    for chunk in bytes.chunks(3) {
-        let n = chunk
-            .iter()
-            .enumerate()
-            .fold(0u32, |n, (i, &b)| n | u32::from(b) << (16 - 8 * i));
-        for i in 0..4 {
-            if i <= chunk.len() {
-                text.push(ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char);
-            } else {
-                text.push('=');
-            }
-        }
-    }
-    text
-}
-
 /// A glTF with one textured triangle whose base colour texture's image has the URI `uri`
 /// (JSON string, quoted).
 fn textured_triangle_gltf(uri: &str) -> String {
@@ -274,7 +254,7 @@ fn textured_triangle_gltf(uri: &str) -> String {
 "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}}],
 "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
 {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}}]}}"#,
-        base64_of(&bytes)
+        base64(&bytes)
     )
 }
 
