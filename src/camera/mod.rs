@@ -63,7 +63,10 @@ impl Camera {
     /// A camera for `desc` rendering `width` x `height` pixels. Degenerate descriptions are
     /// repaired rather than rejected (the scene loader validates and reports them): eye ==
     /// target looks down -Z, an up vector parallel to the view picks another, field of view
-    /// is clamped to [0.001, 179] degrees (45 if not finite), a non-positive focus distance
+    /// is clamped to [1e-7, 179] degrees (45 if not finite; the lower bound keeps the view's
+    /// half-height, `tan(fov / 2)` times the target's distance, a normal f32 at any distance
+    /// a scene can have, and frames a 0.0175-unit patch from 1e6 units away, which the old
+    /// bound of 1e-3 degrees widened to 17 units), a non-positive focus distance
     /// uses the target's distance, a non-positive orthographic height becomes 1, and a zero
     /// image size counts as 1.
     pub fn new(desc: &CameraDesc, width: u32, height: u32) -> Camera {
@@ -89,7 +92,7 @@ impl Camera {
         let up = right.cross(forward);
         let tan_half = |vfov: f32| {
             let deg = if vfov.is_finite() {
-                vfov.clamp(1.0e-3, 179.0)
+                vfov.clamp(1.0e-7, 179.0)
             } else {
                 45.0
             };

@@ -86,7 +86,9 @@ pub use lights::{is_delta_light, light_position, pdf_li, sample_li, LightSample}
 pub use material_bsdf::{MaterialBsdf, OpaqueLobe};
 pub use metallic_roughness::MetallicRoughnessBsdf;
 pub use mirror::SmoothMirror;
-pub use ray_offset::{entry_distance, entry_distances, shadow_ray_end, SpawnPoint};
+pub use ray_offset::{
+    entry_distance, entry_distances, shadow_ray_end, shadow_ray_towards, SpawnPoint,
+};
 pub use reflection::{reflect, reflect_above};
 pub use refraction::refract;
 pub use rough_dielectric::RoughDielectric;

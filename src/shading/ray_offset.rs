@@ -201,6 +201,23 @@ pub fn shadow_ray_end(distance: f32, light: Vec3) -> f32 {
     (distance * (1.0 - SHADOW_EPSILON) - placement).max(0.0)
 }
 
+/// The shadow ray from `origin` (a spawn point's offset origin) to `target` (a point light
+/// or a sampled point on an area light): its unit direction and its far end
+/// ([`shadow_ray_end`] of the distance from `origin`); `None` when they coincide.
+///
+/// The light itself is seen from the surface point, not from `origin`: the offset grows
+/// with the coordinates (about 0.1 units at 131072), and a light measured from there came
+/// that much closer (`tests/far_from_origin.rs`). Only visibility is asked from `origin`.
+#[inline]
+pub fn shadow_ray_towards(origin: Vec3, target: Vec3) -> Option<(Vec3, f32)> {
+    let to_target = target - origin;
+    let distance = to_target.length();
+    if !(distance > 0.0 && distance.is_finite()) {
+        return None;
+    }
+    Some((to_target / distance, shadow_ray_end(distance, target)))
+}
+
 /// How far along the ray (`origin`, unit `direction`) tracing may start without skipping
 /// anything inside the box `bounds` (the scene's bounds): just before the ray enters the
 /// box, or 0 when the origin is inside it, the ray misses it, or a value is not finite.

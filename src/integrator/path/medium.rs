@@ -117,6 +117,7 @@ pub(super) fn scatter(
         ray.depth < context.options.max_depth && ray.diffuse_depth < tracer.diffuse_bounces;
     if throughput.max_element() > 0.0 {
         let point = ShadingPoint {
+            position,
             origin: position,
             origin_through: position,
             sigma: ray.sigma,

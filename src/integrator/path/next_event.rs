@@ -91,6 +91,9 @@ impl Scatterer<'_> {
 
 /// The shading point light sampling starts from.
 pub(super) struct ShadingPoint<'a> {
+    /// The point lights are seen from: the surface point itself (its spawn point's
+    /// position) or the scattering point inside fog.
+    pub(super) position: Vec3,
     /// Where shadow rays start: the hit's spawn point moved off the surface on the side of
     /// `ng`, or the scattering point inside fog.
     pub(super) origin: Vec3,
@@ -130,13 +133,11 @@ pub(super) fn sample_light(
     let (wi, distance, light_point, radiance, pdf) = match light {
         LightRef::Punctual(index) => {
             let light = &context.scene.lights[index];
-            let sample = shading::sample_li(light, point.origin);
-            let position = shading::light_position(light);
-            let end = position.unwrap_or(point.origin);
+            let sample = shading::sample_li(light, point.position);
             (
                 sample.direction_to_light,
                 sample.distance,
-                position.map(|_| end),
+                shading::light_position(light),
                 sample.radiance_scale,
                 f32::INFINITY,
             )
@@ -154,7 +155,7 @@ pub(super) fn sample_light(
         }
         LightRef::Area(index) => {
             let light = &lights.area.lights[index];
-            let Some(sample) = light.sample(point.origin, u_point) else {
+            let Some(sample) = light.sample(point.position, u_point) else {
                 return;
             };
             // Emission textures are read at the sampled point, as for a ray that hits it.
@@ -205,17 +206,22 @@ pub(super) fn sample_light(
     if largest.is_nan() || largest <= 0.0 {
         return;
     }
-    let tfar = match light_point {
-        Some(end) => shading::shadow_ray_end(distance, end),
-        None => f32::INFINITY,
+    // The light was seen from the surface point; the shadow ray asks only whether the
+    // segment from the offset origin to the light's point is clear.
+    let origin = if crosses {
+        point.origin_through
+    } else {
+        point.origin
+    };
+    let Some((direction, tfar)) = (match light_point {
+        Some(end) => shading::shadow_ray_towards(origin, end),
+        None => Some((wi, f32::INFINITY)),
+    }) else {
+        return;
     };
     waves.shadows.push(ShadowRay {
-        origin: if crosses {
-            point.origin_through
-        } else {
-            point.origin
-        },
-        direction: wi,
+        origin,
+        direction,
         tfar,
         contribution,
         slot: point.slot,

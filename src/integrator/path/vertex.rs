@@ -167,6 +167,7 @@ pub(super) fn shade(
     if bsdf_has_smooth_part(&bsdf, wo, ns) {
         let transmits = bsdf.transmits_with_density();
         let point = ShadingPoint {
+            position: spawn.position,
             origin: spawn.offset_origin(ng),
             origin_through: if transmits {
                 spawn.offset_origin(-ng)

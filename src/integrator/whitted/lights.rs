@@ -59,9 +59,9 @@ pub(super) fn queue_shadow_rays(
     let wo = -ray.direction;
     let origin = spawn.offset_origin(ng);
     for light in &context.scene.lights {
-        // Direction and distance from the shadow ray's own origin, so its far end
-        // is measured from where it starts.
-        let sample = shading::sample_li(light, origin);
+        // The light as the surface point sees it; the shadow ray starts from the offset
+        // origin and runs to the light (`shading::shadow_ray_towards`).
+        let sample = shading::sample_li(light, spawn.position);
         let wi = sample.direction_to_light;
         if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 {
             continue;
@@ -73,10 +73,17 @@ pub(super) fn queue_shadow_rays(
             continue;
         }
         let light_position = shading::light_position(light);
+        let (direction, tfar) = match light_position {
+            Some(position) => match shading::shadow_ray_towards(origin, position) {
+                Some(segment) => segment,
+                None => continue,
+            },
+            None => (wi, f32::INFINITY),
+        };
         waves.shadows.push(ShadowRay {
             origin,
-            direction: wi,
-            tfar: shadow_tfar(sample.distance, light_position),
+            direction,
+            tfar,
             light: light_position,
             contribution,
             slot: ray.slot,
