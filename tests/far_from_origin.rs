@@ -119,11 +119,12 @@ fn a_lit_plane_far_from_the_origin_keeps_its_brightness() {
     let under_lamp = 2.0 * 0.5 / std::f64::consts::PI * projected_solid_angle_of_the_lamp();
     // Light sampling sees the light from the surface point; a BSDF-sampled ray still leaves
     // from the offset point, which sees the lamp's edges a little wider: measured +0.08 %
-    // at 8192 and +1.35 % at 131072 (see the module doc), hence the last tolerance.
+    // at 8192 and +1.35 % at 131072 (see the module doc), hence the last tolerance (with
+    // the f32 triangle point the offset was larger and it was +1.99 %).
     let cases = [
         ("point", "whitted", 0.5, [2e-3, 2e-3]),
         ("point", "path", 0.5, [2e-3, 2e-3]),
-        ("lamp", "path", under_lamp, [2e-3, 2e-2]),
+        ("lamp", "path", under_lamp, [2e-3, 1.6e-2]),
     ];
     let mut failures = Vec::new();
     for (light, integrator, expected, tolerances) in cases {
