@@ -297,3 +297,14 @@ fn metallic_roughness_out_of_range_names_the_material() {
         assert_rejected(dir.path(), file, &[], "material 'matte'");
     }
 }
+
+#[test]
+fn a_field_of_view_the_camera_cannot_compute_is_refused() {
+    // The camera works from 1e-7 to 179 degrees; a value outside was clamped silently.
+    let dir = temp_dir();
+    for fov in ["1e-8", "179.5"] {
+        let text = GOOD_SCENE.replace("fov = 40.0", &format!("fov = {fov}"));
+        write(dir.path(), "s.toml", &text);
+        assert_rejected(dir.path(), "s.toml", &[], "must lie in [1e-7, 179] degrees");
+    }
+}

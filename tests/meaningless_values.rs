@@ -352,3 +352,32 @@ fn radiance_above_what_the_film_holds_is_rendered_with_a_note() {
     assert_eq!(image.at("G", 4, 4), limit, "the sphere's emission");
     assert_eq!(image.at("R", 0, 0), limit, "the environment in a corner");
 }
+
+#[test]
+fn an_environment_texture_brighter_than_the_film_holds_is_noted() {
+    let dir = temp_dir();
+    let sky = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textures/sky.png");
+    let text = SCENE.replace(
+        "[environment]\ncolor = [0.1, 0.1, 0.1]",
+        &format!(
+            "[[texture]]\nname = \"sky\"\nfile = \"{}\"\n\n\
+             [environment]\ntexture = \"sky\"\nintensity = 5e9",
+            sky.display()
+        ),
+    );
+    assert_ne!(
+        text, SCENE,
+        "the scene has no environment colour to replace"
+    );
+    write(dir.path(), "s.toml", &text);
+    let out = run_in(dir.path(), &["render", "s.toml", "-o", "out.exr"]);
+    let printed =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{printed}");
+    assert!(
+        printed.contains(
+            "environment intensity 5000000000 is above the film's largest sample value 2^31"
+        ),
+        "{printed}"
+    );
+}

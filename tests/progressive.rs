@@ -310,7 +310,7 @@ fn a_pass_the_deadline_overtakes_is_reported_as_left_out() {
     assert!(abandoned >= 1, "{progressive}");
     assert!(
         stdout.contains(&format!(
-            "a pass of {abandoned} spp was overtaken and left out"
+            "a pass of {abandoned} spp was overtaken by the deadline and left out"
         )),
         "{stdout}"
     );

@@ -399,8 +399,13 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
         accumulated.samples
     ));
     if abandoned_samples > 0 {
+        let by = if stopped_by == "interrupted" {
+            "cut short by the interrupt"
+        } else {
+            "overtaken by the deadline"
+        };
         line.push_str(&format!(
-            "; a pass of {abandoned_samples} spp was overtaken and left out"
+            "; a pass of {abandoned_samples} spp was {by} and left out"
         ));
     }
     line.push_str(&format!("; wrote {}", outputs.exr.display()));

@@ -448,14 +448,21 @@ fn film_clamp_notes(scene: &crate::scene::SceneDescription) -> Vec<String> {
             )
         })
         .collect();
-    if let crate::scene::Environment::Color(c) = scene.environment {
-        if c.max_element() > limit {
+    match scene.environment {
+        crate::scene::Environment::Color(c) if c.max_element() > limit => {
             notes.push(format!(
                 "environment color {} is above the film's largest sample value 2^31 and is \
                  clamped to it",
                 c.max_element()
             ));
         }
+        crate::scene::Environment::LatLong { intensity, .. } if intensity > limit => {
+            notes.push(format!(
+                "environment intensity {intensity} is above the film's largest sample value \
+                 2^31: texels of 1 and brighter are clamped to it"
+            ));
+        }
+        _ => {}
     }
     notes
 }

@@ -797,10 +797,10 @@ fn camera_desc(c: &Spanned<RawCamera>, loc: &Located) -> Result<CameraDesc, Scen
     if distance == 0.0 {
         return Err(loc.at(c, "camera eye and target coincide"));
     }
-    if !(fov > 0.0 && fov < 180.0) {
+    if !(1e-7..=179.0).contains(&fov) {
         return Err(loc.at(
             c,
-            format!("camera fov = {fov} must lie in (0, 180) degrees"),
+            format!("camera fov = {fov} must lie in [1e-7, 179] degrees"),
         ));
     }
     let projection = match raw.kind {

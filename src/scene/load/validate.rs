@@ -73,11 +73,12 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
         {
             return Err("camera up is zero or parallel to the viewing direction".into());
         }
-        let fov_ok = |f: f32| f.is_finite() && f > 0.0 && f < 180.0;
+        // The camera computes in f32 down to 1e-7 degrees and up to 179 (`camera::Camera`).
+        let fov_ok = |f: f32| f.is_finite() && (1e-7..=179.0).contains(&f);
         match camera.projection {
             Projection::Pinhole { vfov_degrees } if !fov_ok(vfov_degrees) => {
                 return Err(format!(
-                    "camera fov {vfov_degrees} must lie in (0, 180) degrees"
+                    "camera fov {vfov_degrees} must lie in [1e-7, 179] degrees"
                 ));
             }
             Projection::ThinLens {
@@ -87,7 +88,7 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
             } => {
                 if !fov_ok(vfov_degrees) {
                     return Err(format!(
-                        "camera fov {vfov_degrees} must lie in (0, 180) degrees"
+                        "camera fov {vfov_degrees} must lie in [1e-7, 179] degrees"
                     ));
                 }
                 if !(aperture_radius.is_finite() && aperture_radius >= 0.0) {
