@@ -140,26 +140,19 @@ pub fn run(cli: Cli) -> i32 {
     match result {
         Ok(()) => EXIT_OK,
         Err(error) => {
-            eprintln!("conetrace: error: {}", one_line(&error.message));
+            // One line whatever the source (a decoder's message can end in blank lines).
+            eprintln!(
+                "conetrace: error: {}",
+                crate::scene::load::one_line(&error.message)
+            );
             error.status
         }
     }
 }
 
-/// `message` on one line: a line break and the blanks around it become one space (a
-/// decoder's message can end in blank lines; the error contract is one line).
-fn one_line(message: &str) -> String {
-    message
-        .lines()
-        .map(str::trim)
-        .filter(|line| !line.is_empty())
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
 #[cfg(test)]
 mod tests {
-    use super::one_line;
+    use crate::scene::load::one_line;
 
     #[test]
     fn error_messages_print_on_one_line() {
@@ -167,7 +160,7 @@ mod tests {
             one_line("a.jpg: cannot decode image: found 0\n\n"),
             "a.jpg: cannot decode image: found 0"
         );
-        assert_eq!(one_line("first\r\n  second\n"), "first second");
+        assert_eq!(one_line("first\r\n  second\n"), "first; second");
         assert_eq!(one_line("plain"), "plain");
     }
 

@@ -75,8 +75,9 @@ pub(crate) fn line_column(text: &str, offset: usize) -> (usize, usize) {
     (line, column)
 }
 
-/// Joins the lines of a multi-line message with "; " and trims it.
-fn one_line(message: &str) -> String {
+/// Joins the lines of a multi-line message with "; " and trims it (also for every error the
+/// command line prints, `cli::run`).
+pub fn one_line(message: &str) -> String {
     message
         .lines()
         .map(str::trim)

@@ -42,7 +42,7 @@ mod validate;
 use std::path::Path;
 
 pub use default_scene::{default_scene, DEFAULT_SCENE_LABEL};
-pub use error::SceneError;
+pub use error::{one_line, SceneError};
 pub use framing::{frame_camera, FRAMING_FOV_DEGREES};
 pub use validate::validate;
 
