@@ -208,13 +208,22 @@ pub fn shadow_ray_end(distance: f32, light: Vec3) -> f32 {
 
 /// The shadow ray from `origin` (a spawn point's offset origin) to `target` (a point light
 /// or a sampled point on an area light): its unit direction and its far end
-/// ([`shadow_ray_end`] of the distance from `origin`); `None` when they coincide.
+/// ([`shadow_ray_end`] of the distance from `origin`); `None` when they coincide. A light
+/// without a position (`target` `None`: directional, environment) is reached along
+/// `direction_to_light`, unbounded.
 ///
 /// The light itself is seen from the surface point, not from `origin`: the offset grows
 /// with the coordinates (about 0.1 units at 131072), and a light measured from there came
 /// that much closer (`tests/far_from_origin.rs`). Only visibility is asked from `origin`.
 #[inline]
-pub fn shadow_ray_towards(origin: Vec3, target: Vec3) -> Option<(Vec3, f32)> {
+pub fn shadow_ray_towards(
+    origin: Vec3,
+    target: Option<Vec3>,
+    direction_to_light: Vec3,
+) -> Option<(Vec3, f32)> {
+    let Some(target) = target else {
+        return Some((direction_to_light, f32::INFINITY));
+    };
     let to_target = target - origin;
     let distance = to_target.length();
     if !(distance > 0.0 && distance.is_finite()) {

@@ -22,22 +22,40 @@ use super::mip_pyramid::MipLevel;
 use super::texels::{try_texel_vec, Texels};
 use super::{tiled_tiff, ColorSpace, TextureError};
 
+/// The image formats textures are read from, told apart by their first 8 bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ImageFormat {
+    OpenExr,
+    PngOrJpeg,
+    Tiff,
+}
+
+/// The format of an image starting with `bytes` (8 are enough), if it is one we read.
+pub(crate) fn sniff_format(bytes: &[u8]) -> Option<ImageFormat> {
+    if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+        Some(ImageFormat::OpenExr)
+    } else if bytes.starts_with(b"\x89PNG\r\n\x1a\n") || bytes.starts_with(&[0xff, 0xd8, 0xff]) {
+        Some(ImageFormat::PngOrJpeg)
+    } else if tiled_tiff::is_tiff(bytes) {
+        Some(ImageFormat::Tiff)
+    } else {
+        None
+    }
+}
+
 /// Decodes `bytes` (PNG, JPEG, OpenEXR or TIFF) into one or more levels, finest first.
 pub(crate) fn decode(
     bytes: &[u8],
     label: &str,
     color_space: ColorSpace,
 ) -> Result<Vec<MipLevel>, TextureError> {
-    if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
-        decode_exr(bytes, label)
-    } else if bytes.starts_with(b"\x89PNG\r\n\x1a\n") || bytes.starts_with(&[0xff, 0xd8, 0xff]) {
-        decode_png_jpeg(bytes, label, color_space).map(|l| vec![l])
-    } else if tiled_tiff::is_tiff(bytes) {
-        tiled_tiff::decode(bytes, label, color_space)
-    } else {
-        Err(TextureError::UnknownFormat {
+    match sniff_format(bytes) {
+        Some(ImageFormat::OpenExr) => decode_exr(bytes, label),
+        Some(ImageFormat::PngOrJpeg) => decode_png_jpeg(bytes, label, color_space).map(|l| vec![l]),
+        Some(ImageFormat::Tiff) => tiled_tiff::decode(bytes, label, color_space),
+        None => Err(TextureError::UnknownFormat {
             label: label.to_string(),
-        })
+        }),
     }
 }
 

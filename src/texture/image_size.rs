@@ -6,6 +6,7 @@
 use std::io::{BufReader, Cursor, Read, Seek};
 use std::path::Path;
 
+use super::image_load::{sniff_format, ImageFormat};
 use super::TextureError;
 
 /// What a texture file's header says about its decoded storage.
@@ -43,8 +44,10 @@ fn image_header<R: Read + Seek + std::io::BufRead>(
     reader
         .rewind()
         .map_err(|e| bad(format!("cannot read the header: {e}")))?;
-    let magic = &magic[..read];
-    if magic.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+    let format = sniff_format(&magic[..read]).ok_or_else(|| TextureError::UnknownFormat {
+        label: label.to_string(),
+    })?;
+    if format == ImageFormat::OpenExr {
         let meta = exr::meta::MetaData::read_from_buffered(reader, false)
             .map_err(|e| bad(format!("OpenEXR header: {e}")))?;
         let header = meta
@@ -62,7 +65,7 @@ fn image_header<R: Read + Seek + std::io::BufRead>(
             height: size.1 as u32,
             bytes_per_texel: if all_half { HALF_TEXEL } else { FLOAT_TEXEL },
         })
-    } else if magic.starts_with(b"II*\0") || magic.starts_with(b"MM\0*") {
+    } else if format == ImageFormat::Tiff {
         let mut decoder =
             tiff::decoder::Decoder::new(reader).map_err(|e| bad(format!("TIFF header: {e}")))?;
         let tiff_bad = |e: tiff::TiffError| bad(format!("TIFF header: {e}"));
@@ -89,11 +92,6 @@ fn image_header<R: Read + Seek + std::io::BufRead>(
             width,
             height,
             bytes_per_texel,
-        })
-    } else if !(magic.starts_with(b"\x89PNG\r\n\x1a\n") || magic.starts_with(&[0xff, 0xd8, 0xff])) {
-        // The formats `image_load::decode` reads; anything else is not a texture.
-        Err(TextureError::UnknownFormat {
-            label: label.to_string(),
         })
     } else {
         use image::ImageDecoder;

@@ -213,10 +213,7 @@ pub(super) fn sample_light(
     } else {
         point.origin
     };
-    let Some((direction, tfar)) = (match light_point {
-        Some(end) => shading::shadow_ray_towards(origin, end),
-        None => Some((wi, f32::INFINITY)),
-    }) else {
+    let Some((direction, tfar)) = shading::shadow_ray_towards(origin, light_point, wi) else {
         return;
     };
     waves.shadows.push(ShadowRay {

@@ -73,12 +73,9 @@ pub(super) fn queue_shadow_rays(
             continue;
         }
         let light_position = shading::light_position(light);
-        let (direction, tfar) = match light_position {
-            Some(position) => match shading::shadow_ray_towards(origin, position) {
-                Some(segment) => segment,
-                None => continue,
-            },
-            None => (wi, f32::INFINITY),
+        let Some((direction, tfar)) = shading::shadow_ray_towards(origin, light_position, wi)
+        else {
+            continue;
         };
         waves.shadows.push(ShadowRay {
             origin,
