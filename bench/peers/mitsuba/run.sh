@@ -7,6 +7,7 @@
 #   bash bench/peers/mitsuba/run.sh direct [direct.py options]     (direct lighting)
 #   bash bench/peers/mitsuba/run.sh cornell [cornell.py options]   (path tracers agree?)
 #   bash bench/peers/mitsuba/run.sh path [path.py options]         (path tracing, time to error)
+#   bash bench/peers/mitsuba/run.sh traversal [traversal.py options] (Embree alone, same rays)
 #
 # Installs (only what is missing): Debian's libllvm19 (Mitsuba's llvm_ad_rgb variant JIT-
 # compiles with it), python3-venv, python3-openimageio and python3-numpy (reading EXRs),
@@ -67,5 +68,11 @@ elif [ "${1:-}" = "cornell" ]; then
 elif [ "${1:-}" = "path" ]; then
     script="$here/path.py"
     shift
+elif [ "${1:-}" = "traversal" ]; then
+    script="$here/traversal.py"
+    shift
+    (cd "$repo" && cargo build --release --quiet --example peer_traversal)
+    example="$(cd "$repo" && realpath -m "${CARGO_TARGET_DIR:-target}")/release/examples/peer_traversal"
+    set -- --example "$example" "$@"
 fi
 exec "$venv/bin/python" "$script" --conetrace "$binary" --work "$cache/work" "$@"
