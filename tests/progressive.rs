@@ -137,9 +137,14 @@ fn a_time_limited_render_rewrites_complete_images_while_it_converges() {
     assert_eq!(progressive["stopped_by"], "time");
     let passes = progressive["passes"].as_u64().unwrap();
     assert!(passes >= 1);
+    let pass_words = if passes == 1 {
+        "1 pass".to_string()
+    } else {
+        format!("{passes} passes")
+    };
     assert!(
         stdout.contains(&format!(
-            "progressive: {passes} passes, {final_samples} spp reached"
+            "progressive: {pass_words}, {final_samples} spp reached"
         )),
         "{stdout}"
     );
@@ -178,6 +183,22 @@ fn a_progressive_render_that_reaches_spp_equals_the_one_shot_render() {
     assert_eq!(
         std::fs::read(dir.path().join("p.png")).unwrap(),
         std::fs::read(dir.path().join("one.png")).unwrap()
+    );
+}
+
+#[test]
+fn a_progressive_render_of_one_pass_says_one_pass() {
+    let dir = temp_dir();
+    // One sample is one pass: the render stops at --spp after it.
+    let out = run_in(
+        dir.path(),
+        &args("p.exr", &["--spp", "1", "--time-limit", "600"]),
+    );
+    assert!(out.status.success(), "{out:?}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("progressive: 1 pass, 1 spp reached, stopped by samples"),
+        "{stdout}"
     );
 }
 

@@ -394,8 +394,8 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
     }
     let mut line = stats.summary_line();
     line.push_str(&format!(
-        "; progressive: {passes} passes, {} spp reached, stopped by {stopped_by} (time limit \
-         {time_limit} s)",
+        "; progressive: {}, {} spp reached, stopped by {stopped_by} (time limit {time_limit} s)",
+        pass_count(passes),
         accumulated.samples
     ));
     if abandoned_samples > 0 {
@@ -423,6 +423,15 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
         });
     }
     Ok(())
+}
+
+/// "1 pass", "N passes".
+fn pass_count(passes: u32) -> String {
+    if passes == 1 {
+        "1 pass".to_string()
+    } else {
+        format!("{passes} passes")
+    }
 }
 
 fn stage_stats(
