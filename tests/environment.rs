@@ -103,3 +103,119 @@ fn an_explicit_wrap_t_still_applies_to_the_environment() {
         "explicit wrap_t = periodic was not honoured: {centre:?}"
     );
 }
+
+/// A scene of one floor under the environment `environment` (TOML of the `[environment]`
+/// table's body), seen looking straight up from below it at the sky, path traced.
+fn sky_scene(environment: &str, texture: &str) -> String {
+    format!(
+        "[render]\nwidth = 4\nheight = 4\nspp = 4\nintegrator = \"path\"\n\n\
+         [camera]\ntype = \"pinhole\"\neye = [0, 0, 0]\ntarget = [0, 1, 0]\n\
+         up = [0, 0, -1]\nfov = 10\n\n\
+         [[material]]\nname = \"floor\"\nbase_color = [0.5, 0.5, 0.5]\n\n\
+         [[sphere]]\ncenter = [0, -5, 0]\nradius = 1\nmaterial = \"floor\"\n\n\
+         {texture}\n[environment]\n{environment}\n"
+    )
+}
+
+/// Renders `scene` into `out.exr` (which holds `previous` bytes before) and returns the exit
+/// status, the error text and whether `out.exr` still holds `previous`.
+fn render_over(dir: &Path, scene: &str, previous: &[u8]) -> (bool, String, bool) {
+    write(dir, "s.toml", scene);
+    std::fs::write(dir.join("out.exr"), previous).unwrap();
+    let output = run_in(
+        dir,
+        &["render", "s.toml", "-o", "out.exr", "--no-png", "--quiet"],
+    );
+    let kept = std::fs::read(dir.join("out.exr")).unwrap() == previous;
+    (
+        output.status.success(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+        kept,
+    )
+}
+
+#[test]
+fn intensity_scales_a_constant_environment_colour() {
+    // Radiance = colour x intensity, as for a map; the sky straight up shows it directly.
+    let dir = temp_dir();
+    for (intensity, expected) in [(2.0f32, 0.5f32), (0.5, 0.125)] {
+        let scene = sky_scene(
+            &format!("color = [0.25, 0.25, 0.25]\nintensity = {intensity}"),
+            "",
+        );
+        write(dir.path(), "s.toml", &scene);
+        let output = run_in(
+            dir.path(),
+            &["render", "s.toml", "-o", "sky.exr", "--no-png", "--quiet"],
+        );
+        assert!(output.status.success(), "{output:?}");
+        let image = read_exr(&dir.path().join("sky.exr"));
+        for channel in ["R", "G", "B"] {
+            for &value in image.channel(channel) {
+                assert!(
+                    (value - expected).abs() < 1e-6,
+                    "intensity {intensity}: sky {value}, expected {expected}"
+                );
+            }
+        }
+    }
+    // Alone, or making the colour overflow, it is refused, naming the file.
+    let previous = b"previous output";
+    for (environment, problem) in [
+        ("intensity = 2", "neither is given"),
+        (
+            "color = [1e38, 1e38, 1e38]\nintensity = 1e10",
+            "overflows to infinity",
+        ),
+        ("color = [1, 1, 1]\nintensity = -1", "must be >= 0"),
+    ] {
+        let (success, stderr, kept) =
+            render_over(dir.path(), &sky_scene(environment, ""), previous);
+        assert!(!success && kept, "{environment}: {stderr}");
+        assert!(
+            stderr.contains("s.toml")
+                && stderr.contains(problem)
+                && stderr.trim().lines().count() == 1,
+            "{environment}: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn an_environment_map_with_an_infinite_nan_or_negative_texel_is_refused() {
+    // A sun brighter than 65504 saved as half floats is stored as inf; a NaN; a negative
+    // radiance. Each used to render without a word (the infinite sun switched light
+    // sampling of the environment off and was dropped as non-finite samples).
+    let dir = temp_dir();
+    let (width, height) = (16usize, 8usize);
+    exr::prelude::write_rgba_file(dir.path().join("half_sun.exr"), width, height, |x, y| {
+        let value = if (x, y) == (3, 2) { 1.0e5f32 } else { 0.25 };
+        let half = exr::prelude::f16::from_f32(value);
+        (half, half, half, exr::prelude::f16::ONE)
+    })
+    .expect("half_sun.exr");
+    let single = |name: &str, bad: f32| {
+        exr::prelude::write_rgba_file(dir.path().join(name), width, height, |x, y| {
+            let value = if (x, y) == (5, 6) { bad } else { 0.25 };
+            (0.25f32, value, 0.25f32, 1.0f32)
+        })
+        .expect(name);
+    };
+    single("nan.exr", f32::NAN);
+    single("negative.exr", -100.0);
+    let previous = b"previous output";
+    for (file, problem) in [
+        ("half_sun.exr", "texel (3, 2) of level 0 has R = inf"),
+        ("nan.exr", "texel (5, 6) of level 0 has G = NaN"),
+        ("negative.exr", "texel (5, 6) has G = -100"),
+    ] {
+        let texture = format!("[[texture]]\nname = \"sky\"\nfile = \"{file}\"\n");
+        let scene = sky_scene("texture = \"sky\"", &texture);
+        let (success, stderr, kept) = render_over(dir.path(), &scene, previous);
+        assert!(!success && kept, "{file}: {stderr}");
+        assert!(
+            stderr.contains(file) && stderr.contains(problem) && stderr.trim().lines().count() == 1,
+            "{file}: {stderr}"
+        );
+    }
+}

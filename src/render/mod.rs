@@ -109,6 +109,18 @@ pub fn prepare_with_textures(
     // A lat-long environment is importance sampled (built once here; Whitted reads only the
     // mean).
     if let crate::scene::Environment::LatLong { texture, intensity } = scene.environment {
+        // Radiance is never negative: a negative texel would subtract light wherever it is
+        // seen, and the sampling distribution (built from luminance >= 0) could not reach it.
+        let base = &textures[texture].pyramid().levels[0];
+        if let Some((x, y, channel, value)) = base.find_texel(3, |v| v < 0.0) {
+            return Err(PrepareError::Invalid {
+                source_label: textures[texture].label().to_string(),
+                message: format!(
+                    "environment map texel ({x}, {y}) has {} = {value}; radiance must be >= 0",
+                    crate::texture::CHANNEL_NAMES[channel]
+                ),
+            });
+        }
         let map = crate::shading::EnvironmentMap::new(textures[texture].clone(), intensity);
         lights = lights.with_environment_map(std::sync::Arc::new(map));
     }

@@ -72,6 +72,30 @@ impl MipLevel {
         self.texels.get(y * self.width as usize + x)
     }
 
+    /// The first texel (row-major) with a channel that `bad` flags, as `(x, y, channel,
+    /// value)`, channels numbered R, G, B, A = 0..3; `channels` bounds which are looked at.
+    /// 8-bit levels hold only values in [0, 1] and are not read.
+    pub fn find_texel(
+        &self,
+        channels: usize,
+        bad: impl Fn(f32) -> bool,
+    ) -> Option<(u32, u32, usize, f32)> {
+        if matches!(self.texels, Texels::Byte { .. }) {
+            return None;
+        }
+        let width = self.width.max(1) as usize;
+        (0..self.texels.len()).find_map(|index| {
+            let texel = self.texels.get(index).to_array();
+            let channel = texel[..channels.min(4)].iter().position(|&v| bad(v))?;
+            Some((
+                (index % width) as u32,
+                (index / width) as u32,
+                channel,
+                texel[channel],
+            ))
+        })
+    }
+
     /// Every texel as linear RGBA f32, row-major (for tools and tests).
     pub fn to_rgba_f32(&self) -> Vec<[f32; 4]> {
         (0..self.texels.len())

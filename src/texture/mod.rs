@@ -181,6 +181,24 @@ pub enum TextureError {
         /// Size of the allocation that failed.
         bytes: u64,
     },
+    /// A texel holds an infinity or a NaN, which every lookup near it would spread.
+    #[error(
+        "{label}: texel ({x}, {y}) of level {level} has {channel} = {value}; a texture must \
+         hold finite values (a half-float EXR stores values above 65504 as inf)"
+    )]
+    NonFinite {
+        /// File path or label.
+        label: String,
+        /// Pyramid level (0 = full resolution).
+        level: usize,
+        /// Column and row of the texel.
+        x: u32,
+        y: u32,
+        /// R, G, B or A.
+        channel: &'static str,
+        /// The value found.
+        value: f32,
+    },
     /// Width or height is zero, too large, or does not match the texel count.
     #[error("{label}: bad dimensions: {message}")]
     Dimensions {
@@ -190,6 +208,9 @@ pub enum TextureError {
         message: String,
     },
 }
+
+/// Channel names in texel order, for messages.
+pub const CHANNEL_NAMES: [&str; 4] = ["R", "G", "B", "A"];
 
 static NEXT_TEXTURE_ID: AtomicU64 = AtomicU64::new(0);
 
@@ -232,6 +253,20 @@ impl Texture {
                 })?;
             MipPyramid::build(base, label)?
         };
+        // Stored levels, and levels built by averaging (where huge finite values can add up
+        // to an infinity), are checked alike.
+        for (index, level) in pyramid.levels.iter().enumerate() {
+            if let Some((x, y, channel, value)) = level.find_texel(4, |v| !v.is_finite()) {
+                return Err(TextureError::NonFinite {
+                    label: label.to_string(),
+                    level: index,
+                    x,
+                    y,
+                    channel: CHANNEL_NAMES[channel],
+                    value,
+                });
+            }
+        }
         Ok(Self::with_pyramid(label, pyramid))
     }
 

@@ -945,28 +945,34 @@ fn environment(
     loc: &Located,
 ) -> Result<Environment, SceneError> {
     let raw = e.get_ref();
+    // `intensity` scales the colour or the texture (radiance = colour or texel x intensity).
+    let intensity = match &raw.intensity {
+        Some(i) => non_negative(loc, i, "intensity")?,
+        None => 1.0,
+    };
     match (&raw.color, &raw.texture) {
         (Some(_), Some(_)) => Err(loc.at(e, "environment takes either color or texture, not both")),
-        (Some(c), None) => Ok(Environment::Color(color(
-            loc,
-            c,
-            "color",
-            ColorRange::NonNegative,
-        )?)),
+        (Some(c), None) => {
+            let radiance = color(loc, c, "color", ColorRange::NonNegative)? * intensity;
+            if !radiance.is_finite() {
+                return Err(loc.at(e, "color x intensity overflows to infinity"));
+            }
+            Ok(Environment::Color(radiance))
+        }
         (None, Some(name)) => {
             let texture = textures
                 .get(name.get_ref())
                 .copied()
                 .ok_or_else(|| unknown_name(loc, name, "texture", textures))?;
-            Ok(Environment::LatLong {
-                texture,
-                intensity: match &raw.intensity {
-                    Some(i) => non_negative(loc, i, "intensity")?,
-                    None => 1.0,
-                },
-            })
+            Ok(Environment::LatLong { texture, intensity })
         }
-        (None, None) => Ok(Environment::Color(Vec3::ZERO)),
+        (None, None) => match &raw.intensity {
+            Some(i) => Err(loc.at(
+                i,
+                "intensity scales the environment's color or texture, and neither is given",
+            )),
+            None => Ok(Environment::Color(Vec3::ZERO)),
+        },
     }
 }
 
