@@ -25,7 +25,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("usage: peer_traversal SCENE.toml RAYS.bin [passes]".into());
     }
     let passes: usize = args.get(3).map_or(Ok(5), |p| p.parse())?;
-    let scene = Arc::new(conetrace::scene::load::load_scene(std::path::Path::new(&args[1]))?);
+    let scene = Arc::new(conetrace::scene::load::load_scene(std::path::Path::new(
+        &args[1],
+    ))?);
     let options = RenderOptions::from_settings(&scene.settings);
     let mut settings = TracerSettings::for_render(&scene, &options);
     // `CONETRACE_NOT_ROBUST=1`: Embree's faster, non-watertight default instead of robust

@@ -117,6 +117,7 @@ pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) 
                         let tfar = shading::shadow_ray_end(
                             sample.distance,
                             shading::light_position(light).unwrap_or(Vec3::ZERO),
+                            0.0,
                         );
                         shadow_rays.push(TraceRay {
                             origin,

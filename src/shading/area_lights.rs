@@ -18,7 +18,9 @@
 //! - a sphere seen from outside is sampled by the cone of directions it subtends,
 //!   uniformly in solid angle: `cos theta` uniform in `[cos theta_max, 1]` with
 //!   `sin^2 theta_max = r^2 / d^2`, density `1 / (2 pi (1 - cos theta_max))` (pbrt-v4,
-//!   section 6.2.4); from inside it sends no light (its emission faces out);
+//!   section 6.2.4); from inside it sends no light (its emission faces out). The cone and
+//!   the sampled point are computed in f64 (`SphereCone`): close to the sphere they are
+//!   small differences of nearly equal values;
 //! - a triangle is sampled uniformly in the solid angle it subtends
 //!   ([`super::spherical_triangle`], Arvo's method), density `1 / Omega`, where that solid
 //!   angle `Omega` lies between [`MIN_SPHERICAL_SOLID_ANGLE`] and
@@ -265,37 +267,31 @@ impl AreaLight {
                 })
             }
             AreaShape::Sphere { center, radius } => {
-                let to_center = center - p;
-                let d2 = to_center.length_squared();
-                let r2 = radius * radius;
-                if d2 <= r2 {
-                    return None;
-                }
-                let d = d2.sqrt();
-                let axis = to_center / d;
-                let sin2_max = r2 / d2;
-                let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-                // 1 - cos theta_max without cancellation for small spheres.
-                let one_minus_cos_max = sin2_max / (1.0 + cos_max);
-                let one_minus_cos = u.x * one_minus_cos_max;
+                let cone = SphereCone::seen_from(p, center, radius)?;
+                let one_minus_cos = f64::from(u.x) * cone.one_minus_cos_max;
                 let cos_theta = 1.0 - one_minus_cos;
                 let sin2_theta = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0);
                 let sin_theta = sin2_theta.sqrt();
-                let phi = 2.0 * PI * u.y;
-                let (t, b) = orthonormal_basis(axis);
-                let wi =
-                    (axis * cos_theta + (t * phi.cos() + b * phi.sin()) * sin_theta).normalize();
-                // Nearest intersection along wi: d cos - sqrt(r^2 - d^2 sin^2).
-                let root = (r2 - d2 * sin2_theta).max(0.0).sqrt();
-                let distance = (d * cos_theta - root).max(0.0);
-                let point = p + wi * distance;
+                let phi = 2.0 * std::f64::consts::PI * f64::from(u.y);
+                let (t, b) = orthonormal_basis(cone.axis.as_vec3());
+                let (t, b) = (t.as_dvec3(), b.as_dvec3());
+                let wi = (cone.axis * cos_theta + (t * phi.cos() + b * phi.sin()) * sin_theta)
+                    .normalize();
+                // Nearest intersection along wi, d cos - sqrt(r^2 - d^2 sin^2), written as
+                // (d^2 - r^2) / (d cos + sqrt(...)) (the product of the two roots): the
+                // difference cancels when the point is close to the sphere, and an error in
+                // it of one f32 rounding of d put sampled points inside the sphere, whose
+                // shadow rays it then blocked.
+                let root = (cone.r2 - cone.d2 * sin2_theta).max(0.0).sqrt();
+                let distance = cone.d2_minus_r2 / (cone.d * cos_theta + root);
+                let point = p.as_dvec3() + wi * distance;
                 Some(AreaLightSample {
-                    direction_to_light: wi,
-                    distance,
-                    point,
+                    direction_to_light: wi.as_vec3().normalize(),
+                    distance: distance as f32,
+                    point: point.as_vec3(),
                     radiance: self.radiance,
-                    pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
-                    st: self.st_at(0.0, 0.0, point),
+                    pdf: cone.pdf(),
+                    st: self.st_at(0.0, 0.0, point.as_vec3()),
                 })
             }
         }
@@ -321,16 +317,70 @@ impl AreaLight {
                 }
             }
             AreaShape::Sphere { center, radius } => {
-                let d2 = (center - p).length_squared();
-                let r2 = radius * radius;
-                if d2 <= r2 {
-                    return 0.0;
-                }
-                let sin2_max = r2 / d2;
-                let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-                1.0 / (2.0 * PI * sin2_max / (1.0 + cos_max))
+                SphereCone::seen_from(p, center, radius).map_or(0.0, |cone| cone.pdf())
             }
         }
+    }
+
+    /// The magnitude of the coordinates the light's surface is computed from: its
+    /// vertices, or its centre and radius. Rounding places the surface (as an intersector
+    /// finds it, and a sampled point on it) a few roundings of this size off, wherever on
+    /// the surface the point is; a shadow ray stops that much short of its light
+    /// (`shading::shadow_ray_end`).
+    pub fn coordinate_scale(&self) -> f32 {
+        match self.shape {
+            AreaShape::Triangle { p, .. } => {
+                p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max)
+            }
+            AreaShape::Sphere { center, radius } => center.abs().max_element() + radius.abs(),
+        }
+    }
+}
+
+/// The cone of directions a sphere light subtends from a point outside it, in f64: near the
+/// sphere, `d^2 - r^2` and `1 - cos theta_max` are small differences of values near `r^2`
+/// and 1, which f32 left with a relative error of a few times 1e-3 at a gap of 1e-4 radii.
+struct SphereCone {
+    /// Unit direction to the centre.
+    axis: DVec3,
+    d: f64,
+    d2: f64,
+    r2: f64,
+    d2_minus_r2: f64,
+    /// `1 - cos theta_max`, with `sin^2 theta_max = r^2 / d^2`.
+    one_minus_cos_max: f64,
+}
+
+impl SphereCone {
+    /// The cone from `p`; `None` from inside the sphere or on it.
+    #[inline]
+    fn seen_from(p: Vec3, center: Vec3, radius: f32) -> Option<SphereCone> {
+        let to_center = center.as_dvec3() - p.as_dvec3();
+        let d2 = to_center.length_squared();
+        let r = f64::from(radius);
+        let r2 = r * r;
+        let d2_minus_r2 = d2 - r2;
+        if !(d2_minus_r2 > 0.0) || !d2.is_finite() {
+            return None;
+        }
+        let d = d2.sqrt();
+        let sin2_max = r2 / d2;
+        let cos_max = (d2_minus_r2 / d2).sqrt();
+        Some(SphereCone {
+            axis: to_center / d,
+            d,
+            d2,
+            r2,
+            d2_minus_r2,
+            // 1 - cos theta_max without cancellation.
+            one_minus_cos_max: sin2_max / (1.0 + cos_max),
+        })
+    }
+
+    /// Uniform density over the cone's solid angle.
+    #[inline]
+    fn pdf(&self) -> f32 {
+        (1.0 / (2.0 * std::f64::consts::PI * self.one_minus_cos_max)) as f32
     }
 }
 

@@ -190,27 +190,33 @@ impl SpawnPoint {
 /// roundings), so a surface the light sits on (a lamp on a wall) does not occlude it.
 pub const SHADOW_EPSILON: f32 = 1e-4;
 
-/// The far end (`tfar`) of a shadow ray towards a point light at `light`, `distance` away
-/// from the ray's origin (measured from that origin, so it carries only the relative
-/// rounding of `|light - origin|`). The ray stops [`SHADOW_EPSILON`] of the distance short
-/// of the light and, in addition, by the rounding of the light's own coordinates, which is
-/// as close as a light placed on a surface can be on it: at `|light| = 1e4` that is about
-/// 5e-3, more than `SHADOW_EPSILON` of a distance under 50. An infinite distance
-/// (directional lights) stays infinite.
+/// The far end (`tfar`) of a shadow ray towards a point light, or a point sampled on an
+/// area light, at `light`, `distance` away from the ray's origin (measured from that origin,
+/// so it carries only the relative rounding of `|light - origin|`). The ray stops
+/// [`SHADOW_EPSILON`] of the distance short of the light and, in addition, by the rounding
+/// of the coordinates the light is placed with: the larger of the light point's own and
+/// `surface_scale`, the magnitude of the coordinates of the surface it lies on
+/// ([`crate::shading::AreaLight::coordinate_scale`]; 0 for a point light). The intersector
+/// finds that surface a few such roundings from where the point was computed, wherever on
+/// it the point is: a point on a unit sphere light 1e-4 from the shading point, sampled and
+/// found 1e-7 apart, would otherwise have the light block its own shadow ray. At `|light| =
+/// 1e4` the margin is about 5e-3, more than `SHADOW_EPSILON` of a distance under 50. An
+/// infinite distance (directional lights) stays infinite.
 #[inline]
-pub fn shadow_ray_end(distance: f32, light: Vec3) -> f32 {
+pub fn shadow_ray_end(distance: f32, light: Vec3, surface_scale: f32) -> f32 {
     if !distance.is_finite() {
         return f32::INFINITY;
     }
-    let placement = light.abs().max_element() * gamma(7 + INTERSECTOR_SLACK);
+    let scale = light.abs().max_element().max(surface_scale);
+    let placement = scale * gamma(7 + INTERSECTOR_SLACK);
     (distance * (1.0 - SHADOW_EPSILON) - placement).max(0.0)
 }
 
-/// The shadow ray from `origin` (a spawn point's offset origin) to `target` (a point light
-/// or a sampled point on an area light): its unit direction and its far end
-/// ([`shadow_ray_end`] of the distance from `origin`); `None` when they coincide. A light
-/// without a position (`target` `None`: directional, environment) is reached along
-/// `direction_to_light`, unbounded.
+/// The shadow ray from `origin` (a spawn point's offset origin) to `target` (a point light,
+/// or a sampled point on an area light with the coordinate scale of the light's surface,
+/// 0 for a point light): its unit direction and its far end ([`shadow_ray_end`] of the
+/// distance from `origin`); `None` when they coincide. A light without a position (`target`
+/// `None`: directional, environment) is reached along `direction_to_light`, unbounded.
 ///
 /// The light itself is seen from the surface point, not from `origin`: the offset grows
 /// with the coordinates (about 0.1 units at 131072), and a light measured from there came
@@ -218,10 +224,10 @@ pub fn shadow_ray_end(distance: f32, light: Vec3) -> f32 {
 #[inline]
 pub fn shadow_ray_towards(
     origin: Vec3,
-    target: Option<Vec3>,
+    target: Option<(Vec3, f32)>,
     direction_to_light: Vec3,
 ) -> Option<(Vec3, f32)> {
-    let Some(target) = target else {
+    let Some((target, surface_scale)) = target else {
         return Some((direction_to_light, f32::INFINITY));
     };
     let to_target = target - origin;
@@ -229,7 +235,10 @@ pub fn shadow_ray_towards(
     if !(distance > 0.0 && distance.is_finite()) {
         return None;
     }
-    Some((to_target / distance, shadow_ray_end(distance, target)))
+    Some((
+        to_target / distance,
+        shadow_ray_end(distance, target, surface_scale),
+    ))
 }
 
 /// How far along the ray (`origin`, unit `direction`) tracing may start without skipping
@@ -465,15 +474,22 @@ mod tests {
 
     #[test]
     fn shadow_rays_stop_short_of_lights_at_every_distance() {
-        let near_origin = shadow_ray_end(2.0, Vec3::new(0.0, 2.0, 0.0));
+        let near_origin = shadow_ray_end(2.0, Vec3::new(0.0, 2.0, 0.0), 0.0);
         assert!(near_origin < 2.0 && near_origin > 2.0 * (1.0 - 2.0 * SHADOW_EPSILON));
         // A light 1e4 from the origin, 1 unit from the point: the rounding of its
         // coordinates (ULP 1e-3) dominates the relative shortfall.
         let far = Vec3::new(1e4, 1.0, 0.0);
-        let end = shadow_ray_end(1.0, far);
+        let end = shadow_ray_end(1.0, far, 0.0);
         assert!(end < 1.0 - 1e-3 && end > 0.99, "{end}");
-        assert_eq!(shadow_ray_end(f32::INFINITY, Vec3::ZERO), f32::INFINITY);
-        assert_eq!(shadow_ray_end(1e-9, far), 0.0);
+        assert_eq!(
+            shadow_ray_end(f32::INFINITY, Vec3::ZERO, 0.0),
+            f32::INFINITY
+        );
+        assert_eq!(shadow_ray_end(1e-9, far, 0.0), 0.0);
+        // A point sampled on a light whose surface is computed from coordinates of 1e4
+        // stops as short as a light at 1e4, wherever the point itself is.
+        let on_big_light = shadow_ray_end(1.0, Vec3::new(0.0, 1.0, 0.0), 1e4);
+        assert!(on_big_light < 1.0 - 1e-3, "{on_big_light}");
     }
 
     #[test]

@@ -111,7 +111,7 @@ fn light_batch(
                 continue;
             }
             let tfar = match shading::light_position(light) {
-                Some(position) => shading::shadow_ray_end(sample.distance, position),
+                Some(position) => shading::shadow_ray_end(sample.distance, position, 0.0),
                 None => f32::INFINITY,
             };
             rays.push(TraceRay {

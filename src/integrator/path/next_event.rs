@@ -137,7 +137,7 @@ pub(super) fn sample_light(
             (
                 sample.direction_to_light,
                 sample.distance,
-                shading::light_position(light),
+                shading::light_position(light).map(|position| (position, 0.0)),
                 sample.radiance_scale,
                 f32::INFINITY,
             )
@@ -163,7 +163,7 @@ pub(super) fn sample_light(
             (
                 sample.direction_to_light,
                 sample.distance,
-                Some(sample.point),
+                Some((sample.point, light.coordinate_scale())),
                 radiance,
                 sample.pdf,
             )

@@ -73,7 +73,8 @@ pub(super) fn queue_shadow_rays(
             continue;
         }
         let light_position = shading::light_position(light);
-        let Some((direction, tfar)) = shading::shadow_ray_towards(origin, light_position, wi)
+        let Some((direction, tfar)) =
+            shading::shadow_ray_towards(origin, light_position.map(|p| (p, 0.0)), wi)
         else {
             continue;
         };
@@ -93,7 +94,7 @@ pub(super) fn queue_shadow_rays(
 #[inline]
 pub(super) fn shadow_tfar(distance: f32, light: Option<Vec3>) -> f32 {
     match light {
-        Some(position) => shading::shadow_ray_end(distance, position),
+        Some(position) => shading::shadow_ray_end(distance, position, 0.0),
         None => f32::INFINITY,
     }
 }
