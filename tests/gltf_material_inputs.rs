@@ -233,3 +233,32 @@ fn check_tilted_normals(image: &ExrImage, tilted: [u8; 3]) {
         );
     }
 }
+
+/// `doubleSided` makes an emissive quad glow from both sides; without it, only its front
+/// (the side its counter-clockwise winding faces, +z here) emits. Seen from behind (-z),
+/// in the path tracer and in Whitted alike.
+#[test]
+fn double_sided_emitters_glow_from_behind_and_one_sided_ones_do_not() {
+    let dir = temp_dir();
+    for double_sided in [true, false] {
+        write_quad_gltf(
+            dir.path(),
+            serde_json::json!({
+                "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0},
+                "emissiveFactor": [1.0, 0.5, 0.25],
+                "doubleSided": double_sided
+            }),
+            &[],
+        );
+        let behind = CAMERA.replace("eye = [0, 0, 3]", "eye = [0, 0, -3]");
+        for integrator in ["path", "whitted"] {
+            let image = render_with(dir.path(), &behind, &["--integrator", integrator]);
+            let got = image.at("R", 32, 32);
+            let want = if double_sided { 1.0 } else { 0.0 };
+            assert!(
+                (got - want).abs() < 1e-6,
+                "{integrator}, doubleSided {double_sided}: {got} seen from behind, expected {want}"
+            );
+        }
+    }
+}

@@ -1188,3 +1188,92 @@ material = "lamp"
         }
     }
 }
+
+/// A two-sided emitter (`two_sided = true`, glTF's `doubleSided`) lights from its back as
+/// from its front: the quad lamp of [`quad_lit_plane`] turned to face away from the plane
+/// gives the plane the form-factor irradiance by light sampling, by BSDF sampling and by
+/// both, and nothing when it is one-sided. Seen from behind, it shows its radiance in the
+/// path tracer and in Whitted alike (Whitted used to show the back of every emitter and the
+/// path tracer none, and `doubleSided` was not read).
+#[test]
+fn a_two_sided_emitter_lights_and_shows_from_its_back() {
+    let dir = temp_dir();
+    write(dir.path(), "plane.obj", &square_obj(5.0, 0.0));
+    write(dir.path(), "lamp.obj", &square_obj(1.0, 0.0));
+    let scene = |two_sided: bool, eye_y: f32| {
+        format!(
+            r#"
+[render]
+width = 8
+height = 8
+spp = 256
+max_depth = 4
+
+[camera]
+type = "orthographic"
+eye = [0.0, {eye_y}, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+height = 0.02
+
+[[material]]
+name = "matte"
+base_color = [0.5, 0.5, 0.5]
+
+[[material]]
+name = "lamp"
+base_color = [0.0, 0.0, 0.0]
+emission = [2.0, 2.0, 2.0]
+two_sided = {two_sided}
+
+[[mesh]]
+file = "plane.obj"
+material = "matte"
+
+# Facing up, away from the plane.
+[[mesh]]
+file = "lamp.obj"
+material = "lamp"
+translate = [0.0, 1.0, 0.0]
+"#
+        )
+    };
+    let form_factor = 4.0 * corner_form_factor(1.0, 1.0, 1.0);
+    let expected = 0.5 / std::f64::consts::PI * (std::f64::consts::PI * 2.0 * form_factor);
+    for strategy in [
+        LightStrategy::MultipleImportance,
+        LightStrategy::LightSampling,
+        LightStrategy::BsdfSampling,
+    ] {
+        let tracer = PathTracer {
+            strategy,
+            ..PathTracer::default()
+        };
+        // The camera sits between the plane and the lamp, looking down at the plane.
+        for (two_sided, want) in [(true, expected), (false, 0.0)] {
+            let (pixels, _) =
+                render_with(load(dir.path(), &scene(two_sided, 0.5)), &tracer, |_| {});
+            let value = mean(&pixels)[0];
+            eprintln!("{strategy:?}, two-sided {two_sided}: {value} (expected {want})");
+            assert!(
+                (value - want).abs() < 0.02 * expected,
+                "{strategy:?}, two-sided {two_sided}: {value}, expected {want}"
+            );
+        }
+    }
+    // Below the lamp looking up at its back: its radiance, or black, in both integrators.
+    for (two_sided, want) in [(true, 2.0f64), (false, 0.0)] {
+        let mut text = scene(two_sided, 0.5);
+        text = text.replace("target = [0.0, 0.0, 0.0]", "target = [0.0, 2.0, 0.0]");
+        text = text.replace("up = [0.0, 0.0, -1.0]", "up = [0.0, 0.0, 1.0]");
+        let (path, _) = render_with(load(dir.path(), &text), &PathTracer::default(), |_| {});
+        let (whitted, _) = render_with(load(dir.path(), &text), &Whitted, |_| {});
+        for (name, pixels) in [("path", path), ("whitted", whitted)] {
+            let value = mean(&pixels)[0];
+            assert!(
+                (value - want).abs() < 1e-6,
+                "{name}, two-sided {two_sided}, seen from behind: {value}, expected {want}"
+            );
+        }
+    }
+}

@@ -202,6 +202,10 @@ pub struct Material {
     pub metallic_texture: Option<TextureBinding>,
     /// Texture multiplying `emission` (sRGB colour, glTF's `emissiveTexture`).
     pub emission_texture: Option<TextureBinding>,
+    /// Whether a triangle emits from both sides (glTF's `doubleSided`, TOML's
+    /// `two_sided`); otherwise only from its front, the side its winding faces. Spheres
+    /// always emit outward.
+    pub two_sided: bool,
     /// Tangent-space normal map (linear, +X along increasing s, +Y along decreasing t, as
     /// glTF and OpenGL-style maps store them); see `crate::shading::surface_inputs`.
     pub normal_texture: Option<TextureBinding>,
@@ -232,6 +236,7 @@ impl Default for Material {
             roughness_texture: None,
             metallic_texture: None,
             emission_texture: None,
+            two_sided: false,
             normal_texture: None,
             normal_scale: 1.0,
         }

@@ -4,7 +4,9 @@
 //!
 //! Emission is one-sided, as pbrt-v4's `DiffuseAreaLight` and Mitsuba 3's `area` emitter
 //! are by default: a triangle emits on the side its geometric normal points to (its
-//! winding, counter-clockwise seen from the front), a sphere outward. The emitted radiance
+//! winding, counter-clockwise seen from the front), a sphere outward. A material marked
+//! `two_sided` (glTF's `doubleSided`) emits from both sides ([`emits_towards`]): its
+//! triangles are sampled from either side, with twice the power. The emitted radiance
 //! is the material's `emission` factor, times its emission texture where it has one.
 //!
 //! Textured emitters: a sample carries the texture coordinates of its point (the triangle's
@@ -52,7 +54,8 @@ use glam::{DVec3, Vec2, Vec3};
 
 use super::bsdf::orthonormal_basis;
 use super::spherical_triangle;
-use crate::scene::SceneDescription;
+use crate::hit::SurfaceHit;
+use crate::scene::{Material, SceneDescription};
 use crate::texture::Texture;
 
 /// Luminance of a linear Rec. 709 colour.
@@ -121,10 +124,20 @@ fn spherical_corners(p: Vec3, triangle: &AreaShape) -> Option<([DVec3; 3], f32)>
         .then_some(([a, b, c], omega))
 }
 
+/// Whether `material`'s emission at `surface` reaches a viewer looking along
+/// `ray_direction`: from the front side, or from either side of a `two_sided` material.
+#[inline]
+pub fn emits_towards(material: &Material, surface: &SurfaceHit, ray_direction: Vec3) -> bool {
+    material.two_sided || surface.is_front_face(ray_direction)
+}
+
 /// One emissive triangle or sphere.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AreaLight {
     pub shape: AreaShape,
+    /// A triangle that emits from both sides (its material's `two_sided`); spheres are
+    /// sampled from outside only.
+    pub two_sided: bool,
     /// Radiance emitted from the front side: the material's emission factor, to be
     /// multiplied by the emission texture at the point when [`AreaLight::textured`] is set.
     pub radiance: Vec3,
@@ -197,7 +210,8 @@ impl AreaLight {
     /// the texture's mean for a textured light (see the module doc).
     pub fn power(&self) -> f32 {
         let mean = self.textured.map_or(Vec3::ONE, |t| t.mean);
-        luminance(self.radiance * mean) * self.area() * PI
+        let sides = if self.two_sided { 2.0 } else { 1.0 };
+        luminance(self.radiance * mean) * self.area() * PI * sides
     }
 
     /// Texture coordinates of the point with barycentrics `(b0, b1)` of a triangle light
@@ -248,7 +262,7 @@ impl AreaLight {
                 }
                 let distance = distance2.sqrt();
                 let wi = to_light / distance;
-                let cos_light = -wi.dot(normal);
+                let cos_light = self.facing_cosine(-wi.dot(normal));
                 if cos_light <= 0.0 {
                     // The back of a one-sided emitter.
                     return None;
@@ -307,7 +321,7 @@ impl AreaLight {
                 if distance2.is_nan() || distance2 <= 0.0 {
                     return 0.0;
                 }
-                let cos_light = -to_light.dot(normal) / distance2.sqrt();
+                let cos_light = self.facing_cosine(-to_light.dot(normal) / distance2.sqrt());
                 if cos_light <= 0.0 || area <= 0.0 {
                     return 0.0;
                 }
@@ -319,6 +333,18 @@ impl AreaLight {
             AreaShape::Sphere { center, radius } => {
                 SphereCone::seen_from(p, center, radius).map_or(0.0, |cone| cone.pdf())
             }
+        }
+    }
+
+    /// The cosine between the light's front normal and the direction towards the viewer as
+    /// the light's emission sees it: negative (no light) behind a one-sided triangle,
+    /// mirrored to the front for a two-sided one.
+    #[inline]
+    fn facing_cosine(&self, cos_front: f32) -> f32 {
+        if self.two_sided {
+            cos_front.abs()
+        } else {
+            cos_front
         }
     }
 
@@ -449,6 +475,7 @@ impl AreaLights {
                     .then(|| tri.map(|i| mesh.st.get(i as usize).copied().unwrap_or(Vec2::ZERO)));
                 out.lights.push(AreaLight {
                     shape: AreaShape::triangle(p),
+                    two_sided: scene.materials[mesh.material].two_sided,
                     radiance,
                     textured: texture.map(|t| TexturedEmission { corner_st, ..t }),
                 });
@@ -462,6 +489,7 @@ impl AreaLights {
             }
             out.sphere_light.push(Some(out.lights.len() as u32));
             out.lights.push(AreaLight {
+                two_sided: false,
                 shape: AreaShape::Sphere {
                     center: sphere.center,
                     radius: sphere.radius,
@@ -530,6 +558,7 @@ mod tests {
 
     fn quad_triangle() -> AreaLight {
         AreaLight {
+            two_sided: false,
             // Wound clockwise seen from above: it faces down.
             shape: AreaShape::triangle([
                 Vec3::new(-1.0, 2.0, -1.0),
@@ -559,6 +588,7 @@ mod tests {
     fn sphere_light_irradiance_is_l_pi_sin2() {
         // E = L pi sin^2(theta_max) for a surface facing a sphere light.
         let light = AreaLight {
+            two_sided: false,
             shape: AreaShape::Sphere {
                 center: Vec3::new(0.0, 3.0, 0.0),
                 radius: 1.0,
@@ -607,6 +637,7 @@ mod tests {
         // beside it: light samples give L times the projected solid angle.
         for height in [20.0f32, 2.0] {
             let light = AreaLight {
+                two_sided: false,
                 // Wound clockwise seen from above: it faces down.
                 shape: AreaShape::triangle([
                     Vec3::new(-1e4, height, -1e4),

@@ -110,8 +110,11 @@ pub(super) fn shade(
         write_material_aovs(image, ray.slot, &inputs);
     }
 
-    // Emission, from the front side only (one-sided emitters, `shading::area_lights`).
-    if material.emission.max_element() > 0.0 && surface.is_front_face(ray.direction) {
+    // Emission, from the front side unless the material is two-sided
+    // (`shading::area_lights`).
+    if material.emission.max_element() > 0.0
+        && shading::area_lights::emits_towards(material, &surface, ray.direction)
+    {
         let light = match context.surfaces.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(mesh) => lights.area.mesh_light(mesh, hit.primitive),
             GeometryRef::Spheres => lights.area.sphere_light(hit.primitive as usize),

@@ -614,6 +614,8 @@ impl Loader<'_> {
         }
         // KHR_materials_emissive_strength scales the emissive factor beyond [0, 1].
         material.emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+        // Double-sided materials are lit, and emit, on both sides (glTF 2.0, 3.9.5).
+        material.two_sided = m.double_sided();
         if let Some(info) = m.emissive_texture() {
             material.emission_texture = Some(self.binding(&info, ColorSpace::Srgb)?);
         }

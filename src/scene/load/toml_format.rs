@@ -275,6 +275,7 @@ struct RawMaterial {
     metallic: Option<Spanned<f64>>,
     metallic_roughness_texture: Option<Spanned<String>>,
     emission_texture: Option<Spanned<String>>,
+    two_sided: Option<bool>,
     normal_texture: Option<Spanned<String>>,
     normal_scale: Option<Spanned<Num>>,
 }
@@ -528,6 +529,9 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
                 return Err(loc.at(d, "attenuation_distance must be > 0"));
             }
             material.attenuation_distance = d.get_ref().0;
+        }
+        if let Some(two_sided) = m.two_sided {
+            material.two_sided = two_sided;
         }
         if let Some(e) = &m.emission {
             material.emission = color(loc, e, "emission", ColorRange::NonNegative)?;
