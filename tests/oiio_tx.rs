@@ -473,3 +473,92 @@ material = "matte"
     let whole = Texture::from_file(&tx, ColorSpace::Srgb).expect("whole .tx loads");
     assert_eq!(whole.level_count(), 7);
 }
+
+/// TIFFs as OpenImageIO writes them (libtiff: one SampleFormat value per channel) and a
+/// `maketx` `.tx` made from one texture a render: the emission texture of a sphere seen
+/// head-on gives its texel in the image, for 8-bit, 16-bit, half and float data. (The
+/// render's memory estimate read the header with a single-valued SampleFormat and refused
+/// every such file with "tag has invalid type".)
+#[test]
+fn tiffs_written_by_openimageio_and_maketx_texture_a_render() {
+    require_oiio();
+    let dir = common::temp_dir();
+    let colour = [0.5f32, 0.25, 0.125];
+    let pattern = format!("constant:color={},{},{}", colour[0], colour[1], colour[2]);
+    let mut files = Vec::new();
+    for depth in ["uint8", "uint16", "half", "float"] {
+        let name = format!("{depth}.tif");
+        run(Command::new("oiiotool").current_dir(dir.path()).args([
+            "--pattern",
+            &pattern,
+            "16x8",
+            "3",
+            "-d",
+            depth,
+            "-o",
+            &name,
+        ]));
+        files.push(name);
+    }
+    run(Command::new("maketx")
+        .current_dir(dir.path())
+        .args(["uint8.tif", "-o", "uint8.tx"]));
+    files.push("uint8.tx".to_string());
+    for file in &files {
+        common::write(
+            dir.path(),
+            "s.toml",
+            &format!(
+                r#"
+[render]
+width = 9
+height = 9
+[camera]
+eye = [0.0, 0.0, 4.0]
+target = [0.0, 0.0, 0.0]
+fov = 10.0
+[[texture]]
+name = "t"
+file = "{file}"
+color_space = "linear"
+[[material]]
+name = "m"
+base_color = [0.0, 0.0, 0.0]
+emission = [1.0, 1.0, 1.0]
+emission_texture = "t"
+[[sphere]]
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+material = "m"
+"#
+            ),
+        );
+        let out = common::run_in(
+            dir.path(),
+            &[
+                "render",
+                "s.toml",
+                "-o",
+                "out.exr",
+                "--quiet",
+                "--no-png",
+                "--integrator",
+                "whitted",
+            ],
+        );
+        assert!(
+            out.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let image = common::read_exr(&dir.path().join("out.exr"));
+        for (channel, expected) in ["R", "G", "B"].iter().zip(colour) {
+            let got = image.at(channel, 4, 4);
+            // 8-bit data holds the colour to within half a step of 1/255.
+            assert!(
+                (got - expected).abs() <= 0.6 / 255.0,
+                "{file}: {channel} = {got}, the texel is {expected}"
+            );
+        }
+    }
+}

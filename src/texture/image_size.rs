@@ -78,11 +78,16 @@ fn image_header<R: Read + Seek + std::io::BufRead>(
             tiff::ColorType::Multiband { bit_depth, .. } => bit_depth,
             _ => 32,
         };
-        // SampleFormat 3 is IEEE floating point.
-        let float = decoder
-            .find_tag_unsigned::<u16>(tiff::tags::Tag::SampleFormat)
+        // SampleFormat 3 is IEEE floating point. libtiff (and so OpenImageIO and maketx)
+        // writes one value per channel, other writers a single one.
+        let sample_formats = match decoder
+            .find_tag(tiff::tags::Tag::SampleFormat)
             .map_err(tiff_bad)?
-            == Some(3);
+        {
+            Some(value) => value.into_u16_vec().map_err(tiff_bad)?,
+            None => Vec::new(),
+        };
+        let float = sample_formats.first() == Some(&3);
         let bytes_per_texel = match (bits, float) {
             (8, false) => BYTE_TEXEL,
             (16, true) => HALF_TEXEL,
