@@ -1277,3 +1277,69 @@ translate = [0.0, 1.0, 0.0]
         }
     }
 }
+
+/// A floor inside a two-sided emitting sphere sees the sphere's inner wall over its whole
+/// upper hemisphere: a white-furnace-like check, the floor's radiance is its albedo times
+/// the wall's, under every strategy. (Light sampling found no light from inside a sphere,
+/// so it gave 0 and multiple importance sampling lost the light at the last bounce.)
+#[test]
+fn a_floor_inside_a_two_sided_emitting_sphere_sees_its_inner_wall() {
+    let dir = temp_dir();
+    write(dir.path(), "floor.obj", &square_obj(0.5, 0.0));
+    let scene = |two_sided: bool| {
+        format!(
+            r#"
+[render]
+width = 8
+height = 8
+spp = 64
+max_depth = 3
+
+[camera]
+type = "orthographic"
+eye = [0.0, 0.5, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+height = 0.2
+
+[[material]]
+name = "matte"
+base_color = [0.5, 0.5, 0.5]
+
+[[material]]
+name = "lamp"
+base_color = [0.0, 0.0, 0.0]
+emission = [3.0, 3.0, 3.0]
+two_sided = {two_sided}
+
+[[mesh]]
+file = "floor.obj"
+material = "matte"
+
+[[sphere]]
+center = [0.0, 0.3, 0.0]
+radius = 2.0
+material = "lamp"
+"#
+        )
+    };
+    for strategy in [
+        LightStrategy::MultipleImportance,
+        LightStrategy::LightSampling,
+        LightStrategy::BsdfSampling,
+    ] {
+        let tracer = PathTracer {
+            strategy,
+            ..PathTracer::default()
+        };
+        for (two_sided, want) in [(true, 1.5f64), (false, 0.0)] {
+            let (pixels, _) = render_with(load(dir.path(), &scene(two_sided)), &tracer, |_| {});
+            let value = mean(&pixels)[0];
+            eprintln!("{strategy:?}, two-sided {two_sided}: {value} (expected {want})");
+            assert!(
+                (value - want).abs() < 0.01 * 1.5,
+                "{strategy:?}, two-sided {two_sided}: {value}, expected {want}"
+            );
+        }
+    }
+}

@@ -202,9 +202,9 @@ pub struct Material {
     pub metallic_texture: Option<TextureBinding>,
     /// Texture multiplying `emission` (sRGB colour, glTF's `emissiveTexture`).
     pub emission_texture: Option<TextureBinding>,
-    /// Whether a triangle emits from both sides (glTF's `doubleSided`, TOML's
-    /// `two_sided`); otherwise only from its front, the side its winding faces. Spheres
-    /// always emit outward.
+    /// Whether a surface emits from both sides (glTF's `doubleSided`, TOML's
+    /// `two_sided`); otherwise only from its front, the side its winding faces (a sphere's
+    /// outside).
     pub two_sided: bool,
     /// Tangent-space normal map (linear, +X along increasing s, +Y along decreasing t, as
     /// glTF and OpenGL-style maps store them); see `crate::shading::surface_inputs`.

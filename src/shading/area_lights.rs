@@ -20,9 +20,11 @@
 //! - a sphere seen from outside is sampled by the cone of directions it subtends,
 //!   uniformly in solid angle: `cos theta` uniform in `[cos theta_max, 1]` with
 //!   `sin^2 theta_max = r^2 / d^2`, density `1 / (2 pi (1 - cos theta_max))` (pbrt-v4,
-//!   section 6.2.4); from inside it sends no light (its emission faces out). The cone and
-//!   the sampled point are computed in f64 (`SphereCone`): close to the sphere they are
-//!   small differences of nearly equal values;
+//!   section 6.2.4). The cone and the sampled point are computed in f64 (`SphereCone`):
+//!   close to the sphere they are small differences of nearly equal values. From inside,
+//!   a one-sided sphere sends no light (its emission faces out); a two-sided one is sampled
+//!   uniformly by area, all of it being in view, with the solid-angle density
+//!   `d^2 / (A |cos theta_l|)`;
 //! - a triangle is sampled uniformly in the solid angle it subtends
 //!   ([`super::spherical_triangle`], Arvo's method), density `1 / Omega`, where that solid
 //!   angle `Omega` lies between [`MIN_SPHERICAL_SOLID_ANGLE`] and
@@ -135,8 +137,8 @@ pub fn emits_towards(material: &Material, surface: &SurfaceHit, ray_direction: V
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AreaLight {
     pub shape: AreaShape,
-    /// A triangle that emits from both sides (its material's `two_sided`); spheres are
-    /// sampled from outside only.
+    /// A triangle or sphere that emits from both sides (its material's `two_sided`): a
+    /// sphere's inside then emits too, and is sampled from within.
     pub two_sided: bool,
     /// Radiance emitted from the front side: the material's emission factor, to be
     /// multiplied by the emission texture at the point when [`AreaLight::textured`] is set.
@@ -281,7 +283,9 @@ impl AreaLight {
                 })
             }
             AreaShape::Sphere { center, radius } => {
-                let cone = SphereCone::seen_from(p, center, radius)?;
+                let Some(cone) = SphereCone::seen_from(p, center, radius) else {
+                    return self.sample_sphere_inside(p, center, radius, u);
+                };
                 let one_minus_cos = f64::from(u.x) * cone.one_minus_cos_max;
                 let cos_theta = 1.0 - one_minus_cos;
                 let sin2_theta = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0);
@@ -331,9 +335,45 @@ impl AreaLight {
                 }
             }
             AreaShape::Sphere { center, radius } => {
-                SphereCone::seen_from(p, center, radius).map_or(0.0, |cone| cone.pdf())
+                match SphereCone::seen_from(p, center, radius) {
+                    Some(cone) => cone.pdf(),
+                    None if self.two_sided => {
+                        let normal = (point - center).as_dvec3().normalize_or_zero();
+                        inside_sphere_pdf(p, point.as_dvec3(), normal, radius).unwrap_or(0.0)
+                    }
+                    None => 0.0,
+                }
             }
         }
+    }
+
+    /// A point drawn uniformly by area on a two-sided sphere light, seen from `p` inside it
+    /// (all of the sphere is in view from there); `None` for a one-sided sphere, whose
+    /// inside is dark, or a degenerate sample (`p` on the sampled point).
+    fn sample_sphere_inside(
+        &self,
+        p: Vec3,
+        center: Vec3,
+        radius: f32,
+        u: Vec2,
+    ) -> Option<AreaLightSample> {
+        if !self.two_sided {
+            return None;
+        }
+        let normal = super::bsdf::sample_uniform_sphere(u).as_dvec3();
+        let point = center.as_dvec3() + normal * f64::from(radius);
+        let pdf = inside_sphere_pdf(p, point, normal, radius)?;
+        let to_light = point - p.as_dvec3();
+        let distance = to_light.length();
+        let point = point.as_vec3();
+        Some(AreaLightSample {
+            direction_to_light: (to_light / distance).as_vec3().normalize(),
+            distance: distance as f32,
+            point,
+            radiance: self.radiance,
+            pdf,
+            st: self.st_at(0.0, 0.0, point),
+        })
     }
 
     /// The cosine between the light's front normal and the direction towards the viewer as
@@ -361,6 +401,18 @@ impl AreaLight {
             AreaShape::Sphere { center, radius } => center.abs().max_element() + radius.abs(),
         }
     }
+}
+
+/// Solid-angle density of reaching `point` (unit outward normal `normal`) on a sphere of
+/// `radius` sampled uniformly by area from `p` inside it: `d^2 / (A |cos theta_l|)`. `None`
+/// when the direction is degenerate.
+fn inside_sphere_pdf(p: Vec3, point: DVec3, normal: DVec3, radius: f32) -> Option<f32> {
+    let to_light = point - p.as_dvec3();
+    let distance2 = to_light.length_squared();
+    let area = 4.0 * std::f64::consts::PI * f64::from(radius) * f64::from(radius);
+    let cos_light = (to_light.dot(normal) / distance2.sqrt()).abs();
+    let pdf = distance2 / (area * cos_light);
+    (distance2 > 0.0 && pdf.is_finite() && pdf > 0.0).then_some(pdf as f32)
 }
 
 /// The cone of directions a sphere light subtends from a point outside it, in f64: near the
@@ -489,7 +541,7 @@ impl AreaLights {
             }
             out.sphere_light.push(Some(out.lights.len() as u32));
             out.lights.push(AreaLight {
-                two_sided: false,
+                two_sided: scene.materials[sphere.material].two_sided,
                 shape: AreaShape::Sphere {
                     center: sphere.center,
                     radius: sphere.radius,
@@ -602,6 +654,51 @@ mod tests {
         assert!(light
             .sample(Vec3::new(0.0, 3.2, 0.0), Vec2::splat(0.5))
             .is_none());
+    }
+
+    #[test]
+    fn a_two_sided_sphere_light_lights_its_inside_with_l_pi() {
+        // Inside, every direction meets the emitting wall: E = L pi, whatever the point.
+        // Estimated over a 500 x 500 grid of stratified sample positions.
+        let light = AreaLight {
+            two_sided: true,
+            shape: AreaShape::Sphere {
+                center: Vec3::new(0.5, 1.0, -0.25),
+                radius: 2.0,
+            },
+            radiance: Vec3::splat(2.0),
+            textured: None,
+        };
+        let n = Vec3::new(0.6, 0.8, 0.0);
+        let side = 500;
+        for p in [Vec3::new(0.5, 1.0, -0.25), Vec3::new(1.9, 1.2, 0.3)] {
+            let mut sum = 0.0f64;
+            for i in 0..side {
+                for j in 0..side {
+                    let u = (Vec2::new(i as f32, j as f32) + 0.5) / side as f32;
+                    let s = light.sample(p, u).expect("inside a two-sided sphere");
+                    assert!((light.pdf(p, s.point) - s.pdf).abs() <= 2e-3 * s.pdf, "pdf");
+                    sum += f64::from(s.radiance.x * s.direction_to_light.dot(n).max(0.0) / s.pdf);
+                }
+            }
+            let e = sum / (side * side) as f64;
+            let expected = 2.0 * std::f64::consts::PI;
+            assert!(
+                (e - expected).abs() < 2e-3 * expected,
+                "at {p}: {e} vs {expected}"
+            );
+        }
+        let one_sided = AreaLight {
+            two_sided: false,
+            ..light
+        };
+        assert!(one_sided
+            .sample(Vec3::new(0.5, 1.0, -0.25), Vec2::splat(0.3))
+            .is_none());
+        assert_eq!(
+            one_sided.pdf(Vec3::new(0.5, 1.0, -0.25), Vec3::new(0.5, 3.0, -0.25)),
+            0.0
+        );
     }
 
     #[test]

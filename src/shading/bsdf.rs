@@ -84,6 +84,16 @@ pub fn sample_cosine_hemisphere(n: Vec3, u: Vec2) -> Vec3 {
     (t * d.x + b * d.y + n * z).normalize()
 }
 
+/// A unit vector uniform on the sphere (density `1 / 4 pi`): `z` uniform in `[-1, 1]`,
+/// azimuth uniform (pbrt-v4, section A.5.2).
+#[inline]
+pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
 /// Shirley and Chiu's concentric map from the unit square to the unit disk, which keeps
 /// strata compact.
 #[inline]

@@ -148,12 +148,7 @@ pub(crate) fn chi_square_directions(
 }
 
 /// A random unit vector, uniform on the sphere.
-pub(crate) fn uniform_sphere(u: Vec2) -> Vec3 {
-    let z = 1.0 - 2.0 * u.x;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * std::f32::consts::PI * u.y;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
+pub(crate) use crate::shading::bsdf::sample_uniform_sphere as uniform_sphere;
 
 #[cfg(test)]
 mod tests {
