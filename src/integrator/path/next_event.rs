@@ -137,7 +137,7 @@ pub(super) fn sample_light(
             (
                 sample.direction_to_light,
                 sample.distance,
-                shading::light_position(light).map(|position| (position, 0.0)),
+                shading::light_position(light).map(|position| (position.as_dvec3(), 0.0)),
                 sample.radiance_scale,
                 f32::INFINITY,
             )
@@ -215,6 +215,12 @@ pub(super) fn sample_light(
     };
     let Some((direction, tfar)) = shading::shadow_ray_towards(origin, light_point, wi) else {
         return;
+    };
+    // A sphere lamp hides nothing of itself from the surface point, but the offset origin
+    // sits closer to it and sees less of it: the segment stops where it enters the lamp.
+    let tfar = match light {
+        LightRef::Area(index) => lights.area.lights[index].clip_shadow_ray(origin, direction, tfar),
+        _ => tfar,
     };
     waves.shadows.push(ShadowRay {
         origin,

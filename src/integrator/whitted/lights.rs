@@ -74,7 +74,7 @@ pub(super) fn queue_shadow_rays(
         }
         let light_position = shading::light_position(light);
         let Some((direction, tfar)) =
-            shading::shadow_ray_towards(origin, light_position.map(|p| (p, 0.0)), wi)
+            shading::shadow_ray_towards(origin, light_position.map(|p| (p.as_dvec3(), 0.0)), wi)
         else {
             continue;
         };
