@@ -219,3 +219,53 @@ fn an_environment_map_with_an_infinite_nan_or_negative_texel_is_refused() {
         );
     }
 }
+
+/// An emission texture with a negative texel is refused like a negative environment map,
+/// naming the file, the material and the texel, with the previous output kept; the same
+/// texture as a base colour is accepted. (It rendered pixels of -1 below a lamp.)
+#[test]
+fn an_emission_texture_with_a_negative_texel_is_refused() {
+    let dir = temp_dir();
+    exr::prelude::write_rgba_file(dir.path().join("minus.exr"), 8, 4, |x, y| {
+        let value = if (x, y) == (6, 1) { -1.0f32 } else { 0.5 };
+        (0.5f32, 0.5f32, value, 1.0f32)
+    })
+    .expect("minus.exr");
+    let scene = |key: &str| {
+        format!(
+            r#"
+[render]
+width = 4
+height = 4
+[camera]
+eye = [0.0, 0.0, 3.0]
+target = [0.0, 0.0, 0.0]
+fov = 30.0
+[[texture]]
+name = "t"
+file = "minus.exr"
+color_space = "linear"
+[[material]]
+name = "glow"
+emission = [1.0, 1.0, 1.0]
+{key} = "t"
+[[sphere]]
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+material = "glow"
+"#
+        )
+    };
+    let previous = b"previous output";
+    let (success, stderr, kept) = render_over(dir.path(), &scene("emission_texture"), previous);
+    assert!(!success && kept, "{stderr}");
+    assert!(
+        stderr.contains("minus.exr")
+            && stderr.contains("material 'glow'")
+            && stderr.contains("texel (6, 1) has B = -1")
+            && stderr.trim().lines().count() == 1,
+        "{stderr}"
+    );
+    let (success, stderr, _) = render_over(dir.path(), &scene("base_color_texture"), previous);
+    assert!(success, "{stderr}");
+}

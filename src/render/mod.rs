@@ -100,6 +100,34 @@ pub fn prepare_with_textures(
     let scene_radius = surfaces
         .bounds
         .map_or(0.0, |(lower, upper)| 0.5 * (upper - lower).length());
+    // Emitted radiance is never negative either: an emission texture with a negative
+    // texel would subtract light where it is seen (the factor `emission` is checked on
+    // load).
+    for material in scene
+        .materials
+        .iter()
+        .filter(|m| m.emission != glam::Vec3::ZERO)
+    {
+        let Some(texture) = material
+            .emission_texture
+            .as_ref()
+            .and_then(|binding| textures.get(binding.texture))
+        else {
+            continue;
+        };
+        let base = &texture.pyramid().levels[0];
+        if let Some((x, y, channel, value)) = base.find_texel(3, |v| v < 0.0) {
+            return Err(PrepareError::Invalid {
+                source_label: texture.label().to_string(),
+                message: format!(
+                    "emission texture of material '{}': texel ({x}, {y}) has {} = {value}; \
+                     radiance must be >= 0",
+                    material.name,
+                    crate::texture::CHANNEL_NAMES[channel]
+                ),
+            });
+        }
+    }
     let mut lights = crate::shading::SceneLights::with_area_lights(
         &scene.lights,
         environment_mean,
