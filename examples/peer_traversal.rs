@@ -24,6 +24,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if args.len() < 3 {
         return Err("usage: peer_traversal SCENE.toml RAYS.bin [passes]".into());
     }
+    // As on every tracing thread of a render (`embree::enable_flush_denormals`).
+    conetrace::embree::enable_flush_denormals();
     let passes: usize = args.get(3).map_or(Ok(5), |p| p.parse())?;
     let scene = Arc::new(conetrace::scene::load::load_scene(std::path::Path::new(
         &args[1],
