@@ -110,6 +110,18 @@ impl MipLevel {
     }
 }
 
+/// `(a + b) / 2` as `maketx` rounds it, in f32; halved before adding when the sum
+/// overflows (texels above `f32::MAX / 2`, which a file may hold, averaged to infinity).
+#[inline]
+fn midpoint(a: f32, b: f32) -> f32 {
+    let sum = a + b;
+    if sum.is_infinite() && a.is_finite() && b.is_finite() {
+        0.5 * a + 0.5 * b
+    } else {
+        0.5 * sum
+    }
+}
+
 /// The next coarser level of a `sw` x `sh` level whose texels `texel(x, y)` gives, by the
 /// `maketx` box rule, in f32.
 fn halve(
@@ -130,7 +142,7 @@ fn halve(
                 let c = texel(2 * x, 2 * y + 1);
                 let d = texel(2 * x + 1, 2 * y + 1);
                 texels.push(std::array::from_fn(|k| {
-                    0.5 * (0.5 * (a[k] + b[k]) + 0.5 * (c[k] + d[k]))
+                    midpoint(midpoint(a[k], b[k]), midpoint(c[k], d[k]))
                 }));
             }
         }
@@ -297,6 +309,24 @@ mod tests {
             assert!((mean(l) - m0).abs() < 1e-5);
         }
         assert_eq!(p.memory_bytes(), (128 + 32 + 8 + 2 + 1) * 16);
+    }
+
+    #[test]
+    fn texels_near_the_largest_float_average_without_overflow() {
+        // 3e38 + 3e38 overflows f32; the file's values are finite, so are the levels.
+        let texels = (0..16)
+            .map(|i| {
+                let v = if i % 2 == 0 { 3.0e38 } else { 2.0e38 };
+                [v, v, v, 1.0]
+            })
+            .collect();
+        let base = MipLevel::new(4, 4, texels).unwrap();
+        let pyramid = MipPyramid::build(base, "huge").unwrap();
+        for l in &pyramid.levels[1..] {
+            assert!(l.find_texel(4, |v| !v.is_finite()).is_none());
+            let t = l.texel(0, 0);
+            assert!((t[0] - 2.5e38).abs() < 1e32, "{}", t[0]);
+        }
     }
 
     #[test]
