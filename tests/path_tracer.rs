@@ -47,6 +47,25 @@ fn mean(pixels: &[[f32; 3]]) -> [f64; 3] {
     sum.map(|s| s / pixels.len() as f64)
 }
 
+/// Renders `text` with `integrator` and checks the red channel's mean over the image is
+/// `want` within `tolerance` (absolute), printing it under `label`.
+fn assert_mean_red<I: Integrator>(
+    dir: &Path,
+    text: &str,
+    integrator: &I,
+    want: f64,
+    tolerance: f64,
+    label: &str,
+) {
+    let (pixels, _) = render_with(load(dir, text), integrator, |_| {});
+    let value = mean(&pixels)[0];
+    eprintln!("{label}: {value} (expected {want})");
+    assert!(
+        (value - want).abs() < tolerance,
+        "{label}: {value}, expected {want}"
+    );
+}
+
 /// Materials the white furnace holds to "reflects everything": one line each.
 /// The rough conductors are white (F0 = 1) GGX metals from nearly smooth to glTF's roughest;
 /// their single-scattering lobes alone keep as little as 0.31 of the light at roughness 1
@@ -1178,13 +1197,8 @@ material = "lamp"
 "#,
                 eye[0], eye[1], eye[2]
             );
-            let (pixels, _) = render_with(load(dir.path(), &text), &PathTracer::default(), |_| {});
-            let value = mean(&pixels)[0];
-            eprintln!("gap {gap}, max_depth {max_depth}: {value} (expected 0.5)");
-            assert!(
-                (value - 0.5).abs() < 2e-3,
-                "gap {gap}, max_depth {max_depth}: {value}, expected 0.5"
-            );
+            let label = format!("gap {gap}, max_depth {max_depth}");
+            assert_mean_red(dir.path(), &text, &PathTracer::default(), 0.5, 2e-3, &label);
         }
     }
 }
@@ -1251,14 +1265,9 @@ translate = [0.0, 1.0, 0.0]
         };
         // The camera sits between the plane and the lamp, looking down at the plane.
         for (two_sided, want) in [(true, expected), (false, 0.0)] {
-            let (pixels, _) =
-                render_with(load(dir.path(), &scene(two_sided, 0.5)), &tracer, |_| {});
-            let value = mean(&pixels)[0];
-            eprintln!("{strategy:?}, two-sided {two_sided}: {value} (expected {want})");
-            assert!(
-                (value - want).abs() < 0.02 * expected,
-                "{strategy:?}, two-sided {two_sided}: {value}, expected {want}"
-            );
+            let label = format!("{strategy:?}, two-sided {two_sided}");
+            let text = scene(two_sided, 0.5);
+            assert_mean_red(dir.path(), &text, &tracer, want, 0.02 * expected, &label);
         }
     }
     // Below the lamp looking up at its back: its radiance, or black, in both integrators.
@@ -1333,13 +1342,8 @@ material = "lamp"
             ..PathTracer::default()
         };
         for (two_sided, want) in [(true, 1.5f64), (false, 0.0)] {
-            let (pixels, _) = render_with(load(dir.path(), &scene(two_sided)), &tracer, |_| {});
-            let value = mean(&pixels)[0];
-            eprintln!("{strategy:?}, two-sided {two_sided}: {value} (expected {want})");
-            assert!(
-                (value - want).abs() < 0.01 * 1.5,
-                "{strategy:?}, two-sided {two_sided}: {value}, expected {want}"
-            );
+            let label = format!("{strategy:?}, two-sided {two_sided}");
+            assert_mean_red(dir.path(), &scene(two_sided), &tracer, want, 0.015, &label);
         }
     }
 }
@@ -1418,12 +1422,13 @@ translate = [10000.0, {}, 10000.0]
         ..PathTracer::default()
     };
     for (name, text, expected) in [("sphere", sphere, 0.5), ("quad", quad, quad_expected)] {
-        let (pixels, _) = render_with(load(dir.path(), &text), &tracer, |_| {});
-        let value = mean(&pixels)[0];
-        eprintln!("{name}: {value} (expected {expected})");
-        assert!(
-            (value - expected).abs() < 2.5e-3 * expected,
-            "{name}: {value}, expected {expected}"
+        assert_mean_red(
+            dir.path(),
+            &text,
+            &tracer,
+            expected,
+            2.5e-3 * expected,
+            name,
         );
     }
 }

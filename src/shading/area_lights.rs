@@ -395,7 +395,7 @@ impl AreaLight {
         let to_center = center.as_dvec3() - origin.as_dvec3();
         let r2 = f64::from(radius) * f64::from(radius);
         let outside = to_center.length_squared() - r2;
-        if !(outside > 0.0) {
+        if outside.is_nan() || outside <= 0.0 {
             return 0.0;
         }
         let direction = direction.as_dvec3();
