@@ -562,3 +562,93 @@ material = "m"
         }
     }
 }
+
+/// A `.tx` made with a ringing filter (`maketx --filter lanczos3`) from a bright band on
+/// black (rows 30-32, along the horizon of a lat-long map) holds negative texels in its coarser levels. Seen as an emission texture from
+/// far (a coarse level) and as an environment map, it must render no negative radiance;
+/// the emission rendered pixels of -0.27 here before (and, in a review, -0.23 through an
+/// environment map).
+#[test]
+fn a_ringing_tx_renders_no_negative_radiance() {
+    require_oiio();
+    let dir = common::temp_dir();
+    exr::prelude::write_rgb_file(dir.path().join("dot.exr"), 64, 64, |x, y| {
+        let v = if (30..33).contains(&y) && x < 48 {
+            10.0f32
+        } else {
+            0.0
+        };
+        (v, v, v)
+    })
+    .expect("dot.exr");
+    run(Command::new("maketx").current_dir(dir.path()).args([
+        "dot.exr", "--filter", "lanczos3", "-d", "float", "-o", "dot.tx",
+    ]));
+    let ringing =
+        Texture::from_file(&dir.path().join("dot.tx"), ColorSpace::Linear).expect("dot.tx loads");
+    let coarse_minimum = ringing.pyramid().levels[1..]
+        .iter()
+        .flat_map(|level| level.to_rgba_f32())
+        .map(|t| t[0])
+        .fold(f32::INFINITY, f32::min);
+    assert!(
+        coarse_minimum < -0.01,
+        "maketx left no ringing: {coarse_minimum}"
+    );
+    common::write(dir.path(), "quad.obj", &common::square_obj(5.0, 0.0));
+    let texture = "[[texture]]\nname = \"t\"\nfile = \"dot.tx\"\ncolor_space = \"linear\"\n";
+    let emitter = r#"
+[[material]]
+name = "glow"
+base_color = [0.0, 0.0, 0.0]
+emission = [1.0, 1.0, 1.0]
+emission_texture = "t"
+texture_scale = [16.0, 16.0]
+[[mesh]]
+file = "quad.obj"
+material = "glow"
+"#;
+    let camera = "[camera]\neye = [0.0, 5.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, -1.0]\nfov = 20.0\n";
+    let sky = "[camera]\neye = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, -1.0]\nfov = 120.0\n[environment]\ntexture = \"t\"\n";
+    for (name, scene) in [
+        ("emission", format!("{camera}{texture}{emitter}")),
+        ("environment", format!("{sky}{texture}")),
+    ] {
+        common::write(dir.path(), "s.toml", &scene);
+        for integrator in ["whitted", "path"] {
+            let out = common::run_in(
+                dir.path(),
+                &[
+                    "render",
+                    "s.toml",
+                    "-o",
+                    "out.exr",
+                    "--quiet",
+                    "--no-png",
+                    "--width",
+                    "32",
+                    "--height",
+                    "32",
+                    "--spp",
+                    "4",
+                    "--filter",
+                    "trilinear",
+                    "--integrator",
+                    integrator,
+                ],
+            );
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let image = common::read_exr(&dir.path().join("out.exr"));
+            let red = image.channel("R");
+            let minimum = red.iter().copied().fold(f32::INFINITY, f32::min);
+            let maximum = red.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            println!("{name}, {integrator}: R in [{minimum}, {maximum}]");
+            assert!(minimum >= 0.0, "{name}, {integrator}: a pixel of {minimum}");
+            assert!(maximum > 0.0, "{name}, {integrator}: the band is not seen");
+        }
+    }
+}

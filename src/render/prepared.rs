@@ -396,7 +396,9 @@ fn environment_radiance_with(
                 ),
                 None => textures[*texture].sample(&q, options),
             };
-            texel.truncate() * *intensity
+            // Radiance is never negative; a filtered lookup of stored levels made with a
+            // ringing filter (`maketx --filter lanczos3`) can be.
+            (texel.truncate() * *intensity).max(Vec3::ZERO)
         }
     }
 }

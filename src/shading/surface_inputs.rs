@@ -90,7 +90,9 @@ pub fn surface_inputs(
     // A black emissive factor emits nothing whatever the texture says: no lookup.
     let emission = match &material.emission_texture {
         Some(binding) if material.emission != Vec3::ZERO => {
-            material.emission * sample(TextureSlot::Emission, binding).truncate()
+            // Never negative, though a filtered lookup of stored levels made with a ringing
+            // filter (`maketx --filter lanczos3`) can be.
+            (material.emission * sample(TextureSlot::Emission, binding).truncate()).max(Vec3::ZERO)
         }
         _ => material.emission,
     };
