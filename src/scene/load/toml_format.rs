@@ -359,6 +359,9 @@ fn color(
     range: ColorRange,
 ) -> Result<Vec3, SceneError> {
     let c = v3(*value.get_ref());
+    if let Some(tiny) = c.to_array().into_iter().find(|v| v.is_subnormal()) {
+        return Err(loc.at(value, below_normal(key, tiny)));
+    }
     match range {
         ColorRange::Unit if c.min_element() < 0.0 || c.max_element() > 1.0 => Err(loc.at(
             value,
@@ -378,10 +381,21 @@ fn color(
     }
 }
 
+/// The message for a non-zero value below the smallest normal f32: rendering threads flush
+/// such values to zero (as Embree asks), so it would render as 0 without a word.
+fn below_normal(key: &str, value: f32) -> String {
+    format!(
+        "{key}: {value:e} is below the smallest normal float ({:e}), which renders as 0",
+        f32::MIN_POSITIVE
+    )
+}
+
 /// A number that must be >= 0 (an intensity), the error pointing at the value.
 fn non_negative(loc: &Located, value: &Spanned<Num>, key: &str) -> Result<f32, SceneError> {
     let x = value.get_ref().0;
-    if x >= 0.0 {
+    if x.is_subnormal() {
+        Err(loc.at(value, below_normal(key, x)))
+    } else if x >= 0.0 {
         Ok(x)
     } else {
         Err(loc.at(value, format!("{key} = {x} must be >= 0")))
@@ -1072,6 +1086,25 @@ material = "glass"
     fn syntax_errors_report_line_and_column() {
         let e = err("[render]\nwidth = = 3\n");
         assert!(e.starts_with("s.toml:2:"), "{e}");
+    }
+
+    #[test]
+    fn values_below_the_smallest_normal_float_are_refused() {
+        // 1e-38 is subnormal in f32; renders flush it to zero, so it rendered black.
+        let e = err("[[material]]\nname = 'm'\nemission = [1e-38, 0, 0]\n");
+        assert!(
+            e.starts_with("s.toml:3:") && e.contains("smallest normal"),
+            "{e}"
+        );
+        let e = err("[environment]\ncolor = [1, 1, 1]\nintensity = 1e-39\n");
+        assert!(
+            e.contains("intensity") && e.contains("smallest normal"),
+            "{e}"
+        );
+        // The smallest normal float itself is accepted.
+        let scene = parse_here("[[material]]\nname = 'm'\nemission = [1.1754944e-38, 0, 0]\n")
+            .expect("smallest normal accepted");
+        assert_eq!(scene.materials[0].emission.x, f32::MIN_POSITIVE);
     }
 
     #[test]
