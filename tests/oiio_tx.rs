@@ -474,6 +474,20 @@ material = "matte"
     assert_eq!(whole.level_count(), 7);
 }
 
+/// Renders `dir/s.toml` to `dir/out.exr` with `options`, fails the test (naming `what`)
+/// if the render fails, and returns the image.
+fn render_scene(dir: &Path, options: &[&str], what: &str) -> common::ExrImage {
+    let mut args = vec!["render", "s.toml", "-o", "out.exr", "--quiet", "--no-png"];
+    args.extend_from_slice(options);
+    let out = common::run_in(dir, &args);
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    common::read_exr(&dir.join("out.exr"))
+}
+
 /// TIFFs as OpenImageIO writes them (libtiff: one SampleFormat value per channel) and a
 /// `maketx` `.tx` made from one texture a render: the emission texture of a sphere seen
 /// head-on gives its texel in the image, for 8-bit, 16-bit, half and float data. (The
@@ -533,25 +547,7 @@ material = "m"
 "#
             ),
         );
-        let out = common::run_in(
-            dir.path(),
-            &[
-                "render",
-                "s.toml",
-                "-o",
-                "out.exr",
-                "--quiet",
-                "--no-png",
-                "--integrator",
-                "whitted",
-            ],
-        );
-        assert!(
-            out.status.success(),
-            "{file}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let image = common::read_exr(&dir.path().join("out.exr"));
+        let image = render_scene(dir.path(), &["--integrator", "whitted"], file);
         for (channel, expected) in ["R", "G", "B"].iter().zip(colour) {
             let got = image.at(channel, 4, 4);
             // 8-bit data holds the colour to within half a step of 1/255.
@@ -616,33 +612,19 @@ material = "glow"
     ] {
         common::write(dir.path(), "s.toml", &scene);
         for integrator in ["whitted", "path"] {
-            let out = common::run_in(
-                dir.path(),
-                &[
-                    "render",
-                    "s.toml",
-                    "-o",
-                    "out.exr",
-                    "--quiet",
-                    "--no-png",
-                    "--width",
-                    "32",
-                    "--height",
-                    "32",
-                    "--spp",
-                    "4",
-                    "--filter",
-                    "trilinear",
-                    "--integrator",
-                    integrator,
-                ],
-            );
-            assert!(
-                out.status.success(),
-                "{}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-            let image = common::read_exr(&dir.path().join("out.exr"));
+            let options = [
+                "--width",
+                "32",
+                "--height",
+                "32",
+                "--spp",
+                "4",
+                "--filter",
+                "trilinear",
+                "--integrator",
+                integrator,
+            ];
+            let image = render_scene(dir.path(), &options, name);
             let red = image.channel("R");
             let minimum = red.iter().copied().fold(f32::INFINITY, f32::min);
             let maximum = red.iter().copied().fold(f32::NEG_INFINITY, f32::max);

@@ -115,18 +115,8 @@ pub fn prepare_with_textures(
         else {
             continue;
         };
-        let base = &texture.pyramid().levels[0];
-        if let Some((x, y, channel, value)) = base.find_texel(3, |v| v < 0.0) {
-            return Err(PrepareError::Invalid {
-                source_label: texture.label().to_string(),
-                message: format!(
-                    "emission texture of material '{}': texel ({x}, {y}) has {} = {value}; \
-                     radiance must be >= 0",
-                    material.name,
-                    crate::texture::CHANNEL_NAMES[channel]
-                ),
-            });
-        }
+        let role = format!("emission texture of material '{}': texel", material.name);
+        refuse_negative_radiance(texture, &role)?;
     }
     let mut lights = crate::shading::SceneLights::with_area_lights(
         &scene.lights,
@@ -139,16 +129,7 @@ pub fn prepare_with_textures(
     if let crate::scene::Environment::LatLong { texture, intensity } = scene.environment {
         // Radiance is never negative: a negative texel would subtract light wherever it is
         // seen, and the sampling distribution (built from luminance >= 0) could not reach it.
-        let base = &textures[texture].pyramid().levels[0];
-        if let Some((x, y, channel, value)) = base.find_texel(3, |v| v < 0.0) {
-            return Err(PrepareError::Invalid {
-                source_label: textures[texture].label().to_string(),
-                message: format!(
-                    "environment map texel ({x}, {y}) has {} = {value}; radiance must be >= 0",
-                    crate::texture::CHANNEL_NAMES[channel]
-                ),
-            });
-        }
+        refuse_negative_radiance(&textures[texture], "environment map texel")?;
         let map = crate::shading::EnvironmentMap::new(textures[texture].clone(), intensity);
         lights = lights.with_environment_map(std::sync::Arc::new(map));
     }
@@ -168,6 +149,25 @@ pub fn prepare_with_textures(
         texture_filters,
         external_textures: None,
     })
+}
+
+/// Refuses a texture read as radiance (an emission texture, an environment map) whose
+/// level 0 holds a negative colour texel: `"{role} (x, y) has C = v; radiance must be >= 0"`.
+fn refuse_negative_radiance(
+    texture: &crate::texture::Texture,
+    role: &str,
+) -> Result<(), PrepareError> {
+    let base = &texture.pyramid().levels[0];
+    match base.find_texel(3, |v| v < 0.0) {
+        Some((x, y, channel, value)) => Err(PrepareError::Invalid {
+            source_label: texture.label().to_string(),
+            message: format!(
+                "{role} ({x}, {y}) has {} = {value}; radiance must be >= 0",
+                crate::texture::CHANNEL_NAMES[channel]
+            ),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// The film layers an AOV selection asks for (colour is always there).

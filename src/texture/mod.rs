@@ -253,8 +253,8 @@ impl Texture {
                 })?;
             MipPyramid::build(base, label)?
         };
-        // Stored levels, and levels built by averaging (where huge finite values can add up
-        // to an infinity), are checked alike.
+        // Stored levels (a `.tx` whose maker overflowed holds an inf in one) and levels
+        // built here are checked alike.
         for (index, level) in pyramid.levels.iter().enumerate() {
             if let Some((x, y, channel, value)) = level.find_texel(4, |v| !v.is_finite()) {
                 return Err(TextureError::NonFinite {
