@@ -12,6 +12,8 @@
 
 mod common;
 
+use std::io::Write;
+use std::os::unix::process::ExitStatusExt;
 use std::path::Path;
 use std::process::{Child, ExitStatus, Stdio};
 use std::thread::sleep;
@@ -21,7 +23,8 @@ use common::*;
 use conetrace::film::{read_exr, Film, Layer};
 use conetrace::render::work_tiles;
 use nix::sys::signal::{kill, Signal};
-use nix::unistd::Pid;
+use nix::sys::stat::Mode;
+use nix::unistd::{mkfifo, Pid};
 
 /// The header attribute of a partial render that lists its finished work tiles.
 const TILES_DONE_ATTRIBUTE: &str = "conetrace.tiles_done";
@@ -139,6 +142,12 @@ fn interrupted_render_with(
                 assert!(stderr.contains("--resume"), "{stderr}");
                 return spp;
             }
+            // Killed by the signal itself before the program reached `main` (only exec and
+            // dynamic loading come before the handler): nothing ran, so wait longer. A signal
+            // while the scene loads is caught; the FIFO test below pins that down.
+            None if status.signal() == Some(signal_name as i32) && stderr.is_empty() => {
+                delay_ms *= 2;
+            }
             Some(0) => {
                 // Finished before the signal: more work next time, fresh output.
                 std::fs::remove_file(dir.join(out)).expect("remove finished output");
@@ -248,6 +257,55 @@ fn sigterm_also_interrupts_with_status_3() {
     let (_, attributes) = read_exr(&dir.path().join("t.partial.exr")).expect("valid EXR");
     assert!(attributes.incomplete);
     assert!(attributes.strings.contains_key(TILES_DONE_ATTRIBUTE));
+}
+
+/// A signal while the scene is still being read is caught like one during rendering: status
+/// 3, one line saying nothing was written, and no file. The scene comes through a FIFO that
+/// the test fills only after signalling, so the signal surely lands inside scene loading.
+/// Both the one-shot and the progressive (`--time-limit`) render are checked. Before the
+/// handler was installed first thing, SIGTERM here killed the process outright.
+#[test]
+fn a_signal_while_the_scene_loads_exits_with_status_3_and_writes_nothing() {
+    let scene = "[camera]\neye = [0, 0, 3]\ntarget = [0, 0, 0]\n\n\
+                 [[sphere]]\ncenter = [0, 0, 0]\nradius = 1\n";
+    for (signal_name, extra) in [
+        (Signal::SIGTERM, &[][..]),
+        (Signal::SIGINT, &["--time-limit", "60"][..]),
+    ] {
+        let dir = temp_dir();
+        let fifo = dir.path().join("scene.toml");
+        mkfifo(&fifo, Mode::S_IRUSR | Mode::S_IWUSR).expect("mkfifo");
+        let mut args = render_args(1, "early.exr");
+        args.insert(1, "scene.toml".into());
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let child = start(dir.path(), &args);
+        // Opening a FIFO for writing returns once a reader has opened it: conetrace is then
+        // inside scene loading, waiting for the text.
+        let mut writer = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&fifo)
+            .expect("open the FIFO for writing");
+        signal(&child, signal_name);
+        // Time for the handler to run before the text arrives.
+        sleep(Duration::from_millis(300));
+        // Fails (broken pipe) when the signal killed the reader; the status check reports it.
+        let _ = writer.write_all(scene.as_bytes());
+        drop(writer);
+        let (status, stderr) = finish(child);
+        assert_eq!(
+            status.code(),
+            Some(3),
+            "{signal_name} {extra:?}: {status}, {stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains("nothing written"), "{stderr}");
+        let mut left: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["scene.toml"], "{signal_name} {extra:?}");
+    }
 }
 
 #[test]

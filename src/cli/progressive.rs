@@ -244,10 +244,14 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
     let decoding = Instant::now();
     let (textures, texture_digests) = render_cmd::decode_textures(&scene, args.quiet)?;
     phases.textures = decoding.elapsed().as_secs_f64();
+    if INTERRUPTED.load(Ordering::SeqCst) {
+        return Err(render_cmd::nothing_written(
+            "the first pass finished",
+            &outputs.exr,
+        ));
+    }
     let signature =
         RenderSignature::new(&scene, args.scene.as_deref(), &options, &texture_digests)?;
-    INTERRUPTED.store(false, Ordering::SeqCst);
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
 
     let scene = Arc::new(scene);
     let preparing = Instant::now();
@@ -365,13 +369,10 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
     };
 
     let Some(mut stats) = last_stats else {
-        return Err(CommandError {
-            message: format!(
-                "interrupted before the first pass finished; nothing written to {}",
-                outputs.exr.display()
-            ),
-            status: EXIT_INTERRUPTED,
-        });
+        return Err(render_cmd::nothing_written(
+            "the first pass finished",
+            &outputs.exr,
+        ));
     };
     phases.write = write_seconds;
     phases.total = started.elapsed().as_secs_f64();

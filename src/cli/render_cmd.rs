@@ -254,6 +254,27 @@ pub(crate) fn memory_estimate(
 /// Set by the Ctrl-C / SIGTERM handler; render workers stop taking new tiles.
 pub(crate) static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
+/// Routes Ctrl-C and SIGTERM to [`INTERRUPTED`]. Called first thing in a render command, so
+/// that a signal while the scene loads or textures decode is caught too (status 3, nothing
+/// written) rather than killing the process by the default action.
+pub(crate) fn catch_interrupts() {
+    INTERRUPTED.store(false, Ordering::SeqCst);
+    // A second handler cannot be installed (e.g. when `run` is called twice in one
+    // process); the first one sets the same flag.
+    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+}
+
+/// The error of a render interrupted before it produced anything: status 3, nothing written.
+pub(crate) fn nothing_written(before: &str, target: &Path) -> CommandError {
+    CommandError {
+        message: format!(
+            "interrupted before {before}; nothing written to {}",
+            target.display()
+        ),
+        status: EXIT_INTERRUPTED,
+    }
+}
+
 /// Load the scene named by `args` (or the default one), with a camera.
 pub fn load(args: &RenderArgs) -> Result<SceneDescription, CommandError> {
     let mut scene = match &args.scene {
@@ -361,6 +382,7 @@ pub(crate) fn tonemap(
 }
 
 pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
+    catch_interrupts();
     if let Some(seconds) = args.time_limit {
         return crate::cli::progressive::run(args, seconds);
     }
@@ -394,6 +416,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let decoding = Instant::now();
     let (textures, texture_digests) = decode_textures(&scene, args.quiet)?;
     phases.textures = decoding.elapsed().as_secs_f64();
+    if INTERRUPTED.load(Ordering::SeqCst) {
+        return Err(nothing_written("rendering started", &outputs.partial_exr));
+    }
 
     let split = requested_split(args, &options)?;
     let signature =
@@ -409,11 +434,6 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     } else {
         None
     };
-    // A second handler cannot be installed (e.g. when `run` is called twice in one
-    // process); the first one sets the same flag.
-    INTERRUPTED.store(false, Ordering::SeqCst);
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
-
     let scene = Arc::new(scene);
     let (mut result, camera, part, tiles) = pool.install(|| -> Result<_, CommandError> {
         let preparing = Instant::now();
@@ -471,13 +491,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     phases.render = result.stats.seconds;
     result.stats.phases = Some(phases);
     if !complete && finished_count == 0 {
-        return Err(CommandError {
-            message: format!(
-                "interrupted before any tile finished; nothing written to {}",
-                outputs.partial_exr.display()
-            ),
-            status: EXIT_INTERRUPTED,
-        });
+        return Err(nothing_written("any tile finished", &outputs.partial_exr));
     }
     let mut attributes = ExrAttributes {
         software: Some(format!("conetrace {}", env!("CARGO_PKG_VERSION"))),
