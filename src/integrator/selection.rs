@@ -147,16 +147,7 @@ pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution
         reasons.push(format!("emissive geometry ({})", counted.join(", ")));
     }
     // Only materials some geometry uses: a rough material nothing wears changes no image.
-    let mut used = vec![false; scene.materials.len()];
-    let worn = scene.meshes.iter().map(|m| m.material);
-    let worn = worn.chain(scene.spheres.iter().map(|s| s.material));
-    let worn = worn.chain(scene.patches.iter().map(|p| p.material));
-    let worn = worn.chain(scene.height_patches.iter().map(|p| p.material));
-    for material in worn {
-        if let Some(flag) = used.get_mut(material) {
-            *flag = true;
-        }
-    }
+    let used = scene.worn_materials();
     let rough: Vec<&str> = scene
         .materials
         .iter()

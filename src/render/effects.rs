@@ -68,30 +68,7 @@ impl EffectSet {
                 because: why,
             })
         };
-        let used: Vec<bool> = {
-            let mut used = vec![false; scene.materials.len()];
-            for mesh in &scene.meshes {
-                if let Some(u) = used.get_mut(mesh.material) {
-                    *u = true;
-                }
-            }
-            for sphere in &scene.spheres {
-                if let Some(u) = used.get_mut(sphere.material) {
-                    *u = true;
-                }
-            }
-            for patch in &scene.patches {
-                if let Some(u) = used.get_mut(patch.material) {
-                    *u = true;
-                }
-            }
-            for patch in &scene.height_patches {
-                if let Some(u) = used.get_mut(patch.material) {
-                    *u = true;
-                }
-            }
-            used
-        };
+        let used = scene.worn_materials();
         let materials = || {
             scene
                 .materials

@@ -346,6 +346,28 @@ impl Default for RenderSettings {
 }
 
 impl SceneDescription {
+    /// The material index of every piece of geometry (each mesh, sphere, patch and height
+    /// patch once): the one list of what geometry exists, for questions such as "does any
+    /// geometry emit" or "which materials are worn".
+    pub fn geometry_materials(&self) -> impl Iterator<Item = usize> + '_ {
+        let meshes = self.meshes.iter().map(|m| m.material);
+        let spheres = self.spheres.iter().map(|s| s.material);
+        let patches = self.patches.iter().map(|p| p.material);
+        let heights = self.height_patches.iter().map(|p| p.material);
+        meshes.chain(spheres).chain(patches).chain(heights)
+    }
+
+    /// Which materials some geometry wears (`SceneDescription::materials` order).
+    pub fn worn_materials(&self) -> Vec<bool> {
+        let mut worn = vec![false; self.materials.len()];
+        for material in self.geometry_materials() {
+            if let Some(flag) = worn.get_mut(material) {
+                *flag = true;
+            }
+        }
+        worn
+    }
+
     /// World-space bounds of all geometry, or `None` for an empty scene.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut lo = Vec3::splat(f32::INFINITY);

@@ -59,10 +59,7 @@ fn lit_without_lights(scene: &SceneDescription) -> bool {
             .get(material)
             .is_some_and(|m| m.emission.max_element() > 0.0)
     };
-    environment
-        || scene.meshes.iter().any(|m| emits(m.material))
-        || scene.spheres.iter().any(|s| emits(s.material))
-        || scene.patches.iter().any(|p| emits(p.material))
+    environment || scene.geometry_materials().any(emits)
 }
 
 /// Adds a framing camera when there is none and a key light (plus, when the environment is
@@ -186,5 +183,38 @@ mod tests {
         });
         add_missing_camera_and_lights(&mut scene);
         assert_eq!(scene.lights.len(), 1);
+    }
+
+    /// An emissive marched height patch lights the scene as its exact (Bezier) form does:
+    /// no key light or environment is added for either. The marched one used to be left out
+    /// of the emitters, so one scene gained lights or not depending on `trace`.
+    #[test]
+    fn an_emissive_height_patch_keeps_the_key_light_away() {
+        let tile = crate::scene::patch::height::HeightPatch {
+            min: glam::Vec2::splat(-1.0),
+            max: glam::Vec2::splat(1.0),
+            heights: [0.0; 16],
+            material: 0,
+            march_step: 0.01,
+        };
+        let emissive = Material {
+            emission: Vec3::splat(2.0),
+            ..Material::default()
+        };
+        let marched = SceneDescription {
+            materials: vec![emissive.clone()],
+            height_patches: vec![tile.clone()],
+            ..Default::default()
+        };
+        let exact = SceneDescription {
+            materials: vec![emissive],
+            patches: vec![tile.to_bezier()],
+            ..Default::default()
+        };
+        for mut scene in [marched, exact] {
+            add_missing_camera_and_lights(&mut scene);
+            assert!(scene.lights.is_empty(), "{:?}", scene.notes);
+            assert_eq!(scene.environment, Environment::Color(Vec3::ZERO));
+        }
     }
 }

@@ -112,6 +112,19 @@ impl HeightPatch {
         )
     }
 
+    /// [`HeightPatch::bounds`] grown in y by a millionth of its largest coordinate, the
+    /// interval the march samples. The heights' own box has no thickness when they are all
+    /// equal (a flat tile): the clipped ray would then be a single point, with no sign change
+    /// of `g` to find. Grown, `g` is positive where the march starts and negative where it
+    /// ends for every ray that crosses the surface.
+    fn march_box(&self) -> (DVec3, DVec3) {
+        let (low, high) = self.bounds();
+        let (low, high) = (low.as_dvec3(), high.as_dvec3());
+        let size = low.abs().max(high.abs()).max(high - low).max_element();
+        let grow = DVec3::new(0.0, 1e-6 * size, 0.0);
+        (low - grow, high + grow)
+    }
+
     /// Why the patch cannot be traced, if it cannot: an empty or non-finite rectangle,
     /// non-finite heights, or a step that is not a positive distance.
     pub fn problem(&self) -> Option<String> {
@@ -169,9 +182,8 @@ impl HeightPatch {
         if !(length > 0.0 && length.is_finite() && ray.origin.is_finite()) {
             return None;
         }
-        let (low, high) = self.bounds();
-        let (t0, t1) =
-            super::hull_tree::ray_box(ray.origin, ray.direction, low.as_dvec3(), high.as_dvec3())?;
+        let (low, high) = self.march_box();
+        let (t0, t1) = super::hull_tree::ray_box(ray.origin, ray.direction, low, high)?;
         let (start, end) = (t0.max(ray.tnear), t1.min(ray.tfar));
         if !(start <= end) {
             return None;
@@ -301,7 +313,24 @@ mod tests {
     /// rays miss.
     #[test]
     fn marching_agrees_with_exact_intersection_at_random_rays() {
-        let patch = hills(0.01);
+        assert_marching_matches_exact(&hills(0.01));
+    }
+
+    /// A flat tile (all heights equal, so its height box has no thickness) and a nearly flat
+    /// one are found by marching as by the exact intersector. The flat one was missed by
+    /// every ray: the march interval clipped to the box was a single point.
+    #[test]
+    fn flat_and_nearly_flat_tiles_are_found_by_marching() {
+        let mut flat = hills(0.01);
+        flat.heights = [0.3; 16];
+        assert_marching_matches_exact(&flat);
+        flat.heights[5] += 1e-7;
+        assert_marching_matches_exact(&flat);
+        flat.heights = [0.0; 16];
+        assert_marching_matches_exact(&flat);
+    }
+
+    fn assert_marching_matches_exact(patch: &HeightPatch) {
         let exact = PatchIntersector::new(&patch.to_bezier().control);
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut next = || unit_f64(xorshift64(&mut state));

@@ -12,6 +12,13 @@
 //! largest control point. Each of the three terms is held to `epsilon / 3`. Flat directions
 //! get one cell; a direction never gets more than [`MAX_CELLS`].
 //!
+//! Texture coordinates count too. Bilinear corner `st` (`BezierPatch::corner_st`) have the
+//! constant twist `T = st_00 - st_10 - st_01 + st_11`, and linear interpolation over a cell's
+//! two triangles is within `h_u h_v |T| / 4` of them. Times the patch's world size per
+//! texture unit `W` (its bounding-box diagonal over its `st` diagonal), that is how far the
+//! texture slides on the surface; it shares the mixed term's `epsilon / 3`. Without it a flat
+//! patch got one cell and its texture a visible seam along the diagonal.
+//!
 //! Vertices carry the patch's exact unit normal (as shading normals) and texture
 //! coordinates; triangles that collapse to zero area at a collapsed edge are dropped.
 
@@ -50,12 +57,13 @@ pub fn cells_for(patch: &BezierPatch, epsilon: f32) -> (usize, usize) {
             uv = uv.max(9.0 * (at(i + 1, j + 1) - at(i + 1, j) - at(i, j + 1) + at(i, j)).length());
         }
     }
+    let texture = texture_twist_in_world(patch);
     let budget = f64::from(epsilon.max(f32::MIN_POSITIVE)) / 3.0;
     // h^2 M / 8 <= budget  <=>  n >= sqrt(M / (8 budget)).
     let cells = |m: f64| ((m / (8.0 * budget)).sqrt().ceil() as usize).clamp(1, MAX_CELLS);
     let (mut nu, mut nv) = (cells(uu), cells(vv));
-    // The mixed term: 2 uv / (8 nu nv) <= budget.
-    let mixed = 2.0 * uv / (8.0 * budget);
+    // The mixed term and the texture's slide: (2 uv / 8 + T W / 4) / (nu nv) <= budget.
+    let mixed = (2.0 * uv / 8.0 + texture / 4.0) / budget;
     while ((nu * nv) as f64) < mixed && (nu < MAX_CELLS || nv < MAX_CELLS) {
         if nu <= nv && nu < MAX_CELLS {
             nu += 1;
@@ -64,6 +72,25 @@ pub fn cells_for(patch: &BezierPatch, epsilon: f32) -> (usize, usize) {
         }
     }
     (nu, nv)
+}
+
+/// `|T| W` of the module doc: the twist of `patch`'s bilinear texture coordinates in world
+/// units (0 without corner `st`, or when they have no twist).
+fn texture_twist_in_world(patch: &BezierPatch) -> f64 {
+    let Some(corners) = patch.corner_st else {
+        return 0.0;
+    };
+    let [a, b, c, d] = corners.map(|st| st.as_dvec2());
+    let twist = (a - b - c + d).length();
+    let st_low = a.min(b).min(c.min(d));
+    let st_high = a.max(b).max(c.max(d));
+    let st_size = (st_high - st_low).length();
+    if twist == 0.0 || !(st_size > 0.0) {
+        return 0.0;
+    }
+    let (low, high) = patch.bounds();
+    let world_size = (high.as_dvec3() - low.as_dvec3()).length();
+    twist * world_size / st_size
 }
 
 /// `patch` as a triangle mesh within `epsilon` of it (see the module doc).
@@ -152,16 +179,43 @@ mod tests {
         }
     }
 
-    /// Distance from a point of the patch to the tessellation's triangle over it, at many
-    /// (u, v): never above the bound.
+    /// Distance from a point of the patch to the tessellation's triangle over it, and the
+    /// slide of its texture (texture-coordinate error times world size per texture unit), at
+    /// many (u, v): never above the bound.
     #[test]
     fn the_error_bound_holds() {
-        let patch = dome();
+        assert_error_bound_holds(&dome());
+    }
+
+    /// A flat patch whose corner texture coordinates twist (st = (3, 3) at u = v = 1): it
+    /// used to get one cell, its texture off by 0.5 texture units along the diagonal.
+    #[test]
+    fn twisted_texture_coordinates_are_tessellated_within_the_bound() {
+        let mut flat = dome();
+        for p in &mut flat.control {
+            p.z = 0.0;
+        }
+        flat.corner_st = Some([Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::splat(3.0)]);
+        assert!(cells_for(&flat, 1e-3) != (1, 1));
+        assert_error_bound_holds(&flat);
+    }
+
+    fn assert_error_bound_holds(patch: &BezierPatch) {
         let c = control_f64(&patch.control);
+        let world_per_texture = {
+            let twist = texture_twist_in_world(patch);
+            let [a, b, c, d] = patch.corner_st.unwrap().map(|st| st.as_dvec2());
+            let raw = (a - b - c + d).length();
+            if raw > 0.0 {
+                twist / raw
+            } else {
+                0.0
+            }
+        };
         for epsilon in [1e-1f32, 1e-2, 1e-3] {
             let (nu, nv) = cells_for(&patch, epsilon);
             let mesh = tessellate(&patch, epsilon);
-            let mut worst: f64 = 0.0;
+            let (mut worst, mut worst_slide): (f64, f64) = (0.0, 0.0);
             for a in 0..=97 {
                 for b in 0..=89 {
                     let (u, v) = (a as f64 / 97.0, b as f64 / 89.0);
@@ -170,18 +224,33 @@ mod tests {
                     let (fu, fv) = (u * nu as f64, v * nv as f64);
                     let (i, j) = ((fu as usize).min(nu - 1), (fv as usize).min(nv - 1));
                     let (s, t) = (fu - i as f64, fv - j as f64);
-                    let p = |i: usize, j: usize| mesh.positions[j * (nu + 1) + i].as_dvec3();
-                    let approx = if s >= t {
-                        p(i, j) * (1.0 - s) + p(i + 1, j) * (s - t) + p(i + 1, j + 1) * t
+                    let weights = if s >= t {
+                        [((i, j), 1.0 - s), ((i + 1, j), s - t), ((i + 1, j + 1), t)]
                     } else {
-                        p(i, j) * (1.0 - t) + p(i + 1, j + 1) * s + p(i, j + 1) * (t - s)
+                        [((i, j), 1.0 - t), ((i + 1, j + 1), s), ((i, j + 1), t - s)]
                     };
+                    let at = |(i, j): (usize, usize)| j * (nu + 1) + i;
+                    let approx: DVec3 = weights
+                        .iter()
+                        .map(|&(k, w)| mesh.positions[at(k)].as_dvec3() * w)
+                        .sum();
                     worst = worst.max((exact - approx).length());
+                    let approx_st: glam::DVec2 = weights
+                        .iter()
+                        .map(|&(k, w)| mesh.st[at(k)].as_dvec2() * w)
+                        .sum();
+                    let exact_st = patch.st(u as f32, v as f32).0.as_dvec2();
+                    worst_slide =
+                        worst_slide.max((exact_st - approx_st).length() * world_per_texture);
                 }
             }
             assert!(
                 worst <= f64::from(epsilon),
                 "epsilon {epsilon}: {worst} with {nu}x{nv}"
+            );
+            assert!(
+                worst_slide <= f64::from(epsilon),
+                "epsilon {epsilon}: the texture slides {worst_slide} with {nu}x{nv}"
             );
             assert_eq!(mesh.triangles.len(), 2 * nu * nv);
         }
