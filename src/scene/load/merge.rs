@@ -1,7 +1,7 @@
 //! Placing one loaded part (an OBJ or glTF file) into a scene: an optional affine
 //! placement and an optional material override, with every index re-based.
 
-use glam::{Affine3A, EulerRot, Mat3A, Quat, Vec3};
+use glam::{Affine3A, DMat3, EulerRot, Mat3A, Quat, Vec3};
 
 use crate::scene::{Light, SceneDescription, TextureBinding};
 
@@ -45,15 +45,31 @@ pub(crate) struct Transform {
 }
 
 impl Transform {
-    /// `None` when the map is singular (a zero scale): it would flatten the geometry.
+    /// `None` when the map is singular (a zero scale, or axes so nearly dependent that the
+    /// unit cube keeps under a millionth of the volume its edges' lengths span): it would
+    /// flatten the geometry. The test is relative, in f64, so a uniform scale of 1e-7 or 1e13
+    /// (whose determinant leaves f32's range) is as good as 1.
     pub(crate) fn new(matrix: Affine3A) -> Option<Self> {
-        let det = matrix.matrix3.determinant();
-        if !det.is_finite() || det.abs() < 1e-20 {
+        let linear = DMat3::from_cols(
+            matrix.matrix3.x_axis.as_dvec3(),
+            matrix.matrix3.y_axis.as_dvec3(),
+            matrix.matrix3.z_axis.as_dvec3(),
+        );
+        let edges = linear.x_axis.length() * linear.y_axis.length() * linear.z_axis.length();
+        let det = linear.determinant();
+        if !(edges.is_finite() && edges > 0.0 && det.abs() > 1e-6 * edges) {
             return None;
         }
+        // Normals are renormalised, so the inverse transpose may be scaled at will: scaled to
+        // a largest entry of 1, it fits f32 whatever the map's scale.
+        let inverse_transpose = linear.inverse().transpose();
+        let largest = inverse_transpose
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, x| m.max(x.abs()));
         Some(Transform {
             matrix,
-            normal_matrix: matrix.matrix3.inverse().transpose(),
+            normal_matrix: Mat3A::from((inverse_transpose / largest).as_mat3()),
         })
     }
 
@@ -216,6 +232,36 @@ mod tests {
             ..Placement::default()
         };
         assert!(Transform::new(placement.matrix()).is_none());
+        // Two axes a ten-millionth of a radian apart flatten the geometry too.
+        let sheared = Affine3A::from_cols(
+            Vec3::X.into(),
+            Vec3::new(1.0, 1e-7, 0.0).into(),
+            Vec3::Z.into(),
+            Vec3::ZERO.into(),
+        );
+        assert!(Transform::new(sheared).is_none());
+    }
+
+    /// Uniform scales far from 1 are proper maps: placed and with their normals. A scale of
+    /// 1e-7 (determinant 1e-21) and one of 1e13 (determinant beyond f32) were refused as
+    /// "scale must not be zero".
+    #[test]
+    fn tiny_and_huge_scales_are_not_singular() {
+        for scale in [1e-7f32, 1e-12, 1e13, 1e18] {
+            let placement = Placement {
+                scale: Vec3::new(scale, 2.0 * scale, scale),
+                rotate_degrees: Vec3::new(0.0, 30.0, 0.0),
+                ..Placement::default()
+            };
+            let t = Transform::new(placement.matrix())
+                .unwrap_or_else(|| panic!("scale {scale} refused"));
+            assert!(((t.point(Vec3::Y).y / scale) - 2.0).abs() < 1e-5);
+            // The plane x + y = 0 becomes x / s + y / (2 s) = 0 before the rotation.
+            let n = t.normal(Vec3::new(1.0, 1.0, 0.0).normalize());
+            let rotate = Quat::from_rotation_y(30f32.to_radians());
+            let expected = rotate * Vec3::new(1.0, 0.5, 0.0).normalize();
+            assert!(close(n, expected), "scale {scale}: {n} against {expected}");
+        }
     }
 
     #[test]

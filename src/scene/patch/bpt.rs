@@ -72,6 +72,7 @@ pub fn parse_bpt(text: &str) -> Result<Vec<[Vec3; 16]>, String> {
         return Err("line 1: the patch count is 0".into());
     }
     let mut patches = Vec::with_capacity(count.min(1 << 16));
+    let mut split = SplitPoint::default();
     for patch in 0..count {
         let line = tokens.line();
         let degree_u = tokens.count(&format!("patch {patch}'s degree in u"))?;
@@ -85,11 +86,18 @@ pub fn parse_bpt(text: &str) -> Result<Vec<[Vec3; 16]>, String> {
         let mut points = Vec::with_capacity(n);
         for k in 0..n {
             let what = format!("coordinate of patch {patch}'s control point {k}");
-            points.push(Vec3::new(
-                tokens.number(&what)?,
-                tokens.number(&what)?,
-                tokens.number(&what)?,
-            ));
+            let first_line = tokens.line();
+            let x = tokens.number(&what).map_err(|e| split.explain(e))?;
+            let y = tokens.number(&what).map_err(|e| split.explain(e))?;
+            let z = tokens.number(&what).map_err(|e| split.explain(e))?;
+            if split.first.is_none() && tokens.tokens[tokens.next - 1].0 != first_line {
+                split.first = Some(format!(
+                    "patch {patch}'s control point {k} starts on line {first_line} and ends on \
+                     line {}",
+                    tokens.tokens[tokens.next - 1].0
+                ));
+            }
+            points.push(Vec3::new(x, y, z));
         }
         let Some(bicubic) = elevate_to_bicubic(degree_u, degree_v, &points) else {
             return Err(format!("line {line}: patch {patch} has a bad control grid"));
@@ -97,12 +105,30 @@ pub fn parse_bpt(text: &str) -> Result<Vec<[Vec3; 16]>, String> {
         patches.push(bicubic);
     }
     if tokens.next < tokens.tokens.len() {
-        return Err(format!(
+        return Err(split.explain(format!(
             "line {}: text after the {count} patches the count line announces",
             tokens.line()
-        ));
+        )));
     }
     Ok(patches)
+}
+
+/// The first control point whose three numbers are not on one line. The format only asks
+/// for whitespace between numbers, but files put one point on each line, so a split point is
+/// usually a line with a number missing or extra, and the error it leads to (too few or too
+/// many numbers at the end) is reported with it.
+#[derive(Default)]
+struct SplitPoint {
+    first: Option<String>,
+}
+
+impl SplitPoint {
+    fn explain(&self, error: String) -> String {
+        match &self.first {
+            Some(point) => format!("{error} ({point}: a number missing or extra there?)"),
+            None => error,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -129,6 +155,21 @@ mod tests {
         // The rim's first control point and the bottom's collapsed centre.
         assert_eq!(patches[0][0], Vec3::new(1.4, 0.0, 2.4));
         assert_eq!(patches[28][0], Vec3::ZERO);
+    }
+
+    /// A line with a number missing shifts every number after it; the error says where the
+    /// first point was split over two lines, not only that the file ended early or late.
+    #[test]
+    fn a_line_with_a_number_missing_or_extra_is_pointed_at() {
+        let missing = ONE_FLAT.replace("\n1 1 0\n", "\n1 1\n");
+        let e = parse_bpt(&missing).unwrap_err();
+        assert!(e.contains("ends where"), "{e}");
+        assert!(e.contains("control point 5 starts on line 8"), "{e}");
+        let extra = format!("{ONE_FLAT}0 0 0\n").replace("\n2 2 0\n", "\n2 2 0 7\n");
+        let extra = extra.replace("\n3 3 0\n0 0 0\n", "\n3 3 0\n");
+        let e = parse_bpt(&extra).unwrap_err();
+        assert!(e.contains("text after"), "{e}");
+        assert!(e.contains("control point 11 starts on line 13"), "{e}");
     }
 
     #[test]
