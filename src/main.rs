@@ -15,7 +15,10 @@ use conetrace::{embree, film, footprint, integrator, render, scene, shading, tex
 use clap::Parser;
 
 fn main() {
-    let cli = cli::Cli::parse();
+    let cli = match cli::Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(error) => std::process::exit(cli::command_line_error(error)),
+    };
     // A panic is a bug: report it as an internal error instead of unwinding into the shell.
     let status = match std::panic::catch_unwind(move || cli::run(cli)) {
         Ok(status) => status,

@@ -308,3 +308,27 @@ fn a_field_of_view_the_camera_cannot_compute_is_refused() {
         assert_rejected(dir.path(), "s.toml", &[], "must lie in [1e-7, 179] degrees");
     }
 }
+
+/// Command-line values out of range are bad input like any other: status 2, one line (no
+/// usage block) naming the option, nothing written. `--threads 100000` used to start
+/// threads for minutes, deaf to signals, before failing.
+#[test]
+fn absurd_command_line_values_get_one_line() {
+    let dir = temp_dir();
+    write(dir.path(), "good.toml", GOOD_SCENE);
+    assert_rejected(
+        dir.path(),
+        "good.toml",
+        &["--threads", "100000"],
+        "--threads",
+    );
+    assert_rejected(dir.path(), "good.toml", &["--spp", "4294967296"], "--spp");
+    assert_rejected(dir.path(), "good.toml", &["--spp", "many"], "--spp");
+    // A misspelt option keeps clap's tip on the same line.
+    assert_rejected(
+        dir.path(),
+        "good.toml",
+        &["--sppp", "4"],
+        "a similar argument exists: '--spp'",
+    );
+}

@@ -361,9 +361,10 @@ pub unsafe extern "C" fn ct_render(
 
         let mut pool = rayon::ThreadPoolBuilder::new()
             .start_handler(|_| crate::embree::enable_flush_denormals());
-        if c_options.threads > 1024 {
+        if c_options.threads as usize > crate::render::MAX_WORKER_THREADS {
             return Err(CapiError::invalid(format!(
-                "threads must be at most 1024, got {}",
+                "threads must be at most {}, got {}",
+                crate::render::MAX_WORKER_THREADS,
                 c_options.threads
             )));
         }

@@ -116,10 +116,42 @@ pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, CommandE
         if threads == 0 {
             return Err(CommandError::bad_input("--threads must be at least 1"));
         }
+        if threads > crate::render::MAX_WORKER_THREADS {
+            return Err(CommandError::bad_input(format!(
+                "--threads {threads}: at most {} worker threads",
+                crate::render::MAX_WORKER_THREADS
+            )));
+        }
         pool = pool.num_threads(threads);
     }
     pool.build()
         .map_err(|e| CommandError::internal(format!("cannot start worker threads: {e}")))
+}
+
+/// Reports a command line clap could not parse; returns the exit status. Help and version
+/// requests print as clap prints them. An error is one line, like every other error, with
+/// clap's tip (a similarly spelled option or command) kept on it and its usage block left
+/// out: status 2 ([`EXIT_BAD_INPUT`]).
+pub fn command_line_error(error: clap::Error) -> i32 {
+    use clap::error::ErrorKind;
+    if matches!(
+        error.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        let _ = error.print();
+        return error.exit_code();
+    }
+    let text = error.render().to_string();
+    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+    let first = lines.next().unwrap_or("cannot parse the command line");
+    let message = first.strip_prefix("error: ").unwrap_or(first);
+    match lines.find(|l| l.starts_with("tip:")) {
+        Some(tip) => eprintln!("conetrace: error: {message} ({tip})"),
+        None => eprintln!("conetrace: error: {message}"),
+    }
+    EXIT_BAD_INPUT
 }
 
 /// Run the parsed command line; returns the exit status.

@@ -217,6 +217,7 @@ fn watch(flag: &AtomicBool, done: &AtomicBool, deadline: Option<Instant>) {
 pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
     let budget = check_time_limit(time_limit)?;
     let outputs = OutputPlan::from_args(args)?;
+    render_cmd::catch_interrupts(&outputs.exr);
     let started = Instant::now();
     let deadline = started + budget;
     let mut scene = render_cmd::load(args)?;
@@ -244,16 +245,11 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
     let decoding = Instant::now();
     let (textures, texture_digests) = render_cmd::decode_textures(&scene, args.quiet)?;
     phases.textures = decoding.elapsed().as_secs_f64();
-    if INTERRUPTED.load(Ordering::SeqCst) {
-        return Err(render_cmd::nothing_written(
-            "the first pass finished",
-            &outputs.exr,
-        ));
-    }
     let signature =
         RenderSignature::new(&scene, args.scene.as_deref(), &options, &texture_digests)?;
 
     let scene = Arc::new(scene);
+    render_cmd::loading_done();
     let preparing = Instant::now();
     let context = pool
         .install(|| render::prepare_with_textures(scene.clone(), options.clone(), textures))

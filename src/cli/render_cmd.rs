@@ -15,7 +15,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
 use clap::Args;
@@ -254,14 +254,37 @@ pub(crate) fn memory_estimate(
 /// Set by the Ctrl-C / SIGTERM handler; render workers stop taking new tiles.
 pub(crate) static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
-/// Routes Ctrl-C and SIGTERM to [`INTERRUPTED`]. Called first thing in a render command, so
-/// that a signal while the scene loads or textures decode is caught too (status 3, nothing
-/// written) rather than killing the process by the default action.
-pub(crate) fn catch_interrupts() {
+/// While a render command loads (scene, textures, memory check: nothing is on disk yet and
+/// no Embree thread runs), the line a signal ends it with at once; `None` once rendering
+/// begins, when a signal only sets [`INTERRUPTED`].
+static LOADING: Mutex<Option<String>> = Mutex::new(None);
+
+/// Routes Ctrl-C and SIGTERM to this render command, which has planned its outputs and is
+/// about to load. Until [`loading_done`] a signal ends the process at once with status 3 and
+/// one line saying nothing was written to `target`: reading a scene (even from a pipe no one
+/// writes to) or decoding a large texture is not waited for. After it, the signal sets
+/// [`INTERRUPTED`], which workers check before each tile.
+pub(crate) fn catch_interrupts(target: &Path) {
     INTERRUPTED.store(false, Ordering::SeqCst);
+    *LOADING.lock().unwrap_or_else(PoisonError::into_inner) =
+        Some(nothing_written("rendering started", target).message);
     // A second handler cannot be installed (e.g. when `run` is called twice in one
-    // process); the first one sets the same flag.
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+    // process); the first one does the same.
+    let _ = ctrlc::set_handler(|| {
+        INTERRUPTED.store(true, Ordering::SeqCst);
+        // Held while exiting, so the main thread cannot leave loading meanwhile.
+        let loading = LOADING.lock().unwrap_or_else(PoisonError::into_inner);
+        if let Some(message) = loading.as_ref() {
+            eprintln!("conetrace: error: {message}");
+            std::process::exit(EXIT_INTERRUPTED);
+        }
+    });
+}
+
+/// Loading is over (the scene is about to be prepared for Embree): from now on a signal sets
+/// [`INTERRUPTED`] and the command ends in its own time, writing what it finished.
+pub(crate) fn loading_done() {
+    *LOADING.lock().unwrap_or_else(PoisonError::into_inner) = None;
 }
 
 /// The error of a render interrupted before it produced anything: status 3, nothing written.
@@ -382,12 +405,12 @@ pub(crate) fn tonemap(
 }
 
 pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
-    catch_interrupts();
     if let Some(seconds) = args.time_limit {
         return crate::cli::progressive::run(args, seconds);
     }
     // Outputs are checked before anything is loaded or rendered: a bad path costs nothing.
     let outputs = OutputPlan::from_args(args)?;
+    catch_interrupts(&outputs.exr);
     let started = Instant::now();
     let mut scene = load(args)?;
     // The integrator options join the scene's settings, so the resume signature covers them.
@@ -416,9 +439,6 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let decoding = Instant::now();
     let (textures, texture_digests) = decode_textures(&scene, args.quiet)?;
     phases.textures = decoding.elapsed().as_secs_f64();
-    if INTERRUPTED.load(Ordering::SeqCst) {
-        return Err(nothing_written("rendering started", &outputs.partial_exr));
-    }
 
     let split = requested_split(args, &options)?;
     let signature =
@@ -436,6 +456,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     };
     let scene = Arc::new(scene);
     let (mut result, camera, part, tiles) = pool.install(|| -> Result<_, CommandError> {
+        loading_done();
         let preparing = Instant::now();
         let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;

@@ -45,6 +45,10 @@ pub use stats::{RenderStats, TextureTileUsage, WorkCounters};
 /// [`crate::texture::TextureTileSet`], a texture cache's unit.
 pub const WORK_TILE_SIZE: u32 = 16;
 
+/// Most worker threads a render accepts (command line and C API alike): far above any
+/// machine's cores, and low enough that thread start-up stays brief and interruptible.
+pub const MAX_WORKER_THREADS: usize = 1024;
+
 /// A finished (or interrupted) render.
 pub struct RenderResult {
     pub film: Film,
