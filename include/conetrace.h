@@ -542,7 +542,8 @@ enum CtStatus ct_texture_load(const char *path,
 enum CtStatus ct_texture_size(struct CtTexture texture, uint32_t *out_width, uint32_t *out_height);
 
 // Filters `count` lookups: `rgba_out[4*i .. 4*i+4]` receives the linear RGBA of `queries[i]`.
-// `options` may be NULL (defaults). Nothing is written on error.
+// `options` may be NULL (defaults). A query whose `s` or `t` is NaN or infinite is refused
+// (`CT_ERROR_INVALID_ARGUMENT`, naming its index). Nothing is written on error.
 //
 // Thread safety: any thread; any number of threads may sample the same texture at once.
 //

@@ -422,7 +422,7 @@ fn null_dangling_and_wrong_kind_handles_are_rejected() {
         unsafe { ct_image_size(CtImage { id: scene.id }, &mut width, std::ptr::null_mut()) };
     assert_eq!(status, CtStatus::CT_ERROR_INVALID_HANDLE);
     assert!(
-        last_error().contains("is a scene, not a image"),
+        last_error().contains("is a scene, not an image"),
         "{}",
         last_error()
     );
@@ -780,6 +780,20 @@ fn texture_batches_match_the_library_filters() {
             )
         };
         assert_eq!(status, CtStatus::CT_ERROR_NULL_POINTER);
+        // A NaN or infinite s or t is refused by index, and nothing is written (it used to
+        // filter to NaN).
+        options.struct_size = std::mem::size_of::<CtSampleOptions>() as u32;
+        for bad in [f32::NAN, f32::INFINITY] {
+            let mut odd = queries[..3].to_vec();
+            odd[2].t = bad;
+            let mut untouched = [7.0f32; 12];
+            let status = unsafe {
+                ct_texture_sample(texture, &options, odd.as_ptr(), 3, untouched.as_mut_ptr())
+            };
+            assert_eq!(status, CtStatus::CT_ERROR_INVALID_ARGUMENT, "{filter_mode}");
+            assert!(last_error().contains("queries[2]"), "{}", last_error());
+            assert_eq!(untouched, [7.0; 12]);
+        }
     }
     let mut w = 0;
     let mut h = 0;

@@ -81,6 +81,16 @@ impl Object {
     }
 }
 
+/// "an image", "a scene": the kind with its indefinite article, for messages.
+fn with_article(kind: &str) -> String {
+    let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    };
+    format!("{article} {kind}")
+}
+
 static OBJECTS: Mutex<BTreeMap<u64, Object>> = Mutex::new(BTreeMap::new());
 static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 
@@ -108,7 +118,11 @@ fn get(id: u64, kind: &'static str) -> Result<Object, CapiError> {
         Some(object) if object.kind() == kind => Ok(object.clone()),
         Some(object) => Err(CapiError::new(
             CtStatus::CT_ERROR_INVALID_HANDLE,
-            format!("handle {id} is a {}, not a {kind}", object.kind()),
+            format!(
+                "handle {id} is {}, not {}",
+                with_article(object.kind()),
+                with_article(kind)
+            ),
         )),
         None => Err(CapiError::new(
             CtStatus::CT_ERROR_INVALID_HANDLE,
@@ -130,7 +144,11 @@ pub(crate) fn remove(id: u64, kind: &'static str) -> Result<(), CapiError> {
         }
         Some(object) => Err(CapiError::new(
             CtStatus::CT_ERROR_INVALID_HANDLE,
-            format!("handle {id} is a {}, not a {kind}", object.kind()),
+            format!(
+                "handle {id} is {}, not {}",
+                with_article(object.kind()),
+                with_article(kind)
+            ),
         )),
         None => Err(CapiError::new(
             CtStatus::CT_ERROR_INVALID_HANDLE,

@@ -142,7 +142,8 @@ pub unsafe extern "C" fn ct_texture_size(
 }
 
 /// Filters `count` lookups: `rgba_out[4*i .. 4*i+4]` receives the linear RGBA of `queries[i]`.
-/// `options` may be NULL (defaults). Nothing is written on error.
+/// `options` may be NULL (defaults). A query whose `s` or `t` is NaN or infinite is refused
+/// (`CT_ERROR_INVALID_ARGUMENT`, naming its index). Nothing is written on error.
 ///
 /// Thread safety: any thread; any number of threads may sample the same texture at once.
 ///
@@ -184,6 +185,15 @@ pub unsafe extern "C" fn ct_texture_sample(
         }
         // SAFETY: the caller provides `count` queries and `4 * count` output floats.
         let queries = unsafe { std::slice::from_raw_parts(queries, count) };
+        if let Some(i) = queries
+            .iter()
+            .position(|q| !(q.s.is_finite() && q.t.is_finite()))
+        {
+            return Err(CapiError::invalid(format!(
+                "queries[{i}] has texture coordinates ({}, {}): s and t must be finite",
+                queries[i].s, queries[i].t
+            )));
+        }
         let out = unsafe { std::slice::from_raw_parts_mut(rgba_out, 4 * count) };
         for (q, rgba) in queries.iter().zip(out.chunks_exact_mut(4)) {
             let query = TextureQuery {

@@ -74,6 +74,14 @@ pub fn read_queries(path: &Path) -> Result<Vec<TextureQuery>, String> {
         if fields.next().is_some() {
             return Err(format!("{name}: line {}: more than 6 values", i + 1));
         }
+        if !(v[0].is_finite() && v[1].is_finite()) {
+            return Err(format!(
+                "{name}: line {}: s and t must be finite, found ({}, {})",
+                i + 1,
+                v[0],
+                v[1]
+            ));
+        }
         queries.push(TextureQuery {
             s: v[0],
             t: v[1],
@@ -139,5 +147,20 @@ mod tests {
         std::fs::write(&bad, "s,t,dsdx,dtdx,dsdy,dtdy\n0.5,x,0,0,0,0\n").unwrap();
         let e = read_queries(&bad).unwrap_err();
         assert!(e.contains("bad.csv") && e.contains("line 2"), "{e}");
+    }
+
+    /// A NaN or infinite s or t is refused with its line; it used to filter to NaN (or, with
+    /// `closest`, to some texel).
+    #[test]
+    fn non_finite_texture_coordinates_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        for (row, value) in [("nan,0.5", "NaN"), ("0.5,inf", "inf"), ("-inf,0", "-inf")] {
+            let path = dir.path().join("q.csv");
+            let text = format!("s,t,dsdx,dtdx,dsdy,dtdy\n0.5,0.5,0,0,0,0\n{row},0,0,0,0\n");
+            std::fs::write(&path, text).unwrap();
+            let e = read_queries(&path).unwrap_err();
+            assert!(e.contains("line 3") && e.contains("must be finite"), "{e}");
+            assert!(e.contains(value), "{e}");
+        }
     }
 }
