@@ -303,3 +303,54 @@ fn crc32(bytes: &[u8]) -> u32 {
     }
     !crc
 }
+
+/// The estimate in MiB from a refusal ("the render needs about 15.4 MiB (...").
+fn estimated_mib(message: &str) -> f64 {
+    let rest = message
+        .split("needs about ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no estimate in {message}"));
+    let (number, unit) = rest.split_once(' ').unwrap();
+    assert!(unit.starts_with("MiB"), "{message}");
+    number.parse().unwrap()
+}
+
+/// A part holding a sample range carries 18 channels of exact sums beside its image (and the
+/// EXR encoder copies them): the estimate counts them, 144 bytes a pixel more than the whole
+/// render's. It used to count the whole render's alone, so a part under `--max-memory` could
+/// take five times the limit.
+#[test]
+fn a_sample_range_part_counts_its_exact_sums() {
+    let dir = temp_dir();
+    let refused = |extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "--width",
+            "512",
+            "--height",
+            "512",
+            "--aov",
+            "none",
+            "--spp",
+            "2",
+            "--quiet",
+            "-o",
+            "p.exr",
+            "--max-memory",
+            "1K",
+        ];
+        args.extend_from_slice(extra);
+        let out = run_in(dir.path(), &args);
+        let message = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(2), "{message}");
+        estimated_mib(&message)
+    };
+    let whole = refused(&[]);
+    let part = refused(&["--samples", "0..1"]);
+    let sums_mib = 512.0 * 512.0 * 144.0 / (1024.0 * 1024.0);
+    assert!(
+        (part - whole - sums_mib).abs() < 0.2,
+        "whole {whole} MiB, part {part} MiB: expected {sums_mib} MiB more"
+    );
+    assert!(!dir.path().join("p.exr").exists());
+}

@@ -430,7 +430,14 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     // Refused before anything large is allocated: an image or texture set that cannot fit
     // gets the estimate, not an allocation failure halfway.
-    let estimate = memory_estimate(&scene, &options)?;
+    let split = requested_split(args, &options)?;
+    let mut estimate = memory_estimate(&scene, &options)?;
+    if split.samples_partial(&options) {
+        // A part holding a sample range also carries its exact sums.
+        let pixels = u64::from(options.width) * u64::from(options.height);
+        let sum_channels = film::Layer::SampleSum.channel_count() as u64;
+        estimate.add_film_channels(pixels, sum_channels);
+    }
     render::memory::check(&estimate, args.max_memory, &scene.source)
         .map_err(CommandError::bad_input)?;
 
@@ -440,7 +447,6 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let (textures, texture_digests) = decode_textures(&scene, args.quiet)?;
     phases.textures = decoding.elapsed().as_secs_f64();
 
-    let split = requested_split(args, &options)?;
     let signature =
         RenderSignature::new(&scene, args.scene.as_deref(), &options, &texture_digests)?;
     let earlier = if args.resume {
@@ -630,7 +636,8 @@ impl RequestedSplit {
         }
     }
 
-    fn samples_partial(&self, options: &RenderOptions) -> bool {
+    /// True when only some of the samples are rendered.
+    pub fn samples_partial(&self, options: &RenderOptions) -> bool {
         let samples = match self {
             RequestedSplit::Fixed(part) => &part.samples,
             RequestedSplit::Balanced { samples, .. } => samples,

@@ -34,6 +34,15 @@ pub struct MemoryEstimate {
 }
 
 impl MemoryEstimate {
+    /// Adds `channels` f32 channels over `pixels` to the film and, as the EXR encoder copies
+    /// every plane, to the outputs: e.g. the exact sample sums of a render of a sample range
+    /// ([`crate::film::Layer::SampleSum`], 18 channels).
+    pub fn add_film_channels(&mut self, pixels: u64, channels: u64) {
+        let bytes = pixels * channels * 4;
+        self.film += bytes;
+        self.outputs += bytes;
+    }
+
     /// The sum of every part.
     pub fn total(&self) -> u64 {
         self.film
