@@ -306,3 +306,64 @@ fn partial_render_options_are_checked() {
         assert!(!dir.path().join("x.exr").exists());
     }
 }
+
+/// The merge reads its parts one at a time: eight sample-range parts of a 1024x512 image
+/// (46 MB of channels each) merge under a 200 MB data limit (`prlimit --data`), as two do.
+/// It used to hold every part at once and abort for want of memory. Worker threads are
+/// limited to 2 so that the stacks of a many-core machine do not count against the limit.
+#[test]
+fn merging_many_sample_parts_holds_one_part_at_a_time() {
+    let dir = temp_dir();
+    let scene = scene();
+    let mut parts = Vec::new();
+    for i in 0..8 {
+        let name = format!("g{i}.exr");
+        let samples = format!("{i}..{}", i + 1);
+        let out = run_in(
+            dir.path(),
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "--width",
+                "1024",
+                "--height",
+                "512",
+                "--spp",
+                "8",
+                "--aov",
+                "none",
+                "--threads",
+                "2",
+                "--no-png",
+                "--quiet",
+                "--samples",
+                &samples,
+                "-o",
+                &name,
+            ],
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        parts.push(name);
+    }
+    let out = std::process::Command::new("prlimit")
+        .arg("--data=200000000")
+        .arg(env!("CARGO_BIN_EXE_conetrace"))
+        .arg("merge")
+        .args(&parts)
+        .args(["-o", "merged.exr"])
+        .env("RAYON_NUM_THREADS", "2")
+        .current_dir(dir.path())
+        .output()
+        .expect("prlimit (util-linux) runs");
+    assert!(
+        out.status.success(),
+        "{}: {}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.path().join("merged.exr").exists());
+}

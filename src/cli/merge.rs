@@ -125,9 +125,10 @@ fn signature(attributes: &ExrAttributes) -> BTreeMap<&str, &str> {
         .collect()
 }
 
-/// The first signature item where `b` differs from `a`.
-fn signature_difference(a: &Part, b: &Part) -> Option<String> {
-    let (sa, sb) = (signature(&a.attributes), signature(&b.attributes));
+/// The first signature item where `b` differs from the part read from `a_path` with header
+/// `a`.
+fn signature_difference(a_path: &Path, a: &ExrAttributes, b: &Part) -> Option<String> {
+    let (sa, sb) = (signature(a), signature(&b.attributes));
     let keys: std::collections::BTreeSet<&str> = sa.keys().chain(sb.keys()).copied().collect();
     for key in keys {
         let (va, vb) = (sa.get(key), sb.get(key));
@@ -135,7 +136,7 @@ fn signature_difference(a: &Part, b: &Part) -> Option<String> {
             let show = |v: Option<&&str>| v.map_or("absent".to_string(), |v| v.to_string());
             return Some(format!(
                 "not the same render as {}: {key} is {} there, {} here",
-                a.path.display(),
+                a_path.display(),
                 show(va),
                 show(vb)
             ));
@@ -144,38 +145,84 @@ fn signature_difference(a: &Part, b: &Part) -> Option<String> {
     None
 }
 
-/// The merged film and the header of the whole render, from checked parts.
-pub fn merge_parts(paths: &[PathBuf]) -> Result<(Film, ExrAttributes), CommandError> {
-    let parts: Vec<Part> = paths
-        .iter()
-        .map(|p| read_part(p))
-        .collect::<Result<_, _>>()?;
-    let first = &parts[0];
-    for part in &parts[1..] {
-        if let Some(problem) = signature_difference(first, part) {
-            return Err(refuse(&part.path, problem));
-        }
-    }
-    let sig = signature(&first.attributes);
-    let number = |key: &str| -> Result<u32, CommandError> {
-        sig.get(key)
-            .and_then(|v| v.parse().ok())
-            .ok_or_else(|| refuse(&first.path, format!("no usable {key} attribute")))
-    };
-    let (width, height, spp) = (
-        number("conetrace.option.width")?,
-        number("conetrace.option.height")?,
-        number("conetrace.option.spp")?.max(1),
-    );
-    let whole_layers: Vec<Layer> = first
-        .film
-        .layers()
+/// A part's layers other than its exact sums: the layers of the whole render.
+fn image_layers(film: &Film) -> Vec<Layer> {
+    film.layers()
         .into_iter()
         .filter(|l| *l != Layer::SampleSum)
-        .collect();
-    for part in &parts {
-        let window = part.attributes.window;
-        let (full_width, full_height) = window
+        .collect()
+}
+
+/// What is kept of a part once it has been added: enough to check the next ones against it.
+struct AddedPart {
+    path: PathBuf,
+    region: PixelRect,
+    samples: Range<u32>,
+}
+
+/// The merge in progress. Parts are read and added one at a time, so it holds the result,
+/// the exact sums and one part, whatever the number of parts.
+struct Merge {
+    /// The first part's file and header: the signature every other part must match.
+    first_path: PathBuf,
+    first_attributes: ExrAttributes,
+    width: u32,
+    height: u32,
+    spp: u32,
+    whole_layers: Vec<Layer>,
+    merged: Film,
+    /// Per pixel, the exact sums of the sample-range parts added so far (allocated with the
+    /// first such part) and whether any was added.
+    sums: Vec<[i128; 3]>,
+    summed: Vec<bool>,
+    /// Per pixel, the samples the parts added so far hold.
+    sample_counts: Vec<u64>,
+    added: Vec<AddedPart>,
+}
+
+impl Merge {
+    /// Starts from the first part's signature, size and layers.
+    fn new(first: &Part) -> Result<Merge, CommandError> {
+        let sig = signature(&first.attributes);
+        let number = |key: &str| -> Result<u32, CommandError> {
+            sig.get(key)
+                .and_then(|v| v.parse().ok())
+                .ok_or_else(|| refuse(&first.path, format!("no usable {key} attribute")))
+        };
+        let (width, height, spp) = (
+            number("conetrace.option.width")?,
+            number("conetrace.option.height")?,
+            number("conetrace.option.spp")?.max(1),
+        );
+        let whole_layers = image_layers(&first.film);
+        let merged =
+            Film::try_new(width, height, &whole_layers).map_err(CommandError::bad_input)?;
+        let pixel_count = width as usize * height as usize;
+        Ok(Merge {
+            first_path: first.path.clone(),
+            first_attributes: first.attributes.clone(),
+            width,
+            height,
+            spp,
+            whole_layers,
+            merged,
+            sums: Vec::new(),
+            summed: vec![false; pixel_count],
+            sample_counts: vec![0; pixel_count],
+            added: Vec::new(),
+        })
+    }
+
+    /// Refuses `part` when it is not of the same render or holds samples an added part holds.
+    fn check(&self, part: &Part) -> Result<(), CommandError> {
+        if let Some(problem) = signature_difference(&self.first_path, &self.first_attributes, part)
+        {
+            return Err(refuse(&part.path, problem));
+        }
+        let (width, height) = (self.width, self.height);
+        let (full_width, full_height) = part
+            .attributes
+            .window
             .map_or((part.film.width(), part.film.height()), |w| {
                 (w.full_width, w.full_height)
             });
@@ -187,29 +234,24 @@ pub fn merge_parts(paths: &[PathBuf]) -> Result<(Film, ExrAttributes), CommandEr
                 ),
             ));
         }
-        let layers: Vec<Layer> = part
-            .film
-            .layers()
-            .into_iter()
-            .filter(|l| *l != Layer::SampleSum)
-            .collect();
-        if layers != whole_layers {
+        let layers = image_layers(&part.film);
+        if layers != self.whole_layers {
             return Err(refuse(
                 &part.path,
                 format!(
-                    "has layers {layers:?}, {} has {whole_layers:?}",
-                    first.path.display()
+                    "has layers {layers:?}, {} has {:?}",
+                    self.first_path.display(),
+                    self.whole_layers
                 ),
             ));
         }
-    }
-    // No two parts may hold the same sample of the same pixel.
-    for (i, a) in parts.iter().enumerate() {
-        for b in &parts[i + 1..] {
-            let samples_meet = a.samples.start < b.samples.end && b.samples.start < a.samples.end;
-            if let (true, Some(o)) = (samples_meet, a.region.intersection(&b.region)) {
+        // No two parts may hold the same sample of the same pixel.
+        for a in &self.added {
+            let samples_meet =
+                a.samples.start < part.samples.end && part.samples.start < a.samples.end;
+            if let (true, Some(o)) = (samples_meet, a.region.intersection(&part.region)) {
                 return Err(refuse(
-                    &b.path,
+                    &part.path,
                     format!(
                         "overlaps {}: both hold samples of pixels {},{} to {},{} (sample ranges {} and {})",
                         a.path.display(),
@@ -218,60 +260,44 @@ pub fn merge_parts(paths: &[PathBuf]) -> Result<(Film, ExrAttributes), CommandEr
                         o.x0 + o.width,
                         o.y0 + o.height,
                         format_sample_range(&a.samples),
-                        format_sample_range(&b.samples)
+                        format_sample_range(&part.samples)
                     ),
                 ));
             }
         }
-    }
-    // With no overlaps, a pixel has all its samples exactly when its parts' ranges add up
-    // to spp.
-    let pixel_count = width as usize * height as usize;
-    let mut sample_counts = vec![0u64; pixel_count];
-    for part in &parts {
-        for (x, y) in part.region.pixels() {
-            sample_counts[y as usize * width as usize + x as usize] += part.samples.len() as u64;
-        }
-    }
-    if let Some(index) = sample_counts.iter().position(|&n| n != u64::from(spp)) {
-        let (x, y) = (index % width as usize, index / width as usize);
-        return Err(CommandError::bad_input(format!(
-            "merge: pixel {x},{y} has {} of its {spp} samples in the parts given (a region or \
-             sample range is missing)",
-            sample_counts[index]
-        )));
+        Ok(())
     }
 
-    let mut merged =
-        Film::try_new(width, height, &whole_layers).map_err(CommandError::bad_input)?;
-    let mut sums: Vec<[i128; 3]> = Vec::new();
-    let mut summed = vec![false; pixel_count];
-    for part in &parts {
+    /// Adds a checked part's pixels: final colour, alpha and AOVs from a part holding sample
+    /// 0, exact sums from a part holding a sample range.
+    fn add(&mut self, part: Part) -> Result<(), CommandError> {
+        let (width, spp) = (self.width as usize, self.spp);
         let full = part.samples == (0..spp);
         let mut digits = [0.0f32; 3 * sample_sum::DIGITS];
         let mut values = [0.0f32; 6];
         for (x, y) in part.region.pixels() {
             let (px, py) = (x - part.region.x0, y - part.region.y0);
-            let index = y as usize * width as usize + x as usize;
+            let index = y as usize * width + x as usize;
+            self.sample_counts[index] += part.samples.len() as u64;
             if full || part.samples.start == 0 {
                 // Alpha and AOVs describe sample 0; with every sample, colour is final too.
-                for layer in &whole_layers {
+                for layer in &self.whole_layers {
                     let n = layer.channel_count();
                     part.film.get(*layer, px, py, &mut values[..n]);
                     if *layer == Layer::Color && !full {
                         let mut kept = [0.0f32; 4];
-                        merged.get(Layer::Color, x, y, &mut kept);
+                        self.merged.get(Layer::Color, x, y, &mut kept);
                         values[..3].copy_from_slice(&kept[..3]);
                     }
-                    merged.set(*layer, x, y, &values[..n]);
+                    self.merged.set(*layer, x, y, &values[..n]);
                 }
             }
             if !full {
-                if sums.is_empty() {
-                    sums = vec![[0; 3]; pixel_count];
+                if self.sums.is_empty() {
+                    self.sums = vec![[0; 3]; self.summed.len()];
                 }
                 part.film.get(Layer::SampleSum, px, py, &mut digits);
-                for (c, sum) in sums[index].iter_mut().enumerate() {
+                for (c, sum) in self.sums[index].iter_mut().enumerate() {
                     let chunk: &[f32; sample_sum::DIGITS] = digits
                         [c * sample_sum::DIGITS..(c + 1) * sample_sum::DIGITS]
                         .try_into()
@@ -287,52 +313,92 @@ pub fn merge_parts(paths: &[PathBuf]) -> Result<(Film, ExrAttributes), CommandEr
                         )
                     })?;
                 }
-                summed[index] = true;
+                self.summed[index] = true;
             }
         }
-    }
-    for (index, sum) in sums.iter().enumerate() {
-        if !summed[index] {
-            continue;
-        }
-        let (x, y) = (
-            (index % width as usize) as u32,
-            (index / width as usize) as u32,
-        );
-        let mut color = [0.0f32; 4];
-        merged.get(Layer::Color, x, y, &mut color);
-        for c in 0..3 {
-            color[c] = sample_sum::mean_of_sum(sum[c], spp);
-        }
-        merged.set(Layer::Color, x, y, &color);
+        self.added.push(AddedPart {
+            path: part.path,
+            region: part.region,
+            samples: part.samples,
+        });
+        Ok(())
     }
 
-    // The header a single render of the same options writes.
-    let tile_count = crate::render::work_tiles(width, height).len();
-    let mut attributes = ExrAttributes {
-        software: first.attributes.software.clone(),
-        incomplete: false,
-        finished_tiles: Some(tile_count as u32),
-        world_to_camera: first.attributes.world_to_camera,
-        world_to_ndc: first.attributes.world_to_ndc,
-        window: None,
-        ..ExrAttributes::default()
-    };
-    for (k, v) in sig {
-        attributes.strings.insert(k.to_string(), v.to_string());
+    /// The merged film and the header a single render of the same options writes, once every
+    /// pixel has all its samples.
+    fn finish(mut self) -> Result<(Film, ExrAttributes), CommandError> {
+        let (width, spp) = (self.width, self.spp);
+        // With no overlaps, a pixel has all its samples exactly when its parts' ranges add
+        // up to spp.
+        if let Some(index) = self.sample_counts.iter().position(|&n| n != u64::from(spp)) {
+            let (x, y) = (index % width as usize, index / width as usize);
+            return Err(CommandError::bad_input(format!(
+                "merge: pixel {x},{y} has {} of its {spp} samples in the parts given (a region or \
+                 sample range is missing)",
+                self.sample_counts[index]
+            )));
+        }
+        for (index, sum) in self.sums.iter().enumerate() {
+            if !self.summed[index] {
+                continue;
+            }
+            let (x, y) = (
+                (index % width as usize) as u32,
+                (index / width as usize) as u32,
+            );
+            let mut color = [0.0f32; 4];
+            self.merged.get(Layer::Color, x, y, &mut color);
+            for c in 0..3 {
+                color[c] = sample_sum::mean_of_sum(sum[c], spp);
+            }
+            self.merged.set(Layer::Color, x, y, &color);
+        }
+
+        let tile_count = crate::render::work_tiles(width, self.height).len();
+        let first = &self.first_attributes;
+        let mut attributes = ExrAttributes {
+            software: first.software.clone(),
+            incomplete: false,
+            finished_tiles: Some(tile_count as u32),
+            world_to_camera: first.world_to_camera,
+            world_to_ndc: first.world_to_ndc,
+            window: None,
+            ..ExrAttributes::default()
+        };
+        for (k, v) in signature(first) {
+            attributes.strings.insert(k.to_string(), v.to_string());
+        }
+        attributes.strings.insert(
+            TILES_DONE_ATTRIBUTE.to_string(),
+            encode_tiles(&vec![true; tile_count]),
+        );
+        attributes.strings.insert(
+            SAMPLES_ATTRIBUTE.to_string(),
+            format_sample_range(&(0..spp)),
+        );
+        attributes
+            .strings
+            .insert(SAMPLE_WEIGHT_ATTRIBUTE.to_string(), spp.to_string());
+        Ok((self.merged, attributes))
     }
-    attributes.strings.insert(
-        TILES_DONE_ATTRIBUTE.to_string(),
-        encode_tiles(&vec![true; tile_count]),
-    );
-    attributes.strings.insert(
-        SAMPLES_ATTRIBUTE.to_string(),
-        format_sample_range(&(0..spp)),
-    );
-    attributes
-        .strings
-        .insert(SAMPLE_WEIGHT_ATTRIBUTE.to_string(), spp.to_string());
-    Ok((merged, attributes))
+}
+
+/// The merged film and the header of the whole render, from checked parts. The parts are
+/// read one at a time: the memory is the result's, the exact sums' and one part's.
+pub fn merge_parts(paths: &[PathBuf]) -> Result<(Film, ExrAttributes), CommandError> {
+    let mut merge: Option<Merge> = None;
+    for path in paths {
+        let part = read_part(path)?;
+        let merge = match &mut merge {
+            Some(merge) => merge,
+            None => merge.insert(Merge::new(&part)?),
+        };
+        merge.check(&part)?;
+        merge.add(part)?;
+    }
+    merge
+        .ok_or_else(|| CommandError::bad_input("merge: no parts given"))?
+        .finish()
 }
 
 pub fn run(args: &MergeArgs) -> Result<(), CommandError> {

@@ -72,7 +72,8 @@ pub fn read_exr(path: &Path) -> Result<(Film, ExrAttributes), OutputError> {
         ));
     }
 
-    let mut film = Film::new(width, height, &layers);
+    let mut film =
+        Film::try_new(width, height, &layers).map_err(|e| OutputError::invalid(path, e))?;
     for (name, samples) in &channels {
         if let Some(plane) = film.channel_mut(name) {
             if samples.len() != plane.len() {
