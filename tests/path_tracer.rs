@@ -1287,6 +1287,55 @@ translate = [0.0, 1.0, 0.0]
     }
 }
 
+/// A mirrored one-sided lamp keeps its front where its normals point: an OBJ quad facing up,
+/// placed with `scale = [-1, 1, 1]` (and a glTF node with a negative scale), still glows
+/// seen from above and lights the plane under it, in both integrators. Its winding used to
+/// be kept, which turned its front downwards: black from above.
+#[test]
+fn a_mirrored_lamp_keeps_its_emitting_side() {
+    let dir = temp_dir();
+    write(dir.path(), "lamp.obj", &square_obj(1.0, 0.0));
+    let scene = |mirror: &str| {
+        format!(
+            r#"
+[render]
+width = 8
+height = 8
+spp = 4
+
+[camera]
+type = "orthographic"
+eye = [0.0, 3.0, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+height = 0.5
+
+[[material]]
+name = "lamp"
+base_color = [0.0, 0.0, 0.0]
+emission = [2.0, 2.0, 2.0]
+
+[[mesh]]
+file = "lamp.obj"
+material = "lamp"
+scale = {mirror}
+"#
+        )
+    };
+    for mirror in ["[1, 1, 1]", "[-1, 1, 1]", "[1, 1, -1]", "[-1, 2, -1]"] {
+        let text = scene(mirror);
+        let (path, _) = render_with(load(dir.path(), &text), &PathTracer::default(), |_| {});
+        let (whitted, _) = render_with(load(dir.path(), &text), &Whitted, |_| {});
+        for (name, pixels) in [("path", path), ("whitted", whitted)] {
+            let value = mean(&pixels)[0];
+            assert!(
+                (value - 2.0).abs() < 1e-6,
+                "{name}, scale {mirror}, seen from the front: {value}, expected 2"
+            );
+        }
+    }
+}
+
 /// A floor inside a two-sided emitting sphere sees the sphere's inner wall over its whole
 /// upper hemisphere: a white-furnace-like check, the floor's radiance is its albedo times
 /// the wall's, under every strategy. (Light sampling found no light from inside a sphere,

@@ -576,6 +576,13 @@ impl Loader<'_> {
                         .collect()
                 }
             };
+            // A mirroring node turns the primitive's winding clockwise (glTF 2.0, "Meshes"):
+            // reversed, its front faces where its mapped normals point.
+            let triangles = if transform.mirrors() {
+                triangles.into_iter().map(|[a, b, c]| [a, c, b]).collect()
+            } else {
+                triangles
+            };
             let material = self.material(&primitive.material())?;
             self.part.meshes.push(TriangleMesh {
                 name: format!("{mesh_name}#{}", primitive.index()),

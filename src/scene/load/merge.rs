@@ -3,7 +3,7 @@
 
 use glam::{Affine3A, DMat3, EulerRot, Mat3A, Quat, Vec3};
 
-use crate::scene::{Light, SceneDescription, TextureBinding};
+use crate::scene::{Light, SceneDescription, TextureBinding, TriangleMesh};
 
 /// Translate / rotate (degrees about x, then y, then z) / scale, applied as `T * R * S`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,6 +42,8 @@ impl Placement {
 pub(crate) struct Transform {
     pub matrix: Affine3A,
     normal_matrix: Mat3A,
+    /// The map reverses handedness (a negative determinant, e.g. a negative scale).
+    mirrors: bool,
 }
 
 impl Transform {
@@ -70,7 +72,33 @@ impl Transform {
         Some(Transform {
             matrix,
             normal_matrix: Mat3A::from((inverse_transpose / largest).as_mat3()),
+            mirrors: det < 0.0,
         })
+    }
+
+    /// Moves `mesh` through the map: positions, normals, and, when the map mirrors, the
+    /// winding of every triangle. A mirror turns a counter-clockwise triangle clockwise; put
+    /// back, its front (one-sided emission, the geometric normal) faces where the shading
+    /// normals, mapped by the inverse transpose, point: the mirrored side, as glTF 2.0 asks
+    /// ("the determinant of the node's global transform defines the winding order") and as
+    /// pbrt-v4 and Blender keep it.
+    pub(crate) fn mesh(&self, mesh: &mut TriangleMesh) {
+        for p in &mut mesh.positions {
+            *p = self.point(*p);
+        }
+        for n in &mut mesh.normals {
+            *n = self.normal(*n);
+        }
+        if self.mirrors {
+            for triangle in &mut mesh.triangles {
+                triangle.swap(1, 2);
+            }
+        }
+    }
+
+    /// The map reverses handedness.
+    pub(crate) fn mirrors(&self) -> bool {
+        self.mirrors
     }
 
     #[inline]
@@ -139,12 +167,7 @@ pub(crate) fn append(
     for mut mesh in part.meshes {
         mesh.material = material_override.unwrap_or(mesh.material + material_base);
         if let Some(t) = transform {
-            for p in &mut mesh.positions {
-                *p = t.point(*p);
-            }
-            for n in &mut mesh.normals {
-                *n = t.normal(*n);
-            }
+            t.mesh(&mut mesh);
         }
         scene.meshes.push(mesh);
     }
@@ -261,6 +284,47 @@ mod tests {
             let rotate = Quat::from_rotation_y(30f32.to_radians());
             let expected = rotate * Vec3::new(1.0, 0.5, 0.0).normalize();
             assert!(close(n, expected), "scale {scale}: {n} against {expected}");
+        }
+    }
+
+    /// A mirroring placement keeps a triangle's front on the side its mapped normal points
+    /// to: the winding is reversed. It was kept, so a mirrored lamp emitted away from where
+    /// its normals pointed.
+    #[test]
+    fn a_mirroring_placement_reverses_the_winding() {
+        let quad = || TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![Vec3::Z; 3],
+            triangles: vec![[0, 1, 2]],
+            ..Default::default()
+        };
+        let front = |m: &TriangleMesh| {
+            let [a, b, c] = m.triangles[0].map(|i| m.positions[i as usize]);
+            (b - a).cross(c - a).normalize()
+        };
+        for (scale, mirrored) in [
+            (Vec3::new(-1.0, 1.0, 1.0), true),
+            (Vec3::new(1.0, 1.0, -2.0), true),
+            (Vec3::new(-1.0, -1.0, 1.0), false),
+            (Vec3::splat(3.0), false),
+        ] {
+            let t = Transform::new(
+                Placement {
+                    scale,
+                    ..Placement::default()
+                }
+                .matrix(),
+            )
+            .unwrap();
+            assert_eq!(t.mirrors(), mirrored, "{scale}");
+            let mut mesh = quad();
+            t.mesh(&mut mesh);
+            assert!(
+                close(front(&mesh), mesh.normals[0]),
+                "scale {scale}: front {} against normal {}",
+                front(&mesh),
+                mesh.normals[0]
+            );
         }
     }
 
