@@ -9,7 +9,10 @@
 //! PBR extension (as Blender and three.js write it): `Pr` roughness, `Pm` metalness (either
 //! selects the metallic-roughness model), `map_Pr` and `map_Pm` greyscale maps (or one
 //! packed texture when they name the same file: green = roughness, blue = metalness), `map_Ke` emission texture (sRGB), `norm` /
-//! `map_Bump` / `bump` tangent-space normal map with `-bm` as its scale.
+//! `map_Bump` / `bump` tangent-space normal map with `-bm` as its scale. Map options come
+//! before the file name (`MapStatement`): `-s`/`-o` transform the texture coordinates,
+//! `-clamp on` clamps; the file name is the rest of the line. A line ending in `\\`
+//! continues on the next.
 //! OBJ texture coordinates have v pointing up; they are stored as `t = 1 - v`
 //! (OpenImageIO convention, t down).
 //!
@@ -25,7 +28,7 @@ use glam::{Affine2, Vec2, Vec3};
 
 use super::error::SceneError;
 use super::files::Files;
-use super::obj_text::{decode_lines, excerpt, LineCountingReader};
+use super::obj_text::{decode_lines, excerpt, join_continued_lines, LineCountingReader};
 use crate::scene::{
     ColorSpace, Material, SceneDescription, TextureBinding, TextureDesc, TriangleMesh, WrapMode,
 };
@@ -41,7 +44,9 @@ pub(crate) fn load_obj(files: &Files, path: &Path) -> Result<SceneDescription, S
         source: label.clone(),
         ..Default::default()
     };
-    let prepared = prepare_obj(decode_lines(&bytes), &local, &label, &mut part.notes)?;
+    let mut lines = decode_lines(&bytes);
+    join_continued_lines(&mut lines);
+    let prepared = prepare_obj(lines, &local, &label, &mut part.notes)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -71,7 +76,7 @@ pub(crate) fn load_obj(files: &Files, path: &Path) -> Result<SceneDescription, S
 
     // Without any readable library `tobj` reports the open failure, already noted.
     for (m, origin) in materials.unwrap_or_default().iter().zip(&prepared.origins) {
-        let material = convert_material(m, origin, &local, &mut part.textures)?;
+        let material = convert_material(m, origin, &local, &mut part.textures, &mut part.notes)?;
         part.materials.push(material);
     }
 
@@ -431,8 +436,8 @@ fn prepare_mtl(
                     ));
                 }
             }
-            "map_Bump" | "map_bump" | "bump" | "norm" => {
-                if let Err(message) = bump_multiplier(rest) {
+            keyword if keyword.starts_with("map_") || matches!(keyword, "bump" | "norm") => {
+                if let Err(message) = MapStatement::parse(rest) {
                     return Err(at(number, format!("'{}': {message}", excerpt(line, 60))));
                 }
             }
@@ -560,6 +565,7 @@ fn convert_material(
     origin: &MaterialOrigin,
     files: &Files,
     textures: &mut Vec<TextureDesc>,
+    notes: &mut Vec<String>,
 ) -> Result<Material, SceneError> {
     let at = |keyword: &str, message: String| {
         SceneError::invalid(
@@ -604,31 +610,21 @@ fn convert_material(
         _ => {}
     }
     if let Some(file) = &m.diffuse_texture {
-        let index =
-            add_texture(files, textures, file, ColorSpace::Srgb).map_err(|e| at("map_Kd", e))?;
-        material.base_color_texture = Some(TextureBinding {
-            texture: index,
-            transform: Affine2::IDENTITY,
-        });
+        material.base_color_texture = Some(
+            add_texture(files, textures, file, ColorSpace::Srgb, notes)
+                .map_err(|e| at("map_Kd", e))?,
+        );
     }
     if let Some(file) = &m.dissolve_texture {
-        let index =
-            add_texture(files, textures, file, ColorSpace::Linear).map_err(|e| at("map_d", e))?;
-        material.alpha_texture = Some(TextureBinding {
-            texture: index,
-            transform: Affine2::IDENTITY,
-        });
+        material.alpha_texture = Some(
+            add_texture(files, textures, file, ColorSpace::Linear, notes)
+                .map_err(|e| at("map_d", e))?,
+        );
         material.alpha_cutoff = Some(0.5);
     }
     let param = |key: &str| m.unknown_param.get(key).map(String::as_str);
     let number =
         |key: &str| param(key).and_then(|v| v.split_whitespace().next()?.parse::<f32>().ok());
-    let bind = |index: usize| {
-        Some(TextureBinding {
-            texture: index,
-            transform: Affine2::IDENTITY,
-        })
-    };
     // The PBR extension of MTL (`Pr`, `Pm`, `map_Pr`, `map_Pm`, as Blender and three.js
     // write them) selects the metallic-roughness model.
     let (roughness_map, metallic_map) = (param("map_Pr"), param("map_Pm"));
@@ -643,29 +639,33 @@ fn convert_material(
         material.metallic = number("Pm").unwrap_or(default_metallic);
         match (roughness_map, metallic_map) {
             // One file for both: glTF's packing (green = roughness, blue = metalness).
-            (Some(r), Some(m)) if texture_file(r) == texture_file(m) => {
-                let index = add_texture(files, textures, r, ColorSpace::Linear)
-                    .map_err(|e| at("map_Pr", e))?;
-                material.metallic_roughness_texture = bind(index);
+            (Some(r), Some(m)) if MapStatement::parse(r) == MapStatement::parse(m) => {
+                material.metallic_roughness_texture = Some(
+                    add_texture(files, textures, r, ColorSpace::Linear, notes)
+                        .map_err(|e| at("map_Pr", e))?,
+                );
             }
             (r, m) => {
                 if let Some(r) = r {
-                    let index = add_texture(files, textures, r, ColorSpace::Linear)
-                        .map_err(|e| at("map_Pr", e))?;
-                    material.roughness_texture = bind(index);
+                    material.roughness_texture = Some(
+                        add_texture(files, textures, r, ColorSpace::Linear, notes)
+                            .map_err(|e| at("map_Pr", e))?,
+                    );
                 }
                 if let Some(m) = m {
-                    let index = add_texture(files, textures, m, ColorSpace::Linear)
-                        .map_err(|e| at("map_Pm", e))?;
-                    material.metallic_texture = bind(index);
+                    material.metallic_texture = Some(
+                        add_texture(files, textures, m, ColorSpace::Linear, notes)
+                            .map_err(|e| at("map_Pm", e))?,
+                    );
                 }
             }
         }
     }
     if let Some(file) = param("map_Ke") {
-        let index =
-            add_texture(files, textures, file, ColorSpace::Srgb).map_err(|e| at("map_Ke", e))?;
-        material.emission_texture = bind(index);
+        material.emission_texture = Some(
+            add_texture(files, textures, file, ColorSpace::Srgb, notes)
+                .map_err(|e| at("map_Ke", e))?,
+        );
         // The texture gives the emission by itself unless `Ke` scales it.
         if m.emissive.is_none() {
             material.emission = Vec3::ONE;
@@ -691,64 +691,189 @@ fn convert_material(
         } else {
             keyword
         };
-        material.normal_scale = bump_multiplier(statement).map_err(|e| at(keyword, e))?;
-        let index = add_texture(files, textures, statement, ColorSpace::Linear)
-            .map_err(|e| at(keyword, e))?;
-        material.normal_texture = bind(index);
+        material.normal_scale = MapStatement::parse(statement)
+            .map_err(|e| at(keyword, e))?
+            .bump_multiplier;
+        material.normal_texture = Some(
+            add_texture(files, textures, statement, ColorSpace::Linear, notes)
+                .map_err(|e| at(keyword, e))?,
+        );
     }
     Ok(material)
 }
 
-/// The file name of an MTL map statement: its last word, with `\\` read as `/`.
-fn texture_file(statement: &str) -> String {
-    statement
-        .split_whitespace()
-        .last()
-        .unwrap_or(statement)
-        .replace('\\', "/")
+/// An MTL map statement (`map_Kd -s 2 2 1 -clamp on wood grain.png`): its options, then
+/// the file name, which is the rest of the line (spaces included, `\\` read as `/`).
+#[derive(Clone, Debug, PartialEq)]
+struct MapStatement {
+    file: String,
+    /// `-s` and `-o` as a transform of (s, t) (the MTL spec's scale and origin offset of
+    /// the texture coordinates, in OBJ's v-up convention, turned into t-down).
+    transform: Affine2,
+    /// `-clamp on`: the texture does not repeat.
+    clamp: bool,
+    /// `-bm`: the bump (normal map) multiplier, 1 when absent.
+    bump_multiplier: f32,
+    /// Options the renderer does not use (e.g. `-mm`, `-imfchan`, `-blendu`), for a note.
+    ignored: Vec<String>,
 }
 
-/// The `-bm` multiplier of a bump or normal map statement (1 when absent).
-fn bump_multiplier(statement: &str) -> Result<f32, String> {
-    let mut words = statement.split_whitespace();
-    while let Some(word) = words.next() {
-        if word == "-bm" {
-            return match words.next().map(str::parse::<f32>) {
-                Some(Ok(value)) if value.is_finite() => Ok(value),
-                _ => Err("-bm needs a finite number".to_owned()),
-            };
+impl MapStatement {
+    /// Parses the options the MTL specification defines, each with its arguments; the rest
+    /// of the statement is the file name. An unknown option is an error: how many words it
+    /// takes is unknown, so the file name could not be found.
+    fn parse(statement: &str) -> Result<MapStatement, String> {
+        let mut rest = statement.trim();
+        let mut scale = Vec2::ONE;
+        let mut offset = Vec2::ZERO;
+        let mut clamp = false;
+        let mut bump_multiplier = 1.0;
+        let mut ignored = Vec::new();
+        // The next word of `rest`, and `rest` after it.
+        fn word(rest: &mut &str) -> Option<String> {
+            let trimmed = rest.trim_start();
+            if trimmed.is_empty() {
+                return None;
+            }
+            let end = trimmed.find(char::is_whitespace).unwrap_or(trimmed.len());
+            *rest = &trimmed[end..];
+            Some(trimmed[..end].to_owned())
         }
+        // Up to three numbers (`-s u [v [w]]`), at least one.
+        fn numbers(rest: &mut &str, option: &str) -> Result<Vec<f32>, String> {
+            let mut values = Vec::new();
+            while values.len() < 3 {
+                let mut probe = *rest;
+                match word(&mut probe).and_then(|w| w.parse::<f32>().ok()) {
+                    Some(value) if value.is_finite() => {
+                        values.push(value);
+                        *rest = probe;
+                    }
+                    _ => break,
+                }
+            }
+            if values.is_empty() {
+                return Err(format!("{option} needs a finite number"));
+            }
+            Ok(values)
+        }
+        loop {
+            let trimmed = rest.trim_start();
+            if !trimmed.starts_with('-') {
+                break;
+            }
+            let option = word(&mut rest).unwrap_or_default();
+            match option.as_str() {
+                "-s" | "-o" => {
+                    let values = numbers(&mut rest, &option)?;
+                    let uv = Vec2::new(values[0], values.get(1).copied().unwrap_or(values[0]));
+                    let uv = if values.len() == 1 && option == "-o" {
+                        Vec2::new(values[0], 0.0)
+                    } else if values.len() == 1 {
+                        Vec2::new(values[0], 1.0)
+                    } else {
+                        uv
+                    };
+                    if option == "-s" {
+                        scale = uv;
+                    } else {
+                        offset = uv;
+                    }
+                }
+                "-bm" => {
+                    bump_multiplier = numbers(&mut rest, &option)?[0];
+                }
+                "-clamp" => match word(&mut rest).as_deref() {
+                    Some("on") => clamp = true,
+                    Some("off") => clamp = false,
+                    other => return Err(format!("-clamp takes on or off, not {other:?}")),
+                },
+                "-blendu" | "-blendv" | "-cc" => {
+                    word(&mut rest).ok_or_else(|| format!("{option} takes on or off"))?;
+                    ignored.push(option);
+                }
+                "-t" => {
+                    numbers(&mut rest, &option)?;
+                    ignored.push(option);
+                }
+                "-mm" => {
+                    for _ in 0..2 {
+                        word(&mut rest).ok_or_else(|| "-mm takes a base and a gain".to_owned())?;
+                    }
+                    ignored.push(option);
+                }
+                "-texres" | "-boost" | "-imfchan" | "-type" => {
+                    word(&mut rest).ok_or_else(|| format!("{option} takes a value"))?;
+                    ignored.push(option);
+                }
+                _ => return Err(format!("unknown map option '{option}'")),
+            }
+        }
+        let file = rest.trim().replace('\\', "/");
+        if file.is_empty() {
+            return Err("no file name".to_owned());
+        }
+        // u' = s_u u + o_u and v' = s_v v + o_v in OBJ's v-up coordinates; with t = 1 - v:
+        // t' = s_v t + (1 - s_v - o_v).
+        let transform = Affine2::from_cols(
+            Vec2::new(scale.x, 0.0),
+            Vec2::new(0.0, scale.y),
+            Vec2::new(offset.x, 1.0 - scale.y - offset.y),
+        );
+        Ok(MapStatement {
+            file,
+            transform,
+            clamp,
+            bump_multiplier,
+            ignored,
+        })
     }
-    Ok(1.0)
 }
 
-/// Adds (or reuses) a texture for an MTL map statement. Options such as `-s 1 1 1` before
-/// the file name are skipped: the file name is the last word. Windows separators (`.\\a.jpg`,
-/// common in exported MTL files) are read as `/`.
+/// Adds (or reuses) the texture of an MTL map statement and returns its binding (with the
+/// statement's `-s`/`-o` transform). Windows separators (`.\\a.jpg`, common in exported MTL
+/// files) are read as `/`. Options the renderer ignores get one note per material.
 fn add_texture(
     files: &Files,
     textures: &mut Vec<TextureDesc>,
     statement: &str,
     color_space: ColorSpace,
-) -> Result<usize, String> {
-    let name = texture_file(statement);
+    notes: &mut Vec<String>,
+) -> Result<TextureBinding, String> {
+    let map = MapStatement::parse(statement)?;
+    if !map.ignored.is_empty() {
+        notes.push(format!(
+            "texture '{}': map option(s) {} ignored",
+            map.file,
+            map.ignored.join(", ")
+        ));
+    }
+    let wrap = if map.clamp {
+        WrapMode::Clamp
+    } else {
+        WrapMode::Periodic
+    };
+    let binding = |texture: usize| TextureBinding {
+        texture,
+        transform: map.transform,
+    };
     if let Some(i) = textures
         .iter()
-        .position(|t| t.name == name && t.color_space == color_space)
+        .position(|t| t.name == map.file && t.color_space == color_space && t.wrap_s == wrap)
     {
-        return Ok(i);
+        return Ok(binding(i));
     }
     let source = files
-        .texture_source(&files.resolve(&name))
-        .map_err(|e| format!("texture '{name}': {e}"))?;
+        .texture_source(&files.resolve(&map.file))
+        .map_err(|e| format!("texture '{}': {e}", map.file))?;
     textures.push(TextureDesc {
-        name,
+        name: map.file.clone(),
         source,
         color_space,
-        wrap_s: WrapMode::Periodic,
-        wrap_t: WrapMode::Periodic,
+        wrap_s: wrap,
+        wrap_t: wrap,
     });
-    Ok(textures.len() - 1)
+    Ok(binding(textures.len() - 1))
 }
 
 #[cfg(test)]
@@ -915,6 +1040,68 @@ mod tests {
             assert!(err.contains(expected) && err.contains("quad.mtl"), "{err}");
             assert_eq!(err.lines().count(), 1, "{err}");
         }
+    }
+
+    /// Map statements as 3ds Max, Maya and Blender write them: options with their arguments
+    /// (`-s` and `-o` become the binding's transform, `-clamp on` clamps, options without
+    /// effect here are noted), then a file name that may hold spaces. The file name used to
+    /// be the last word, so `-s` was dropped without a word and `quad space.png` read as
+    /// `space.png`.
+    #[test]
+    fn map_options_and_file_names_with_spaces() {
+        let parsed =
+            MapStatement::parse("-s 2 4 1 -o 0.25 0.5 -clamp on -mm 0 1 wood grain.png").unwrap();
+        assert_eq!(parsed.file, "wood grain.png");
+        assert!(parsed.clamp);
+        assert_eq!(parsed.ignored, ["-mm"]);
+        // (u, v) = (0.5, 0.25), i.e. (s, t) = (0.5, 0.75): u' = 2 u + 0.25 = 1.25 and
+        // v' = 4 v + 0.5 = 1.5, so (s', t') = (1.25, 1 - 1.5).
+        let st = parsed.transform.transform_point2(Vec2::new(0.5, 0.75));
+        assert!((st - Vec2::new(1.25, -0.5)).length() < 1e-6, "{st}");
+        let plain = MapStatement::parse("  textures\\brick.png ").unwrap();
+        assert_eq!(plain.file, "textures/brick.png");
+        assert_eq!(plain.transform, Affine2::IDENTITY);
+        assert_eq!(
+            MapStatement::parse("-s 3 tile.png")
+                .unwrap()
+                .transform
+                .matrix2
+                .y_axis
+                .y,
+            1.0
+        );
+        for bad in [
+            "-s tile.png",
+            "-clamp maybe a.png",
+            "-frobnicate 2 a.png",
+            "-s 2 2",
+        ] {
+            assert!(MapStatement::parse(bad).is_err(), "{bad}");
+        }
+
+        let dir = tempfile::tempdir().unwrap();
+        write(dir.path(), "quad.obj", QUAD);
+        fs::copy(
+            concat!(env!("CARGO_MANIFEST_DIR"), "/assets/textures/checker.png"),
+            dir.path().join("my checker.png"),
+        )
+        .unwrap();
+        write(
+            dir.path(),
+            "quad.mtl",
+            "newmtl red\nmap_Kd -s 2 2 1 -blendu off my checker.png\n",
+        );
+        let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap();
+        let binding = part.materials[0].base_color_texture.clone().unwrap();
+        assert_eq!(part.textures[binding.texture].name, "my checker.png");
+        assert_eq!(binding.transform.matrix2.x_axis.x, 2.0);
+        assert!(
+            part.notes
+                .iter()
+                .any(|n| n.contains("-blendu") && n.contains("ignored")),
+            "{:?}",
+            part.notes
+        );
     }
 
     #[test]

@@ -35,6 +35,24 @@ pub(crate) fn decode_lines(bytes: &[u8]) -> Vec<String> {
         .collect()
 }
 
+/// Joins lines continued with a trailing backslash (the OBJ specification's line
+/// continuation, `f 1 2 \\` then `3 4`) into the first of them, leaving the lines it took
+/// empty: every line keeps its number, and an error in a continued statement names the line
+/// it starts on.
+pub(crate) fn join_continued_lines(lines: &mut [String]) {
+    let mut start = 0;
+    while start < lines.len() {
+        let mut next = start + 1;
+        while lines[start].trim_end().ends_with('\\') && next < lines.len() {
+            let kept = lines[start].trim_end().trim_end_matches('\\').to_owned();
+            let taken = std::mem::take(&mut lines[next]);
+            lines[start] = format!("{kept} {taken}");
+            next += 1;
+        }
+        start = next;
+    }
+}
+
 /// One line as UTF-8 when valid, else as Latin-1 (byte value = code point).
 fn decode_line(line: &[u8]) -> String {
     match std::str::from_utf8(line) {
@@ -153,6 +171,21 @@ mod tests {
     #[test]
     fn byte_order_marks_are_honoured() {
         assert_eq!(decode_lines(b"\xEF\xBB\xBFv 1 2 3\n"), ["v 1 2 3", ""]);
+    }
+
+    /// `\\` at the end of a line continues the statement on the next one; the lines keep
+    /// their numbers. Such files were refused ("face parse error").
+    #[test]
+    fn continued_lines_are_joined_in_place() {
+        let mut lines: Vec<String> = ["v -1 \\", "  -1 0", "f 1/1 2/2 \\", "3/3 \\", "4/4", "g x"]
+            .iter()
+            .map(|l| l.to_string())
+            .collect();
+        join_continued_lines(&mut lines);
+        assert_eq!(
+            lines,
+            ["v -1    -1 0", "", "f 1/1 2/2  3/3  4/4", "", "", "g x"]
+        );
         let utf16be: Vec<u8> = [0xFE, 0xFF]
             .into_iter()
             .chain("v 1\r\nf 1".encode_utf16().flat_map(u16::to_be_bytes))
