@@ -35,6 +35,7 @@ mod merge;
 mod obj;
 mod obj_text;
 mod patches;
+mod polygon;
 mod toml_format;
 mod uri;
 mod validate;
