@@ -34,7 +34,7 @@ pub(crate) fn triangulate(positions: &[Vec3], face: &[u32]) -> Vec<[u32; 3]> {
         .map(|k| point(face[k]).cross(point(face[(k + 1) % n])))
         .sum();
     let axis = normal.abs().max_element();
-    if !(axis > 0.0) || !axis.is_finite() {
+    if !(axis.is_finite() && axis > 0.0) {
         return fan(face);
     }
     // Drop the dominant axis; swap the two kept ones when that flips the orientation, so the

@@ -85,7 +85,7 @@ fn texture_twist_in_world(patch: &BezierPatch) -> f64 {
     let st_low = a.min(b).min(c.min(d));
     let st_high = a.max(b).max(c.max(d));
     let st_size = (st_high - st_low).length();
-    if twist == 0.0 || !(st_size > 0.0) {
+    if !(twist > 0.0 && st_size > 0.0) {
         return 0.0;
     }
     let (low, high) = patch.bounds();
