@@ -92,6 +92,22 @@ fn signal(child: &Child, signal: Signal) {
     kill(pid, signal).unwrap_or_else(|e| panic!("kill({pid}, {signal}) failed: {e}"));
 }
 
+/// Polls `child` until it exits and returns how long that took; after `limit` it is killed
+/// and the test fails, saying the process was `what` (a signal it did not answer).
+fn wait_for_exit(child: &mut Child, limit: Duration, what: &str) -> Duration {
+    let step = Duration::from_millis(20);
+    let mut waited = Duration::ZERO;
+    while child.try_wait().expect("poll conetrace").is_none() {
+        if waited > limit {
+            child.kill().ok();
+            panic!("conetrace {what}: still running {waited:?} after the signal");
+        }
+        sleep(step);
+        waited += step;
+    }
+    waited
+}
+
 fn finish(child: Child) -> (ExitStatus, String) {
     let out = child.wait_with_output().expect("wait for conetrace");
     (
@@ -284,15 +300,8 @@ fn a_signal_while_the_scene_loads_ends_the_render_at_once_writing_nothing() {
             .open(&fifo)
             .expect("open the FIFO for writing");
         signal(&child, signal_name);
-        let mut waited = Duration::ZERO;
-        while child.try_wait().expect("poll conetrace").is_none() {
-            if waited > Duration::from_secs(60) {
-                child.kill().ok();
-                panic!("{signal_name} {extra:?}: still loading {waited:?} after the signal");
-            }
-            sleep(Duration::from_millis(20));
-            waited += Duration::from_millis(20);
-        }
+        let what = format!("still loading after {signal_name} ({extra:?})");
+        wait_for_exit(&mut child, Duration::from_secs(60), &what);
         drop(writer);
         let (status, stderr) = finish(child);
         assert_eq!(
@@ -481,15 +490,7 @@ fn sigint_stops_a_tile_with_many_samples_mid_way() {
         sleep(Duration::from_millis(delay_ms));
         signal(&child, Signal::SIGINT);
         // A generous bound that only a render ignoring the signal reaches.
-        let mut waited = Duration::ZERO;
-        while child.try_wait().expect("poll conetrace").is_none() {
-            if waited > Duration::from_secs(120) {
-                child.kill().ok();
-                panic!("the render ignored SIGINT for {waited:?}");
-            }
-            sleep(Duration::from_millis(50));
-            waited += Duration::from_millis(50);
-        }
+        let waited = wait_for_exit(&mut child, Duration::from_secs(120), "ignored SIGINT");
         let (status, stderr) = finish(child);
         match status.code() {
             // The signal landed before the handler was installed: try later.
