@@ -148,10 +148,19 @@ pub fn command_line_error(error: clap::Error) -> i32 {
     let first = lines.next().unwrap_or("cannot parse the command line");
     let message = first.strip_prefix("error: ").unwrap_or(first);
     match lines.find(|l| l.starts_with("tip:")) {
-        Some(tip) => eprintln!("conetrace: error: {message} ({tip})"),
-        None => eprintln!("conetrace: error: {message}"),
+        Some(tip) => print_error(&format!("{message} ({tip})")),
+        None => print_error(message),
     }
     EXIT_BAD_INPUT
+}
+
+/// Prints an error as every command does: one line on stderr, `conetrace: error: ...`
+/// (a decoder's message can end in blank lines or span several).
+pub(crate) fn print_error(message: &str) {
+    eprintln!(
+        "conetrace: error: {}",
+        crate::scene::load::one_line(message)
+    );
 }
 
 /// Run the parsed command line; returns the exit status.
@@ -172,11 +181,7 @@ pub fn run(cli: Cli) -> i32 {
     match result {
         Ok(()) => EXIT_OK,
         Err(error) => {
-            // One line whatever the source (a decoder's message can end in blank lines).
-            eprintln!(
-                "conetrace: error: {}",
-                crate::scene::load::one_line(&error.message)
-            );
+            print_error(&error.message);
             error.status
         }
     }

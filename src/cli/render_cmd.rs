@@ -275,7 +275,7 @@ pub(crate) fn catch_interrupts(target: &Path) {
         // Held while exiting, so the main thread cannot leave loading meanwhile.
         let loading = LOADING.lock().unwrap_or_else(PoisonError::into_inner);
         if let Some(message) = loading.as_ref() {
-            eprintln!("conetrace: error: {message}");
+            crate::cli::print_error(message);
             std::process::exit(EXIT_INTERRUPTED);
         }
     });

@@ -518,10 +518,7 @@ impl Loader<'_> {
                 .ok_or_else(|| format!("{what} has no POSITION attribute"))?;
             let positions = read_floats(&positions_accessor, self.buffers, 3)?;
             let vertex_count = positions.len() / 3;
-            let positions: Vec<Vec3> = positions
-                .chunks_exact(3)
-                .map(|p| transform.point(Vec3::from_slice(p)))
-                .collect();
+            let positions: Vec<Vec3> = positions.chunks_exact(3).map(Vec3::from_slice).collect();
             let normals = match primitive.get(&gltf::Semantic::Normals) {
                 Some(accessor) => {
                     let n = read_floats(&accessor, self.buffers, 3)?;
@@ -531,9 +528,7 @@ impl Loader<'_> {
                             n.len() / 3
                         ));
                     }
-                    n.chunks_exact(3)
-                        .map(|n| transform.normal(Vec3::from_slice(n)))
-                        .collect()
+                    n.chunks_exact(3).map(Vec3::from_slice).collect()
                 }
                 None => Vec::new(),
             };
@@ -576,22 +571,19 @@ impl Loader<'_> {
                         .collect()
                 }
             };
-            // A mirroring node turns the primitive's winding clockwise (glTF 2.0, "Meshes"):
-            // reversed, its front faces where its mapped normals point.
-            let triangles = if transform.mirrors() {
-                triangles.into_iter().map(|[a, b, c]| [a, c, b]).collect()
-            } else {
-                triangles
-            };
             let material = self.material(&primitive.material())?;
-            self.part.meshes.push(TriangleMesh {
+            let mut placed = TriangleMesh {
                 name: format!("{mesh_name}#{}", primitive.index()),
                 positions,
                 normals,
                 st,
                 triangles,
                 material,
-            });
+            };
+            // Into the world; a mirroring node's winding is reversed (glTF 2.0, "Meshes":
+            // the determinant of the node's global transform defines the winding order).
+            transform.mesh(&mut placed);
+            self.part.meshes.push(placed);
         }
         Ok(())
     }

@@ -96,11 +96,6 @@ impl Transform {
         }
     }
 
-    /// The map reverses handedness.
-    pub(crate) fn mirrors(&self) -> bool {
-        self.mirrors
-    }
-
     #[inline]
     pub(crate) fn point(&self, p: Vec3) -> Vec3 {
         self.matrix.transform_point3(p)
@@ -316,7 +311,7 @@ mod tests {
                 .matrix(),
             )
             .unwrap();
-            assert_eq!(t.mirrors(), mirrored, "{scale}");
+            assert_eq!(t.mirrors, mirrored, "{scale}");
             let mut mesh = quad();
             t.mesh(&mut mesh);
             assert!(

@@ -776,14 +776,9 @@ impl MapStatement {
             match option.as_str() {
                 "-s" | "-o" => {
                     let values = numbers(&mut rest, &option)?;
-                    let uv = Vec2::new(values[0], values.get(1).copied().unwrap_or(values[0]));
-                    let uv = if values.len() == 1 && option == "-o" {
-                        Vec2::new(values[0], 0.0)
-                    } else if values.len() == 1 {
-                        Vec2::new(values[0], 1.0)
-                    } else {
-                        uv
-                    };
+                    // A missing v is the spec's default: scale 1, offset 0.
+                    let default_v = if option == "-s" { 1.0 } else { 0.0 };
+                    let uv = Vec2::new(values[0], values.get(1).copied().unwrap_or(default_v));
                     if option == "-s" {
                         scale = uv;
                     } else {
@@ -842,7 +837,7 @@ impl MapStatement {
 
 /// Adds (or reuses) the texture of an MTL map statement and returns its binding (with the
 /// statement's `-s`/`-o` transform). Windows separators (`.\\a.jpg`, common in exported MTL
-/// files) are read as `/`. Options the renderer ignores get one note per material.
+/// files) are read as `/`. Options the renderer ignores get a note.
 fn add_texture(
     files: &Files,
     textures: &mut Vec<TextureDesc>,
