@@ -205,7 +205,8 @@ typedef struct CtRenderOptions {
   uint32_t width;
   // Image height in pixels; 0 = the scene's.
   uint32_t height;
-  // Samples per pixel; 0 = the scene's.
+  // Samples per pixel; 0 = the scene's, or without one the integrator's default (16 for
+  // the path tracer, 1 for Whitted and vct).
   uint32_t spp;
   // Maximum reflection/refraction depth; -1 = the scene's.
   int32_t max_depth;

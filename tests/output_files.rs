@@ -319,3 +319,93 @@ fn aov_none_writes_only_colour_and_alpha_with_the_same_pixels() {
     assert!(stderr(&out).contains("--aov none"), "{}", stderr(&out));
     assert!(!dir.path().join("both.exr").exists());
 }
+
+/// A one-triangle glTF whose buffer is the external file `bin_name`, and its bytes.
+fn triangle_gltf_with_bin(bin_name: &str) -> (String, Vec<u8>) {
+    let mut buffer = Vec::new();
+    for p in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        p.iter().for_each(|x| buffer.extend(x.to_le_bytes()));
+    }
+    let gltf = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+  "buffers": [{{"byteLength": {len}, "uri": "{bin_name}"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": {len}}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+      "min": [0, 0, 0], "max": [1, 1, 0]}}]}}"#,
+        len = buffer.len()
+    );
+    (gltf, buffer)
+}
+
+#[test]
+fn no_output_may_overwrite_any_file_the_render_reads() {
+    let dir = temp_dir();
+    let at = |name: &str| dir.path().join(name);
+    let (gltf, bin) = triangle_gltf_with_bin("tri.bin");
+    write(dir.path(), "tri.gltf", &gltf);
+    std::fs::write(at("tri.bin"), &bin).unwrap();
+    write(
+        dir.path(),
+        "m.mtl",
+        "newmtl red\nKd 0.8 0.1 0.1\nmap_Kd wood.png\n",
+    );
+    std::fs::write(at("wood.png"), b"texture bytes, refused before decoding").unwrap();
+    let obj = format!("mtllib m.mtl\nusemtl red\n{}", square_obj(1.0, 0.0));
+    write(dir.path(), "m.obj", &obj);
+    write(dir.path(), "plain.obj", &square_obj(1.0, 0.0));
+    write(
+        dir.path(),
+        "s.toml",
+        "[[mesh]]\nfile = \"plain.obj\"\n[[texture]]\nname = \"t\"\nfile = \"t.partial.exr\"\n",
+    );
+    std::fs::write(
+        at("t.partial.exr"),
+        b"a texture named like a partial render",
+    )
+    .unwrap();
+    std::os::unix::fs::symlink("tri.bin", at("link.json")).unwrap();
+    std::fs::hard_link(at("tri.bin"), at("hard.json")).unwrap();
+    let before: Vec<(String, Vec<u8>)> = listing(dir.path())
+        .into_iter()
+        .map(|name| (name.clone(), std::fs::read(at(&name)).unwrap()))
+        .collect();
+    let cases: [(&[&str], &str); 7] = [
+        (&["tri.gltf", "--stats", "tri.bin"], "tri.bin"),
+        (&["tri.gltf", "--stats", "./sub/../tri.bin"], "tri.bin"),
+        (&["tri.gltf", "--stats", "link.json"], "tri.bin"),
+        (&["tri.gltf", "--stats", "hard.json"], "tri.bin"),
+        (&["m.obj", "--stats", "m.mtl"], "m.mtl"),
+        (&["m.obj", "--stats", "wood.png"], "wood.png"),
+        (&["s.toml", "--stats", "plain.obj"], "plain.obj"),
+    ];
+    for (args, input) in cases {
+        let mut all = args.to_vec();
+        all.extend(["-o", "out.exr"]);
+        let out = render(dir.path(), &all);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {message}");
+        assert_eq!(message.lines().count(), 1, "{args:?}: {message}");
+        assert!(
+            message.contains("would overwrite") && message.contains(input),
+            "{args:?}: {message}"
+        );
+    }
+    // The partial file of `-o t.exr` is t.partial.exr, a texture of s.toml.
+    let out = render(dir.path(), &["s.toml", "-o", "t.exr"]);
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{message}");
+    assert!(message.contains("t.partial.exr"), "{message}");
+    let after: Vec<(String, Vec<u8>)> = listing(dir.path())
+        .into_iter()
+        .map(|name| (name.clone(), std::fs::read(at(&name)).unwrap()))
+        .collect();
+    assert_eq!(before, after, "a refused render changed or created a file");
+    // The model still renders.
+    let out = render(
+        dir.path(),
+        &["tri.gltf", "-o", "ok.exr", "--stats", "ok.json"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+}

@@ -83,7 +83,8 @@ pub struct CtRenderOptions {
     pub width: u32,
     /// Image height in pixels; 0 = the scene's.
     pub height: u32,
-    /// Samples per pixel; 0 = the scene's.
+    /// Samples per pixel; 0 = the scene's, or without one the integrator's default (16 for
+    /// the path tracer, 1 for Whitted and vct).
     pub spp: u32,
     /// Maximum reflection/refraction depth; -1 = the scene's.
     pub max_depth: i32,
@@ -557,7 +558,15 @@ fn render_options(
         )));
     }
     let spp = if c.spp == 0 {
-        scene.settings.spp
+        scene.settings.spp.unwrap_or_else(|| {
+            let choice = integrator_from_code(c.integrator, &scene.settings);
+            let kind = crate::integrator::selection::resolve(
+                choice.unwrap_or(scene.settings.integrator),
+                scene,
+            )
+            .kind;
+            crate::integrator::selection::default_spp(kind)
+        })
     } else {
         c.spp
     };

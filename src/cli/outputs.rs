@@ -78,6 +78,19 @@ fn identity(path: &Path) -> PathBuf {
     absolute
 }
 
+/// Whether `a` and `b` name one file: the same [`identity`], or, for files that exist, the
+/// same device and inode (a hard link, or a path through a bind mount).
+fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    if identity(a) == identity(b) {
+        return true;
+    }
+    match (fs::metadata(a), fs::metadata(b)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
+}
+
 /// Checks that a file can be created at `path` (what `what` calls it in messages): its
 /// nearest existing ancestor directory accepts a new file, and `path` is not a directory.
 fn check_writable(path: &Path, what: &str) -> Result<(), CommandError> {
@@ -181,20 +194,16 @@ impl OutputPlan {
         Ok(plan)
     }
 
-    /// Refuses outputs that would overwrite one of the render's inputs (the scene file, a
-    /// texture): the render would destroy what it reads.
+    /// Refuses outputs that would overwrite one of the render's inputs (every file the
+    /// scene's loaders read: `SceneDescription::input_files`): the render would destroy what
+    /// it reads.
     pub fn check_inputs<'a>(
         &self,
         inputs: impl IntoIterator<Item = &'a Path>,
     ) -> Result<(), CommandError> {
-        let outputs: Vec<(&str, &Path, PathBuf)> = self
-            .named()
-            .into_iter()
-            .map(|(option, path)| (option, path, identity(path)))
-            .collect();
+        let outputs = self.named();
         for input in inputs {
-            let input_identity = identity(input);
-            if let Some((option, path, _)) = outputs.iter().find(|o| o.2 == input_identity) {
+            if let Some((option, path)) = outputs.iter().find(|(_, out)| same_file(out, input)) {
                 return Err(CommandError::bad_input(format!(
                     "{}: {option} would overwrite {}, an input of the render",
                     path.display(),
@@ -225,7 +234,7 @@ impl OutputPlan {
         let named = self.named();
         for (i, (first_option, first)) in named.iter().enumerate() {
             for (second_option, second) in &named[i + 1..] {
-                if identity(first) == identity(second) {
+                if same_file(first, second) {
                     return Err(CommandError::bad_input(format!(
                         "{}: {first_option} and {second_option} name the same file ({})",
                         first.display(),
@@ -334,6 +343,11 @@ mod tests {
         assert!(plan
             .check_inputs([dir.path().join("other.png").as_path()])
             .is_ok());
+        // The same file through a hard link.
+        let linked = dir.path().join("linked.png");
+        std::fs::hard_link(&texture, &linked).unwrap();
+        let message = plan.check_inputs([linked.as_path()]).unwrap_err().message;
+        assert!(message.contains("linked.png"), "{message}");
     }
 
     #[test]

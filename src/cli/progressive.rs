@@ -227,11 +227,7 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
         load: started.elapsed().as_secs_f64(),
         ..PhaseSeconds::default()
     };
-    let texture_files = scene.textures.iter().filter_map(|t| match &t.source {
-        crate::scene::TextureSource::File(path) => Some(path.as_path()),
-        crate::scene::TextureSource::Encoded { .. } => None,
-    });
-    outputs.check_inputs(args.scene.as_deref().into_iter().chain(texture_files))?;
+    outputs.check_inputs(scene.input_files.iter().map(std::path::PathBuf::as_path))?;
     let mut options = render_cmd::options(args, &scene)?;
     options.spp = args.spp.unwrap_or(UNBOUNDED_SPP);
     let bound = options.spp;

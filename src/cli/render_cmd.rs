@@ -322,6 +322,28 @@ pub fn load(args: &RenderArgs) -> Result<SceneDescription, CommandError> {
     Ok(scene)
 }
 
+/// Samples per pixel: `--spp`, else the scene's `[render] spp`, else the default of the
+/// integrator the scene resolves to, with a note for the summary line when that default is
+/// more than one sample.
+pub(crate) fn samples_per_pixel(
+    args: &RenderArgs,
+    scene: &SceneDescription,
+) -> (u32, Option<String>) {
+    if let Some(spp) = args.spp.or(scene.settings.spp) {
+        return (spp, None);
+    }
+    let kind = selection::resolve(scene.settings.integrator, scene).kind;
+    let spp = selection::default_spp(kind);
+    let note = (spp > 1).then(|| {
+        format!(
+            "{spp} spp: the {} integrator's default, as neither --spp nor [render] spp \
+             gave a count",
+            kind.name()
+        )
+    });
+    (spp, note)
+}
+
 /// Render options from the command line over the scene's settings.
 pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOptions, CommandError> {
     let label = &scene.source;
@@ -337,7 +359,7 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
             "{label}: image size {width}x{height} is larger than 65536 on a side"
         )));
     }
-    let spp = args.spp.unwrap_or(scene.settings.spp);
+    let (spp, _) = samples_per_pixel(args, scene);
     if spp == 0 {
         return Err(CommandError::bad_input(format!(
             "{label}: --spp must be at least 1"
@@ -419,12 +441,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         load: started.elapsed().as_secs_f64(),
         ..PhaseSeconds::default()
     };
-    let texture_files = scene.textures.iter().filter_map(|t| match &t.source {
-        crate::scene::TextureSource::File(path) => Some(path.as_path()),
-        crate::scene::TextureSource::Encoded { .. } => None,
-    });
-    outputs.check_inputs(args.scene.as_deref().into_iter().chain(texture_files))?;
+    outputs.check_inputs(scene.input_files.iter().map(PathBuf::as_path))?;
     let options = options(args, &scene)?;
+    scene.notes.extend(samples_per_pixel(args, &scene).1);
     let tonemap = tonemap(args, &scene)?;
     let exposure = scene.settings.exposure;
 

@@ -48,6 +48,21 @@ impl IntegratorKind {
     }
 }
 
+/// Samples per pixel the path tracer takes when neither the caller nor the scene gives a
+/// count: pbrt-v4's default. One path per pixel is salt-and-pepper noise on any scene that
+/// needs the path tracer; 16 gives a usable first image.
+pub const PATH_DEFAULT_SPP: u32 = 16;
+
+/// Samples per pixel for `kind` when neither the caller nor the scene gives a count. Whitted
+/// and the voxel cone tracer are deterministic apart from antialiasing, and their footprint
+/// filtering gives a clean image at one sample.
+pub fn default_spp(kind: IntegratorKind) -> u32 {
+    match kind {
+        IntegratorKind::Path => PATH_DEFAULT_SPP,
+        IntegratorKind::Whitted | IntegratorKind::Vct => 1,
+    }
+}
+
 /// What a scene or the command line asks for: one integrator, or the scene's choice.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum IntegratorChoice {
@@ -107,6 +122,43 @@ pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution
         };
     }
     let mut reasons = Vec::new();
+    if let Some(emitters) = emissive_geometry(scene) {
+        reasons.push(format!("emissive geometry ({emitters})"));
+    }
+    // Only materials some geometry uses: a rough material nothing wears changes no image.
+    let used = scene.worn_materials();
+    let rough: Vec<&str> = scene
+        .materials
+        .iter()
+        .zip(&used)
+        .filter(|(m, &worn)| worn && m.roughness.is_some())
+        .map(|(m, _)| m.name.as_str())
+        .collect();
+    if !rough.is_empty() {
+        reasons.push(format!(
+            "rough or glossy materials ({} with roughness)",
+            rough.len()
+        ));
+    }
+    if scene.settings.gi {
+        reasons.push("[render] gi = true".to_string());
+    }
+    if reasons.is_empty() {
+        Resolution {
+            kind: IntegratorKind::Whitted,
+            reason: "no emissive geometry, rough materials or gi".to_string(),
+        }
+    } else {
+        Resolution {
+            kind: IntegratorKind::Path,
+            reason: reasons.join("; "),
+        }
+    }
+}
+
+/// The scene's emissive geometry counted by kind ("12 triangles, 1 sphere"), or `None`
+/// when nothing emits.
+fn emissive_geometry(scene: &SceneDescription) -> Option<String> {
     let emissive = |material: usize| {
         scene
             .materials
@@ -141,47 +193,60 @@ pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution
     ]
     .iter()
     .filter(|(n, _)| *n > 0)
-    .map(|(n, what)| format!("{n} {what}{}", if *n == 1 { "" } else { "s" }))
+    .map(|(n, what)| {
+        let plural = match (*n, *what) {
+            (1, _) => "",
+            (_, "patch") => "es",
+            _ => "s",
+        };
+        format!("{n} {what}{plural}")
+    })
     .collect::<Vec<_>>();
-    if !counted.is_empty() {
-        reasons.push(format!("emissive geometry ({})", counted.join(", ")));
-    }
-    // Only materials some geometry uses: a rough material nothing wears changes no image.
-    let used = scene.worn_materials();
-    let rough: Vec<&str> = scene
-        .materials
-        .iter()
-        .zip(&used)
-        .filter(|(m, &worn)| worn && m.roughness.is_some())
-        .map(|(m, _)| m.name.as_str())
-        .collect();
-    if !rough.is_empty() {
-        reasons.push(format!(
-            "rough or glossy materials ({} with roughness)",
-            rough.len()
-        ));
-    }
-    if scene.settings.gi {
-        reasons.push("[render] gi = true".to_string());
-    }
-    if reasons.is_empty() {
-        Resolution {
-            kind: IntegratorKind::Whitted,
-            reason: "no emissive geometry, rough materials or gi".to_string(),
+    (!counted.is_empty()).then(|| counted.join(", "))
+}
+
+/// The note for a scene whose emissive geometry `kind` does not use as light (Whitted, which
+/// samples punctual lights and the environment only; the voxel cone tracer, which gathers
+/// emitters only through its voxels): stronger when nothing else lights the scene, whose
+/// image is then black apart from the emitters themselves.
+fn unlit_emitters_note(kind: IntegratorKind, scene: &SceneDescription) -> Option<String> {
+    let emitters = emissive_geometry(scene)?;
+    let environment_lights = match &scene.environment {
+        crate::scene::Environment::Color(c) => c.max_element() > 0.0,
+        crate::scene::Environment::LatLong { intensity, .. } => *intensity > 0.0,
+    };
+    let only_emitters = scene.lights.is_empty() && !environment_lights;
+    let how = match kind {
+        IntegratorKind::Whitted => {
+            "Whitted's recursion lights surfaces by point, spot and directional lights and the \
+             environment only; emitters are seen, and seen in mirrors, but light nothing"
         }
+        IntegratorKind::Vct => {
+            "the voxel cone tracer gathers emitters' light only through its voxels, and only a \
+             few percent of it reaches other surfaces (docs/vct.md)"
+        }
+        IntegratorKind::Path => return None,
+    };
+    let name = kind.name();
+    Some(if only_emitters {
+        format!(
+            "{name}: the scene is lit only by emissive geometry ({emitters}), so it renders \
+             nearly black: {how}; --integrator path renders its light"
+        )
     } else {
-        Resolution {
-            kind: IntegratorKind::Path,
-            reason: reasons.join("; "),
-        }
-    }
+        format!(
+            "{name}: emissive geometry ({emitters}) does not light the scene: {how}; \
+             --integrator path renders its light"
+        )
+    })
 }
 
 /// What the integrator of `kind` leaves out of `scene`, one note each (the summary line and
-/// `--stats` print them): today, fog under the voxel cone tracer, which renders as if the
+/// `--stats` print them): emissive geometry it does not use as light
+/// ([`unlit_emitters_note`]), and fog under the voxel cone tracer, which renders as if the
 /// fog were not there (Whitted blends it, the path tracer simulates it as a medium).
 pub fn unsupported_effects(kind: IntegratorKind, scene: &SceneDescription) -> Vec<String> {
-    let mut notes = Vec::new();
+    let mut notes: Vec<String> = unlit_emitters_note(kind, scene).into_iter().collect();
     if kind == IntegratorKind::Vct && !scene.fog.is_empty() {
         notes.push(format!(
             "{}: fog is not simulated by this integrator (rendered without it; \

@@ -39,12 +39,14 @@ pub struct RenderOptions {
 
 impl RenderOptions {
     /// A scene's own settings (size, samples, depth, throughput cut-off, Fresnel mode, seed),
-    /// with cone footprints, the default filter, no AOVs, and nothing counted or forced.
+    /// with cone footprints, the default filter, no AOVs, and nothing counted or forced. A
+    /// scene that gives no sample count gets one sample; renders that know their integrator
+    /// use its default instead (`crate::integrator::selection::default_spp`).
     pub fn from_settings(settings: &crate::scene::RenderSettings) -> RenderOptions {
         RenderOptions {
             width: settings.width,
             height: settings.height,
-            spp: settings.spp,
+            spp: settings.spp.unwrap_or(1),
             max_depth: settings.max_depth,
             min_throughput: settings.min_throughput,
             lod: LodStrategy::Cone,

@@ -40,6 +40,10 @@ pub struct SceneDescription {
     /// Fog volumes (`[[fog]]`), with their exact optical depth in `crate::medium`.
     pub fog: Vec<crate::medium::FogVolume>,
     pub settings: RenderSettings,
+    /// Every disk file the loaders read or referenced: the scene file, meshes, MTL
+    /// libraries, glTF buffers and images, textures, patch files, environment maps and fog
+    /// bounds. A render refuses outputs that name any of them.
+    pub input_files: Vec<std::path::PathBuf>,
     /// Things the loader decided on the user's behalf ("camera placed to frame the bounds",
     /// "no lights: default light and environment added"); printed in the summary line.
     pub notes: Vec<String>,
@@ -291,7 +295,9 @@ pub enum FresnelMode {
 pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
-    pub spp: u32,
+    /// `[render] spp`; `None` leaves the count to the integrator
+    /// (`crate::integrator::selection::default_spp`).
+    pub spp: Option<u32>,
     pub max_depth: u32,
     /// A path whose throughput (max RGB component) falls below this stops (seed 001).
     pub min_throughput: f32,
@@ -327,7 +333,7 @@ impl Default for RenderSettings {
         RenderSettings {
             width: 640,
             height: 360,
-            spp: 1,
+            spp: None,
             max_depth: 8,
             min_throughput: 1e-3,
             tonemap: ToneMap::Clamp,

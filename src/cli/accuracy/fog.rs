@@ -172,7 +172,7 @@ fn measure(
     let textures = render::prepared::decode_textures(&setup.scene)
         .map_err(|e| CommandError::bad_input(e.to_string()))?;
     let options = RenderOptions {
-        spp: setup.scene.settings.spp.max(1),
+        spp: setup.scene.settings.spp.unwrap_or(1).max(1),
         ..setup.base.clone()
     };
     let display = |result: &RenderResult| {

@@ -2,6 +2,7 @@
 //! compiled into the binary so it renders from any working directory.
 
 use super::files::Files;
+use super::framing::EmitterRule;
 use super::toml_format;
 use crate::scene::{Environment, Material, SceneDescription, Sphere};
 
@@ -46,7 +47,9 @@ static EMBEDDED: &[(&str, &[u8])] = &[
 /// a single grey sphere is returned with the error in `notes` rather than panicking.
 pub fn default_scene() -> SceneDescription {
     let files = Files::embedded("assets/scenes", EMBEDDED);
-    match toml_format::parse(SCENE_TEXT, &files, DEFAULT_SCENE_LABEL).and_then(super::finish) {
+    match toml_format::parse(SCENE_TEXT, &files, DEFAULT_SCENE_LABEL)
+        .and_then(|scene| super::finish(scene, EmitterRule::AnyEmitter))
+    {
         Ok(scene) => scene,
         Err(e) => {
             let mut scene = SceneDescription {
@@ -63,7 +66,7 @@ pub fn default_scene() -> SceneDescription {
                 )],
                 ..Default::default()
             };
-            super::framing::add_missing_camera_and_lights(&mut scene);
+            super::framing::add_missing_camera_and_lights(&mut scene, EmitterRule::AnyEmitter);
             scene
         }
     }

@@ -4,9 +4,12 @@
 //! Loaders never touch `std::fs` directly; they ask a [`Files`] for a path relative to the
 //! file being loaded. That lets the built-in default scene resolve `../models/box.obj` and
 //! `../textures/checker.png` from `include_bytes!` data exactly as the asset files would.
+//!
+//! Every disk file a loader reads or references is recorded ([`Files::read_so_far`]), so
+//! that a render can refuse an output that would overwrite any of them.
 
 use std::path::{Component, Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use super::error::SceneError;
 use crate::scene::TextureSource;
@@ -17,6 +20,8 @@ pub(crate) struct Files {
     base_dir: PathBuf,
     /// `None` reads the file system; `Some` looks paths up in embedded (path, bytes) pairs.
     embedded: Option<&'static [(&'static str, &'static [u8])]>,
+    /// The disk files read or referenced so far, shared by every `with_base` copy.
+    touched: Arc<Mutex<Vec<PathBuf>>>,
 }
 
 impl Files {
@@ -25,6 +30,7 @@ impl Files {
         Files {
             base_dir: base_dir.to_path_buf(),
             embedded: None,
+            touched: Arc::default(),
         }
     }
 
@@ -36,6 +42,7 @@ impl Files {
         Files {
             base_dir: PathBuf::from(base_dir),
             embedded: Some(table),
+            touched: Arc::default(),
         }
     }
 
@@ -44,6 +51,26 @@ impl Files {
         Files {
             base_dir: dir.to_path_buf(),
             embedded: self.embedded,
+            touched: self.touched.clone(),
+        }
+    }
+
+    /// The disk files read or referenced through this source and its `with_base` copies, in
+    /// first-touch order, each once (embedded files are not on disk and are not listed).
+    pub(crate) fn read_so_far(&self) -> Vec<PathBuf> {
+        self.touched
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .clone()
+    }
+
+    fn record(&self, path: &Path) {
+        let mut touched = self
+            .touched
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if !touched.iter().any(|p| p == path) {
+            touched.push(path.to_path_buf());
         }
     }
 
@@ -59,6 +86,7 @@ impl Files {
                 SceneError::unreadable(path.display(), "not among the built-in files")
             }),
             None => {
+                self.record(path);
                 if path.is_dir() {
                     return Err(SceneError::unreadable(path.display(), "is a directory"));
                 }
@@ -82,6 +110,7 @@ impl Files {
                 )),
             },
             None => {
+                self.record(path);
                 if !path.is_file() {
                     let reason = if path.exists() {
                         "not a regular file"
@@ -170,5 +199,35 @@ mod tests {
             err.contains("t.png") && err.contains("no such file"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn every_disk_file_read_or_referenced_is_recorded_once() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a.obj"), b"v 0 0 0\n").unwrap();
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        std::fs::write(dir.path().join("sub/t.png"), b"png").unwrap();
+        let files = Files::disk(dir.path());
+        files.read(&files.resolve("a.obj")).unwrap();
+        files.read(&files.resolve("a.obj")).unwrap();
+        let nested = files.with_base(&dir.path().join("sub"));
+        nested.texture_source(&nested.resolve("t.png")).unwrap();
+        // A file that could not be read is recorded too: an output there would change what
+        // the next render reads.
+        assert!(nested.read(&nested.resolve("missing.mtl")).is_err());
+        assert_eq!(
+            files.read_so_far(),
+            [
+                dir.path().join("a.obj"),
+                dir.path().join("sub/t.png"),
+                dir.path().join("sub/missing.mtl")
+            ]
+        );
+        // Built-in files are not on disk.
+        let embedded = Files::embedded("assets/scenes", TABLE);
+        embedded
+            .read(&embedded.resolve("../models/box.obj"))
+            .unwrap();
+        assert!(embedded.read_so_far().is_empty());
     }
 }

@@ -46,26 +46,60 @@ pub fn frame_camera(scene: &SceneDescription, aspect: f32) -> CameraDesc {
     }
 }
 
+/// Which emissive geometry counts as the scene's lighting when deciding whether it needs the
+/// default key light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum EmitterRule {
+    /// A TOML scene: its author wrote every emission, so any emitter lights it.
+    AnyEmitter,
+    /// A model file (OBJ, glTF) rendered as it is: only a lamp lights it, an emitter whose
+    /// radiance exceeds [`LAMP_RADIANCE`] in some channel. Models mark glowing surfaces
+    /// (labels, screens, indicators) emissive at radiance 1 or less (glTF's
+    /// `emissiveFactor` cannot exceed 1 without `KHR_materials_emissive_strength`) and
+    /// expect the viewer to light them.
+    LampsOnly,
+}
+
+/// The radiance above which a model's emitter is a lamp: a white diffuse surface under the
+/// default key light has radiance 1, so a dimmer emitter glows without lighting its
+/// surroundings noticeably.
+pub const LAMP_RADIANCE: f32 = 1.0;
+
 /// Whether anything lights the scene besides punctual lights: a non-black environment, or
-/// geometry (a mesh, sphere or patch) whose material emits.
-fn lit_without_lights(scene: &SceneDescription) -> bool {
+/// geometry (a mesh, sphere or patch) whose material emits, as `rule` counts emitters.
+fn lit_without_lights(scene: &SceneDescription, rule: EmitterRule) -> bool {
     let environment = match &scene.environment {
         Environment::Color(c) => c.max_element() > 0.0,
         Environment::LatLong { intensity, .. } => *intensity > 0.0,
+    };
+    let threshold = match rule {
+        EmitterRule::AnyEmitter => 0.0,
+        EmitterRule::LampsOnly => LAMP_RADIANCE,
     };
     let emits = |material: usize| {
         scene
             .materials
             .get(material)
-            .is_some_and(|m| m.emission.max_element() > 0.0)
+            .is_some_and(|m| m.emission.max_element() > threshold)
     };
     environment || scene.geometry_materials().any(emits)
 }
 
+/// Whether some geometry emits at all (any radiance above 0).
+fn has_emitters(scene: &SceneDescription) -> bool {
+    scene.geometry_materials().any(|material| {
+        scene
+            .materials
+            .get(material)
+            .is_some_and(|m| m.emission.max_element() > 0.0)
+    })
+}
+
 /// Adds a framing camera when there is none and a key light (plus, when the environment is
 /// black, the grey-blue environment) when nothing lights the scene: no punctual light, no
-/// emissive geometry and a black environment. Notes each addition in `scene.notes`.
-pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription) {
+/// emissive geometry that `rule` counts as light, and a black environment. Notes each
+/// addition in `scene.notes`.
+pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription, rule: EmitterRule) {
     if scene.camera.is_none() {
         let aspect = scene.settings.width as f32 / scene.settings.height.max(1) as f32;
         scene.camera = Some(frame_camera(scene, aspect));
@@ -73,7 +107,8 @@ pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription) {
             .notes
             .push("no camera: placed one to frame the bounds".into());
     }
-    if scene.lights.is_empty() && !lit_without_lights(scene) {
+    if scene.lights.is_empty() && !lit_without_lights(scene, rule) {
+        let glowing = has_emitters(scene);
         let (center, radius) = bounding_sphere(scene);
         let (eye, up) = scene
             .camera
@@ -94,9 +129,14 @@ pub(crate) fn add_missing_camera_and_lights(scene: &mut SceneDescription) {
         if scene.environment == Environment::Color(Vec3::ZERO) {
             scene.environment = Environment::Color(DEFAULT_ENVIRONMENT);
         }
-        scene
-            .notes
-            .push("no lights: added a default key light and environment".into());
+        scene.notes.push(if glowing {
+            format!(
+                "no lights (its emitters, of radiance {LAMP_RADIANCE} or less, glow but are not \
+                 lamps): added a default key light and environment"
+            )
+        } else {
+            "no lights: added a default key light and environment".into()
+        });
     }
 }
 
@@ -148,7 +188,7 @@ mod tests {
     #[test]
     fn missing_camera_and_lights_are_added_with_notes() {
         let mut scene = one_sphere(Vec3::ZERO, 1.0);
-        add_missing_camera_and_lights(&mut scene);
+        add_missing_camera_and_lights(&mut scene, EmitterRule::AnyEmitter);
         assert!(scene.camera.is_some());
         assert_eq!(scene.lights.len(), 1);
         assert_eq!(scene.environment, Environment::Color(DEFAULT_ENVIRONMENT));
@@ -158,7 +198,7 @@ mod tests {
         };
         assert!(position.y > scene.camera.as_ref().unwrap().eye.y);
         // Nothing more is added the second time.
-        add_missing_camera_and_lights(&mut scene);
+        add_missing_camera_and_lights(&mut scene, EmitterRule::AnyEmitter);
         assert_eq!(scene.notes.len(), 2);
     }
 
@@ -167,13 +207,13 @@ mod tests {
         // Lit by an emissive sphere alone: no key light, no environment added.
         let mut scene = one_sphere(Vec3::ZERO, 1.0);
         scene.materials[0].emission = Vec3::splat(2.0);
-        add_missing_camera_and_lights(&mut scene);
+        add_missing_camera_and_lights(&mut scene, EmitterRule::AnyEmitter);
         assert!(scene.lights.is_empty());
         assert_eq!(scene.environment, Environment::Color(Vec3::ZERO));
         // Lit by the environment alone.
         let mut scene = one_sphere(Vec3::ZERO, 1.0);
         scene.environment = Environment::Color(Vec3::splat(0.5));
-        add_missing_camera_and_lights(&mut scene);
+        add_missing_camera_and_lights(&mut scene, EmitterRule::AnyEmitter);
         assert!(scene.lights.is_empty());
         // An emissive material no geometry uses lights nothing: the key light comes.
         let mut scene = one_sphere(Vec3::ZERO, 1.0);
@@ -181,7 +221,7 @@ mod tests {
             emission: Vec3::ONE,
             ..Material::default()
         });
-        add_missing_camera_and_lights(&mut scene);
+        add_missing_camera_and_lights(&mut scene, EmitterRule::AnyEmitter);
         assert_eq!(scene.lights.len(), 1);
     }
 
@@ -212,9 +252,45 @@ mod tests {
             ..Default::default()
         };
         for mut scene in [marched, exact] {
-            add_missing_camera_and_lights(&mut scene);
+            add_missing_camera_and_lights(&mut scene, EmitterRule::AnyEmitter);
             assert!(scene.lights.is_empty(), "{:?}", scene.notes);
             assert_eq!(scene.environment, Environment::Color(Vec3::ZERO));
         }
+    }
+
+    #[test]
+    fn a_model_s_glowing_surfaces_do_not_replace_the_key_light_but_its_lamps_do() {
+        let glowing = |radiance: f32| {
+            let mut scene = one_sphere(Vec3::ZERO, 1.0);
+            scene.materials.push(Material {
+                emission: Vec3::new(radiance, 0.5 * radiance, 0.0),
+                ..Material::default()
+            });
+            scene.spheres.push(Sphere {
+                center: Vec3::X * 3.0,
+                radius: 0.1,
+                material: 1,
+            });
+            scene
+        };
+        // A label of radiance 1 in a model file: the key light and environment come, and the
+        // note says why its emitters did not count.
+        let mut label = glowing(1.0);
+        add_missing_camera_and_lights(&mut label, EmitterRule::LampsOnly);
+        assert_eq!(label.lights.len(), 1);
+        assert_eq!(label.environment, Environment::Color(DEFAULT_ENVIRONMENT));
+        assert!(
+            label.notes.iter().any(|n| n.contains("glow")),
+            "{:?}",
+            label.notes
+        );
+        // A lamp brighter than 1 lights the model alone.
+        let mut lamp = glowing(1.5);
+        add_missing_camera_and_lights(&mut lamp, EmitterRule::LampsOnly);
+        assert!(lamp.lights.is_empty(), "{:?}", lamp.notes);
+        // A TOML scene's emitters light it at any radiance.
+        let mut authored = glowing(0.25);
+        add_missing_camera_and_lights(&mut authored, EmitterRule::AnyEmitter);
+        assert!(authored.lights.is_empty(), "{:?}", authored.notes);
     }
 }

@@ -44,11 +44,12 @@ use std::path::Path;
 
 pub use default_scene::{default_scene, DEFAULT_SCENE_LABEL};
 pub use error::{one_line, SceneError};
-pub use framing::{frame_camera, FRAMING_FOV_DEGREES};
+pub use framing::{frame_camera, FRAMING_FOV_DEGREES, LAMP_RADIANCE};
 pub use validate::validate;
 
 use crate::scene::SceneDescription;
 use files::Files;
+use framing::EmitterRule;
 
 /// The file formats a scene can be loaded from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,7 +83,7 @@ pub fn load_scene(path: &Path) -> Result<SceneDescription, SceneError> {
     let base_dir = path.parent().unwrap_or(Path::new(""));
     let files = Files::disk(base_dir);
     let format = format_of(path)?;
-    let scene = match format {
+    let mut scene = match format {
         Format::Toml => {
             let bytes = files.read(path)?;
             let text = String::from_utf8(bytes)
@@ -98,7 +99,12 @@ pub fn load_scene(path: &Path) -> Result<SceneDescription, SceneError> {
             scene
         }
     };
-    finish(scene)
+    scene.input_files = files.read_so_far();
+    let rule = match format {
+        Format::Toml => EmitterRule::AnyEmitter,
+        Format::Obj | Format::Gltf => EmitterRule::LampsOnly,
+    };
+    finish(scene, rule)
 }
 
 /// Parses TOML scene text; relative file names resolve against `base_dir`, and messages name
@@ -108,11 +114,10 @@ pub fn load_toml_str(
     base_dir: &Path,
     source_label: &str,
 ) -> Result<SceneDescription, SceneError> {
-    finish(toml_format::parse(
-        text,
-        &Files::disk(base_dir),
-        source_label,
-    )?)
+    let files = Files::disk(base_dir);
+    let mut scene = toml_format::parse(text, &files, source_label)?;
+    scene.input_files = files.read_so_far();
+    finish(scene, EmitterRule::AnyEmitter)
 }
 
 /// An OBJ or glTF file as a scene part (world-space meshes, materials, textures, lights,
@@ -138,9 +143,9 @@ fn load_bounds_mesh(files: &Files, path: &Path) -> Result<SceneDescription, Scen
     }
 }
 
-/// Adds a missing camera and lights, then validates.
-fn finish(mut scene: SceneDescription) -> Result<SceneDescription, SceneError> {
-    framing::add_missing_camera_and_lights(&mut scene);
+/// Adds a missing camera and lights (counting emitters by `rule`), then validates.
+fn finish(mut scene: SceneDescription, rule: EmitterRule) -> Result<SceneDescription, SceneError> {
+    framing::add_missing_camera_and_lights(&mut scene, rule);
     validate(&scene)?;
     Ok(scene)
 }

@@ -724,10 +724,15 @@ fn texture_transform(m: &RawMaterial) -> Affine2 {
 
 fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> {
     let mut s = RenderSettings::default();
+    if let Some(v) = &r.spp {
+        if *v.get_ref() == 0 {
+            return Err(loc.at(v, "render.spp must be at least 1"));
+        }
+        s.spp = Some(*v.get_ref());
+    }
     for (slot, value, key) in [
         (&mut s.width, &r.width, "width"),
         (&mut s.height, &r.height, "height"),
-        (&mut s.spp, &r.spp, "spp"),
     ] {
         if let Some(v) = value {
             if *v.get_ref() == 0 {
@@ -1054,7 +1059,7 @@ material = "glass"
         let s = parse_here(text).unwrap();
         assert_eq!(
             (s.settings.width, s.settings.height, s.settings.spp),
-            (320, 200, 4)
+            (320, 200, Some(4))
         );
         assert_eq!(s.settings.tonemap, ToneMap::Reinhard);
         assert_eq!(s.settings.fresnel, FresnelMode::Schlick);
