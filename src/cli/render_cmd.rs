@@ -100,6 +100,12 @@ pub struct RenderArgs {
     /// Extra EXR layers (Z, N, albedo and uv are written unless `--aov none`).
     #[arg(long, value_enum)]
     pub aov: Vec<AovName>,
+    /// Clamp every camera sample so that no colour component exceeds VALUE (a finite
+    /// number above 0), scaling the sample as a whole (its hue kept), as pbrt-v4's
+    /// `maxcomponentvalue` does: removes fireflies, and darkens what it clamps (biased)
+    /// [default: the scene's `[render] clamp`, else no clamp].
+    #[arg(long, value_name = "VALUE", allow_negative_numbers = true)]
+    pub clamp: Option<f64>,
     /// Fresnel equations at dielectric boundaries (default: the scene's, else exact).
     #[arg(long, value_parser = ["exact", "schlick"])]
     pub fresnel: Option<String>,
@@ -367,6 +373,13 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
         ));
     }
     let extra = |name: AovName| args.aov.contains(&name) || args.aov.contains(&AovName::All);
+    let sample_clamp = match args.clamp {
+        Some(value) => Some(
+            render::context::parse_sample_clamp(value)
+                .map_err(|problem| CommandError::bad_input(format!("--clamp {problem}")))?,
+        ),
+        None => scene.settings.sample_clamp,
+    };
     Ok(RenderOptions {
         width,
         height,
@@ -388,6 +401,7 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
         count_texture_tiles: args.stats.is_some(),
         all_effects: args.all_effects,
         seed: args.seed.unwrap_or(scene.settings.seed),
+        sample_clamp,
     })
 }
 

@@ -169,6 +169,12 @@ impl RenderSignature {
         option("aov-footprint", flag(options.aovs.texture_footprint));
         option("aov-lod", flag(options.aovs.lod));
         option("all-effects", flag(options.all_effects));
+        option(
+            "clamp",
+            options
+                .sample_clamp
+                .map_or_else(|| "off".to_string(), |value| value.to_string()),
+        );
 
         let mut input = |name: &str, digest: &ContentDigest| {
             items.push((format!("{INPUT_PREFIX}{name}"), digest.hex()));
