@@ -267,8 +267,7 @@ fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
 
 /// An interrupted `--region` render (edges off the tile grid) resumes as a whole one does:
 /// the partial file holds the region, `--resume` with another region is refused, and the
-/// resumed EXR equals an uninterrupted render of the region, bit for bit. (`--resume` was
-/// refused for every region.)
+/// resumed EXR equals an uninterrupted render of the region, bit for bit.
 #[test]
 fn an_interrupted_region_render_resumes_to_the_uninterrupted_region() {
     let dir = temp_dir();

@@ -1579,8 +1579,8 @@ fn brightest(film: &conetrace::film::Film) -> f32 {
 /// `--clamp VALUE` caps every camera sample's largest component at VALUE, for every
 /// integrator; at one sample per pixel a pixel is its sample, so no pixel exceeds VALUE, and
 /// the lamp seen directly keeps its hue (400 : 300 : 100 scaled to 2 : 1.5 : 0.5). The
-/// header records the clamp (`conetrace.option.clamp`), "off" without one. (There was no
-/// clamp: the same renders have pixels of hundreds.)
+/// header records the clamp (`conetrace.option.clamp`), "off" without one; unclamped, the
+/// same renders have pixels of hundreds.
 #[test]
 fn a_sample_clamp_caps_every_pixel_of_every_integrator() {
     let dir = temp_dir();

@@ -165,7 +165,7 @@ fn region_parts_merge_into_the_single_render() {
 /// cover it and keeps its pixels, so every channel equals the whole render's there, bit for
 /// bit. The region's EXR has the region as its data window and the whole image as its
 /// display window; `--png` writes the region alone, sized to it, with the whole render's
-/// PNG pixels. (Edges off the 16-pixel tile grid were refused, and so was `--png`.)
+/// PNG pixels.
 #[test]
 fn a_region_off_the_tile_grid_holds_the_whole_render_s_pixels() {
     let dir = temp_dir();
