@@ -166,8 +166,9 @@ impl TileImage {
 /// One camera sample's radiance with no component above `max_component`: a sample whose
 /// largest component exceeds it is scaled down to it as a whole, so its hue is kept
 /// (pbrt-v4's film clamp, `maxcomponentvalue`: Pharr, Jakob and Humphreys 2023, Physically
-/// Based Rendering, 4th ed., section 5.4.5). An infinite component becomes `max_component`
-/// and the finite ones 0, the limit of that scaling; NaN is left to the caller's rule.
+/// Based Rendering, 4th ed., section 5.4, its RGB film). An infinite component becomes
+/// `max_component` and the finite ones 0, the limit of that scaling; NaN is left to the
+/// caller's rule.
 pub fn clamp_sample(color: [f32; 3], max_component: f32) -> [f32; 3] {
     let largest = color.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     if largest <= max_component {
