@@ -235,11 +235,16 @@ typedef struct CtRenderOptions {
   // estimated above it fails with `CT_ERROR_OUT_OF_MEMORY` before allocating anything
   // large. 0 = the memory the system reports available (no limit where it reports none).
   uint64_t max_memory;
-  // Integrator (`CT_INTEGRATOR_*`). Appended last: a caller whose `struct_size` ends before
-  // it gets `CT_INTEGRATOR_SCENE`. The struct ends in 4 bytes of padding after it; a field
-  // appended later must start after that padding (at an 8-byte boundary), so that every
-  // version of this header has its own `struct_size`.
+  // Integrator (`CT_INTEGRATOR_*`). A caller whose `struct_size` ends before it gets
+  // `CT_INTEGRATOR_SCENE`. 4 bytes of padding follow it, so that `clamp` starts at an
+  // 8-byte boundary and every version of this header has its own `struct_size`.
   uint32_t integrator;
+  // The largest colour component a camera sample keeps: a brighter sample is scaled down
+  // to it, its hue kept (`--clamp` on the command line; it removes fireflies and darkens
+  // what it clamps). 0 = the scene's `[render] clamp` (none unless the scene sets one);
+  // otherwise a finite number above 0. Appended last: a caller whose `struct_size` ends
+  // before it gets 0. A field appended later starts after it, at an 8-byte boundary.
+  double clamp;
 } CtRenderOptions;
 
 // A loaded scene. `id == 0` is the null handle.

@@ -99,6 +99,7 @@ fn prepare(scene: &Path, size: u32) -> RenderContext {
         count_texture_tiles: false,
         all_effects: false,
         seed: 0,
+        sample_clamp: None,
     };
     conetrace::render::prepare(Arc::new(description), options).expect("scene prepares")
 }

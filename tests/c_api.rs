@@ -482,7 +482,7 @@ fn scenes_that_do_not_parse_give_a_scene_error() {
 fn options_with_a_wrong_size_or_bad_values_are_rejected() {
     let scene = default_scene();
     let mut options = small_options();
-    // Neither today's size nor an earlier header's (which ends before `integrator`).
+    // Neither today's size nor an earlier header's (which end before `integrator` or `clamp`).
     options.struct_size -= 4;
     let mut image = CtImage::default();
     let status = unsafe { ct_render(scene, &options, &mut image) };
@@ -1340,6 +1340,54 @@ fn the_integrator_is_chosen_through_the_options() {
     earlier.threads = 2;
     earlier.integrator = CT_INTEGRATOR_PATH; // past its struct_size: ignored
     assert_eq!(mean_red(scene, &earlier), whitted);
+    assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
+}
+
+/// The largest red value of `scene` rendered with `options`.
+fn max_red(scene: CtScene, options: &CtRenderOptions) -> f32 {
+    let mut image = CtImage::default();
+    let status = unsafe { ct_render(scene, options, &mut image) };
+    assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
+    let red = image_plane(image, "R");
+    assert_eq!(ct_image_free(image), CtStatus::CT_OK);
+    red.into_iter().fold(0.0, f32::max)
+}
+
+/// `CtRenderOptions.clamp` caps every camera sample's largest component as `--clamp` does
+/// (0: the scene's, here none); values that are not a finite number above 0 are refused; a
+/// caller built against the header before `clamp` (its `struct_size` ends at the field)
+/// renders unclamped.
+#[test]
+fn the_sample_clamp_is_set_through_the_options() {
+    let dir = common::temp_dir();
+    let scene = emissive_quad_scene(dir.path());
+    let mut options = small_options();
+    options.integrator = CT_INTEGRATOR_PATH;
+    assert_eq!(options.clamp, 0.0);
+    let free = max_red(scene, &options);
+    options.clamp = 0.05;
+    let clamped = max_red(scene, &options);
+    eprintln!("largest red: {free} unclamped, {clamped} with clamp 0.05");
+    assert!(free > 0.1, "unclamped {free}");
+    assert!(clamped <= 0.05, "clamp 0.05 gave {clamped}");
+
+    for bad in [-1.0, f64::NAN, f64::INFINITY] {
+        options.clamp = bad;
+        let mut image = CtImage::default();
+        assert_eq!(
+            unsafe { ct_render(scene, &options, &mut image) },
+            CtStatus::CT_ERROR_INVALID_ARGUMENT,
+            "clamp {bad}"
+        );
+        assert!(last_error().contains("clamp"), "{}", last_error());
+        assert_eq!(image, CtImage::default());
+    }
+
+    let mut earlier = small_options();
+    earlier.integrator = CT_INTEGRATOR_PATH;
+    earlier.struct_size = std::mem::offset_of!(CtRenderOptions, clamp) as u32;
+    earlier.clamp = 0.05; // past its struct_size: ignored
+    assert_eq!(max_red(scene, &earlier), free);
     assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
 }
 

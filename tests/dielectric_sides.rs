@@ -53,6 +53,7 @@ fn options() -> RenderOptions {
         count_texture_tiles: false,
         all_effects: false,
         seed: 0,
+        sample_clamp: None,
     }
 }
 

@@ -902,6 +902,7 @@ fn render_options() -> conetrace::render::RenderOptions {
         count_texture_tiles: false,
         all_effects: false,
         seed: 0,
+        sample_clamp: None,
     }
 }
 

@@ -52,6 +52,7 @@ fn options(lod: LodStrategy, filter: FilterMode) -> RenderOptions {
         count_texture_tiles: false,
         all_effects: false,
         seed: 0,
+        sample_clamp: None,
     }
 }
 

@@ -265,6 +265,53 @@ fn sigint_writes_the_finished_part_and_resume_matches_an_uninterrupted_run() {
     assert_films_identical(&partial, &expected);
 }
 
+/// An interrupted `--region` render (edges off the tile grid) resumes as a whole one does:
+/// the partial file holds the region, `--resume` with another region is refused, and the
+/// resumed EXR equals an uninterrupted render of the region, bit for bit.
+#[test]
+fn an_interrupted_region_render_resumes_to_the_uninterrupted_region() {
+    let dir = temp_dir();
+    let region = ["--region", "10,6,90,60"].map(String::from);
+    let spp = interrupted_render_with(dir.path(), "region.exr", Signal::SIGINT, &region, || {});
+    let (partial, attributes) =
+        read_exr(&dir.path().join("region.partial.exr")).expect("valid EXR");
+    assert!(attributes.incomplete);
+    let window = attributes
+        .window
+        .expect("the partial region has a data window");
+    assert_eq!(
+        (window.x0, window.y0, partial.width(), partial.height()),
+        (10, 6, 80, 54)
+    );
+
+    let before = std::fs::read(dir.path().join("region.partial.exr")).unwrap();
+    let mut other = render_args(spp, "region.exr");
+    other.extend(["--region", "0,6,90,60", "--resume"].map(String::from));
+    let (status, stderr) = finish(start(dir.path(), &other));
+    assert_eq!(status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("region 10,6,90,60"), "{stderr}");
+    assert_eq!(
+        std::fs::read(dir.path().join("region.partial.exr")).unwrap(),
+        before
+    );
+
+    let mut resume = render_args(spp, "region.exr");
+    resume.extend(region.iter().cloned().chain(["--resume".to_string()]));
+    let (status, stderr) = finish(start(dir.path(), &resume));
+    assert!(status.success(), "resume failed: {stderr}");
+    assert!(!dir.path().join("region.partial.exr").exists());
+    let (resumed, attributes) = read_exr(&dir.path().join("region.exr")).unwrap();
+    assert!(!attributes.incomplete);
+    assert_eq!(attributes.window, Some(window));
+
+    let mut uninterrupted = render_args(spp, "full.exr");
+    uninterrupted.extend(region.iter().cloned());
+    let (status, stderr) = finish(start(dir.path(), &uninterrupted));
+    assert!(status.success(), "{stderr}");
+    let (full, _) = read_exr(&dir.path().join("full.exr")).unwrap();
+    assert_films_identical(&resumed, &full);
+}
+
 #[test]
 fn sigterm_also_interrupts_with_status_3() {
     let dir = temp_dir();

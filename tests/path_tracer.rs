@@ -1481,3 +1481,234 @@ translate = [10000.0, {}, 10000.0]
         );
     }
 }
+
+/// A small, very bright lamp (a sphere of emission 400, 300, 100) over a matte floor, with a
+/// glass sphere that focuses it: at one sample per pixel, the lamp seen directly, through
+/// the glass and in the caustic gives pixels far above 1. `extra_render` is added to
+/// `[render]`.
+fn firefly_scene(dir: &Path, extra_render: &str) -> std::path::PathBuf {
+    write(dir, "floor.obj", &square_obj(3.0, 0.0));
+    write(
+        dir,
+        "fireflies.toml",
+        &format!(
+            r#"
+[render]
+width = 48
+height = 32
+spp = 1
+vct_resolution = 32
+{extra_render}
+
+[camera]
+type = "pinhole"
+eye = [0.0, 1.0, 3.0]
+target = [0.0, 0.4, 0.0]
+fov = 45
+
+[[material]]
+name = "floor"
+base_color = [0.8, 0.8, 0.8]
+
+[[material]]
+name = "lamp"
+base_color = [0.0, 0.0, 0.0]
+emission = [400.0, 300.0, 100.0]
+
+[[material]]
+name = "glass"
+base_color = [1.0, 1.0, 1.0]
+transmission = 1.0
+ior = 1.5
+
+[[mesh]]
+file = "floor.obj"
+material = "floor"
+
+[[sphere]]
+center = [0.1, 1.3, -0.2]
+radius = 0.08
+material = "lamp"
+
+[[sphere]]
+center = [-0.3, 0.35, 0.2]
+radius = 0.35
+material = "glass"
+"#
+        ),
+    )
+}
+
+/// Renders `scene` into `dir/name` with `extra` options; panics with stderr on failure.
+/// Returns the film and its header.
+fn render_cli(
+    dir: &Path,
+    scene: &Path,
+    name: &str,
+    extra: &[&str],
+) -> (conetrace::film::Film, conetrace::film::ExrAttributes) {
+    let out = dir.join(name);
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--no-png",
+        "--quiet",
+        "--threads",
+        "2",
+    ];
+    args.extend_from_slice(extra);
+    let output = run_in(dir, &args);
+    assert!(
+        output.status.success(),
+        "render {extra:?}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    conetrace::film::read_exr(&out).unwrap_or_else(|e| panic!("{}: {e}", out.display()))
+}
+
+/// The largest colour component of any pixel.
+fn brightest(film: &conetrace::film::Film) -> f32 {
+    ["R", "G", "B"]
+        .iter()
+        .flat_map(|c| film.channel(c).expect("colour").iter().copied())
+        .fold(0.0, f32::max)
+}
+
+/// `--clamp VALUE` caps every camera sample's largest component at VALUE, for every
+/// integrator; at one sample per pixel a pixel is its sample, so no pixel exceeds VALUE, and
+/// the lamp seen directly keeps its hue (400 : 300 : 100 scaled to 2 : 1.5 : 0.5). The
+/// header records the clamp (`conetrace.option.clamp`), "off" without one; unclamped, the
+/// same renders have pixels of hundreds.
+#[test]
+fn a_sample_clamp_caps_every_pixel_of_every_integrator() {
+    let dir = temp_dir();
+    let scene = firefly_scene(dir.path(), "");
+    for integrator in ["whitted", "path", "vct"] {
+        let (free, attributes) = render_cli(
+            dir.path(),
+            &scene,
+            &format!("{integrator}_free.exr"),
+            &["--integrator", integrator],
+        );
+        assert_eq!(attributes.strings["conetrace.option.clamp"], "off");
+        assert!(
+            brightest(&free) > 100.0,
+            "{integrator}: the unclamped lamp peaks at {}",
+            brightest(&free)
+        );
+        let (clamped, attributes) = render_cli(
+            dir.path(),
+            &scene,
+            &format!("{integrator}_clamped.exr"),
+            &["--integrator", integrator, "--clamp", "2"],
+        );
+        assert_eq!(attributes.strings["conetrace.option.clamp"], "2");
+        assert!(
+            brightest(&clamped) <= 2.0,
+            "{integrator}: a pixel of {} under --clamp 2",
+            brightest(&clamped)
+        );
+        let [r, g, b] = ["R", "G", "B"].map(|c| clamped.channel(c).unwrap().to_vec());
+        let lamp = (0..r.len())
+            .find(|&i| r[i] == 2.0 && g[i] > 1.0)
+            .unwrap_or_else(|| panic!("{integrator}: no clamped lamp pixel"));
+        assert!(
+            (g[lamp] - 1.5).abs() < 1e-5 && (b[lamp] - 0.5).abs() < 1e-5,
+            "{integrator}: the lamp became {}, {}, {}",
+            r[lamp],
+            g[lamp],
+            b[lamp]
+        );
+    }
+}
+
+/// `[render] clamp` clamps as `--clamp` does, and `--clamp` overrides it. A resume whose
+/// clamp differs from the partial render's is refused, naming the option.
+#[test]
+fn the_scene_s_clamp_applies_and_a_resume_with_another_clamp_is_refused() {
+    let dir = temp_dir();
+    let d = dir.path();
+    let scene = firefly_scene(d, "clamp = 3.5\nintegrator = \"path\"");
+    let (film, attributes) = render_cli(d, &scene, "scene.exr", &[]);
+    assert_eq!(attributes.strings["conetrace.option.clamp"], "3.5");
+    let peak = brightest(&film);
+    assert!(peak <= 3.5 && peak > 2.0, "peak {peak} under clamp = 3.5");
+    let (film, attributes) = render_cli(d, &scene, "cli.exr", &["--clamp", "2"]);
+    assert_eq!(attributes.strings["conetrace.option.clamp"], "2");
+    assert!(brightest(&film) <= 2.0);
+
+    // The render's file stands in for a partial one: the signature is checked first.
+    std::fs::copy(d.join("cli.exr"), d.join("cli.partial.exr")).unwrap();
+    for (other, now) in [(&["--clamp", "4"][..], "now: 4"), (&[][..], "now: 3.5")] {
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            "cli.exr",
+            "--no-png",
+            "--quiet",
+            "--resume",
+        ];
+        args.extend_from_slice(other);
+        let output = run_in(d, &args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{other:?}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.contains("option --clamp changed (partial render: 2,") && stderr.contains(now),
+            "{other:?}: {stderr}"
+        );
+    }
+}
+
+/// A clamp must be a finite number above 0: `--clamp` and `[render] clamp` refuse 0,
+/// negatives, nan and inf with one line naming the option or the key, exit 2, writing
+/// nothing.
+#[test]
+fn bad_clamp_values_are_refused() {
+    let dir = temp_dir();
+    let d = dir.path();
+    let scene = firefly_scene(d, "");
+    for value in ["0", "-1", "nan", "inf", "1e40"] {
+        let output = run_in(
+            d,
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "-o",
+                "bad.exr",
+                "--quiet",
+                "--clamp",
+                value,
+            ],
+        );
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "--clamp {value}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains("--clamp"), "--clamp {value}: {stderr}");
+        assert!(!d.join("bad.exr").exists() && !d.join("bad.png").exists());
+    }
+    for value in ["0", "-1.5", "nan", "inf"] {
+        let scene = firefly_scene(d, &format!("clamp = {value}"));
+        let output = run_in(
+            d,
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "-o",
+                "bad.exr",
+                "--quiet",
+            ],
+        );
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "clamp = {value}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.contains("fireflies.toml") && stderr.contains("render.clamp"),
+            "clamp = {value}: {stderr}"
+        );
+        assert!(!d.join("bad.exr").exists());
+    }
+}

@@ -34,15 +34,26 @@ fn render(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
 
 /// [`render`] at `spp` samples per pixel.
 fn render_spp(dir: &Path, name: &str, spp: u32, extra: &[&str]) -> PathBuf {
+    render_sized(
+        dir,
+        name,
+        (WIDTH, HEIGHT),
+        spp,
+        &[&["--no-png"], extra].concat(),
+    )
+}
+
+/// [`render`] of a `size.0` x `size.1` image at `spp` samples per pixel (a PNG too unless
+/// `extra` says `--no-png`).
+fn render_sized(dir: &Path, name: &str, size: (u32, u32), spp: u32, extra: &[&str]) -> PathBuf {
     let out = dir.join(name);
     let scene = scene();
-    let (w, h, spp) = (WIDTH.to_string(), HEIGHT.to_string(), spp.to_string());
+    let (w, h, spp) = (size.0.to_string(), size.1.to_string(), spp.to_string());
     let mut args = vec![
         "render",
         scene.to_str().unwrap(),
         "-o",
         out.to_str().unwrap(),
-        "--no-png",
         "--quiet",
         "--width",
         &w,
@@ -148,6 +159,77 @@ fn region_parts_merge_into_the_single_render() {
         render(dir.path(), "left_bottom.exr", &["--region", "0,32,48,64"]),
     ];
     assert_same_image(&whole, &merged(dir.path(), &parts, "regions.exr"));
+}
+
+/// `--region` takes any rectangle inside the image: the render traces the work tiles that
+/// cover it and keeps its pixels, so every channel equals the whole render's there, bit for
+/// bit. The region's EXR has the region as its data window and the whole image as its
+/// display window; `--png` writes the region alone, sized to it, with the whole render's
+/// PNG pixels.
+#[test]
+fn a_region_off_the_tile_grid_holds_the_whole_render_s_pixels() {
+    let dir = temp_dir();
+    let d = dir.path();
+    let size = (120, 104);
+    let whole = render_sized(d, "whole.exr", size, SPP, &[]);
+    let png = d.join("region.png");
+    let region = render_sized(
+        d,
+        "region.exr",
+        size,
+        SPP,
+        &["--region", "10,10,100,100", "--png", png.to_str().unwrap()],
+    );
+    let (whole_film, _) = conetrace::film::read_exr(&whole).unwrap();
+    let (region_film, attributes) = conetrace::film::read_exr(&region).unwrap();
+    let window = attributes.window.expect("a region has a data window");
+    assert_eq!(
+        (window.x0, window.y0, window.full_width, window.full_height),
+        (10, 10, size.0, size.1)
+    );
+    assert_eq!((region_film.width(), region_film.height()), (90, 90));
+    assert_eq!(region_film.channel_names(), whole_film.channel_names());
+    for name in whole_film.channel_names() {
+        let (all, part) = (
+            whole_film.channel(&name).unwrap(),
+            region_film.channel(&name).unwrap(),
+        );
+        let differing = (0..90usize * 90)
+            .filter(|&i| {
+                let (x, y) = (10 + i % 90, 10 + i / 90);
+                part[i].to_bits() != all[y * size.0 as usize + x].to_bits()
+            })
+            .count();
+        assert_eq!(differing, 0, "channel {name}: {differing} pixels differ");
+    }
+
+    let whole_png = image::open(d.join("whole.png")).unwrap().to_rgba8();
+    let region_png = image::open(&png)
+        .unwrap_or_else(|e| panic!("--region --png wrote no readable {}: {e}", png.display()))
+        .to_rgba8();
+    assert_eq!(region_png.dimensions(), (90, 90));
+    for (x, y, pixel) in region_png.enumerate_pixels() {
+        assert_eq!(
+            pixel,
+            whole_png.get_pixel(x + 10, y + 10),
+            "PNG pixel {x},{y}"
+        );
+    }
+}
+
+/// Regions with edges off the tile grid that tile the frame merge into the single render,
+/// byte for byte (here three, cutting tiles both ways).
+#[test]
+fn odd_edged_regions_merge_into_the_single_render() {
+    let dir = temp_dir();
+    let d = dir.path();
+    let whole = render(d, "whole.exr", &[]);
+    let parts = [
+        render(d, "top_left.exr", &["--region", "0,0,37,23"]),
+        render(d, "top_right.exr", &["--region", "37,0,80,23"]),
+        render(d, "bottom.exr", &["--region", "0,23,80,64"]),
+    ];
+    assert_same_image(&whole, &merged(d, &parts, "odd.exr"));
 }
 
 #[test]
@@ -279,7 +361,8 @@ fn partial_render_options_are_checked() {
     let dir = temp_dir();
     let scene = scene();
     for (args, expect) in [
-        (vec!["--region", "1,0,16,16"], "--region"),
+        (vec!["--region", "1,0,81,16"], "--region"),
+        (vec!["--region", "5,9,5,12"], "--region"),
         (vec!["--samples", "2..9"], "--samples"),
         (vec!["--part", "4/4"], "--part"),
         (vec!["--part", "0/9"], "tile"),
@@ -305,6 +388,34 @@ fn partial_render_options_are_checked() {
         assert!(stderr.contains(expect), "{args:?}: {stderr}");
         assert!(!dir.path().join("x.exr").exists());
     }
+    // A sample range's colour is not the image: no PNG of it.
+    let output = run_in(
+        dir.path(),
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            "x.exr",
+            "--png",
+            "x.png",
+            "--quiet",
+            "--width",
+            "80",
+            "--height",
+            "64",
+            "--spp",
+            "4",
+            "--samples",
+            "0..2",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--png") && stderr.contains("--samples"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("x.exr").exists() && !dir.path().join("x.png").exists());
 }
 
 /// The merge reads its parts one at a time: eight sample-range parts of a 1024x512 image

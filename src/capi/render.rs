@@ -113,15 +113,25 @@ pub struct CtRenderOptions {
     /// estimated above it fails with `CT_ERROR_OUT_OF_MEMORY` before allocating anything
     /// large. 0 = the memory the system reports available (no limit where it reports none).
     pub max_memory: u64,
-    /// Integrator (`CT_INTEGRATOR_*`). Appended last: a caller whose `struct_size` ends before
-    /// it gets `CT_INTEGRATOR_SCENE`. The struct ends in 4 bytes of padding after it; a field
-    /// appended later must start after that padding (at an 8-byte boundary), so that every
-    /// version of this header has its own `struct_size`.
+    /// Integrator (`CT_INTEGRATOR_*`). A caller whose `struct_size` ends before it gets
+    /// `CT_INTEGRATOR_SCENE`. 4 bytes of padding follow it, so that `clamp` starts at an
+    /// 8-byte boundary and every version of this header has its own `struct_size`.
     pub integrator: u32,
+    /// The largest colour component a camera sample keeps: a brighter sample is scaled down
+    /// to it, its hue kept (`--clamp` on the command line; it removes fireflies and darkens
+    /// what it clamps). 0 = the scene's `[render] clamp` (none unless the scene sets one);
+    /// otherwise a finite number above 0. Appended last: a caller whose `struct_size` ends
+    /// before it gets 0. A field appended later starts after it, at an 8-byte boundary.
+    pub clamp: f64,
 }
 
 /// `struct_size` of `CtRenderOptions` before `integrator` was appended: still accepted.
 const OPTIONS_SIZE_BEFORE_INTEGRATOR: usize = std::mem::offset_of!(CtRenderOptions, integrator);
+/// `struct_size` of `CtRenderOptions` before `clamp` was appended: still accepted.
+const OPTIONS_SIZE_BEFORE_CLAMP: usize = std::mem::offset_of!(CtRenderOptions, clamp);
+/// The `struct_size`s of earlier headers' `CtRenderOptions`, oldest first.
+const EARLIER_OPTIONS_SIZES: [usize; 2] =
+    [OPTIONS_SIZE_BEFORE_INTEGRATOR, OPTIONS_SIZE_BEFORE_CLAMP];
 
 impl CtRenderOptions {
     fn defaults() -> CtRenderOptions {
@@ -142,6 +152,7 @@ impl CtRenderOptions {
             texture_callback: None,
             texture_user_data: std::ptr::null_mut(),
             integrator: CT_INTEGRATOR_SCENE,
+            clamp: 0.0,
         }
     }
 }
@@ -261,12 +272,12 @@ pub unsafe extern "C" fn ct_render_options_init(
             unsafe { options.write_unaligned(CtRenderOptions::defaults()) };
             return Ok(CtStatus::CT_OK);
         }
-        if struct_size != OPTIONS_SIZE_BEFORE_INTEGRATOR {
+        if !EARLIER_OPTIONS_SIZES.contains(&struct_size) {
             return Err(CapiError::new(
                 CtStatus::CT_ERROR_STRUCT_SIZE,
                 format!(
                     "options: struct_size is {struct_size}, this library expects {expected} \
-                     (or {OPTIONS_SIZE_BEFORE_INTEGRATOR} from an earlier header)"
+                     (or {EARLIER_OPTIONS_SIZES:?} from earlier headers)"
                 ),
             ));
         }
@@ -322,7 +333,7 @@ pub unsafe extern "C" fn ct_render(
                 read_sized_or_earlier(
                     options,
                     "options",
-                    &[OPTIONS_SIZE_BEFORE_INTEGRATOR],
+                    &EARLIER_OPTIONS_SIZES,
                     CtRenderOptions::defaults(),
                 )
             }?
@@ -496,7 +507,7 @@ pub unsafe extern "C" fn ct_render_memory_estimate(
                 read_sized_or_earlier(
                     options,
                     "options",
-                    &[OPTIONS_SIZE_BEFORE_INTEGRATOR],
+                    &EARLIER_OPTIONS_SIZES,
                     CtRenderOptions::defaults(),
                 )
             }?
@@ -579,6 +590,14 @@ fn render_options(
             )))
         }
     };
+    let sample_clamp = if c.clamp == 0.0 {
+        scene.settings.sample_clamp
+    } else {
+        Some(
+            crate::render::context::parse_sample_clamp(c.clamp)
+                .map_err(|problem| CapiError::invalid(format!("clamp {problem}")))?,
+        )
+    };
     if c.aovs & !(CT_AOV_FOOTPRINT | CT_AOV_LOD | CT_AOV_NO_SURFACE) != 0 {
         return Err(CapiError::invalid(format!(
             "aovs has unknown flags {:#x} (CT_AOV_*)",
@@ -606,5 +625,6 @@ fn render_options(
         count_texture_tiles: false,
         all_effects: false,
         seed: 0,
+        sample_clamp,
     })
 }

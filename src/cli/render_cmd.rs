@@ -100,6 +100,12 @@ pub struct RenderArgs {
     /// Extra EXR layers (Z, N, albedo and uv are written unless `--aov none`).
     #[arg(long, value_enum)]
     pub aov: Vec<AovName>,
+    /// Clamp every camera sample so that no colour component exceeds VALUE (a finite
+    /// number above 0), scaling the sample as a whole (its hue kept), as pbrt-v4's
+    /// `maxcomponentvalue` does: removes fireflies, and darkens what it clamps (biased)
+    /// [default: the scene's `[render] clamp`, else no clamp].
+    #[arg(long, value_name = "VALUE", allow_negative_numbers = true)]
+    pub clamp: Option<f64>,
     /// Fresnel equations at dielectric boundaries (default: the scene's, else exact).
     #[arg(long, value_parser = ["exact", "schlick"])]
     pub fresnel: Option<String>,
@@ -129,9 +135,10 @@ pub struct RenderArgs {
     /// and its triangles.
     #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true)]
     pub tessellation_error: f32,
-    /// Render only this region, X0,Y0,X1,Y1 (columns X0..X1, rows Y0..Y1; edges on the
-    /// 16-pixel tile grid or the image edge). The EXR's data window is the region, its
-    /// display window the whole image; `conetrace merge` stitches regions.
+    /// Render only this region, X0,Y0,X1,Y1 (columns X0..X1, rows Y0..Y1; any rectangle
+    /// inside the image). The EXR's data window is the region, its display window the whole
+    /// image; a PNG (only with --png) holds the region alone; `conetrace merge` stitches
+    /// regions.
     #[arg(long, value_name = "X0,Y0,X1,Y1", conflicts_with = "part")]
     pub region: Option<String>,
     /// Render only the sample indices START..END of every pixel (of --spp); the EXR keeps
@@ -388,6 +395,13 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
         ));
     }
     let extra = |name: AovName| args.aov.contains(&name) || args.aov.contains(&AovName::All);
+    let sample_clamp = match args.clamp {
+        Some(value) => Some(
+            render::context::parse_sample_clamp(value)
+                .map_err(|problem| CommandError::bad_input(format!("--clamp {problem}")))?,
+        ),
+        None => scene.settings.sample_clamp,
+    };
     Ok(RenderOptions {
         width,
         height,
@@ -409,6 +423,7 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
         count_texture_tiles: args.stats.is_some(),
         all_effects: args.all_effects,
         seed: args.seed.unwrap_or(scene.settings.seed),
+        sample_clamp,
     })
 }
 
@@ -468,16 +483,15 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     let signature =
         RenderSignature::new(&scene, args.scene.as_deref(), &options, &texture_digests)?;
-    let earlier = if args.resume {
-        Some(read_resume_state(
+    let earlier = match (&split, args.resume) {
+        (RequestedSplit::Fixed(part), true) => Some(read_resume_state(
             &outputs.partial_exr,
             &signature,
             &scene,
             &options,
-            render::work_tiles(options.width, options.height).len(),
-        )?)
-    } else {
-        None
+            part,
+        )?),
+        _ => None,
     };
     let scene = Arc::new(scene);
     let (mut result, camera, part, tiles) = pool.install(|| -> Result<_, CommandError> {
@@ -518,7 +532,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         Ok((result, context.camera, part, tiles))
     })?;
 
-    // Tiles an earlier run finished come from its file.
+    // Tiles an earlier run finished come from its file, a film of the part's region.
     if let Some((earlier_film, earlier_finished)) = &earlier {
         for ((tile, done), &done_before) in tiles
             .iter()
@@ -526,7 +540,12 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
             .zip(earlier_finished)
         {
             if done_before && !*done {
-                result.film.copy_region_from(earlier_film, *tile);
+                let in_film = film::PixelRect {
+                    x0: tile.x0 - part.region.x0,
+                    y0: tile.y0 - part.region.y0,
+                    ..*tile
+                };
+                result.film.copy_region_from(earlier_film, in_film);
                 *done = true;
             }
         }
@@ -601,11 +620,14 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     }
     let writing = Instant::now();
     film::stage_exr(&mut set, &result.film, &outputs.exr, &attributes).map_err(written)?;
-    let png = if split.is_partial(&options) {
-        None
-    } else {
-        outputs.png.as_ref()
-    };
+    // A part's PNG is written only when asked for (farm parts need none), and never for a
+    // sample range, whose colour is not final.
+    let png =
+        if split.samples_partial(&options) || (split.is_partial(&options) && args.png.is_none()) {
+            None
+        } else {
+            outputs.png.as_ref()
+        };
     if let Some(png_path) = png {
         film::stage_png(&mut set, &result.film, png_path, tonemap, exposure).map_err(written)?;
     }
@@ -717,28 +739,25 @@ fn requested_split(
         }
     } else {
         let region = match &args.region {
-            Some(text) => film::partial::parse_region(
-                text,
-                options.width,
-                options.height,
-                render::WORK_TILE_SIZE,
-            )
-            .map_err(CommandError::bad_input)?,
+            Some(text) => film::partial::parse_region(text, options.width, options.height)
+                .map_err(CommandError::bad_input)?,
             None => whole.region,
         };
         RequestedSplit::Fixed(render::part::RenderPart { region, samples })
     };
-    if split.is_partial(options) {
+    if let RequestedSplit::Balanced { .. } = split {
         if args.resume {
             return Err(CommandError::bad_input(
-                "--resume continues whole renders only; rerun a failed part from the start",
+                "--resume continues whole renders, --region and --samples; rerun a failed \
+                 --part from the start",
             ));
         }
-        if args.png.is_some() {
-            return Err(CommandError::bad_input(
-                "--png: a partial render (--region, --samples, --part) writes only its EXR",
-            ));
-        }
+    }
+    if split.samples_partial(options) && args.png.is_some() {
+        return Err(CommandError::bad_input(
+            "--png: a render of a sample range (--samples) writes only its EXR (its colour is \
+             not the final image)",
+        ));
     }
     Ok(split)
 }

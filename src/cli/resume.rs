@@ -26,6 +26,9 @@ use sha2::{Digest, Sha256};
 
 use crate::cli::CommandError;
 use crate::film;
+use crate::film::partial::{format_sample_range, ImageWindow, SAMPLES_ATTRIBUTE};
+use crate::film::PixelRect;
+use crate::render::part::RenderPart;
 use crate::render::RenderOptions;
 use crate::scene::SceneDescription;
 
@@ -166,6 +169,12 @@ impl RenderSignature {
         option("aov-footprint", flag(options.aovs.texture_footprint));
         option("aov-lod", flag(options.aovs.lod));
         option("all-effects", flag(options.all_effects));
+        option(
+            "clamp",
+            options
+                .sample_clamp
+                .map_or_else(|| "off".to_string(), |value| value.to_string()),
+        );
 
         let mut input = |name: &str, digest: &ContentDigest| {
             items.push((format!("{INPUT_PREFIX}{name}"), digest.hex()));
@@ -267,14 +276,15 @@ impl RenderSignature {
     }
 }
 
-/// The earlier, partial render `--resume` continues: its film and finished tiles, after
-/// checking that it was made with the same `signature`.
+/// The earlier, partial render `--resume` continues: its film (of `part`'s region) and
+/// finished tiles (`part`'s), after checking that it was made with the same `signature` and
+/// the same region and sample range.
 pub fn read_resume_state(
     partial_path: &Path,
     signature: &RenderSignature,
     scene: &SceneDescription,
     options: &RenderOptions,
-    tile_count: usize,
+    part: &RenderPart,
 ) -> Result<(film::Film, Vec<bool>), CommandError> {
     let label = partial_path.display();
     if !partial_path.exists() {
@@ -294,18 +304,9 @@ pub fn read_resume_state(
             "{label}: --resume: {what}"
         )));
     }
-    // The header may agree while the pixels do not (an edited or foreign file): the finished
-    // tiles are copied from this film, so it must have the render's size and layers.
-    if (earlier.width(), earlier.height()) != (options.width, options.height) {
-        return Err(CommandError::bad_input(format!(
-            "{label}: --resume: the partial image is {}x{}, the render {}x{}",
-            earlier.width(),
-            earlier.height(),
-            options.width,
-            options.height
-        )));
-    }
-    let expected = crate::render::film_layers(options.aovs);
+    check_same_part(&earlier, &attributes, options, part)
+        .map_err(|what| CommandError::bad_input(format!("{label}: --resume: {what}")))?;
+    let expected = part.film_layers(options);
     if let Some(missing) = expected.iter().find(|layer| !earlier.has(**layer)) {
         return Err(CommandError::bad_input(format!(
             "{label}: --resume: the partial image lacks the {missing:?} channels"
@@ -314,13 +315,57 @@ pub fn read_resume_state(
     let finished = attributes
         .strings
         .get(TILES_DONE_ATTRIBUTE)
-        .and_then(|text| decode_tiles(text, tile_count))
+        .and_then(|text| decode_tiles(text, part.tiles(options.width, options.height).len()))
         .ok_or_else(|| {
             CommandError::bad_input(format!(
                 "{label}: --resume: missing or malformed {TILES_DONE_ATTRIBUTE} attribute"
             ))
         })?;
     Ok((earlier, finished))
+}
+
+/// Checks that a partial render's film and header hold `part`: the same region of an image
+/// of the render's size (the header may agree while the pixels do not, in an edited or
+/// foreign file, and the finished tiles are copied from this film) and the same samples.
+fn check_same_part(
+    earlier: &film::Film,
+    attributes: &film::ExrAttributes,
+    options: &RenderOptions,
+    part: &RenderPart,
+) -> Result<(), String> {
+    let (width, height) = (earlier.width(), earlier.height());
+    let window = attributes.window.unwrap_or(ImageWindow {
+        x0: 0,
+        y0: 0,
+        full_width: width,
+        full_height: height,
+    });
+    let full = (window.full_width, window.full_height);
+    if full != (options.width, options.height) {
+        return Err(format!(
+            "the partial image is {}x{}, the render {}x{}",
+            full.0, full.1, options.width, options.height
+        ));
+    }
+    let region = window.rect(width, height);
+    if region != part.region {
+        let corners =
+            |r: PixelRect| format!("{},{},{},{}", r.x0, r.y0, r.x0 + r.width, r.y0 + r.height);
+        return Err(format!(
+            "the partial render holds the region {}, this render {}",
+            corners(region),
+            corners(part.region)
+        ));
+    }
+    let samples = attributes.strings.get(SAMPLES_ATTRIBUTE);
+    let wanted = format_sample_range(&part.samples);
+    if samples != Some(&wanted) {
+        return Err(format!(
+            "the partial render holds the samples {}, this render {wanted}",
+            samples.map_or("(none recorded)", String::as_str)
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -368,6 +368,26 @@ impl Film {
             }
         }
     }
+
+    /// The pixels of `rect` (inside this film) as a film of their own, with every layer.
+    pub fn try_cropped(&self, rect: PixelRect) -> Result<Film, String> {
+        let rect = rect.clipped(self.width, self.height);
+        let mut cropped = Film::try_new(rect.width, rect.height, &self.layers())?;
+        let (n, cropped_n) = (self.pixel_count(), cropped.pixel_count());
+        if cropped_n == 0 {
+            return Ok(cropped);
+        }
+        let (w, cropped_w) = (self.width as usize, rect.width as usize);
+        for c in 0..self.layout.channel_count() {
+            let plane = &self.planes[c * n..(c + 1) * n];
+            let cropped_plane = &mut cropped.planes[c * cropped_n..(c + 1) * cropped_n];
+            for (row, out) in cropped_plane.chunks_exact_mut(cropped_w).enumerate() {
+                let start = (rect.y0 as usize + row) * w + rect.x0 as usize;
+                out.copy_from_slice(&plane[start..start + cropped_w]);
+            }
+        }
+        Ok(cropped)
+    }
 }
 
 /// A rectangle of the film filled by one worker, merged with [`Film::merge_tile`].
@@ -462,6 +482,40 @@ mod tests {
         assert!(message.contains("4294967295x4294967295"), "{message}");
         let small = Film::try_new(3, 2, &[Layer::Color]).unwrap();
         assert_eq!(small.channel("R").unwrap().len(), 6);
+    }
+
+    #[test]
+    fn a_cropped_film_holds_the_rectangle_of_every_channel() {
+        let layers = [Layer::Color, Layer::Depth];
+        let mut film = Film::new(7, 5, &layers);
+        for (x, y) in (PixelRect {
+            x0: 0,
+            y0: 0,
+            width: 7,
+            height: 5,
+        })
+        .pixels()
+        {
+            let color = [0, 1, 2, 3].map(|c| pattern(x, y, c));
+            film.set(Layer::Color, x, y, &color);
+            film.set(Layer::Depth, x, y, &[pattern(x, y, 4)]);
+        }
+        let rect = PixelRect {
+            x0: 2,
+            y0: 1,
+            width: 4,
+            height: 3,
+        };
+        let cropped = film.try_cropped(rect).unwrap();
+        assert_eq!((cropped.width(), cropped.height()), (4, 3));
+        assert_eq!(cropped.layers(), film.layers());
+        let (mut color, mut depth) = ([0.0f32; 4], [0.0f32; 1]);
+        for (x, y) in rect.pixels() {
+            assert!(cropped.get(Layer::Color, x - 2, y - 1, &mut color));
+            assert!(cropped.get(Layer::Depth, x - 2, y - 1, &mut depth));
+            assert_eq!(color, [0, 1, 2, 3].map(|c| pattern(x, y, c)), "({x}, {y})");
+            assert_eq!(depth[0], pattern(x, y, 4), "({x}, {y})");
+        }
     }
 
     #[test]

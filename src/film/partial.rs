@@ -54,11 +54,9 @@ impl ImageWindow {
 }
 
 /// Parses `X0,Y0,X1,Y1` (half-open: columns `X0..X1`, rows `Y0..Y1`) for a `width` x
-/// `height` image. The region must be non-empty and inside the image, and its edges must
-/// lie on the `grid`-pixel work-tile grid or on the image's edge: a pixel is then rendered
-/// in the same work tile, with the same ray packets, as in the whole render, which keeps a
-/// stitched image bit-identical to it.
-pub fn parse_region(text: &str, width: u32, height: u32, grid: u32) -> Result<PixelRect, String> {
+/// `height` image: any non-empty rectangle inside the image (the render traces the work
+/// tiles that cover it and keeps its pixels, `render::part::RenderPart::covering_region`).
+pub fn parse_region(text: &str, width: u32, height: u32) -> Result<PixelRect, String> {
     let values: Vec<u32> = text
         .split(',')
         .map(|v| v.trim().parse::<u32>())
@@ -77,13 +75,6 @@ pub fn parse_region(text: &str, width: u32, height: u32, grid: u32) -> Result<Pi
     if x1 > width || y1 > height {
         return Err(format!(
             "--region {text:?}: outside the {width}x{height} image"
-        ));
-    }
-    let on_grid = |v: u32, edge: u32| v.is_multiple_of(grid) || v == edge;
-    if !(on_grid(x0, width) && on_grid(y0, height) && on_grid(x1, width) && on_grid(y1, height)) {
-        return Err(format!(
-            "--region {text:?}: edges must be multiples of {grid} (the work-tile size) or the \
-             image's edge"
         ));
     }
     Ok(PixelRect {
@@ -121,19 +112,25 @@ mod tests {
     use super::*;
 
     #[test]
-    fn regions_parse_half_open_and_must_sit_on_the_tile_grid() {
-        let r = parse_region("16,0,40,32", 40, 36, 16).unwrap();
+    fn regions_parse_half_open_anywhere_inside_the_image() {
+        let r = parse_region("16,0,40,32", 40, 36).unwrap();
         assert_eq!((r.x0, r.y0, r.width, r.height), (16, 0, 24, 32));
-        assert!(parse_region("0,0,40,36", 40, 36, 16).is_ok());
+        assert!(parse_region("0,0,40,36", 40, 36).is_ok());
+        let off_grid = parse_region("1,3,17,35", 40, 36).unwrap();
+        assert_eq!(
+            (off_grid.x0, off_grid.y0, off_grid.width, off_grid.height),
+            (1, 3, 16, 32)
+        );
         for bad in [
-            "1,0,16,16",
             "0,0,41,16",
+            "0,0,16,37",
             "16,0,16,16",
+            "5,9,4,12",
             "0,0,16",
             "a,b,c,d",
-            "0,0,17,16",
+            "-1,0,16,16",
         ] {
-            let error = parse_region(bad, 40, 36, 16).unwrap_err();
+            let error = parse_region(bad, 40, 36).unwrap_err();
             assert!(error.starts_with("--region"), "{bad}: {error}");
         }
     }

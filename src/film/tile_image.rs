@@ -123,9 +123,15 @@ impl TileImage {
     }
 
     /// Adds the radiance of the samples in flight at `places` to each pixel's exact sum
-    /// (`film::sample_sum`); with `drop_nonfinite`, a sample with a NaN or infinite channel
-    /// is left out instead. Returns how many were left out.
-    pub fn add_samples_in_flight(&mut self, places: Range<usize>, drop_nonfinite: bool) -> u64 {
+    /// (`film::sample_sum`), each first scaled by [`clamp_sample`] when `clamp` is given;
+    /// with `drop_nonfinite`, a sample with a NaN or infinite channel is left out instead.
+    /// Returns how many were left out.
+    pub fn add_samples_in_flight(
+        &mut self,
+        places: Range<usize>,
+        drop_nonfinite: bool,
+        clamp: Option<f32>,
+    ) -> u64 {
         let pixels = self.pixel_count();
         let mut dropped = 0;
         if pixels == 0 {
@@ -137,7 +143,8 @@ impl TileImage {
                 if drop_nonfinite && !color.iter().all(|c| c.is_finite()) {
                     dropped += 1;
                 } else {
-                    super::sample_sum::add_sample(sum, *color);
+                    let color = clamp.map_or(*color, |max| clamp_sample(*color, max));
+                    super::sample_sum::add_sample(sum, color);
                 }
             }
         }
@@ -156,9 +163,70 @@ impl TileImage {
     }
 }
 
+/// One camera sample's radiance with no component above `max_component`: a sample whose
+/// largest component exceeds it is scaled down to it as a whole, so its hue is kept
+/// (pbrt-v4's film clamp, `maxcomponentvalue`: Pharr, Jakob and Humphreys 2023, Physically
+/// Based Rendering, 4th ed., section 5.4, its RGB film). An infinite component becomes
+/// `max_component` and the finite ones 0, the limit of that scaling; NaN is left to the
+/// caller's rule.
+pub fn clamp_sample(color: [f32; 3], max_component: f32) -> [f32; 3] {
+    let largest = color.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    if largest <= max_component {
+        color
+    } else if largest.is_infinite() {
+        color.map(|c| {
+            if c == f32::INFINITY {
+                max_component
+            } else {
+                0.0
+            }
+        })
+    } else {
+        let scale = max_component / largest;
+        color.map(|c| (c * scale).min(max_component))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_clamped_sample_keeps_its_hue_below_the_limit() {
+        // Under the limit (and at it) nothing changes.
+        assert_eq!(clamp_sample([0.5, 2.0, 1.0], 2.0), [0.5, 2.0, 1.0]);
+        // Above it, every component is scaled by limit / largest.
+        assert_eq!(clamp_sample([40.0, 10.0, 0.0], 4.0), [4.0, 1.0, 0.0]);
+        let bright = [17.4, 3.1, 0.2];
+        let clamped = clamp_sample(bright, 1.5);
+        assert!(clamped.iter().all(|&c| c <= 1.5), "{clamped:?}");
+        assert_eq!(clamped[0], 1.5);
+        for (c, b) in clamped.iter().zip(bright) {
+            assert!((c / b - 1.5 / 17.4).abs() < 1e-6, "{clamped:?}");
+        }
+        // An infinite component: the limit of the scaling.
+        assert_eq!(
+            clamp_sample([f32::INFINITY, 3.0, 0.0], 2.0),
+            [2.0, 0.0, 0.0]
+        );
+        // Every sample of a pixel clamped: its mean cannot exceed the limit.
+        let mut image = TileImage::new(
+            PixelRect {
+                x0: 0,
+                y0: 0,
+                width: 1,
+                height: 1,
+            },
+            AovSelection::default(),
+        );
+        image.begin_samples(3);
+        image.color = vec![[1e6, 0.0, 0.0], [0.0, 1e9, 3.0], [0.25, 0.5, 0.0]];
+        image.add_samples_in_flight(0..3, true, Some(1.0));
+        image.finish_mean(3);
+        let mean = image.color[0];
+        assert!(mean.iter().all(|&c| c <= 1.0), "{mean:?}");
+        assert!((mean[0] - 1.25 / 3.0).abs() < 1e-6, "{mean:?}");
+    }
 
     #[test]
     fn a_reset_image_is_a_new_one_in_the_same_buffers() {

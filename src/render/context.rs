@@ -35,6 +35,25 @@ pub struct RenderOptions {
     /// The seed of every sample position (`crate::sampler::Sampler`): equal seeds give
     /// bit-identical images.
     pub seed: u32,
+    /// No camera sample's colour component may exceed this (`--clamp`, `[render] clamp`):
+    /// brighter samples are scaled down, keeping their hue (`film::tile_image::clamp_sample`).
+    /// `None`: samples are kept as traced.
+    pub sample_clamp: Option<f32>,
+}
+
+/// The sample clamp `value` (`--clamp`, `[render] clamp`) as a render uses it, or the
+/// problem to report after the option's name: it must be a finite number above 0 that an
+/// `f32` holds.
+pub fn parse_sample_clamp(value: f64) -> Result<f32, String> {
+    let single = value as f32;
+    if value.is_finite() && single.is_finite() && single > 0.0 {
+        Ok(single)
+    } else {
+        Err(format!(
+            "must be a finite number above 0 (the largest colour component a sample keeps), \
+             got {value}"
+        ))
+    }
 }
 
 impl RenderOptions {
@@ -56,6 +75,7 @@ impl RenderOptions {
             count_texture_tiles: false,
             all_effects: false,
             seed: settings.seed,
+            sample_clamp: settings.sample_clamp,
         }
     }
 }

@@ -259,17 +259,17 @@ pub fn render<I: Integrator>(
     let options = &context.options;
     let whole = part::RenderPart::whole(options);
     let part = control.part.unwrap_or(&whole);
-    let tiles = part.tiles(options.width, options.height);
+    // Whole work tiles are traced, so that every pixel is traced with the same packets as in
+    // the whole render; the film is cut to the region at the end.
+    let tiles = part.traced_tiles(options.width, options.height);
+    let covering = part.covering_region(options.width, options.height);
     let sample_range = part.is_sample_range(options).then(|| part.samples.clone());
-    let mut film = Film::try_new(
-        part.region.width,
-        part.region.height,
-        &part.film_layers(options),
-    )
-    .map_err(|message| RenderError::OutOfMemory {
+    let out_of_memory = |message| RenderError::OutOfMemory {
         scene: context.scene.source.clone(),
         message,
-    })?;
+    };
+    let mut film = Film::try_new(covering.width, covering.height, &part.film_layers(options))
+        .map_err(out_of_memory)?;
     let finished_count = AtomicUsize::new(0);
     let count_texture_tiles = options.count_texture_tiles;
     let start = Instant::now();
@@ -286,10 +286,10 @@ pub fn render<I: Integrator>(
             Vec::new()
         },
     };
-    // The film covers the part's region, whose edges lie on the work-tile grid: its bands
-    // and columns are the part's work tiles, moved to the region's origin.
-    let origin = (part.region.x0, part.region.y0);
-    let tiles_per_row = part.region.width.div_ceil(WORK_TILE_SIZE) as usize;
+    // The film covers whole work tiles: its bands and columns are the part's work tiles,
+    // moved to the covering region's origin.
+    let origin = (covering.x0, covering.y0);
+    let tiles_per_row = covering.width.div_ceil(WORK_TILE_SIZE) as usize;
     // Each worker writes its finished tiles straight into its own region of the film and
     // keeps its counters, its integrator state and its tile image to itself, one of each per
     // thread for the whole render (a thread-local slot, not rayon's per-split fold state, so
@@ -365,6 +365,15 @@ pub fn render<I: Integrator>(
             scene: context.scene.source.clone(),
             source,
         });
+    }
+
+    if covering != part.region {
+        let kept = PixelRect {
+            x0: part.region.x0 - covering.x0,
+            y0: part.region.y0 - covering.y0,
+            ..part.region
+        };
+        film = film.try_cropped(kept).map_err(out_of_memory)?;
     }
 
     let mut finished_tiles = vec![false; tiles.len()];

@@ -1,11 +1,12 @@
 //! One part of a render split across machines: a region of the image and a range of sample
 //! indices, and the cost-balanced split behind `--part i/N`.
 //!
-//! A part renders the work tiles of the whole image that meet its region, clipped to it,
-//! with the sample indices of its range. Samples are a pure function of (pixel, sample
-//! index, dimension) (`render::sampling`), and a region whose edges lie on the work-tile grid
-//! keeps every pixel in the same tile, so a part computes exactly the values the whole render
-//! computes for its pixels and samples. Colour is accumulated in exact fixed-point sums
+//! A part renders the work tiles of the whole image that meet its region, whole, with the
+//! sample indices of its range, and keeps the region's pixels. Samples are a pure function
+//! of (pixel, sample index, dimension) (`render::sampling`), and every pixel is traced in
+//! the same work tile, with the same ray packets, as in the whole render, so a part computes
+//! exactly the values the whole render computes for its pixels and samples, whatever its
+//! edges. Colour is accumulated in exact fixed-point sums
 //! (`film::sample_sum`); a part holding only some samples stores those sums, so parts add up
 //! to the whole render's bits (`conetrace merge`).
 //!
@@ -62,7 +63,35 @@ impl RenderPart {
         layers
     }
 
-    /// The whole image's work tiles that meet the region, clipped to it, in row-major order.
+    /// The smallest rectangle of whole work tiles (clipped to the `width` x `height` image)
+    /// that holds the region: what the render traces before keeping the region's pixels.
+    pub fn covering_region(&self, width: u32, height: u32) -> PixelRect {
+        let r = &self.region;
+        let x0 = r.x0 / WORK_TILE_SIZE * WORK_TILE_SIZE;
+        let y0 = r.y0 / WORK_TILE_SIZE * WORK_TILE_SIZE;
+        let x1 = (r.x0 + r.width).next_multiple_of(WORK_TILE_SIZE).min(width);
+        let y1 = (r.y0 + r.height)
+            .next_multiple_of(WORK_TILE_SIZE)
+            .min(height);
+        PixelRect {
+            x0,
+            y0,
+            width: x1 - x0,
+            height: y1 - y0,
+        }
+    }
+
+    /// The whole image's work tiles that meet the region, whole, in row-major order: the
+    /// tiles the render traces, indexed as [`RenderPart::tiles`] is.
+    pub fn traced_tiles(&self, width: u32, height: u32) -> Vec<PixelRect> {
+        crate::render::work_tiles(width, height)
+            .into_iter()
+            .filter(|tile| tile.intersection(&self.region).is_some())
+            .collect()
+    }
+
+    /// The whole image's work tiles that meet the region, clipped to it, in row-major order:
+    /// the pixels each traced tile contributes to the part.
     pub fn tiles(&self, width: u32, height: u32) -> Vec<PixelRect> {
         crate::render::work_tiles(width, height)
             .into_iter()
@@ -180,6 +209,33 @@ pub fn balanced_strip(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_covering_region_is_the_work_tiles_a_region_meets() {
+        let part = |x0, y0, width, height| RenderPart {
+            region: PixelRect {
+                x0,
+                y0,
+                width,
+                height,
+            },
+            samples: 0..1,
+        };
+        let rect = |r: PixelRect| (r.x0, r.y0, r.width, r.height);
+        // 10..100 x 10..100 of a 120x110 image: tiles 0..112 across, 0..110 down (the edge).
+        let odd = part(10, 10, 90, 90);
+        assert_eq!(rect(odd.covering_region(120, 110)), (0, 0, 112, 110));
+        assert_eq!(odd.tiles(120, 110).len(), 7 * 7);
+        assert_eq!(rect(odd.tiles(120, 110)[0]), (10, 10, 6, 6));
+        // A region on the grid covers itself.
+        let aligned = part(16, 32, 32, 16);
+        assert_eq!(rect(aligned.covering_region(120, 110)), (16, 32, 32, 16));
+        // One pixel inside one tile.
+        assert_eq!(
+            rect(part(17, 18, 1, 1).covering_region(120, 110)),
+            (16, 16, 16, 16)
+        );
+    }
 
     #[test]
     fn strips_cover_the_image_once_and_follow_the_cost() {

@@ -326,6 +326,9 @@ pub struct RenderSettings {
     /// How fog segments' optical depth is integrated (`[render] fog_march_steps`: ray
     /// marching with that many steps; the closed form by default).
     pub fog_integration: crate::medium::FogIntegration,
+    /// `[render] clamp`: the largest colour component a camera sample may keep
+    /// (`RenderOptions::sample_clamp`; `--clamp` overrides it). `None`: no clamp.
+    pub sample_clamp: Option<f32>,
 }
 
 impl Default for RenderSettings {
@@ -347,6 +350,7 @@ impl Default for RenderSettings {
             vct_bounces: 1,
             fog_model: crate::medium::FogModel::Exact,
             fog_integration: crate::medium::FogIntegration::Exact,
+            sample_clamp: None,
         }
     }
 }

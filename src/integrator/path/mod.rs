@@ -264,7 +264,7 @@ impl Integrator for PathTracer {
             // These samples' radiance joins the exact sums (`film::sample_sum`); a sample
             // whose radiance is not finite is counted and dropped.
             worker.counters.nonfinite_samples +=
-                image.add_samples_in_flight(run.kept_places(), true);
+                image.add_samples_in_flight(run.kept_places(), true, context.options.sample_clamp);
         }
         image.finish_mean(sample_count);
         image.alpha.fill(1.0);

@@ -178,7 +178,7 @@ pub(crate) fn render_tile_with(
         );
         // These samples' radiance joins the exact sums (`film::sample_sum`): any split of
         // the samples into ranges then adds up to the same bits.
-        image.add_samples_in_flight(run.kept_places(), false);
+        image.add_samples_in_flight(run.kept_places(), false, options.sample_clamp);
     }
     image.finish_mean(sample_count);
     // The background is rendered too: a finished pixel is opaque. (Alpha 0 marks pixels

@@ -137,6 +137,7 @@ struct RawRender {
     vct_bounces: Option<Spanned<u32>>,
     fog_model: Option<RawFogModel>,
     fog_march_steps: Option<Spanned<u32>>,
+    clamp: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -806,6 +807,11 @@ fn settings(r: &RawRender, loc: &Located) -> Result<RenderSettings, SceneError> 
     if let Some(steps) = &r.fog_march_steps {
         s.fog_integration = crate::medium::FogIntegration::march(*steps.get_ref())
             .ok_or_else(|| loc.at(steps, "render.fog_march_steps must be at least 1"))?;
+    }
+    if let Some(clamp) = &r.clamp {
+        let value = crate::render::context::parse_sample_clamp(*clamp.get_ref())
+            .map_err(|problem| loc.at(clamp, format!("render.clamp {problem}")))?;
+        s.sample_clamp = Some(value);
     }
     Ok(s)
 }
