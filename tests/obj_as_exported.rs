@@ -232,7 +232,11 @@ fn malformed_mtl_lines_are_named() {
         ),
         (
             "newmtl a\nKs 2 2 2\n",
-            "m.mtl: line 2: 'Ks 2 2 2': a specular weight lies above 1",
+            "m.mtl: line 2: 'Ks 2 2 2': Ks is a reflectance, its components must lie in [0, 1]",
+        ),
+        (
+            "newmtl a\nKd 2 0 0\n",
+            "m.mtl: line 2: 'Kd 2 0 0': Kd is a reflectance, its components must lie in [0, 1]",
         ),
         ("newmtl a\nTr half\n", "m.mtl: line 2: bad Tr value 'half'"),
         (
