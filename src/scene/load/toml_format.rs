@@ -427,25 +427,32 @@ fn unknown_name(
     )
 }
 
-fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription, SceneError> {
-    let mut scene = SceneDescription {
-        source: loc.label.to_owned(),
-        ..Default::default()
-    };
-    if let Some(render) = &raw.render {
-        scene.settings = settings(render, loc)?;
-    }
+/// What `[[texture]]` tables declared, beside the textures added to the scene.
+struct DeclaredTextures {
+    /// Index in `scene.textures` by name.
+    names: HashMap<String, usize>,
+    /// Whether each texture's t wrap was written (`wrap_t` or `wrap`) rather than defaulted.
+    wrap_t_written: Vec<bool>,
+    /// Textures whose file cannot be read: kept until the scene is built, so references to
+    /// them are checked as any other, then left out (`files::leave_out_textures`).
+    missing: Vec<usize>,
+}
 
-    // Textures, by name.
-    let mut texture_names: HashMap<String, usize> = HashMap::new();
-    // Whether each texture's t wrap was written (`wrap_t` or `wrap`) rather than defaulted.
-    let mut wrap_t_written: Vec<bool> = Vec::new();
-    // Textures whose file cannot be read: kept until the scene is built, so references to
-    // them are checked as any other, then left out (`files::leave_out_textures`).
-    let mut missing_textures = Vec::new();
-    for t in &raw.texture {
+/// Adds the `[[texture]]` tables to `scene.textures` (a file that cannot be read gets a note).
+fn declare_textures(
+    tables: &[RawTexture],
+    files: &Files,
+    loc: &Located,
+    scene: &mut SceneDescription,
+) -> Result<DeclaredTextures, SceneError> {
+    let mut declared = DeclaredTextures {
+        names: HashMap::new(),
+        wrap_t_written: Vec::new(),
+        missing: Vec::new(),
+    };
+    for t in tables {
         let name = t.name.get_ref().clone();
-        if texture_names.contains_key(&name) {
+        if declared.names.contains_key(&name) {
             return Err(loc.at(&t.name, format!("texture '{name}' is defined twice")));
         }
         let path = files.resolve(t.file.get_ref());
@@ -454,7 +461,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             let place = loc.place(&t.file);
             let consequence = "rendered without it";
             note_not_loaded(&mut scene.notes, &place, &what, &e, consequence);
-            missing_textures.push(scene.textures.len());
+            declared.missing.push(scene.textures.len());
             TextureSource::File(path.clone())
         });
         let wrap = t.wrap.map_or(WrapMode::Periodic, RawWrap::mode);
@@ -468,9 +475,28 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             wrap_s: t.wrap_s.map_or(wrap, RawWrap::mode),
             wrap_t: t.wrap_t.map_or(wrap, RawWrap::mode),
         });
-        wrap_t_written.push(t.wrap_t.is_some() || t.wrap.is_some());
-        texture_names.insert(name, scene.textures.len() - 1);
+        declared
+            .wrap_t_written
+            .push(t.wrap_t.is_some() || t.wrap.is_some());
+        declared.names.insert(name, scene.textures.len() - 1);
     }
+    Ok(declared)
+}
+
+fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription, SceneError> {
+    let mut scene = SceneDescription {
+        source: loc.label.to_owned(),
+        ..Default::default()
+    };
+    if let Some(render) = &raw.render {
+        scene.settings = settings(render, loc)?;
+    }
+
+    let DeclaredTextures {
+        names: texture_names,
+        wrap_t_written,
+        missing: missing_textures,
+    } = declare_textures(&raw.texture, files, loc, &mut scene)?;
     let texture = |name: &Spanned<String>| {
         texture_names
             .get(name.get_ref())
