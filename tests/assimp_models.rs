@@ -159,6 +159,47 @@ fn every_assimp_model_renders_or_is_rejected_with_one_line() {
             "{malformed}: {outcome:?}"
         );
     }
+
+    // Outcomes the loaders' shared rules decide (docs/scene-format.md, "Rules every loader
+    // follows"): zero normals are repaired, so BoxBadNormals renders; every glTF 1.0 file
+    // and every file requiring an extension conetrace lacks is refused with its reason.
+    let outcome_of = |relative: &str| {
+        let path = Path::new(MODELS).join(relative);
+        let (_, outcome) = results
+            .iter()
+            .find(|(f, _)| *f == path)
+            .unwrap_or_else(|| panic!("{} is not installed: {SETUP_HINT}", path.display()));
+        outcome
+    };
+    for repaired in [
+        "glTF2/BoxBadNormals-glTF-Binary/BoxBadNormals.glb",
+        "glTF2/ClearCoat-glTF/ClearCoatTest.gltf",
+    ] {
+        let outcome = outcome_of(repaired);
+        assert!(
+            matches!(outcome, Ok(Outcome::Rendered)),
+            "{repaired}: {outcome:?}"
+        );
+    }
+    for (refused, reason) in [
+        (
+            "glTF/CesiumMilkTruck/CesiumMilkTruck.gltf",
+            "glTF 1.0 files are not supported (only glTF 2.0)",
+        ),
+        (
+            "glTF/BoxTextured-glTF-Binary/BoxTextured.glb",
+            "glTF 1.0 files are not supported (only glTF 2.0)",
+        ),
+        (
+            "glTF2/draco/2CylinderEngine.gltf",
+            "requires the glTF extension KHR_draco_mesh_compression, which conetrace does not support",
+        ),
+    ] {
+        match outcome_of(refused) {
+            Ok(Outcome::Rejected(line)) => assert!(line.ends_with(reason), "{line}"),
+            other => panic!("{refused}: {other:?}"),
+        }
+    }
 }
 
 /// Inputs the fuzzers found crashing (tests/fuzz_regressions; the first byte is the

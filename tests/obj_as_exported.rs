@@ -232,13 +232,13 @@ fn malformed_mtl_lines_are_named() {
         ),
         (
             "newmtl a\nKs 2 2 2\n",
-            "m.mtl: line 2: 'Ks 2 2 2': a specular weight lies above 1",
+            "m.mtl: line 2: 'Ks 2 2 2': Ks is a reflectance, its components must lie in [0, 1]",
+        ),
+        (
+            "newmtl a\nKd 2 0 0\n",
+            "m.mtl: line 2: 'Kd 2 0 0': Kd is a reflectance, its components must lie in [0, 1]",
         ),
         ("newmtl a\nTr half\n", "m.mtl: line 2: bad Tr value 'half'"),
-        (
-            "# textures\nnewmtl a\nKd 1 1 1\nmap_Kd missing.png\n",
-            "m.mtl: line 4: texture 'missing.png'",
-        ),
     ];
     for (mtl, expected) in cases {
         let dir = temp_dir();
@@ -246,6 +246,31 @@ fn malformed_mtl_lines_are_named() {
         write(dir.path(), "m.mtl", mtl);
         assert_refused(dir.path(), "m.obj", &[expected]);
     }
+}
+
+/// A map file that cannot be read is not a malformed line: the render goes on without it
+/// (exit 0, the material's own `Kd` seen) and the summary names the file and its MTL line.
+#[test]
+fn a_missing_map_file_renders_without_it_and_says_so() {
+    let dir = temp_dir();
+    write(
+        dir.path(),
+        "m.obj",
+        "mtllib m.mtl\nv -1 -1 0\nv 1 -1 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+    );
+    write(
+        dir.path(),
+        "m.mtl",
+        "# textures\nnewmtl a\nKd 0.5 0.25 1\nmap_Kd missing.png\n",
+    );
+    let (summary, albedos) = render_albedos(&dir.path().join("m.obj"));
+    assert!(
+        summary.contains(
+            "m.mtl: line 4: texture 'missing.png' not loaded (no such file): rendered without it"
+        ),
+        "{summary}"
+    );
+    assert!(albedos.contains(&[500, 250, 1000]), "{albedos:?}");
 }
 
 #[test]

@@ -217,6 +217,21 @@ pub struct Material {
     pub normal_scale: f32,
 }
 
+impl Material {
+    /// Every texture slot of the material, for code that re-indexes or drops textures.
+    pub fn texture_slots_mut(&mut self) -> [&mut Option<TextureBinding>; 7] {
+        [
+            &mut self.base_color_texture,
+            &mut self.alpha_texture,
+            &mut self.metallic_roughness_texture,
+            &mut self.roughness_texture,
+            &mut self.metallic_texture,
+            &mut self.emission_texture,
+            &mut self.normal_texture,
+        ]
+    }
+}
+
 impl Default for Material {
     fn default() -> Self {
         Material {

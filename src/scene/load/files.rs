@@ -11,8 +11,10 @@
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+use glam::Vec3;
+
 use super::error::SceneError;
-use crate::scene::TextureSource;
+use crate::scene::{Environment, SceneDescription, TextureSource};
 
 /// Resolves and reads files relative to a base directory.
 #[derive(Clone, Debug)]
@@ -122,6 +124,75 @@ impl Files {
                 std::fs::File::open(path).map_err(|e| SceneError::unreadable(path.display(), e))?;
                 Ok(TextureSource::File(path.to_path_buf()))
             }
+        }
+    }
+}
+
+/// The policy for a referenced file that cannot be read (missing, a directory, no
+/// permission; docs/scene-format.md, "Missing and invalid referenced files"): an image or an
+/// MTL library only changes how surfaces look, so the scene renders without it and a note
+/// says so; geometry (mesh files, glTF buffers, patch files, fog bounds) is an error, as is a
+/// file that is read but malformed.
+///
+/// Records the note `<place>: <what> not loaded (<reason>): <consequence>` once per `what`
+/// (a file used by several materials is named once).
+pub(crate) fn note_not_loaded(
+    notes: &mut Vec<String>,
+    place: &str,
+    what: &str,
+    error: &SceneError,
+    consequence: &str,
+) {
+    let marker = format!("{what} not loaded");
+    if notes.iter().any(|n| n.contains(&marker)) {
+        return;
+    }
+    let reason = match error {
+        SceneError::Unreadable { reason, .. } => reason.clone(),
+        other => other.to_string(),
+    };
+    notes.push(format!("{place}: {marker} ({reason}): {consequence}"));
+}
+
+/// Removes the textures at `missing` (indices into `scene.textures`, files that could not be
+/// read) from the scene: material slots bound to them are emptied, so the material renders
+/// with its factors alone; an environment map among them leaves a black environment. Other
+/// bindings are re-indexed.
+pub(crate) fn leave_out_textures(scene: &mut SceneDescription, missing: &[usize]) {
+    if missing.is_empty() {
+        return;
+    }
+    // New index of each texture, `None` for a removed one.
+    let mut kept = 0;
+    let new_index: Vec<Option<usize>> = (0..scene.textures.len())
+        .map(|i| {
+            if missing.contains(&i) {
+                None
+            } else {
+                kept += 1;
+                Some(kept - 1)
+            }
+        })
+        .collect();
+    let mut index = 0;
+    scene.textures.retain(|_| {
+        index += 1;
+        new_index[index - 1].is_some()
+    });
+    for material in &mut scene.materials {
+        for slot in material.texture_slots_mut() {
+            if let Some(binding) = slot {
+                match new_index.get(binding.texture).copied().flatten() {
+                    Some(i) => binding.texture = i,
+                    None => *slot = None,
+                }
+            }
+        }
+    }
+    if let Environment::LatLong { texture, .. } = &mut scene.environment {
+        match new_index.get(*texture).copied().flatten() {
+            Some(i) => *texture = i,
+            None => scene.environment = Environment::Color(Vec3::ZERO),
         }
     }
 }

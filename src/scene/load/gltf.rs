@@ -4,7 +4,13 @@
 //! reads accessors with bounds checks, so malformed files (indices out of range, short
 //! buffers, cyclic node graphs) become a [`SceneError`] instead of a panic. Images are not
 //! decoded: buffer-view and `data:` images become `TextureSource::Encoded`, file URIs
-//! `TextureSource::File`.
+//! `TextureSource::File` (a file that cannot be read is left out with a note, the policy of
+//! `files::note_not_loaded`; a buffer file is geometry, and an error).
+//!
+//! Before the `gltf` crate reads the file, its [`Preamble`] refuses glTF 1.0 and files that
+//! require an extension missing from [`SUPPORTED_EXTENSIONS`], and lists the used extensions
+//! that are ignored (a note each). Zero-length normals are repaired as in OBJ files
+//! (`normals::repair_zero_normals`).
 //!
 //! Material mapping: base colour factor/texture (sRGB), the metallic-roughness model itself
 //! (`metallic`, `roughness: Some(..)`, factors defaulting to 1, and the linear
@@ -24,8 +30,9 @@ use glam::{Affine2, Affine3A, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 
 use super::error::SceneError;
-use super::files::Files;
+use super::files::{note_not_loaded, Files};
 use super::merge::Transform;
+use super::normals::repair_zero_normals;
 use super::uri::{decode_data_uri, percent_decode};
 use crate::scene::{
     CameraDesc, ColorSpace, Light, Material, Projection, SceneDescription, TextureBinding,
@@ -49,13 +56,15 @@ pub(crate) fn load_gltf_with(
     let label = path.display().to_string();
     let bytes = files.read(path)?;
     let err = |m: String| SceneError::invalid(&label, m);
-    let gltf =
-        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
-            match version_1_hint(&bytes) {
-                Some(hint) => err(hint.to_owned()),
-                None => err(format!("glTF parse error: {e}")),
-            }
-        })?;
+    // Before the `gltf` crate deserialises the file: a glTF 1.0 file fails there with
+    // whichever of its 1.0 constructs it meets first, and a required extension only after
+    // full validation, among the problems it causes.
+    let ignored_extensions = match Preamble::of(&bytes) {
+        Some(preamble) => preamble.check().map_err(err)?,
+        None => Vec::new(),
+    };
+    let gltf = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| err(format!("glTF parse error: {e}")))?;
     check_schema(gltf.document.as_json()).map_err(err)?;
     let local = files.with_base(path.parent().unwrap_or(Path::new("")));
     let buffers = load_buffers(&gltf, &local).map_err(err)?;
@@ -71,6 +80,11 @@ pub(crate) fn load_gltf_with(
         materials: HashMap::new(),
         textures: HashMap::new(),
     };
+    for extension in ignored_extensions {
+        loader.part.notes.push(format!(
+            "{label}: uses the glTF extension {extension}, which conetrace ignores"
+        ));
+    }
     loader.walk_nodes().map_err(err)?;
     if loader.part.meshes.is_empty() {
         return Err(err("no triangle meshes in the glTF file".into()));
@@ -519,7 +533,7 @@ impl Loader<'_> {
             let positions = read_floats(&positions_accessor, self.buffers, 3)?;
             let vertex_count = positions.len() / 3;
             let positions: Vec<Vec3> = positions.chunks_exact(3).map(Vec3::from_slice).collect();
-            let normals = match primitive.get(&gltf::Semantic::Normals) {
+            let mut normals = match primitive.get(&gltf::Semantic::Normals) {
                 Some(accessor) => {
                     let n = read_floats(&accessor, self.buffers, 3)?;
                     if n.len() / 3 != vertex_count {
@@ -571,6 +585,11 @@ impl Loader<'_> {
                         .collect()
                 }
             };
+            if let Some(note) = repair_zero_normals(&positions, &triangles, &mut normals) {
+                self.part
+                    .notes
+                    .push(format!("{}: {what}: {note}", self.label));
+            }
             let material = self.material(&primitive.material())?;
             let mut placed = TriangleMesh {
                 name: format!("{mesh_name}#{}", primitive.index()),
@@ -609,17 +628,17 @@ impl Loader<'_> {
         material.metallic = pbr.metallic_factor();
         material.roughness = Some(pbr.roughness_factor());
         if let Some(info) = pbr.metallic_roughness_texture() {
-            material.metallic_roughness_texture = Some(self.binding(&info, ColorSpace::Linear)?);
+            material.metallic_roughness_texture = self.binding(&info, ColorSpace::Linear)?;
         }
         // KHR_materials_emissive_strength scales the emissive factor beyond [0, 1].
         material.emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
         // Double-sided materials are lit, and emit, on both sides (glTF 2.0, 3.9.5).
         material.two_sided = m.double_sided();
         if let Some(info) = m.emissive_texture() {
-            material.emission_texture = Some(self.binding(&info, ColorSpace::Srgb)?);
+            material.emission_texture = self.binding(&info, ColorSpace::Srgb)?;
         }
         if let Some(normal) = m.normal_texture() {
-            material.normal_texture = Some(self.normal_binding(&normal)?);
+            material.normal_texture = self.normal_binding(&normal)?;
             material.normal_scale = normal.scale();
         }
         if let Some(t) = m.transmission() {
@@ -640,12 +659,12 @@ impl Loader<'_> {
             material.attenuation_distance = volume.attenuation_distance();
         }
         if let Some(info) = pbr.base_color_texture() {
-            material.base_color_texture = Some(self.binding(&info, ColorSpace::Srgb)?);
+            material.base_color_texture = self.binding(&info, ColorSpace::Srgb)?;
             if matches!(
                 m.alpha_mode(),
                 gltf::material::AlphaMode::Mask | gltf::material::AlphaMode::Blend
             ) {
-                material.alpha_texture = Some(self.binding(&info, ColorSpace::Linear)?);
+                material.alpha_texture = self.binding(&info, ColorSpace::Linear)?;
             }
         }
         match m.alpha_mode() {
@@ -667,11 +686,12 @@ impl Loader<'_> {
         Ok(index)
     }
 
+    /// The binding of a texture reference; `None` when its image file cannot be read.
     fn binding(
         &mut self,
         info: &gltf::texture::Info,
         color_space: ColorSpace,
-    ) -> Result<TextureBinding, String> {
+    ) -> Result<Option<TextureBinding>, String> {
         let mut transform = Affine2::IDENTITY;
         let mut tex_coord = info.tex_coord();
         if let Some(t) = info.texture_transform() {
@@ -685,7 +705,7 @@ impl Loader<'_> {
             ));
         }
         let texture = self.texture(&info.texture(), color_space)?;
-        Ok(TextureBinding { texture, transform })
+        Ok(texture.map(|texture| TextureBinding { texture, transform }))
     }
 
     /// The binding of a `normalTexture` (linear data). Its `KHR_texture_transform`, which the
@@ -693,7 +713,7 @@ impl Loader<'_> {
     fn normal_binding(
         &mut self,
         normal: &gltf::material::NormalTexture,
-    ) -> Result<TextureBinding, String> {
+    ) -> Result<Option<TextureBinding>, String> {
         let mut transform = Affine2::IDENTITY;
         let mut tex_coord = normal.tex_coord();
         if let Some(t) = normal.extension_value("KHR_texture_transform") {
@@ -722,17 +742,19 @@ impl Loader<'_> {
             ));
         }
         let texture = self.texture(&normal.texture(), ColorSpace::Linear)?;
-        Ok(TextureBinding { texture, transform })
+        Ok(texture.map(|texture| TextureBinding { texture, transform }))
     }
 
+    /// The index in `part.textures` of a glTF texture in `color_space`; `None` (with a note,
+    /// `files::note_not_loaded`) when its image is a file that cannot be read.
     fn texture(
         &mut self,
         texture: &gltf::Texture,
         color_space: ColorSpace,
-    ) -> Result<usize, String> {
+    ) -> Result<Option<usize>, String> {
         let key = (texture.index(), color_space == ColorSpace::Srgb);
         if let Some(&i) = self.textures.get(&key) {
-            return Ok(i);
+            return Ok(Some(i));
         }
         let image = texture.source();
         let image_label = format!("{}#image{}", self.label, image.index());
@@ -748,9 +770,21 @@ impl Loader<'_> {
                 },
                 None => {
                     let path = self.files.resolve(&percent_decode(uri));
-                    self.files
-                        .texture_source(&path)
-                        .map_err(|e| format!("image {}: {e}", image.index()))?
+                    match self.files.texture_source(&path) {
+                        Ok(source) => source,
+                        Err(e) => {
+                            let what = format!("image {} '{uri}'", image.index());
+                            let consequence = "textures using it are left out";
+                            note_not_loaded(
+                                &mut self.part.notes,
+                                self.label,
+                                &what,
+                                &e,
+                                consequence,
+                            );
+                            return Ok(None);
+                        }
+                    }
                 }
             },
         };
@@ -767,7 +801,7 @@ impl Loader<'_> {
         });
         let index = self.part.textures.len() - 1;
         self.textures.insert(key, index);
-        Ok(index)
+        Ok(Some(index))
     }
 }
 
@@ -792,18 +826,161 @@ fn fan_triangles(indices: &[u32]) -> Vec<[u32; 3]> {
         .collect()
 }
 
-/// When the `gltf` crate rejects a file, a clearer reason if it is a glTF 1.0 file.
-fn version_1_hint(bytes: &[u8]) -> Option<&'static str> {
-    const HINT: &str = "glTF 1.0 files are not supported (only glTF 2.0)";
-    if bytes.starts_with(b"glTF") {
-        let version = bytes
-            .get(4..8)
-            .map(|v| u32::from_le_bytes([v[0], v[1], v[2], v[3]]));
-        return (version == Some(1)).then_some(HINT);
+/// The glTF extensions this loader reads (`load_gltf`'s material, texture and light
+/// mapping); others in `extensionsUsed` are ignored with a note, others in
+/// `extensionsRequired` refuse the file.
+const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_transmission",
+    "KHR_materials_volume",
+    "KHR_texture_transform",
+];
+
+/// What is read of a glTF file before the `gltf` crate deserialises it: its version, its
+/// extension lists and whether its collections are glTF 1.0's id-keyed objects.
+#[derive(Debug, Default, serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct Preamble {
+    asset: Option<serde_json::Value>,
+    extensions_required: Option<serde_json::Value>,
+    extensions_used: Option<serde_json::Value>,
+    nodes: Option<Collection>,
+    meshes: Option<Collection>,
+    accessors: Option<Collection>,
+    /// Set for a binary file whose header gives container version 1.
+    #[serde(skip)]
+    binary_version_1: bool,
+}
+
+/// How a top-level collection is written; its contents are skipped unread.
+#[derive(Debug)]
+struct Collection {
+    /// A JSON object keyed by id (glTF 1.0) rather than an array (glTF 2.0).
+    keyed: bool,
+}
+
+impl<'de> serde::Deserialize<'de> for Collection {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::{IgnoredAny, MapAccess, SeqAccess, Visitor};
+        struct Kind;
+        impl<'de> Visitor<'de> for Kind {
+            type Value = Collection;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a JSON value")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Collection, A::Error> {
+                while map.next_entry::<IgnoredAny, IgnoredAny>()?.is_some() {}
+                Ok(Collection { keyed: true })
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Collection, A::Error> {
+                while seq.next_element::<IgnoredAny>()?.is_some() {}
+                Ok(Collection { keyed: false })
+            }
+            // Wrong types are left to the `gltf` crate's messages.
+            fn visit_bool<E>(self, _: bool) -> Result<Collection, E> {
+                Ok(Collection { keyed: false })
+            }
+            fn visit_i64<E>(self, _: i64) -> Result<Collection, E> {
+                Ok(Collection { keyed: false })
+            }
+            fn visit_u64<E>(self, _: u64) -> Result<Collection, E> {
+                Ok(Collection { keyed: false })
+            }
+            fn visit_f64<E>(self, _: f64) -> Result<Collection, E> {
+                Ok(Collection { keyed: false })
+            }
+            fn visit_str<E>(self, _: &str) -> Result<Collection, E> {
+                Ok(Collection { keyed: false })
+            }
+            fn visit_unit<E>(self) -> Result<Collection, E> {
+                Ok(Collection { keyed: false })
+            }
+        }
+        d.deserialize_any(Kind)
     }
-    let json: serde_json::Value = serde_json::from_slice(bytes).ok()?;
-    let version = json.get("asset")?.get("version")?.as_str()?;
-    version.starts_with('1').then_some(HINT)
+}
+
+impl Preamble {
+    /// The preamble of a `.gltf` (JSON) or `.glb` (binary container) file; `None` when the
+    /// JSON cannot be read, which the `gltf` crate then reports.
+    fn of(bytes: &[u8]) -> Option<Preamble> {
+        if !bytes.starts_with(b"glTF") {
+            return serde_json::from_slice(bytes).ok();
+        }
+        // GLB header: magic, container version, length; then the JSON chunk's length and
+        // type (glTF 2.0, "Binary glTF Layout").
+        let word = |at: usize| {
+            let b = bytes.get(at..at + 4)?;
+            Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+        };
+        if word(4)? == 1 {
+            return Some(Preamble {
+                binary_version_1: true,
+                ..Preamble::default()
+            });
+        }
+        let json_length = word(12)?;
+        let json = bytes.get(20..20usize.checked_add(json_length)?)?;
+        serde_json::from_slice(json).ok()
+    }
+
+    /// Whether the file is glTF 1.0: by its version, or, without a readable version, by
+    /// collections written as id-keyed objects.
+    fn is_version_1(&self) -> bool {
+        let version = self.asset.as_ref().and_then(|a| a.get("version"));
+        let major = match version {
+            Some(serde_json::Value::String(s)) => s.split('.').next().map(str::trim),
+            Some(serde_json::Value::Number(n)) => return n.as_f64().is_some_and(|v| v < 2.0),
+            _ => None,
+        };
+        match major {
+            Some(major) => major == "1",
+            None => {
+                self.binary_version_1
+                    || [&self.nodes, &self.meshes, &self.accessors]
+                        .into_iter()
+                        .flatten()
+                        .any(|c| c.keyed)
+            }
+        }
+    }
+
+    /// Refuses a glTF 1.0 file and one that requires an extension this loader lacks;
+    /// returns the used extensions it ignores, in the file's order.
+    fn check(&self) -> Result<Vec<String>, String> {
+        if self.is_version_1() {
+            return Err("glTF 1.0 files are not supported (only glTF 2.0)".into());
+        }
+        let unsupported = |list: &Option<serde_json::Value>| -> Vec<String> {
+            let names = list.as_ref().and_then(|l| l.as_array());
+            let mut out: Vec<String> = Vec::new();
+            for name in names.into_iter().flatten().filter_map(|n| n.as_str()) {
+                if !SUPPORTED_EXTENSIONS.contains(&name) && !out.iter().any(|o| o == name) {
+                    out.push(name.to_owned());
+                }
+            }
+            out
+        };
+        let required = unsupported(&self.extensions_required);
+        match required.len() {
+            0 => {}
+            1 => {
+                return Err(format!(
+                    "requires the glTF extension {}, which conetrace does not support",
+                    required[0]
+                ))
+            }
+            _ => {
+                return Err(format!(
+                    "requires the glTF extensions {}, which conetrace does not support",
+                    required.join(", ")
+                ))
+            }
+        }
+        Ok(unsupported(&self.extensions_used))
+    }
 }
 
 fn wrap_mode(mode: gltf::texture::WrappingMode) -> WrapMode {
@@ -1318,26 +1495,57 @@ mod tests {
                 }),
                 "roughnessFactor 1.5 must lie in [0, 1]",
             ),
-            (
-                Box::new(|j| {
-                    j["images"]
-                        .as_array_mut()
-                        .unwrap()
-                        .push(serde_json::json!({"uri": "no_such_normals.png"}));
-                    j["textures"]
-                        .as_array_mut()
-                        .unwrap()
-                        .push(serde_json::json!({"source": 1}));
-                    j["materials"][0]["normalTexture"] = serde_json::json!({"index": 1});
-                }),
-                "no_such_normals.png",
-            ),
         ];
         for (edit, expected) in cases {
             let e = synthetic(edit, TRIANGLE).unwrap_err().to_string();
             assert!(e.contains("synthetic.gltf") && e.contains(expected), "{e}");
             assert_eq!(e.lines().count(), 1, "{e}");
         }
+    }
+
+    /// An image file that cannot be read is left out with one note, as an MTL map or a TOML
+    /// texture is; the material keeps its factors. A missing buffer stays an error
+    /// (`malformed_synthetic_files_are_errors`).
+    #[test]
+    fn missing_image_files_are_left_out_with_a_note() {
+        let part = synthetic(
+            |j| {
+                j["images"]
+                    .as_array_mut()
+                    .unwrap()
+                    .push(serde_json::json!({"uri": "no_such_normals.png"}));
+                j["textures"]
+                    .as_array_mut()
+                    .unwrap()
+                    .push(serde_json::json!({"source": 1}));
+                let m = &mut j["materials"][0];
+                m["normalTexture"] = serde_json::json!({"index": 1});
+                m["emissiveTexture"] = serde_json::json!({"index": 1});
+            },
+            TRIANGLE,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let m = &part.materials[0];
+        assert!(m.normal_texture.is_none() && m.emission_texture.is_none());
+        assert!(
+            m.base_color_texture.is_some(),
+            "the data: image still loads"
+        );
+        assert_eq!(m.emission, Vec3::new(0.1, 0.2, 0.3));
+        let notes: Vec<&String> = part
+            .notes
+            .iter()
+            .filter(|n| n.contains("no_such_normals.png"))
+            .collect();
+        assert_eq!(notes.len(), 1, "{:?}", part.notes);
+        assert!(
+            notes[0].ends_with(
+                "synthetic.gltf: image 1 'no_such_normals.png' not loaded (no such file): \
+                 textures using it are left out"
+            ),
+            "{}",
+            notes[0]
+        );
     }
 
     #[test]
@@ -1410,6 +1618,32 @@ mod tests {
             .contains("not finite"));
     }
 
+    /// A zero normal (Khronos' BoxBadNormals has four) is repaired with a note, as in OBJ.
+    #[test]
+    fn zero_normals_are_replaced_by_the_face_normal() {
+        // The NORMAL accessor reads the positions: vertex 0's normal is (0, 0, 0).
+        let part = synthetic(|j| j["accessors"][1]["byteOffset"] = 0.into(), TRIANGLE)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mesh = &part.meshes[0];
+        assert!(
+            (mesh.normals[0] - Vec3::Z).length() < 1e-6,
+            "{}",
+            mesh.normals[0]
+        );
+        assert!(
+            part.notes.iter().any(|n| n.contains(
+                "synthetic.gltf: mesh 'tri' primitive 0: 1 zero-length normals replaced"
+            )),
+            "{:?}",
+            part.notes
+        );
+        let scene = SceneDescription {
+            source: "synthetic.gltf".into(),
+            ..part
+        };
+        super::super::validate(&scene).unwrap_or_else(|e| panic!("{e}"));
+    }
+
     #[test]
     fn indices_of_every_unsigned_width_are_read_little_endian() {
         let bytes = [0xfe, 0xdc, 0xba, 0x98];
@@ -1439,11 +1673,78 @@ mod tests {
         assert!(fan_triangles(&[]).is_empty());
     }
 
+    /// Every way a 1.0 file shows itself: the version as a string or as a number (as
+    /// CesiumMilkTruck writes it), id-keyed collections, a version 1 binary container, and a
+    /// 1.0 JSON chunk in a version 2 container.
     #[test]
     fn gltf_1_files_are_named_as_such() {
-        assert!(version_1_hint(br#"{"asset": {"version": "1.0"}}"#).is_some());
-        assert!(version_1_hint(br#"{"asset": {"version": "2.0"}}"#).is_none());
-        assert!(version_1_hint(b"glTF\x01\0\0\0").is_some());
+        let version_1 = |bytes: &[u8]| Preamble::of(bytes).unwrap().is_version_1();
+        assert!(version_1(br#"{"asset": {"version": "1.0"}}"#));
+        assert!(version_1(br#"{"asset": {"version": 1}}"#));
+        assert!(version_1(br#"{"asset": {}, "meshes": {"mesh_1": {}}}"#));
+        assert!(version_1(b"glTF\x01\0\0\0"));
+        assert!(!version_1(
+            br#"{"asset": {"version": "2.0"}, "meshes": []}"#
+        ));
+        assert!(!version_1(br#"{"asset": {}, "meshes": [{}]}"#));
+        let mut glb = b"glTF\x02\0\0\0\0\0\0\0".to_vec();
+        let json = br#"{"asset": {"version": "1.0"}}"#;
+        glb.extend((json.len() as u32).to_le_bytes());
+        glb.extend(b"JSON");
+        glb.extend(json);
+        assert!(version_1(&glb));
+        let e = Preamble::of(br#"{"asset": {"version": 1}}"#)
+            .unwrap()
+            .check()
+            .unwrap_err();
+        assert_eq!(e, "glTF 1.0 files are not supported (only glTF 2.0)");
+    }
+
+    /// A required extension the loader lacks is named, not the validation problems it causes
+    /// (a Draco-compressed accessor has no buffer view); used ones it ignores are noted.
+    #[test]
+    fn required_extensions_refuse_and_used_ones_are_noted() {
+        let e = synthetic(
+            |j| {
+                j["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+                j["extensionsUsed"]
+                    .as_array_mut()
+                    .unwrap()
+                    .push("KHR_draco_mesh_compression".into());
+                j["accessors"][0]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("bufferView");
+            },
+            TRIANGLE,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.ends_with(
+                "synthetic.gltf: requires the glTF extension KHR_draco_mesh_compression, \
+                 which conetrace does not support"
+            ),
+            "{e}"
+        );
+        let part = synthetic(
+            |j| {
+                let used = j["extensionsUsed"].as_array_mut().unwrap();
+                used.push("KHR_materials_clearcoat".into());
+                used.push("KHR_materials_sheen".into());
+                j["extensionsRequired"] = serde_json::json!(["KHR_texture_transform"]);
+            },
+            TRIANGLE,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let ignored: Vec<&String> = part
+            .notes
+            .iter()
+            .filter(|n| n.contains("which conetrace ignores"))
+            .collect();
+        assert_eq!(ignored.len(), 2, "{:?}", part.notes);
+        assert!(ignored[0].contains("uses the glTF extension KHR_materials_clearcoat"));
+        assert!(ignored[1].contains("KHR_materials_sheen"));
     }
 
     #[test]

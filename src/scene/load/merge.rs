@@ -149,13 +149,7 @@ pub(crate) fn append(
             }
         };
         for mut material in part.materials {
-            rebase(&mut material.base_color_texture);
-            rebase(&mut material.alpha_texture);
-            rebase(&mut material.metallic_roughness_texture);
-            rebase(&mut material.roughness_texture);
-            rebase(&mut material.metallic_texture);
-            rebase(&mut material.emission_texture);
-            rebase(&mut material.normal_texture);
+            material.texture_slots_mut().into_iter().for_each(rebase);
             scene.materials.push(material);
         }
     }

@@ -32,6 +32,7 @@ mod fog;
 mod framing;
 mod gltf;
 mod merge;
+mod normals;
 mod obj;
 mod obj_text;
 mod patches;

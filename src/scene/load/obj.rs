@@ -27,7 +27,8 @@ use std::path::Path;
 use glam::{Affine2, Vec2, Vec3};
 
 use super::error::SceneError;
-use super::files::Files;
+use super::files::{note_not_loaded, Files};
+use super::normals::repair_zero_normals;
 use super::obj_text::{decode_lines, excerpt, join_continued_lines, LineCountingReader};
 use super::polygon;
 use crate::scene::{
@@ -352,8 +353,8 @@ fn load_library(
 ///   material, with a note); `tobj` would refuse the whole library;
 /// - `Ka`/`Kd`/`Ks`/`Ke` with one number mean grey (the MTL format's `r` alone stands for
 ///   `r r r`): written out as three, since `tobj` needs three;
-/// - colours with two numbers or none, negative `Kd`/`Ks`/`Ke` components and unreadable `Tr`
-///   values are errors at their line.
+/// - colours with two numbers or none, negative `Kd`/`Ks`/`Ke` components, `Kd`/`Ks`
+///   components above 1 and unreadable `Tr` values are errors at their line.
 ///
 /// Returns the lines and where each material `tobj` will return was written.
 fn prepare_mtl(
@@ -411,10 +412,16 @@ fn prepare_mtl(
                         format!("'{}': a colour component is negative", excerpt(line, 60)),
                     ));
                 }
-                if keyword == "Ks" && values.iter().any(|&x| x > 1.0) {
+                // Reflectances (the same rule as TOML's base_color and glTF's
+                // baseColorFactor): above 1 a surface would give back more light than it
+                // receives. Emission (`Ke`) may exceed 1; `Ka` is not used.
+                if matches!(keyword, "Kd" | "Ks") && values.iter().any(|&x| x > 1.0) {
                     return Err(at(
                         number,
-                        format!("'{}': a specular weight lies above 1", excerpt(line, 60)),
+                        format!(
+                            "'{}': {keyword} is a reflectance, its components must lie in [0, 1]",
+                            excerpt(line, 60)
+                        ),
                     ));
                 }
                 if words.len() == 1 {
@@ -520,12 +527,8 @@ fn convert_mesh(
     } else {
         Vec::new()
     };
-    let repaired = repair_zero_normals(&positions, &triangles, &mut normals);
-    if repaired > 0 {
-        notes.push(format!(
-            "{label}: object '{}': {repaired} zero-length normals replaced by the surrounding faces' normal",
-            model.name
-        ));
+    if let Some(note) = repair_zero_normals(&positions, &triangles, &mut normals) {
+        notes.push(format!("{label}: object '{}': {note}", model.name));
     }
     Ok(Some(TriangleMesh {
         name: model.name.clone(),
@@ -535,38 +538,6 @@ fn convert_mesh(
         triangles,
         material: 0,
     }))
-}
-
-/// Replaces zero-length vertex normals (exporters write `vn 0 0 0`) by the area-weighted
-/// normal of the triangles around the vertex; drops all normals (flat shading) when that is
-/// zero too. Returns how many normals were replaced.
-fn repair_zero_normals(
-    positions: &[Vec3],
-    triangles: &[[u32; 3]],
-    normals: &mut Vec<Vec3>,
-) -> usize {
-    let is_zero = |n: &Vec3| n.length_squared() == 0.0;
-    let count = normals.iter().filter(|n| is_zero(n)).count();
-    if count == 0 {
-        return 0;
-    }
-    let mut face_sum = vec![Vec3::ZERO; positions.len()];
-    for t in triangles {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
-        let area_normal = (b - a).cross(c - a);
-        for &i in t {
-            face_sum[i as usize] += area_normal;
-        }
-    }
-    for (n, sum) in normals.iter_mut().zip(&face_sum) {
-        if is_zero(n) {
-            *n = sum.normalize_or_zero();
-        }
-    }
-    if normals.iter().any(is_zero) {
-        normals.clear();
-    }
-    count
 }
 
 /// One parsed MTL material as a conetrace material; `origin` locates its messages.
@@ -619,18 +590,19 @@ fn convert_material(
         Some(4 | 6 | 7) => material.transmission = 1.0,
         _ => {}
     }
+    let mut texture = |keyword: &str, statement: &str, color_space: ColorSpace| {
+        let place = format!("{}: line {}", origin.file, origin.line_of(keyword));
+        add_texture(files, textures, statement, color_space, &place, notes)
+            .map_err(|e| at(keyword, e))
+    };
     if let Some(file) = &m.diffuse_texture {
-        material.base_color_texture = Some(
-            add_texture(files, textures, file, ColorSpace::Srgb, notes)
-                .map_err(|e| at("map_Kd", e))?,
-        );
+        material.base_color_texture = texture("map_Kd", file, ColorSpace::Srgb)?;
     }
     if let Some(file) = &m.dissolve_texture {
-        material.alpha_texture = Some(
-            add_texture(files, textures, file, ColorSpace::Linear, notes)
-                .map_err(|e| at("map_d", e))?,
-        );
-        material.alpha_cutoff = Some(0.5);
+        material.alpha_texture = texture("map_d", file, ColorSpace::Linear)?;
+        if material.alpha_texture.is_some() {
+            material.alpha_cutoff = Some(0.5);
+        }
     }
     let param = |key: &str| m.unknown_param.get(key).map(String::as_str);
     let number =
@@ -650,34 +622,22 @@ fn convert_material(
         match (roughness_map, metallic_map) {
             // One file for both: glTF's packing (green = roughness, blue = metalness).
             (Some(r), Some(m)) if MapStatement::parse(r) == MapStatement::parse(m) => {
-                material.metallic_roughness_texture = Some(
-                    add_texture(files, textures, r, ColorSpace::Linear, notes)
-                        .map_err(|e| at("map_Pr", e))?,
-                );
+                material.metallic_roughness_texture = texture("map_Pr", r, ColorSpace::Linear)?;
             }
             (r, m) => {
                 if let Some(r) = r {
-                    material.roughness_texture = Some(
-                        add_texture(files, textures, r, ColorSpace::Linear, notes)
-                            .map_err(|e| at("map_Pr", e))?,
-                    );
+                    material.roughness_texture = texture("map_Pr", r, ColorSpace::Linear)?;
                 }
                 if let Some(m) = m {
-                    material.metallic_texture = Some(
-                        add_texture(files, textures, m, ColorSpace::Linear, notes)
-                            .map_err(|e| at("map_Pm", e))?,
-                    );
+                    material.metallic_texture = texture("map_Pm", m, ColorSpace::Linear)?;
                 }
             }
         }
     }
     if let Some(file) = param("map_Ke") {
-        material.emission_texture = Some(
-            add_texture(files, textures, file, ColorSpace::Srgb, notes)
-                .map_err(|e| at("map_Ke", e))?,
-        );
+        material.emission_texture = texture("map_Ke", file, ColorSpace::Srgb)?;
         // The texture gives the emission by itself unless `Ke` scales it.
-        if m.emissive.is_none() {
+        if m.emissive.is_none() && material.emission_texture.is_some() {
             material.emission = Vec3::ONE;
         }
     }
@@ -704,10 +664,7 @@ fn convert_material(
         material.normal_scale = MapStatement::parse(statement)
             .map_err(|e| at(keyword, e))?
             .bump_multiplier;
-        material.normal_texture = Some(
-            add_texture(files, textures, statement, ColorSpace::Linear, notes)
-                .map_err(|e| at(keyword, e))?,
-        );
+        material.normal_texture = texture(keyword, statement, ColorSpace::Linear)?;
     }
     Ok(material)
 }
@@ -837,14 +794,16 @@ impl MapStatement {
 
 /// Adds (or reuses) the texture of an MTL map statement and returns its binding (with the
 /// statement's `-s`/`-o` transform). Windows separators (`.\\a.jpg`, common in exported MTL
-/// files) are read as `/`. Options the renderer ignores get a note.
+/// files) are read as `/`. Options the renderer ignores get a note. A file that cannot be
+/// read gives `None` and a note at `place` (`files::note_not_loaded`).
 fn add_texture(
     files: &Files,
     textures: &mut Vec<TextureDesc>,
     statement: &str,
     color_space: ColorSpace,
+    place: &str,
     notes: &mut Vec<String>,
-) -> Result<TextureBinding, String> {
+) -> Result<Option<TextureBinding>, String> {
     let map = MapStatement::parse(statement)?;
     if !map.ignored.is_empty() {
         notes.push(format!(
@@ -866,11 +825,16 @@ fn add_texture(
         .iter()
         .position(|t| t.name == map.file && t.color_space == color_space && t.wrap_s == wrap)
     {
-        return Ok(binding(i));
+        return Ok(Some(binding(i)));
     }
-    let source = files
-        .texture_source(&files.resolve(&map.file))
-        .map_err(|e| format!("texture '{}': {e}", map.file))?;
+    let source = match files.texture_source(&files.resolve(&map.file)) {
+        Ok(source) => source,
+        Err(e) => {
+            let what = format!("texture '{}'", map.file);
+            note_not_loaded(notes, place, &what, &e, "rendered without it");
+            return Ok(None);
+        }
+    };
     textures.push(TextureDesc {
         name: map.file.clone(),
         source,
@@ -878,7 +842,7 @@ fn add_texture(
         wrap_s: wrap,
         wrap_t: wrap,
     });
-    Ok(binding(textures.len() - 1))
+    Ok(Some(binding(textures.len() - 1)))
 }
 
 #[cfg(test)]
@@ -1011,6 +975,33 @@ mod tests {
         assert!(m.normal_texture.is_some());
     }
 
+    /// `Kd` obeys the reflectance rule `Ks`, TOML's `base_color` and glTF's
+    /// `baseColorFactor` obey; `Ke` is emission and may exceed 1.
+    #[test]
+    fn reflectances_above_one_are_errors_at_their_line() {
+        let dir = tempfile::tempdir().unwrap();
+        write(dir.path(), "quad.obj", QUAD);
+        for (mtl, expected) in [
+            (
+                "newmtl red\nKd 2 0 0\n",
+                "quad.mtl: line 2: 'Kd 2 0 0': Kd is a reflectance, its components must lie in [0, 1]",
+            ),
+            (
+                "newmtl red\nKs 1.5\n",
+                "quad.mtl: line 2: 'Ks 1.5': Ks is a reflectance, its components must lie in [0, 1]",
+            ),
+        ] {
+            write(dir.path(), "quad.mtl", mtl);
+            let err = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj"))
+                .unwrap_err()
+                .to_string();
+            assert!(err.ends_with(expected), "{err}");
+        }
+        write(dir.path(), "quad.mtl", "newmtl red\nKd 1 1 1\nKe 4 4 4\n");
+        let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap();
+        assert_eq!(part.materials[0].emission, Vec3::splat(4.0));
+    }
+
     #[test]
     fn bad_pbr_statements_are_errors_at_their_line() {
         let dir = tempfile::tempdir().unwrap();
@@ -1027,15 +1018,6 @@ mod tests {
             (
                 "newmtl red\nKd 1 1 1\nmap_Bump -bm nan n.png\n",
                 "line 3: 'map_Bump -bm nan n.png': -bm needs a finite number",
-            ),
-            ("newmtl red\nmap_Ke missing_glow.png\n", "missing_glow.png"),
-            (
-                "newmtl red\nnorm missing_normals.png\n",
-                "missing_normals.png",
-            ),
-            (
-                "newmtl red\nPm 1\nmap_Pm missing_metal.png\n",
-                "line 3: texture 'missing_metal.png'",
             ),
         ] {
             write(dir.path(), "quad.mtl", mtl);
@@ -1134,28 +1116,40 @@ mod tests {
         assert!((area - 2.5).abs() < 1e-5, "area {area}");
     }
 
+    /// A map file that cannot be read is left out with a note naming the MTL line, as a
+    /// missing MTL library is; the material keeps its factors (`map_Ke` without its image
+    /// does not make the surface a white emitter).
     #[test]
-    fn missing_texture_file_is_an_error() {
+    fn missing_texture_files_are_left_out_with_a_note() {
         let dir = tempfile::tempdir().unwrap();
         write(dir.path(), "quad.obj", QUAD);
-        write(dir.path(), "quad.mtl", "newmtl red\nmap_Kd nothere.png\n");
-        let err = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap_err();
-        assert!(err.to_string().contains("nothere.png"), "{err}");
-    }
-
-    #[test]
-    fn zero_normals_are_repaired_from_faces() {
-        let positions = [Vec3::ZERO, Vec3::X, Vec3::Y];
-        let mut normals = vec![Vec3::ZERO, Vec3::Z, Vec3::Z];
-        assert_eq!(
-            repair_zero_normals(&positions, &[[0, 1, 2]], &mut normals),
-            1
+        write(
+            dir.path(),
+            "quad.mtl",
+            "newmtl red\nKd 1 0 0\nmap_Kd nothere.png\nmap_d nothere.png\n\
+             map_Ke missing_glow.png\nnorm missing_normals.png\nPm 1\nmap_Pm missing_metal.png\n",
         );
-        assert_eq!(normals[0], Vec3::Z);
-        // A degenerate triangle cannot supply a normal: fall back to flat shading.
-        let mut normals = vec![Vec3::ZERO; 3];
-        repair_zero_normals(&[Vec3::ZERO; 3], &[[0, 1, 2]], &mut normals);
-        assert!(normals.is_empty());
+        let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut m = part.materials[0].clone();
+        assert_eq!(m.base_color, Vec3::new(1.0, 0.0, 0.0));
+        assert!(m.texture_slots_mut().iter().all(|slot| slot.is_none()));
+        assert_eq!((m.alpha_cutoff, m.emission), (None, Vec3::ZERO));
+        assert!(part.textures.is_empty());
+        for expected in [
+            "quad.mtl: line 3: texture 'nothere.png' not loaded (no such file): rendered without it",
+            "quad.mtl: line 5: texture 'missing_glow.png' not loaded",
+            "quad.mtl: line 6: texture 'missing_normals.png' not loaded",
+            "quad.mtl: line 8: texture 'missing_metal.png' not loaded",
+        ] {
+            assert!(
+                part.notes.iter().any(|n| n.contains(expected)),
+                "{expected} not in {:?}",
+                part.notes
+            );
+        }
+        let named = |file: &str| part.notes.iter().filter(|n| n.contains(file)).count();
+        assert_eq!(named("'nothere.png'"), 1, "{:?}", part.notes);
     }
 
     #[test]

@@ -13,12 +13,12 @@ use std::collections::HashMap;
 use std::fmt;
 use toml::Spanned;
 
-use super::error::SceneError;
-use super::files::Files;
+use super::error::{line_column, SceneError};
+use super::files::{leave_out_textures, note_not_loaded, Files};
 use super::merge::{append, Placement, Transform};
 use crate::scene::{
     CameraDesc, ColorSpace, Environment, FresnelMode, Light, Material, Projection, RenderSettings,
-    SceneDescription, Sphere, TextureBinding, TextureDesc, ToneMap, WrapMode,
+    SceneDescription, Sphere, TextureBinding, TextureDesc, TextureSource, ToneMap, WrapMode,
 };
 
 /// A finite number: TOML's `nan` and `inf` literals (and overflow past f32) are rejected.
@@ -309,6 +309,12 @@ impl Located<'_> {
     pub(super) fn at<T>(&self, spanned: &Spanned<T>, message: impl fmt::Display) -> SceneError {
         SceneError::at_offset(self.label, self.text, spanned.span().start, message)
     }
+
+    /// `file:line:column` of a value, for notes.
+    fn place<T>(&self, spanned: &Spanned<T>) -> String {
+        let (line, column) = line_column(self.text, spanned.span().start);
+        format!("{}:{line}:{column}", self.label)
+    }
 }
 
 /// Parses a TOML scene and loads what it references (relative to `files`); the result has
@@ -422,28 +428,43 @@ fn unknown_name(
     )
 }
 
-fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription, SceneError> {
-    let mut scene = SceneDescription {
-        source: loc.label.to_owned(),
-        ..Default::default()
-    };
-    if let Some(render) = &raw.render {
-        scene.settings = settings(render, loc)?;
-    }
+/// What `[[texture]]` tables declared, beside the textures added to the scene.
+struct DeclaredTextures {
+    /// Index in `scene.textures` by name.
+    names: HashMap<String, usize>,
+    /// Whether each texture's t wrap was written (`wrap_t` or `wrap`) rather than defaulted.
+    wrap_t_written: Vec<bool>,
+    /// Textures whose file cannot be read: kept until the scene is built, so references to
+    /// them are checked as any other, then left out (`files::leave_out_textures`).
+    missing: Vec<usize>,
+}
 
-    // Textures, by name.
-    let mut texture_names: HashMap<String, usize> = HashMap::new();
-    // Whether each texture's t wrap was written (`wrap_t` or `wrap`) rather than defaulted.
-    let mut wrap_t_written: Vec<bool> = Vec::new();
-    for t in &raw.texture {
+/// Adds the `[[texture]]` tables to `scene.textures` (a file that cannot be read gets a note).
+fn declare_textures(
+    tables: &[RawTexture],
+    files: &Files,
+    loc: &Located,
+    scene: &mut SceneDescription,
+) -> Result<DeclaredTextures, SceneError> {
+    let mut declared = DeclaredTextures {
+        names: HashMap::new(),
+        wrap_t_written: Vec::new(),
+        missing: Vec::new(),
+    };
+    for t in tables {
         let name = t.name.get_ref().clone();
-        if texture_names.contains_key(&name) {
+        if declared.names.contains_key(&name) {
             return Err(loc.at(&t.name, format!("texture '{name}' is defined twice")));
         }
         let path = files.resolve(t.file.get_ref());
-        let source = files
-            .texture_source(&path)
-            .map_err(|e| loc.at(&t.file, format!("texture '{name}': {e}")))?;
+        let source = files.texture_source(&path).unwrap_or_else(|e| {
+            let what = format!("texture '{name}' file '{}'", t.file.get_ref());
+            let place = loc.place(&t.file);
+            let consequence = "rendered without it";
+            note_not_loaded(&mut scene.notes, &place, &what, &e, consequence);
+            declared.missing.push(scene.textures.len());
+            TextureSource::File(path.clone())
+        });
         let wrap = t.wrap.map_or(WrapMode::Periodic, RawWrap::mode);
         scene.textures.push(TextureDesc {
             name: name.clone(),
@@ -455,9 +476,28 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
             wrap_s: t.wrap_s.map_or(wrap, RawWrap::mode),
             wrap_t: t.wrap_t.map_or(wrap, RawWrap::mode),
         });
-        wrap_t_written.push(t.wrap_t.is_some() || t.wrap.is_some());
-        texture_names.insert(name, scene.textures.len() - 1);
+        declared
+            .wrap_t_written
+            .push(t.wrap_t.is_some() || t.wrap.is_some());
+        declared.names.insert(name, scene.textures.len() - 1);
     }
+    Ok(declared)
+}
+
+fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription, SceneError> {
+    let mut scene = SceneDescription {
+        source: loc.label.to_owned(),
+        ..Default::default()
+    };
+    if let Some(render) = &raw.render {
+        scene.settings = settings(render, loc)?;
+    }
+
+    let DeclaredTextures {
+        names: texture_names,
+        wrap_t_written,
+        missing: missing_textures,
+    } = declare_textures(&raw.texture, files, loc, &mut scene)?;
     let texture = |name: &Spanned<String>| {
         texture_names
             .get(name.get_ref())
@@ -652,7 +692,11 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
 
     if let Some(env) = &raw.environment {
         scene.environment = environment(env, &texture_names, loc)?;
-        clamp_lat_long_poles(&mut scene, &wrap_t_written);
+        let map_missing = matches!(scene.environment,
+            Environment::LatLong { texture, .. } if missing_textures.contains(&texture));
+        if !map_missing {
+            clamp_lat_long_poles(&mut scene, &wrap_t_written);
+        }
     }
     if let Some(camera) = &raw.camera {
         scene.camera = Some(camera_desc(camera, loc)?);
@@ -664,6 +708,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
         let volume = super::fog::fog_volume(fog.get_ref(), files).map_err(|e| loc.at(fog, e))?;
         scene.fog.push(volume);
     }
+    leave_out_textures(&mut scene, &missing_textures);
     Ok(scene)
 }
 
@@ -1178,18 +1223,54 @@ material = "glass"
         assert!(e.contains("ior"), "{e}");
     }
 
+    /// Geometry that cannot be read is an error at its reference; an image is left out with
+    /// a note there, as MTL maps and glTF images are (`files::note_not_loaded`).
     #[test]
-    fn missing_files_are_errors_at_the_reference() {
+    fn missing_files_follow_the_referenced_file_policy() {
         let e = err("[[mesh]]\nfile = 'missing.obj'\n");
         assert!(
             e.starts_with("s.toml:2:8:") && e.contains("missing.obj"),
             "{e}"
         );
-        let e = err("[[texture]]\nname = 't'\nfile = 'missing.png'\n");
-        assert!(
-            e.starts_with("s.toml:3:8:") && e.contains("missing.png"),
-            "{e}"
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::copy(
+            concat!(env!("CARGO_MANIFEST_DIR"), "/assets/textures/checker.png"),
+            dir.path().join("here.png"),
+        )
+        .unwrap();
+        let text = "[[texture]]\nname = 'gone'\nfile = 'missing.png'\n\
+                    [[texture]]\nname = 'here'\nfile = 'here.png'\n\
+                    [[texture]]\nname = 'sky'\nfile = 'no_sky.exr'\n\
+                    [[material]]\nname = 'm'\nbase_color = [1, 0, 0]\n\
+                    base_color_texture = 'gone'\nemission_texture = 'here'\n\
+                    [environment]\ntexture = 'sky'\n";
+        let s = parse(text, &Files::disk(dir.path()), "s.toml").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.textures.len(), 1);
+        assert_eq!(s.textures[0].name, "here");
+        let m = &s.materials[0];
+        assert!(m.base_color_texture.is_none());
+        assert_eq!(m.emission_texture.as_ref().unwrap().texture, 0);
+        assert_eq!(m.base_color, Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(s.environment, Environment::Color(Vec3::ZERO));
+        assert_eq!(
+            s.notes,
+            [
+                "s.toml:3:8: texture 'gone' file 'missing.png' not loaded (no such file): \
+                 rendered without it",
+                "s.toml:9:8: texture 'sky' file 'no_sky.exr' not loaded (no such file): \
+                 rendered without it"
+            ]
         );
+        // A reference to a left-out texture is still checked.
+        let e = parse(
+            "[[texture]]\nname = 'gone'\nfile = 'missing.png'\n\
+             [[material]]\nname = 'm'\nalpha_texture = 'gone'\n",
+            &Files::disk(dir.path()),
+            "s.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("must be declared with color_space"), "{e}");
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! Checks a finished [`SceneDescription`] for values the renderer cannot use: non-finite
 //! numbers anywhere, zero image size, non-positive sphere radius or index of refraction,
 //! physically meaningless values (negative light intensities, negative colour components,
-//! weights outside [0, 1]), out-of-range material/texture/vertex indices, degenerate cameras.
+//! base colours and weights outside [0, 1]), out-of-range material/texture/vertex indices, degenerate cameras.
 //! The loaders refuse these values first where they can say where they were written (TOML
 //! line and column, MTL line, glTF material or light); this is the last line of defence.
 //!
@@ -268,6 +268,14 @@ fn check(scene: &SceneDescription) -> Result<(), String> {
 fn check_material(m: &Material, texture_count: usize) -> Result<(), String> {
     let what = format!("material '{}'", m.name);
     non_negative3(m.base_color, &format!("{what} base_color"))?;
+    // A reflectance above 1 gives back more light than arrives (every loader refuses it
+    // where it was written; this catches a description built otherwise).
+    if m.base_color.max_element() > 1.0 {
+        return Err(format!(
+            "{what}: base_color {} has a component above 1",
+            m.base_color
+        ));
+    }
     non_negative3(m.attenuation_color, &format!("{what} attenuation_color"))?;
     non_negative3(m.emission, &format!("{what} emission"))?;
     for (name, value) in [
@@ -367,6 +375,12 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("transmission 1.5"));
+        let mut s = base();
+        s.materials[0].base_color = Vec3::new(2.0, 0.0, 0.0);
+        assert!(validate(&s)
+            .unwrap_err()
+            .to_string()
+            .contains("base_color [2, 0, 0] has a component above 1"));
         let mut s = base();
         s.materials[0].ior = 0.0;
         assert!(validate(&s).unwrap_err().to_string().contains("ior"));
