@@ -325,9 +325,9 @@ fn cpp_example_with_openimageio_textures_matches_builtin_filtering() {
     };
     println!("recomputed PSNR {psnr:.2} dB (example printed {printed:.2})");
     assert!((psnr - printed).abs() < 0.05 || psnr.is_infinite());
-    // Float rounding between two implementations of one filter leaves about 100 dB; OpenImageIO
-    // filtering float levels where ours reads 8-bit ones gives 65.6 dB.
-    assert!(psnr >= 90.0, "PSNR {psnr:.2} dB < 90 dB");
+    // Float rounding between two implementations of one filter leaves about 100 dB here;
+    // OpenImageIO filtering float levels where ours reads 8-bit ones gives 65.6 dB.
+    assert!(psnr >= 80.0, "PSNR {psnr:.2} dB < 80 dB");
     // The textures really went through the callback: the albedo AOV of the two renders is
     // computed from different texture systems, so it cannot be bit-identical everywhere.
     let differs = ours

@@ -5,7 +5,7 @@
 //   oiio_textures SCENE.toml WORK_DIR [WIDTH HEIGHT]
 //
 // Writes WORK_DIR/builtin.exr and WORK_DIR/oiio.exr, prints "psnr_db <value>", and exits 1
-// if the PSNR is below 90 dB. The scene's textures must be files on disk: each is converted
+// if the PSNR is below 80 dB. The scene's textures must be files on disk: each is converted
 // to what our loader sees (8-bit sRGB decoded to linear float, the same piecewise sRGB curve),
 // mip-mapped by OpenImageIO's make_texture with a box filter (maketx --filter box, the rule
 // our pyramid follows), and every level rounded to the source's precision as our loader
@@ -287,10 +287,11 @@ int main(int argc, char **argv) {
     check(ct_image_free(builtin), "ct_image_free");
     check(ct_image_free(served), "ct_image_free");
     TextureSystem::destroy(textures.system);
-    // What remains once both systems filter the same levels is float rounding (about 100 dB);
-    // levels of another precision (float against our 8-bit ones) give 65.6 dB.
-    if (!(psnr >= 90.0)) {
-        std::fprintf(stderr, "PSNR %.2f dB is below 90 dB\n", psnr);
+    // What remains once both systems filter the same levels is float rounding (100.6 dB at
+    // 160x90, 90.1 dB at 640x360); levels of another precision (float against our 8-bit
+    // ones) give 65.6 and 69.9 dB.
+    if (!(psnr >= 80.0)) {
+        std::fprintf(stderr, "PSNR %.2f dB is below 80 dB\n", psnr);
         return 1;
     }
     return 0;
