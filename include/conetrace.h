@@ -98,11 +98,13 @@
 
 // What a `ct_` function reports. `CT_OK` is success; `CT_CANCELLED` means the render was
 // stopped by the progress callback and still produced a (partial) image; every other value is
-// an error whose message `ct_last_error_message` returns on the same thread.
+// an error. Every value but `CT_OK` leaves a message that `ct_last_error_message` returns on
+// the same thread.
 typedef enum CtStatus {
   // Success.
   CT_OK = 0,
-  // The progress callback asked to stop; the image handle is valid and partial.
+  // The progress callback asked to stop; the image handle is valid and partial, and the
+  // message says how many tiles were finished.
   CT_CANCELLED = 1,
   // A required pointer argument was NULL.
   CT_ERROR_NULL_POINTER = 2,
@@ -303,10 +305,11 @@ const char *ct_version(void);
 // Thread safety: any thread.
 uint32_t ct_abi_version(void);
 
-// The message of the last failed `ct_` call on the calling thread ("" if none failed yet).
+// The message of the last `ct_` call on the calling thread that returned a status other than
+// `CT_OK` (an error, or `CT_CANCELLED`); "" if there was none yet.
 //
-// Thread safety: per thread; the pointer stays valid until the next failing `ct_` call on
-// this thread. Never NULL.
+// Thread safety: per thread; the pointer stays valid until the next such call on this
+// thread. Never NULL.
 const char *ct_last_error_message(void);
 
 // A static, human-readable name for a status code (e.g. "CT_ERROR_SCENE"); never NULL.
@@ -370,7 +373,9 @@ enum CtStatus ct_image_channel_pixels(struct CtImage image,
 enum CtStatus ct_image_is_complete(struct CtImage image, int32_t *out_complete);
 
 // Writes every channel as 32-bit float OpenEXR (atomically: a failure never leaves a partial
-// file). A partial image is marked with the header attribute `conetrace.incomplete`.
+// file). A partial image is marked with the header attribute `conetrace.incomplete`. A path
+// that does not end in `.exr` (any case) is `CT_ERROR_INVALID_ARGUMENT`, and nothing is
+// written.
 //
 // Thread safety: any thread, concurrently with any other call (different paths).
 //
@@ -379,6 +384,8 @@ enum CtStatus ct_image_is_complete(struct CtImage image, int32_t *out_complete);
 enum CtStatus ct_image_write_exr(struct CtImage image, const char *path);
 
 // Writes the colour as 8-bit sRGB PNG with the scene's tone mapping and exposure (atomically).
+// A path that does not end in `.png` (any case) is `CT_ERROR_INVALID_ARGUMENT`, and nothing
+// is written.
 //
 // Thread safety: any thread, concurrently with any other call (different paths).
 //
@@ -408,7 +415,8 @@ enum CtStatus ct_render_options_init(struct CtRenderOptions *options, size_t str
 // `options` may be NULL (defaults). Returns `CT_OK` with a complete image; `CT_CANCELLED`
 // when the progress callback asked to stop before every tile was done — `*out_image` is then
 // a valid partial image (unfinished 16x16 tiles are zero, `ct_image_is_complete` says 0) that
-// must be freed like any other; `CT_ERROR_CALLBACK` when the texture callback returned an
+// must be freed like any other, and `ct_last_error_message` says how many tiles were
+// finished; `CT_ERROR_CALLBACK` when the texture callback returned an
 // error (no image); other errors leave `*out_image` null.
 //
 // Thread safety: any thread; several renders may run at once (each uses its own worker pool

@@ -325,7 +325,9 @@ fn cpp_example_with_openimageio_textures_matches_builtin_filtering() {
     };
     println!("recomputed PSNR {psnr:.2} dB (example printed {printed:.2})");
     assert!((psnr - printed).abs() < 0.05 || psnr.is_infinite());
-    assert!(psnr >= 50.0, "PSNR {psnr:.2} dB < 50 dB");
+    // Float rounding between two implementations of one filter leaves about 100 dB here;
+    // OpenImageIO filtering float levels where ours reads 8-bit ones gives 65.6 dB.
+    assert!(psnr >= 80.0, "PSNR {psnr:.2} dB < 80 dB");
     // The textures really went through the callback: the albedo AOV of the two renders is
     // computed from different texture systems, so it cannot be bit-identical everywhere.
     let differs = ours
@@ -587,6 +589,90 @@ fn a_render_cancelled_from_the_progress_callback_leaves_a_valid_partial_image() 
     assert!(attributes.incomplete);
     assert_eq!(ct_image_free(image), CtStatus::CT_OK);
     assert_eq!(ct_image_free(image), CtStatus::CT_ERROR_INVALID_HANDLE);
+    assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
+}
+
+#[test]
+fn a_cancelled_render_leaves_its_own_message() {
+    // An unrelated failure first, whose message must not stand for the cancellation.
+    let mut count = 0u32;
+    let status = unsafe { ct_scene_texture_count(CtScene::default(), &mut count) };
+    assert_eq!(status, CtStatus::CT_ERROR_INVALID_HANDLE);
+    let stale = last_error();
+    assert!(stale.contains("null"), "{stale}");
+
+    let scene = default_scene();
+    let calls = AtomicUsize::new(0);
+    let mut options = small_options();
+    options.width = 320;
+    options.height = 180;
+    options.threads = 1;
+    options.progress = Some(cancel_after_two);
+    options.progress_user_data = &calls as *const AtomicUsize as *mut c_void;
+    let mut image = CtImage::default();
+    let status = unsafe { ct_render(scene, &options, &mut image) };
+    assert_eq!(status, CtStatus::CT_CANCELLED, "{}", last_error());
+    let message = last_error();
+    assert_ne!(message, stale, "the message of an earlier failure was left");
+    assert!(
+        message.contains("cancelled by the progress callback"),
+        "{message}"
+    );
+    // 320x180 in 16x16 tiles: 20 x 12.
+    assert!(message.contains("of 240 tiles"), "{message}");
+    assert_eq!(ct_image_free(image), CtStatus::CT_OK);
+    assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
+}
+
+#[test]
+fn image_writers_refuse_a_path_named_for_the_other_format() {
+    let scene = default_scene();
+    let options = small_options();
+    let mut image = CtImage::default();
+    let status = unsafe { ct_render(scene, &options, &mut image) };
+    assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
+    let dir = common::temp_dir();
+    let c_path = |name: &str| CString::new(dir.path().join(name).display().to_string()).unwrap();
+
+    // Neither writer puts its format into a file named for another, nor creates the file.
+    type Writer = unsafe extern "C" fn(CtImage, *const c_char) -> CtStatus;
+    let cases: [(Writer, &str, &str); 4] = [
+        (ct_image_write_png, "picture.exr", ".png"),
+        (ct_image_write_png, "picture", ".png"),
+        (ct_image_write_exr, "frame.png", ".exr"),
+        (ct_image_write_exr, "frame.exr.tmp", ".exr"),
+    ];
+    for (write, name, expected) in cases {
+        let status = unsafe { write(image, c_path(name).as_ptr()) };
+        assert_eq!(status, CtStatus::CT_ERROR_INVALID_ARGUMENT, "{name}");
+        let message = last_error();
+        assert!(
+            message.contains(name) && message.contains(expected),
+            "{name}: {message}"
+        );
+        assert!(!dir.path().join(name).exists(), "{name} was written");
+    }
+    // An existing file under the wrong name is left as it was.
+    let kept = common::write(dir.path(), "kept.exr", "not an image");
+    let status = unsafe { ct_image_write_png(image, c_path("kept.exr").as_ptr()) };
+    assert_eq!(status, CtStatus::CT_ERROR_INVALID_ARGUMENT);
+    assert_eq!(std::fs::read_to_string(&kept).unwrap(), "not an image");
+
+    // The right extensions, in any case, write their formats.
+    for (write, name, magic) in [
+        (ct_image_write_png as Writer, "ok.PNG", &b"\x89PNG"[..]),
+        (
+            ct_image_write_exr as Writer,
+            "ok.Exr",
+            &[0x76, 0x2f, 0x31, 0x01][..],
+        ),
+    ] {
+        let status = unsafe { write(image, c_path(name).as_ptr()) };
+        assert_eq!(status, CtStatus::CT_OK, "{name}: {}", last_error());
+        let bytes = std::fs::read(dir.path().join(name)).expect(name);
+        assert!(bytes.starts_with(magic), "{name} is not in its format");
+    }
+    assert_eq!(ct_image_free(image), CtStatus::CT_OK);
     assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
 }
 

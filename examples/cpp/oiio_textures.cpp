@@ -5,10 +5,11 @@
 //   oiio_textures SCENE.toml WORK_DIR [WIDTH HEIGHT]
 //
 // Writes WORK_DIR/builtin.exr and WORK_DIR/oiio.exr, prints "psnr_db <value>", and exits 1
-// if the PSNR is below 50 dB. The scene's textures must be files on disk: each is converted
-// to what our loader sees (8-bit sRGB decoded to linear float, the same piecewise sRGB curve)
-// and mip-mapped by OpenImageIO's make_texture with a box filter (maketx --filter box, the
-// rule our pyramid follows), into WORK_DIR.
+// if the PSNR is below 80 dB. The scene's textures must be files on disk: each is converted
+// to what our loader sees (8-bit sRGB decoded to linear float, the same piecewise sRGB curve),
+// mip-mapped by OpenImageIO's make_texture with a box filter (maketx --filter box, the rule
+// our pyramid follows), and every level rounded to the source's precision as our loader
+// stores it (an 8-bit texture's levels in bytes, sRGB-encoded colour), into WORK_DIR.
 //
 // Build (see docs/c-api.md):
 //   g++ -std=c++17 examples/cpp/oiio_textures.cpp $(pkg-config --cflags --libs conetrace) \
@@ -16,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,57 @@ float srgb_to_linear(float c) {
     return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
 
+float linear_to_srgb(float c) {
+    return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+
+// A linear value as our loader keeps it in a byte and reads it back: encoded (sRGB for the
+// colour of an sRGB texture), rounded to the nearest byte with ties up, decoded.
+float through_byte(float value, bool srgb) {
+    const float encoded = srgb ? linear_to_srgb(value) : value;
+    const float byte = std::fmin(std::fmax(std::floor(encoded * 255.0f + 0.5f), 0.0f), 255.0f);
+    return srgb ? srgb_to_linear(byte / 255.0f) : byte / 255.0f;
+}
+
+// Our loader computes every level of an 8-bit or half texture in float from the previous
+// float level, as make_texture does, and then stores it in the source's precision (maketx's
+// rule for 8-bit and half output). Rewrites the float pyramid `made` into `out` with every
+// level so rounded, so that OpenImageIO filters the values our filters read.
+void round_levels(const std::string &made, const std::string &out, TypeDesc stored,
+                  int srgb_channels) {
+    std::unique_ptr<ImageInput> in = ImageInput::open(made);
+    std::unique_ptr<ImageOutput> writer = ImageOutput::create(out);
+    if (!in || !writer) {
+        std::fprintf(stderr, "%s: cannot reopen: %s\n", made.c_str(), OIIO::geterror().c_str());
+        std::exit(1);
+    }
+    for (int level = 0; in->seek_subimage(0, level); ++level) {
+        const ImageSpec spec = in->spec();
+        const int nc = spec.nchannels;
+        std::vector<float> pixels((size_t)spec.image_pixels() * nc);
+        bool ok = in->read_image(0, level, 0, nc, TypeDesc::FLOAT, pixels.data());
+        if (ok && stored == TypeDesc::HALF) {
+            std::vector<uint16_t> halves(pixels.size());
+            ok = convert_pixel_values(TypeDesc::FLOAT, pixels.data(), TypeDesc::HALF,
+                                      halves.data(), (int)pixels.size()) &&
+                 convert_pixel_values(TypeDesc::HALF, halves.data(), TypeDesc::FLOAT,
+                                      pixels.data(), (int)pixels.size());
+        } else {
+            for (size_t i = 0; i < pixels.size(); ++i)
+                pixels[i] = through_byte(pixels[i], (int)(i % nc) < srgb_channels);
+        }
+        const auto mode = level == 0 ? ImageOutput::Create : ImageOutput::AppendMIPLevel;
+        ok = ok && writer->open(out, spec, mode) &&
+             writer->write_image(TypeDesc::FLOAT, pixels.data());
+        if (!ok) {
+            std::fprintf(stderr, "%s: level %d: %s %s\n", out.c_str(), level,
+                         in->geterror().c_str(), writer->geterror().c_str());
+            std::exit(1);
+        }
+    }
+    writer->close();
+}
+
 // Our loader's view of a texture file as a mip-mapped float OpenEXR for the TextureSystem.
 std::string prepare_texture(const std::string &path, uint32_t color_space,
                             const std::string &out) {
@@ -54,19 +107,23 @@ std::string prepare_texture(const std::string &path, uint32_t color_space,
     const int nc = linear.nchannels();
     // Integer (PNG/JPEG) colour channels are sRGB-encoded unless the scene says linear;
     // alpha never is. (src.spec() is float after read(); the file's own type is nativespec().)
-    if (color_space == CT_COLOR_SPACE_SRGB && !src.nativespec().format.is_floating_point()) {
-        const int colour = nc >= 3 ? 3 : (nc == 2 ? 1 : nc);
-        for (ImageBuf::Iterator<float> it(linear); !it.done(); ++it)
-            for (int c = 0; c < colour; ++c) it[c] = srgb_to_linear(it[c]);
-    }
+    const TypeDesc stored = src.nativespec().format;
+    const bool srgb = color_space == CT_COLOR_SPACE_SRGB && !stored.is_floating_point();
+    const int srgb_channels = srgb ? (nc >= 3 ? 3 : (nc == 2 ? 1 : nc)) : 0;
+    for (ImageBuf::Iterator<float> it(linear); !it.done(); ++it)
+        for (int c = 0; c < srgb_channels; ++c) it[c] = srgb_to_linear(it[c]);
+    // Our loader keeps 8-bit and half sources in their precision; every other one in float.
+    const bool rounded = stored == TypeDesc::UINT8 || stored == TypeDesc::HALF;
+    const std::string made = rounded ? out + ".float.exr" : out;
     ImageSpec config;
     config.attribute("maketx:filtername", "box");
     config.set_format(TypeDesc::FLOAT);
-    if (!ImageBufAlgo::make_texture(ImageBufAlgo::MakeTxTexture, linear, out, config)) {
-        std::fprintf(stderr, "%s: make_texture failed: %s\n", out.c_str(),
+    if (!ImageBufAlgo::make_texture(ImageBufAlgo::MakeTxTexture, linear, made, config)) {
+        std::fprintf(stderr, "%s: make_texture failed: %s\n", made.c_str(),
                      OIIO::geterror().c_str());
         std::exit(1);
     }
+    if (rounded) round_levels(made, out, stored, srgb_channels);
     return out;
 }
 
@@ -230,8 +287,11 @@ int main(int argc, char **argv) {
     check(ct_image_free(builtin), "ct_image_free");
     check(ct_image_free(served), "ct_image_free");
     TextureSystem::destroy(textures.system);
-    if (!(psnr >= 50.0)) {
-        std::fprintf(stderr, "PSNR %.2f dB is below 50 dB\n", psnr);
+    // What remains once both systems filter the same levels is float rounding (100.6 dB at
+    // 160x90, 90.1 dB at 640x360); levels of another precision (float against our 8-bit
+    // ones) give 65.6 and 69.9 dB.
+    if (!(psnr >= 80.0)) {
+        std::fprintf(stderr, "PSNR %.2f dB is below 80 dB\n", psnr);
         return 1;
     }
     return 0;

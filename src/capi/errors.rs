@@ -7,14 +7,16 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// What a `ct_` function reports. `CT_OK` is success; `CT_CANCELLED` means the render was
 /// stopped by the progress callback and still produced a (partial) image; every other value is
-/// an error whose message `ct_last_error_message` returns on the same thread.
+/// an error. Every value but `CT_OK` leaves a message that `ct_last_error_message` returns on
+/// the same thread.
 #[repr(C)]
 #[allow(non_camel_case_types)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CtStatus {
     /// Success.
     CT_OK = 0,
-    /// The progress callback asked to stop; the image handle is valid and partial.
+    /// The progress callback asked to stop; the image handle is valid and partial, and the
+    /// message says how many tiles were finished.
     CT_CANCELLED = 1,
     /// A required pointer argument was NULL.
     CT_ERROR_NULL_POINTER = 2,
@@ -80,9 +82,17 @@ fn set_last_error(message: &str) {
 
 /// Runs an entry point's body: returns its status, records the message of an error, and turns a
 /// panic into `CT_ERROR_INTERNAL`.
+///
+/// A body returns every status other than `CT_OK` as an `Err` with its message, `CT_CANCELLED`
+/// included (its partial image is already in the caller's hands then): the message is what
+/// `ct_last_error_message` promises for every status but `CT_OK`, and one left over from an
+/// earlier call would describe another failure.
 pub(crate) fn guard(body: impl FnOnce() -> Result<CtStatus, CapiError>) -> CtStatus {
     match catch_unwind(AssertUnwindSafe(body)) {
-        Ok(Ok(status)) => status,
+        Ok(Ok(status)) => {
+            debug_assert_eq!(status, CtStatus::CT_OK, "a status without its message");
+            status
+        }
         Ok(Err(error)) => {
             set_last_error(&error.message);
             error.status
@@ -101,10 +111,11 @@ pub(crate) fn guard(body: impl FnOnce() -> Result<CtStatus, CapiError>) -> CtSta
     }
 }
 
-/// The message of the last failed `ct_` call on the calling thread ("" if none failed yet).
+/// The message of the last `ct_` call on the calling thread that returned a status other than
+/// `CT_OK` (an error, or `CT_CANCELLED`); "" if there was none yet.
 ///
-/// Thread safety: per thread; the pointer stays valid until the next failing `ct_` call on
-/// this thread. Never NULL.
+/// Thread safety: per thread; the pointer stays valid until the next such call on this
+/// thread. Never NULL.
 #[no_mangle]
 pub extern "C" fn ct_last_error_message() -> *const c_char {
     let result = catch_unwind(|| LAST_ERROR.with(|cell| cell.borrow().as_ptr()));

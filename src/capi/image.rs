@@ -4,6 +4,7 @@
 //! owned by the image and valid until `ct_image_free`.
 
 use std::ffi::c_char;
+use std::path::Path;
 
 use crate::film::{self, ExrAttributes};
 
@@ -146,6 +147,23 @@ pub unsafe extern "C" fn ct_image_channel_pixels(
     })
 }
 
+/// Refuses a `path` whose extension is not `extension` (any case), so that a writer never puts
+/// its format into a file named for another, as `conetrace render` refuses `-o x.png`.
+fn require_extension(path: &Path, extension: &str, writer: &str) -> Result<(), CapiError> {
+    let matches = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case(extension));
+    if matches {
+        Ok(())
+    } else {
+        Err(CapiError::invalid(format!(
+            "{}: {writer} writes a .{extension} file; the path must end in .{extension}",
+            path.display()
+        )))
+    }
+}
+
 /// 1 when every tile was rendered, 0 for the partial image of a cancelled render.
 ///
 /// Thread safety: any thread, concurrently with any other call.
@@ -163,7 +181,9 @@ pub unsafe extern "C" fn ct_image_is_complete(image: CtImage, out_complete: *mut
 }
 
 /// Writes every channel as 32-bit float OpenEXR (atomically: a failure never leaves a partial
-/// file). A partial image is marked with the header attribute `conetrace.incomplete`.
+/// file). A partial image is marked with the header attribute `conetrace.incomplete`. A path
+/// that does not end in `.exr` (any case) is `CT_ERROR_INVALID_ARGUMENT`, and nothing is
+/// written.
 ///
 /// Thread safety: any thread, concurrently with any other call (different paths).
 ///
@@ -174,6 +194,7 @@ pub unsafe extern "C" fn ct_image_write_exr(image: CtImage, path: *const c_char)
     guard(|| {
         let object = handles::image(image)?;
         let path = unsafe { c_path(path, "path") }?;
+        require_extension(&path, "exr", "ct_image_write_exr")?;
         let attributes = ExrAttributes {
             software: Some(format!("conetrace {}", env!("CARGO_PKG_VERSION"))),
             incomplete: !object.complete,
@@ -189,6 +210,8 @@ pub unsafe extern "C" fn ct_image_write_exr(image: CtImage, path: *const c_char)
 }
 
 /// Writes the colour as 8-bit sRGB PNG with the scene's tone mapping and exposure (atomically).
+/// A path that does not end in `.png` (any case) is `CT_ERROR_INVALID_ARGUMENT`, and nothing
+/// is written.
 ///
 /// Thread safety: any thread, concurrently with any other call (different paths).
 ///
@@ -199,6 +222,7 @@ pub unsafe extern "C" fn ct_image_write_png(image: CtImage, path: *const c_char)
     guard(|| {
         let object = handles::image(image)?;
         let path = unsafe { c_path(path, "path") }?;
+        require_extension(&path, "png", "ct_image_write_png")?;
         film::write_png(&object.film, &path, object.tonemap, object.exposure)
             .map_err(|e| CapiError::new(CtStatus::CT_ERROR_IO, e.to_string()))?;
         Ok(CtStatus::CT_OK)

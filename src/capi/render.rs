@@ -304,7 +304,8 @@ pub unsafe extern "C" fn ct_render_options_init(
 /// `options` may be NULL (defaults). Returns `CT_OK` with a complete image; `CT_CANCELLED`
 /// when the progress callback asked to stop before every tile was done — `*out_image` is then
 /// a valid partial image (unfinished 16x16 tiles are zero, `ct_image_is_complete` says 0) that
-/// must be freed like any other; `CT_ERROR_CALLBACK` when the texture callback returned an
+/// must be freed like any other, and `ct_last_error_message` says how many tiles were
+/// finished; `CT_ERROR_CALLBACK` when the texture callback returned an
 /// error (no image); other errors leave `*out_image` null.
 ///
 /// Thread safety: any thread; several renders may run at once (each uses its own worker pool
@@ -450,11 +451,13 @@ pub unsafe extern "C" fn ct_render(
             .map(|n| CString::new(n.as_str()).unwrap_or_default())
             .collect();
         let complete = result.stats.complete;
+        let finished_tiles = result.finished_tiles.iter().filter(|&&f| f).count();
+        let total_tiles = result.finished_tiles.len();
         let image = ImageObject {
             film: result.film,
             channel_names,
             complete,
-            finished_tiles: result.finished_tiles.iter().filter(|&&f| f).count() as u32,
+            finished_tiles: finished_tiles as u32,
             tonemap: scene.settings.tonemap,
             exposure: scene.settings.exposure,
             world_to_camera: camera.map(|c| c.world_to_camera_matrix()),
@@ -468,11 +471,18 @@ pub unsafe extern "C" fn ct_render(
         let cancelled = relay
             .as_ref()
             .is_some_and(|r| r.cancelled_by_callback.load(Ordering::Relaxed));
-        Ok(if cancelled && !complete {
-            CtStatus::CT_CANCELLED
-        } else {
-            CtStatus::CT_OK
-        })
+        if cancelled && !complete {
+            // The image is handed out above; the error only carries the status and the
+            // message that `ct_last_error_message` must give for it.
+            return Err(CapiError::new(
+                CtStatus::CT_CANCELLED,
+                format!(
+                    "the render was cancelled by the progress callback after \
+                     {finished_tiles} of {total_tiles} tiles; the image is partial"
+                ),
+            ));
+        }
+        Ok(CtStatus::CT_OK)
     })
 }
 
