@@ -15,10 +15,10 @@
 //! triangle) finds no ear where the slit's repeated corners touch every candidate, so ears
 //! are looked for in three passes, each used only when the previous finds none in a full
 //! round: that test; then the test a weakly simple polygon needs, that no boundary edge
-//! enters the triangle's interior (Eberly 2002, "Triangulation by Ear Clipping", section 5:
-//! coincident bridge corners do not block an ear); then zero-area corners (slit tips and
-//! collinear corners left behind) are dropped. A face none of this cuts (self-intersecting)
-//! has its remaining corners fanned.
+//! enters the triangle's interior (Eberly 2002, "Triangulation by Ear Clipping", section
+//! "Polygons with a Hole": coincident bridge corners do not block an ear); then zero-area
+//! corners (slit tips and collinear corners left behind) are dropped. A face none of this
+//! cuts (self-intersecting) has its remaining corners fanned.
 
 use glam::{DVec2, DVec3, Vec3};
 
@@ -30,10 +30,10 @@ fn cross(o: DVec2, p: DVec2, q: DVec2) -> f64 {
 /// Whether some point of the segment from `x` to `y` lies strictly inside the
 /// counter-clockwise triangle `corners`. Each edge's signed distance is linear along the
 /// segment, so the points strictly left of all three edges form one interval of the
-/// segment's parameter (Liang-Barsky clipping with open half-planes). A segment that only
-/// touches the triangle's boundary, such as a slit edge lying along one of its sides or an
-/// edge leaving one of its corners outwards, does not enter it: corners shared by position
-/// give exact zeros here.
+/// segment's parameter (Liang and Barsky 1984's clipping, with open half-planes). A segment
+/// that only touches the triangle's boundary, such as a slit edge lying along one of its
+/// sides or an edge leaving one of its corners outwards, does not enter it: corners shared
+/// by position give exact zeros here.
 fn segment_enters_triangle(x: DVec2, y: DVec2, corners: [DVec2; 3]) -> bool {
     // The parameter interval [low, high] of the segment, open at an end whose flag is set.
     let (mut low, mut high) = (0.0_f64, 1.0_f64);
@@ -145,17 +145,15 @@ fn is_ear(flat: &[DVec2], remaining: &[usize], k: usize, pass: Pass) -> bool {
     if area <= 0.0 {
         return false;
     }
-    let others = || {
+    // Every other corner strictly outside at least one edge.
+    let clear_of_corners = || {
         remaining
             .iter()
-            .filter(move |&&other| other != previous && other != current && other != next)
-    };
-    // Strictly outside at least one edge.
-    let clear_of_corners = || {
-        others().all(|&other| {
-            let x = flat[other];
-            cross(p, c, x) < 0.0 || cross(c, q, x) < 0.0 || cross(q, p, x) < 0.0
-        })
+            .filter(|&&other| other != previous && other != current && other != next)
+            .all(|&other| {
+                let x = flat[other];
+                cross(p, c, x) < 0.0 || cross(c, q, x) < 0.0 || cross(q, p, x) < 0.0
+            })
     };
     // Every edge but the ear's own two: (remaining[j], remaining[j + 1]) for j other than
     // k - 1 and k.
