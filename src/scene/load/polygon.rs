@@ -288,6 +288,37 @@ mod tests {
         assert_eq!(triangulate(&line, &[0, 1, 2, 3]).len(), 2);
     }
 
+    /// Segments that only touch the triangle (along a side, out of a corner, to a corner from
+    /// outside) or miss it (crossing a side's line beyond the side) do not enter it; one from
+    /// a corner inwards, one crossing it, one inside it and one through a corner do.
+    #[test]
+    fn segments_enter_a_triangle_only_through_its_interior() {
+        let v = |x: f64, y: f64| DVec2::new(x, y);
+        let triangle = [v(0.0, 0.0), v(4.0, 0.0), v(0.0, 4.0)];
+        let touching = [
+            (v(4.0, 0.0), v(0.0, 0.0)),
+            (v(1.0, 0.0), v(3.0, 0.0)),
+            (v(0.0, 0.0), v(-1.0, -1.0)),
+            (v(-1.0, 5.0), v(1.0, 3.0)),
+            (v(4.0, 0.0), v(0.0, 4.0)),
+            (v(5.0, -2.0), v(5.0, 2.0)),
+        ];
+        for (x, y) in touching {
+            assert!(!segment_enters_triangle(x, y, triangle), "{x} - {y}");
+            assert!(!segment_enters_triangle(y, x, triangle), "{y} - {x}");
+        }
+        let entering = [
+            (v(0.0, 0.0), v(1.0, 1.0)),
+            (v(-1.0, 1.0), v(5.0, 1.0)),
+            (v(1.0, 1.0), v(1.5, 1.0)),
+            (v(4.0, 0.0), v(-4.0, 4.0)),
+        ];
+        for (x, y) in entering {
+            assert!(segment_enters_triangle(x, y, triangle), "{x} - {y}");
+            assert!(segment_enters_triangle(y, x, triangle), "{y} - {x}");
+        }
+    }
+
     /// How a face repeats the corners its slits pass twice.
     #[derive(Clone, Copy, Debug)]
     enum Repeat {
