@@ -494,4 +494,67 @@ mod tests {
         let area = 16.0 - 2.5 - 3.75;
         assert_every_variant(&square, &[&upper, &lower], outside_both, area, "two holes");
     }
+
+    /// A ring around the origin of `n` corners at radii in [`lower`, `upper`], the first at
+    /// angle 0, the others jittered by up to 0.15 of their spacing, counter-clockwise.
+    fn jittered_ring(
+        n: usize,
+        lower: f64,
+        upper: f64,
+        random: &mut impl FnMut() -> f64,
+    ) -> Vec<(f32, f32)> {
+        (0..n)
+            .map(|k| {
+                let jitter = if k == 0 { 0.0 } else { 0.3 * (random() - 0.5) };
+                let angle = (k as f64 + jitter) * std::f64::consts::TAU / n as f64;
+                let radius = lower + random() * (upper - lower);
+                ((radius * angle.cos()) as f32, (radius * angle.sin()) as f32)
+            })
+            .collect()
+    }
+
+    /// 2000 random rings (4-15 corners, radii 3-4) with random holes (3-14 corners, radii
+    /// 0.5-1.5), bridged along the positive x axis: the triangles cover the ring's area minus
+    /// the hole's, all facing the face's way.
+    #[test]
+    fn random_rings_with_holes_are_tiled() {
+        // A linear congruential generator (Knuth's MMIX constants): the same cases every run.
+        let mut state = 12345u64;
+        let mut random = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let shoelace = |ring: &[(f32, f32)]| {
+            0.5 * (0..ring.len())
+                .map(|k| {
+                    let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
+                    f64::from(a.0) * f64::from(b.1) - f64::from(b.0) * f64::from(a.1)
+                })
+                .sum::<f64>()
+        };
+        for case in 0..2000 {
+            let outer_corners = 4 + (random() * 12.0) as usize;
+            let hole_corners = 3 + (random() * 12.0) as usize;
+            let outer = jittered_ring(outer_corners, 3.0, 4.0, &mut random);
+            let hole = jittered_ring(hole_corners, 0.5, 1.5, &mut random);
+            let expected = shoelace(&outer) - shoelace(&hole);
+            for repeat in [Repeat::Index, Repeat::Position] {
+                let (positions, mut face) = bridged(&outer, &[&hole], repeat);
+                let start = case % face.len();
+                face.rotate_left(start);
+                let flat = |i: u32| positions[i as usize].truncate().as_dvec2();
+                let areas: Vec<f64> = triangulate(&positions, &face)
+                    .iter()
+                    .map(|t| 0.5 * cross(flat(t[0]), flat(t[1]), flat(t[2])))
+                    .collect();
+                let total: f64 = areas.iter().sum();
+                assert!(
+                    areas.iter().all(|&a| a >= 0.0) && (total - expected).abs() < 1e-9 * expected,
+                    "case {case}, {repeat:?}: triangle areas {areas:?} sum to {total}, not {expected}"
+                );
+            }
+        }
+    }
 }
