@@ -26,7 +26,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
-use glam::{Affine2, Affine3A, Mat4, Vec2, Vec3};
+use glam::{Affine2, Affine3A, DMat4, DQuat, DVec3, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 
 use super::error::SceneError;
@@ -79,6 +79,7 @@ pub(crate) fn load_gltf_with(
         },
         materials: HashMap::new(),
         textures: HashMap::new(),
+        camera: None,
     };
     for extension in ignored_extensions {
         loader.part.notes.push(format!(
@@ -89,6 +90,10 @@ pub(crate) fn load_gltf_with(
     if loader.part.meshes.is_empty() {
         return Err(err("no triangle meshes in the glTF file".into()));
     }
+    loader.part.camera = loader
+        .camera
+        .as_ref()
+        .map(|pose| pose.desc(loader.part.bounds()));
     if with_fog {
         loader.part.fog =
             super::fog::gltf_fog(gltf.document.as_json().extras.as_deref(), &local).map_err(err)?;
@@ -419,6 +424,8 @@ struct Loader<'a> {
     materials: HashMap<Option<usize>, usize>,
     /// (glTF texture index, colour space) -> index in `part.textures`.
     textures: HashMap<(usize, bool), usize>,
+    /// The first camera met, placed once the scene's extent is known.
+    camera: Option<CameraPose>,
 }
 
 impl Loader<'_> {
@@ -466,17 +473,19 @@ impl Loader<'_> {
             ));
         }
         let nodes: Vec<gltf::Node> = self.document.nodes().collect();
-        let mut stack: Vec<(usize, Mat4)> =
-            roots.iter().rev().map(|&r| (r, Mat4::IDENTITY)).collect();
+        // Composed in f64: a camera's view direction comes from its world matrix, and must
+        // keep its precision at any distance from the origin.
+        let mut stack: Vec<(usize, DMat4)> =
+            roots.iter().rev().map(|&r| (r, DMat4::IDENTITY)).collect();
         let mut cameras_seen = 0;
         while let Some((index, parent_matrix)) = stack.pop() {
             let node = &nodes[index];
-            let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-            let world = parent_matrix * local;
-            if !world.is_finite() {
+            let world = parent_matrix * local_matrix(node);
+            let world_f32 = world.as_mat4();
+            if !world_f32.is_finite() {
                 return Err(format!("node {index} has a non-finite transform"));
             }
-            let affine = Affine3A::from_mat4(world);
+            let affine = Affine3A::from_mat4(world_f32);
             if let Some(mesh) = node.mesh() {
                 match Transform::new(affine) {
                     Some(transform) => self.add_mesh(&mesh, &transform)?,
@@ -488,8 +497,8 @@ impl Loader<'_> {
             }
             if let Some(camera) = node.camera() {
                 cameras_seen += 1;
-                if self.part.camera.is_none() {
-                    self.part.camera = Some(convert_camera(&camera, &affine)?);
+                if self.camera.is_none() {
+                    self.camera = Some(CameraPose::new(&camera, &world)?);
                 }
             }
             if let Some(light) = node.light() {
@@ -1011,31 +1020,85 @@ pub(crate) fn texture_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]
     )
 }
 
-/// A glTF camera looks down its node's -Z with +Y up.
-fn convert_camera(camera: &gltf::Camera, world: &Affine3A) -> Result<CameraDesc, String> {
-    let eye = world.transform_point3(Vec3::ZERO);
-    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
-    let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
-    if forward == Vec3::ZERO || up == Vec3::ZERO {
-        return Err(format!(
-            "camera {} has a degenerate node transform",
-            camera.index()
-        ));
+/// A node's local transform in f64. The `gltf` crate composes translation, rotation and scale
+/// in f32; here the f32 values of the file are composed in f64.
+fn local_matrix(node: &gltf::Node) -> DMat4 {
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => {
+            DMat4::from_cols_array_2d(&matrix.map(|column| column.map(f64::from)))
+        }
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation: [x, y, z, w],
+            scale,
+        } => DMat4::from_scale_rotation_translation(
+            DVec3::from(scale.map(f64::from)),
+            DQuat::from_xyzw(x.into(), y.into(), z.into(), w.into()),
+            DVec3::from(translation.map(f64::from)),
+        ),
     }
-    let projection = match camera.projection() {
-        gltf::camera::Projection::Perspective(p) => Projection::Pinhole {
-            vfov_degrees: p.yfov().to_degrees(),
-        },
-        gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
-            height: 2.0 * o.ymag(),
-        },
-    };
-    Ok(CameraDesc {
-        eye,
-        target: eye + forward,
-        up,
-        projection,
-    })
+}
+
+/// A glTF camera as its node places it, in f64. A glTF camera looks down its node's -Z with
+/// +Y up.
+struct CameraPose {
+    eye: DVec3,
+    forward: DVec3,
+    up: DVec3,
+    projection: Projection,
+}
+
+impl CameraPose {
+    fn new(camera: &gltf::Camera, world: &DMat4) -> Result<CameraPose, String> {
+        let forward = world.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
+        let up = world.transform_vector3(DVec3::Y).normalize_or_zero();
+        if forward == DVec3::ZERO || up == DVec3::ZERO {
+            return Err(format!(
+                "camera {} has a degenerate node transform",
+                camera.index()
+            ));
+        }
+        let projection = match camera.projection() {
+            gltf::camera::Projection::Perspective(p) => Projection::Pinhole {
+                vfov_degrees: p.yfov().to_degrees(),
+            },
+            gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
+                height: 2.0 * o.ymag(),
+            },
+        };
+        Ok(CameraPose {
+            eye: world.transform_point3(DVec3::ZERO),
+            forward,
+            up,
+            projection,
+        })
+    }
+
+    /// The camera with its target on the view axis at the scene's distance: at least the
+    /// distance from the eye to the centre of the scene's `bounds`, half their diagonal and
+    /// one unit. The view direction is `target - eye` in f32, so rounding both points turns
+    /// it by about an ulp of their coordinates over that distance: a target one unit from an
+    /// eye 1e4 units from the origin turned the view by up to 5e-4 radians.
+    fn desc(&self, bounds: Option<(Vec3, Vec3)>) -> CameraDesc {
+        let reach = bounds
+            .filter(|(lower, upper)| lower.is_finite() && upper.is_finite())
+            .map_or(0.0, |(lower, upper)| {
+                let (lower, upper) = (lower.as_dvec3(), upper.as_dvec3());
+                let to_centre = (0.5 * (lower + upper) - self.eye).length();
+                to_centre.max(0.5 * (upper - lower).length())
+            });
+        let distance = if reach.is_finite() {
+            reach.max(1.0)
+        } else {
+            1.0
+        };
+        CameraDesc {
+            eye: self.eye.as_vec3(),
+            target: (self.eye + self.forward * distance).as_vec3(),
+            up: self.up.as_vec3(),
+            projection: self.projection.clone(),
+        }
+    }
 }
 
 /// How a material is named in messages: `material 'name' (materials[i])`.
@@ -1380,7 +1443,10 @@ mod tests {
         // Camera at node 1 (child of node 0): eye = (10, 0, 5), looking down -z.
         let camera = part.camera.as_ref().unwrap();
         assert_eq!(camera.eye, Vec3::new(10.0, 0.0, 5.0));
-        assert!((camera.target - camera.eye - Vec3::NEG_Z).length() < 1e-6);
+        // Its target is on the view axis, as far as the centre of the scene's bounds
+        // (the triangle scaled by node 0 spans (10, 0, 0)-(12, 1, 0)).
+        let distance = Vec3::new(1.0, 0.5, -5.0).length();
+        assert!((camera.target - (camera.eye + Vec3::NEG_Z * distance)).length() < 1e-5);
         assert!(
             matches!(camera.projection, Projection::Pinhole { vfov_degrees } if (vfov_degrees - 0.5f32.to_degrees()).abs() < 1e-4)
         );
@@ -1546,6 +1612,31 @@ mod tests {
             "{}",
             notes[0]
         );
+    }
+
+    /// A camera node 1e4 units from the origin looking obliquely at it: the view direction
+    /// the camera gets (`target - eye`, in f32) is the node's -Z to f32 precision. With the
+    /// target one unit in front of the eye it was off by 1.6e-4 radians.
+    #[test]
+    fn a_distant_camera_keeps_its_view_direction() {
+        let away = DVec3::new(0.3, 0.5, 0.8).normalize();
+        let x_axis = DVec3::Y.cross(away).normalize();
+        let rotation = DQuat::from_mat3(&glam::DMat3::from_cols(x_axis, away.cross(x_axis), away));
+        let eye = away * 1e4;
+        let part = synthetic(
+            |j| {
+                j["nodes"][1] = serde_json::json!({"camera": 0,
+                    "translation": eye.to_array(), "rotation": rotation.to_array()});
+                j["scenes"][0]["nodes"] = serde_json::json!([0, 1]);
+                j["nodes"][0]["children"] = serde_json::json!([2]);
+            },
+            TRIANGLE,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let camera = part.camera.unwrap();
+        let view = (camera.target - camera.eye).as_dvec3().normalize();
+        let error = view.angle_between(-away);
+        assert!(error < 2e-7, "view direction off by {error} radians");
     }
 
     #[test]
