@@ -162,7 +162,7 @@ fn zero_area_image_size() {
     );
     assert_rejected(dir.path(), "zero.toml", &[], "zero.toml");
     write(dir.path(), "good.toml", GOOD_SCENE);
-    assert_rejected(dir.path(), "good.toml", &["--height", "0"], "good.toml");
+    assert_rejected(dir.path(), "good.toml", &["--height", "0"], "--height");
 }
 
 #[test]

@@ -319,3 +319,135 @@ fn aov_none_writes_only_colour_and_alpha_with_the_same_pixels() {
     assert!(stderr(&out).contains("--aov none"), "{}", stderr(&out));
     assert!(!dir.path().join("both.exr").exists());
 }
+
+/// `bench render` and `bench scale-out` write no image: their `--help` lists none of
+/// `render`'s options about outputs, interruption, progress or splitting (they used to list
+/// `-o` and `--png`, which then failed), and those options are unknown to them.
+#[test]
+fn bench_commands_list_only_the_options_that_apply() {
+    let dir = temp_dir();
+    for bench in ["render", "scale-out"] {
+        let out = run_in(dir.path(), &["bench", bench, "--help"]);
+        assert!(
+            out.status.success(),
+            "bench {bench} --help: {}",
+            stderr(&out)
+        );
+        let help = String::from_utf8_lossy(&out.stdout);
+        for option in [
+            "-o,",
+            "--output",
+            "--png",
+            "--no-png",
+            "--stats",
+            "--resume",
+            "--max-memory",
+            "--quiet",
+            "--region",
+            "--samples",
+            "--part",
+            "--time-limit",
+            "--tonemap",
+        ] {
+            assert!(
+                !help.contains(option),
+                "bench {bench} --help lists {option}:\n{help}"
+            );
+        }
+        for option in ["--width", "--spp", "--lod", "--filter", "--patch-mode"] {
+            assert!(
+                help.contains(option),
+                "bench {bench} --help lacks {option}:\n{help}"
+            );
+        }
+        let png = run_in(dir.path(), &["bench", bench, "--png", "x.png"]);
+        assert_eq!(png.status.code(), Some(2), "{}", stderr(&png));
+        assert!(stderr(&png).contains("'--png'"), "{}", stderr(&png));
+        assert!(!dir.path().join("x.png").exists());
+    }
+}
+
+/// Numeric options out of range name the documented range (`--width -3` used to say "not in
+/// 0..=4294967295"), in `render` and in the benchmarks that share its options.
+#[test]
+fn out_of_range_numbers_name_the_documented_range() {
+    let dir = temp_dir();
+    let cases: [(&[&str], &str); 7] = [
+        (&["render", "--width", "-3"], "1..=65536"),
+        (&["render", "--height", "65537"], "1..=65536"),
+        (&["render", "--spp", "0"], "1..=4294967295"),
+        (&["render", "--threads", "0"], "1..=1024"),
+        (&["render", "--vct-resolution", "1"], "2..=1024"),
+        (&["bench", "render", "--width", "-3"], "1..=65536"),
+        (&["bench", "scale-out", "--height", "0"], "1..=65536"),
+    ];
+    for (args, range) in cases {
+        let out = run_in(dir.path(), args);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {message}");
+        assert_eq!(message.lines().count(), 1, "{args:?}: {message}");
+        assert!(
+            message.contains(range) && message.contains(args[args.len() - 2]),
+            "{args:?}: {message}"
+        );
+    }
+    assert!(listing(dir.path()).is_empty(), "{:?}", listing(dir.path()));
+}
+
+/// `bench textures` finds its OpenImageIO script wherever it runs (it used to look for
+/// bench/oiio_texture_bench.py under the working directory, and fail after measuring its own
+/// side with a Python traceback flattened onto one line); a script that fails is reported by
+/// the line that says why.
+#[test]
+fn bench_textures_runs_outside_the_repository() {
+    let dir = temp_dir();
+    let quick = [
+        "bench",
+        "textures",
+        "--queries",
+        "2000",
+        "--oiio-queries",
+        "200",
+        "--seconds",
+        "0.01",
+        "--filters",
+        "bilinear",
+    ];
+    let out = run_in(dir.path(), &quick);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8_lossy(&out.stdout);
+    let row = table
+        .lines()
+        .find(|line| line.starts_with("| bilinear | mixed |"))
+        .unwrap_or_else(|| panic!("no bilinear row:\n{table}"));
+    // Every column filled: OIIO's rates came back.
+    assert!(!row.contains(" - "), "{row}");
+
+    write(
+        dir.path(),
+        "broken.py",
+        "def main():\n    raise RuntimeError('the benchmark broke')\n\nmain()\n",
+    );
+    let mut args = quick.to_vec();
+    args.extend(["--oiio-script", "broken.py"]);
+    let out = run_in(dir.path(), &args);
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{message}");
+    assert_eq!(message.lines().count(), 1, "{message}");
+    assert!(
+        message.contains("broken.py")
+            && message.contains("RuntimeError: the benchmark broke")
+            && !message.contains("Traceback"),
+        "{message}"
+    );
+
+    let mut args = quick.to_vec();
+    args.extend(["--oiio-script", "missing.py"]);
+    let out = run_in(dir.path(), &args);
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{message}");
+    assert!(
+        message.contains("missing.py: --oiio-script: no such file"),
+        "{message}"
+    );
+}

@@ -46,6 +46,9 @@ pub enum AovName {
     All,
 }
 
+/// The longest image side a render takes, in pixels.
+pub const MAX_IMAGE_SIDE: u32 = 65_536;
+
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
     /// Scene file (.toml, .obj, .gltf, .glb). Without it, the built-in default scene.
@@ -60,14 +63,16 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_png: bool,
     /// Image width in pixels, 1 to 65536 [default: the scene's width, else 640].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_IMAGE_SIDE)))]
     pub width: Option<u32>,
     /// Image height in pixels, 1 to 65536 [default: the scene's height, else 360].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_IMAGE_SIDE)))]
     pub height: Option<u32>,
     /// Samples per pixel (Owen-scrambled Sobol; 1 = pixel centre) [default: the scene's,
     /// else 1].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
     /// Seed of the sample positions, 0 to 4294967295; the same seed gives the same image
     /// [default: the scene's, else 0].
@@ -82,8 +87,8 @@ pub struct RenderArgs {
     /// else 8].
     #[arg(long, allow_negative_numbers = true)]
     pub max_depth: Option<u32>,
-    /// Worker threads (default: all cores).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Worker threads, 1 to 1024 (default: all cores).
+    #[arg(long, allow_negative_numbers = true, value_parser = thread_count_parser())]
     pub threads: Option<usize>,
     /// Write the statistics as JSON to this file.
     #[arg(long)]
@@ -144,11 +149,12 @@ pub struct RenderArgs {
     pub part: Option<String>,
     /// Voxel cone tracing: voxels across the scene's longest side, 2 to 1024 [default: the
     /// scene's, else 128, halved until the voxel pyramid fits in 256 MiB].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(2..=i64::from(conetrace::vct::build::MAX_RESOLUTION)))]
     pub vct_resolution: Option<u32>,
     /// Voxel cone tracing: light bounces held by the voxels, 1 (direct light) to 8
     /// [default: the scene's, else 1].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=8))]
     pub vct_bounces: Option<u32>,
     /// Fog: integrate each segment's optical depth by ray marching with N steps (midpoint
     /// rule) instead of the closed form, for comparison [default: the scene's
@@ -193,6 +199,11 @@ pub fn lod_parser() -> impl clap::builder::TypedValueParser<Value = LodStrategy>
     use clap::builder::TypedValueParser;
     clap::builder::PossibleValuesParser::new(LodStrategy::ALL.map(LodStrategy::name))
         .try_map(|name| name.parse::<LodStrategy>())
+}
+
+/// `--threads`' values, 1 to [`render::MAX_WORKER_THREADS`], the range errors name.
+pub fn thread_count_parser() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::new().range(1..=render::MAX_WORKER_THREADS as u64)
 }
 
 /// `--filter`'s values, listed in `--help` and in errors.
@@ -332,9 +343,9 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
             "{label}: image size {width}x{height} has zero area"
         )));
     }
-    if width > 65_536 || height > 65_536 {
+    if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
         return Err(CommandError::bad_input(format!(
-            "{label}: image size {width}x{height} is larger than 65536 on a side"
+            "{label}: image size {width}x{height} is larger than {MAX_IMAGE_SIDE} on a side"
         )));
     }
     let spp = args.spp.unwrap_or(scene.settings.spp);
