@@ -451,3 +451,81 @@ fn bench_textures_runs_outside_the_repository() {
         "{message}"
     );
 }
+
+/// Without a terminal (a farm's log), a render that takes longer than the progress interval
+/// prints plain lines: fraction done, rate and time left, and a last line at the end.
+#[test]
+fn without_a_terminal_a_long_render_prints_plain_progress_lines() {
+    let dir = temp_dir();
+    let out = conetrace()
+        .args([
+            "render",
+            "-o",
+            "p.exr",
+            "--no-png",
+            "--threads",
+            "1",
+            "--width",
+            "160",
+            "--height",
+            "96",
+            "--spp",
+            "16",
+        ])
+        .env("CONETRACE_PROGRESS_INTERVAL", "0.02")
+        .current_dir(dir.path())
+        .output()
+        .expect("conetrace runs");
+    let text = stderr(&out);
+    assert!(out.status.success(), "{text}");
+    // 10 x 6 tiles of 16 pixels.
+    let total = 60;
+    let mut last_done = 0;
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines.len() >= 2, "{text}");
+    for (index, line) in lines.iter().enumerate() {
+        let rest = line
+            .strip_prefix("progress: ")
+            .unwrap_or_else(|| panic!("not a progress line: {line}"));
+        let (percent, rest) = rest.split_once("% (").expect(line);
+        let (done, rest) = rest.split_once('/').expect(line);
+        let (count, rest) = rest.split_once(" tiles), ").expect(line);
+        let (rate, rest) = rest.split_once(" tiles/s, ").expect(line);
+        let (percent, done): (usize, usize) = (percent.parse().unwrap(), done.parse().unwrap());
+        assert_eq!(count, total.to_string(), "{line}");
+        assert!(done >= last_done && done <= total, "{line}");
+        assert_eq!(percent, 100 * done / total, "{line}");
+        assert!(rate.parse::<f64>().unwrap() > 0.0, "{line}");
+        if index + 1 < lines.len() {
+            let eta = rest.strip_prefix("ETA ").expect(line);
+            assert!(eta.ends_with(" s"), "{line}");
+        } else {
+            assert_eq!(done, total, "the last line is the end: {line}");
+        }
+        last_done = done;
+    }
+
+    // --quiet prints none, and neither does a bad interval setting: it is refused.
+    let out = conetrace()
+        .args([
+            "render", "-o", "q.exr", "--no-png", "--quiet", "--width", "32",
+        ])
+        .env("CONETRACE_PROGRESS_INTERVAL", "0.02")
+        .current_dir(dir.path())
+        .output()
+        .expect("conetrace runs");
+    assert!(
+        out.status.success() && out.stderr.is_empty(),
+        "{}",
+        stderr(&out)
+    );
+    let out = conetrace()
+        .args(["render", "-o", "r.exr", "--no-png", "--width", "32"])
+        .env("CONETRACE_PROGRESS_INTERVAL", "soon")
+        .current_dir(dir.path())
+        .output()
+        .expect("conetrace runs");
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("CONETRACE_PROGRESS_INTERVAL=soon"));
+    assert!(!dir.path().join("r.exr").exists());
+}

@@ -13,6 +13,7 @@ pub mod bench_tiles;
 pub mod merge;
 pub mod outputs;
 pub mod patch_mode;
+pub mod progress;
 pub mod progressive;
 pub mod render_cmd;
 pub mod resume;

@@ -21,7 +21,11 @@ use std::time::Instant;
 use clap::Args;
 
 use crate::cli::outputs::OutputPlan;
-use crate::cli::resume::{encoded_texture_digest, read_resume_state, RenderSignature};
+use crate::cli::progress::RenderProgress;
+use crate::cli::resume::{
+    encoded_texture_digest, partial_stats_record, read_resume_state, RenderSignature, ResumeState,
+    PARTIAL_STATS_ATTRIBUTE,
+};
 use crate::cli::{CommandError, EXIT_INTERRUPTED};
 use crate::film::AovSelection;
 use crate::film::{self, ExrAttributes, OutputSet};
@@ -421,6 +425,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     }
     // Outputs are checked before anything is loaded or rendered: a bad path costs nothing.
     let outputs = OutputPlan::from_args(args)?;
+    let progress_interval = crate::cli::progress::plain_interval()?;
     catch_interrupts(&outputs.exr);
     let started = Instant::now();
     let mut scene = load(args)?;
@@ -482,16 +487,19 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         let integrator = select_integrator(&context, resolution.kind)?;
         let part = split.resolve(&context, &integrator)?;
         let tiles = part.tiles(options.width, options.height);
-        let bar = progress_bar(args.quiet, tiles.len());
-        let progress = |done: usize, _total: usize| bar.set_position(done as u64);
+        let already = earlier.as_ref().map_or(0, |state| {
+            state.finished.iter().filter(|&&done| done).count()
+        });
+        let bar = RenderProgress::new(args.quiet, tiles.len(), already, progress_interval);
+        let progress = |done: usize, _total: usize| bar.update(done);
         let control = RenderControl {
             progress: Some(&progress),
             cancel: Some(&INTERRUPTED),
-            skip: earlier.as_ref().map(|(_, finished)| finished.as_slice()),
+            skip: earlier.as_ref().map(|state| state.finished.as_slice()),
             part: Some(&part),
         };
         let result = render::render(&context, &integrator, &control);
-        bar.finish_and_clear();
+        bar.finish();
         let mut result = result.map_err(crate::cli::render_failed)?;
         result.stats.integrator = Some(resolution.to_string());
         let unsupported = selection::unsupported_effects(resolution.kind, &context.scene);
@@ -510,19 +518,12 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         Ok((result, context.camera, part, tiles))
     })?;
 
-    // Tiles an earlier run finished come from its file.
-    if let Some((earlier_film, earlier_finished)) = &earlier {
-        for ((tile, done), &done_before) in tiles
-            .iter()
-            .zip(result.finished_tiles.iter_mut())
-            .zip(earlier_finished)
-        {
-            if done_before && !*done {
-                result.film.copy_region_from(earlier_film, *tile);
-                *done = true;
-            }
-        }
+    if let Some(state) = &earlier {
+        copy_resumed_tiles(state, &tiles, &mut result, &outputs.partial_exr);
     }
+    let earlier_stats = earlier
+        .as_ref()
+        .and_then(|state| superseded_partial_stats(state, &outputs));
     let finished_count = result.finished_tiles.iter().filter(|&&d| d).count();
     let complete = finished_count == tiles.len();
     result.stats.complete = complete;
@@ -574,6 +575,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     if !complete {
         // The finished part goes to the partial files only: the outputs of an earlier,
         // complete run stay as they were.
+        record_partial_stats(&mut set, &mut attributes, &outputs, earlier_stats);
         film::stage_exr(&mut set, &result.film, &outputs.partial_exr, &attributes)
             .map_err(written)?;
         if let Some(partial_stats) = &outputs.partial_stats {
@@ -614,6 +616,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     if let Some(partial_stats) = &outputs.partial_stats {
         set.remove_on_commit(partial_stats);
     }
+    if let Some(earlier_stats) = earlier_stats {
+        set.remove_on_commit(earlier_stats);
+    }
     set.commit().map_err(written)?;
 
     let mut line = result.stats.summary_line();
@@ -623,6 +628,66 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     }
     println!("{line}");
     Ok(())
+}
+
+/// Copies the tiles an earlier, interrupted run finished from its partial file into
+/// `result`, and notes how many on the summary line.
+fn copy_resumed_tiles(
+    state: &ResumeState,
+    tiles: &[film::PixelRect],
+    result: &mut render::RenderResult,
+    partial_exr: &Path,
+) {
+    let mut resumed = 0;
+    for ((tile, done), &done_before) in tiles
+        .iter()
+        .zip(result.finished_tiles.iter_mut())
+        .zip(&state.finished)
+    {
+        if done_before && !*done {
+            result.film.copy_region_from(&state.film, *tile);
+            *done = true;
+            resumed += 1;
+        }
+    }
+    result.stats.notes.push(format!(
+        "resumed: {resumed} of {} tiles from {}",
+        tiles.len(),
+        partial_exr.display()
+    ));
+}
+
+/// The statistics file an earlier interrupted run wrote beside its partial EXR, unless this
+/// run writes the same one: this run's partial or final statistics supersede it.
+fn superseded_partial_stats<'a>(state: &'a ResumeState, outputs: &OutputPlan) -> Option<&'a Path> {
+    let earlier = state.partial_stats.as_deref()?;
+    let current = outputs.partial_stats.as_deref().map(partial_stats_record);
+    (current != Some(partial_stats_record(earlier))).then_some(earlier)
+}
+
+/// Records in a partial EXR's `attributes` the partial statistics that belong to it: this
+/// run's, replacing (removing in `set`'s commit) an earlier run's; else the earlier run's,
+/// which stay.
+fn record_partial_stats(
+    set: &mut OutputSet,
+    attributes: &mut ExrAttributes,
+    outputs: &OutputPlan,
+    earlier_stats: Option<&Path>,
+) {
+    let recorded = match (&outputs.partial_stats, earlier_stats) {
+        (Some(current), superseded) => {
+            if let Some(superseded) = superseded {
+                set.remove_on_commit(superseded);
+            }
+            current.as_path()
+        }
+        (None, Some(kept)) => kept,
+        (None, None) => return,
+    };
+    attributes.strings.insert(
+        PARTIAL_STATS_ATTRIBUTE.to_string(),
+        partial_stats_record(recorded),
+    );
 }
 
 /// The part of the image and samples the command line asks for, before the scene is
@@ -791,18 +856,4 @@ pub(crate) fn stage_text(
         w.write_all(text.as_bytes())
             .map_err(|e| film::OutputError::io(path, "write", e))
     })
-}
-
-fn progress_bar(quiet: bool, tiles: usize) -> indicatif::ProgressBar {
-    if quiet {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(tiles as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{elapsed_precise} [{bar:40}] {pos}/{len} tiles, {per_sec}, ETA {eta}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
 }
