@@ -529,3 +529,29 @@ fn without_a_terminal_a_long_render_prints_plain_progress_lines() {
     assert!(stderr(&out).contains("CONETRACE_PROGRESS_INTERVAL=soon"));
     assert!(!dir.path().join("r.exr").exists());
 }
+
+/// Outputs in one directory named once relatively and once absolutely are committed under
+/// one directory lock: the second lock of the same directory used to wait forever.
+#[test]
+fn one_directory_spelt_two_ways_does_not_hang_the_commit() {
+    let dir = temp_dir();
+    let png = dir.path().join("same.png");
+    let mut child = conetrace()
+        .args(["render", "--width", "32", "--height", "16", "--quiet"])
+        .args(["-o", "same.exr", "--png", png.to_str().unwrap()])
+        .current_dir(dir.path())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("conetrace runs");
+    let started = std::time::Instant::now();
+    while child.try_wait().expect("poll conetrace").is_none() {
+        if started.elapsed() > std::time::Duration::from_secs(120) {
+            child.kill().ok();
+            panic!("the render did not finish in 120 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let out = child.wait_with_output().expect("conetrace output");
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(dir.path().join("same.exr").exists() && png.exists());
+}
