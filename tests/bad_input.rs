@@ -162,7 +162,7 @@ fn zero_area_image_size() {
     );
     assert_rejected(dir.path(), "zero.toml", &[], "zero.toml");
     write(dir.path(), "good.toml", GOOD_SCENE);
-    assert_rejected(dir.path(), "good.toml", &["--height", "0"], "good.toml");
+    assert_rejected(dir.path(), "good.toml", &["--height", "0"], "--height");
 }
 
 #[test]
@@ -330,5 +330,53 @@ fn absurd_command_line_values_get_one_line() {
         "good.toml",
         &["--sppp", "4"],
         "a similar argument exists: '--spp'",
+    );
+}
+
+/// A directory named as the scene is called one (it used to get "unknown scene format ''").
+#[test]
+fn a_directory_is_not_a_scene_file() {
+    let dir = temp_dir();
+    std::fs::create_dir(dir.path().join("scenes")).unwrap();
+    std::fs::create_dir(dir.path().join("box.toml")).unwrap();
+    assert_rejected(
+        dir.path(),
+        "scenes",
+        &[],
+        "scenes: is a directory, not a scene file",
+    );
+    assert_rejected(
+        dir.path(),
+        "box.toml",
+        &[],
+        "box.toml: is a directory, not a scene file",
+    );
+}
+
+/// A scene with nothing a ray can meet (an empty file, lights alone, a plain background) is
+/// bad input naming the file: it used to render a grey frame and exit 0. Fog alone and an
+/// environment map alone are something to see and still render.
+#[test]
+fn a_scene_without_geometry_is_refused() {
+    let dir = temp_dir();
+    write(dir.path(), "empty.toml", "");
+    assert_rejected(dir.path(), "empty.toml", &[], "empty.toml: no geometry");
+    let lights_only = GOOD_SCENE.split("[[sphere]]").next().unwrap();
+    write(dir.path(), "lights.toml", lights_only);
+    assert_rejected(dir.path(), "lights.toml", &[], "lights.toml: no geometry");
+
+    let fog = format!(
+        "{lights_only}\n[[fog]]\ndensity = \"constant\"\nsigma = 0.5\n\
+         bounds = {{ min = [-1, -1, -1], max = [1, 1, 1] }}\n"
+    );
+    write(dir.path(), "fog.toml", &fog);
+    let out = run_in(
+        dir.path(),
+        &["render", "fog.toml", "-o", "fog.exr", "--no-png", "--quiet"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
     );
 }

@@ -554,3 +554,65 @@ fn sigint_stops_a_tile_with_many_samples_mid_way() {
     }
     panic!("the signal never reached a running render");
 }
+
+/// A render interrupted with `--stats` and resumed without it removes the earlier run's
+/// `<stats>.partial.json` when it completes (it used to be left behind), and its summary line
+/// says how many tiles came from the partial file.
+#[test]
+fn resume_without_stats_removes_the_partial_statistics_and_says_it_resumed() {
+    let dir = temp_dir();
+    let stats = ["--stats".to_string(), "stats.json".to_string()];
+    // An attempt that finished before the signal wrote stats.json: not this test's.
+    let forget_finished = || {
+        let _ = std::fs::remove_file(dir.path().join("stats.json"));
+    };
+    let spp = interrupted_render_with(
+        dir.path(),
+        "render.exr",
+        Signal::SIGINT,
+        &stats,
+        forget_finished,
+    );
+    let partial_stats = dir.path().join("stats.partial.json");
+    assert!(
+        partial_stats.exists(),
+        "the interrupted run wrote no partial statistics"
+    );
+    let (_, attributes) = read_exr(&dir.path().join("render.partial.exr")).expect("valid EXR");
+    let tiles = work_tiles(WIDTH, HEIGHT).len();
+    let done = decode_tiles(&attributes.strings[TILES_DONE_ATTRIBUTE], tiles)
+        .expect("tiles_done attribute decodes")
+        .iter()
+        .filter(|&&d| d)
+        .count();
+
+    let mut resume = render_args(spp, "render.exr");
+    resume.push("--resume".into());
+    let out = run_in(
+        dir.path(),
+        &resume.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains(&format!(
+            "resumed: {done} of {tiles} tiles from render.partial.exr"
+        )),
+        "{stdout}"
+    );
+    assert!(dir.path().join("render.exr").exists());
+    assert!(!dir.path().join("render.partial.exr").exists());
+    assert!(
+        !partial_stats.exists(),
+        "{} was left behind",
+        partial_stats.display()
+    );
+    assert!(
+        !dir.path().join("stats.json").exists(),
+        "no --stats this time"
+    );
+}

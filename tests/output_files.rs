@@ -320,6 +320,242 @@ fn aov_none_writes_only_colour_and_alpha_with_the_same_pixels() {
     assert!(!dir.path().join("both.exr").exists());
 }
 
+/// `bench render` and `bench scale-out` write no image: their `--help` lists none of
+/// `render`'s options about outputs, interruption, progress or splitting (they used to list
+/// `-o` and `--png`, which then failed), and those options are unknown to them.
+#[test]
+fn bench_commands_list_only_the_options_that_apply() {
+    let dir = temp_dir();
+    for bench in ["render", "scale-out"] {
+        let out = run_in(dir.path(), &["bench", bench, "--help"]);
+        assert!(
+            out.status.success(),
+            "bench {bench} --help: {}",
+            stderr(&out)
+        );
+        let help = String::from_utf8_lossy(&out.stdout);
+        for option in [
+            "-o,",
+            "--output",
+            "--png",
+            "--no-png",
+            "--stats",
+            "--resume",
+            "--max-memory",
+            "--quiet",
+            "--region",
+            "--samples",
+            "--part",
+            "--time-limit",
+            "--tonemap",
+        ] {
+            assert!(
+                !help.contains(option),
+                "bench {bench} --help lists {option}:\n{help}"
+            );
+        }
+        for option in ["--width", "--spp", "--lod", "--filter", "--patch-mode"] {
+            assert!(
+                help.contains(option),
+                "bench {bench} --help lacks {option}:\n{help}"
+            );
+        }
+        let png = run_in(dir.path(), &["bench", bench, "--png", "x.png"]);
+        assert_eq!(png.status.code(), Some(2), "{}", stderr(&png));
+        assert!(stderr(&png).contains("'--png'"), "{}", stderr(&png));
+        assert!(!dir.path().join("x.png").exists());
+    }
+}
+
+/// Numeric options out of range name the documented range (`--width -3` used to say "not in
+/// 0..=4294967295"), in `render` and in the benchmarks that share its options.
+#[test]
+fn out_of_range_numbers_name_the_documented_range() {
+    let dir = temp_dir();
+    let cases: [(&[&str], &str); 7] = [
+        (&["render", "--width", "-3"], "1..=65536"),
+        (&["render", "--height", "65537"], "1..=65536"),
+        (&["render", "--spp", "0"], "1..=4294967295"),
+        (&["render", "--threads", "0"], "1..=1024"),
+        (&["render", "--vct-resolution", "1"], "2..=1024"),
+        (&["bench", "render", "--width", "-3"], "1..=65536"),
+        (&["bench", "scale-out", "--height", "0"], "1..=65536"),
+    ];
+    for (args, range) in cases {
+        let out = run_in(dir.path(), args);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {message}");
+        assert_eq!(message.lines().count(), 1, "{args:?}: {message}");
+        assert!(
+            message.contains(range) && message.contains(args[args.len() - 2]),
+            "{args:?}: {message}"
+        );
+    }
+    assert!(listing(dir.path()).is_empty(), "{:?}", listing(dir.path()));
+}
+
+/// `bench textures` finds its OpenImageIO script wherever it runs (it used to look for
+/// bench/oiio_texture_bench.py under the working directory, and fail after measuring its own
+/// side with a Python traceback flattened onto one line); a script that fails is reported by
+/// the line that says why.
+#[test]
+fn bench_textures_runs_outside_the_repository() {
+    let dir = temp_dir();
+    let quick = [
+        "bench",
+        "textures",
+        "--queries",
+        "2000",
+        "--oiio-queries",
+        "200",
+        "--seconds",
+        "0.01",
+        "--filters",
+        "bilinear",
+    ];
+    let out = run_in(dir.path(), &quick);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8_lossy(&out.stdout);
+    let row = table
+        .lines()
+        .find(|line| line.starts_with("| bilinear | mixed |"))
+        .unwrap_or_else(|| panic!("no bilinear row:\n{table}"));
+    // Every column filled: OIIO's rates came back.
+    assert!(!row.contains(" - "), "{row}");
+
+    write(
+        dir.path(),
+        "broken.py",
+        "def main():\n    raise RuntimeError('the benchmark broke')\n\nmain()\n",
+    );
+    let mut args = quick.to_vec();
+    args.extend(["--oiio-script", "broken.py"]);
+    let out = run_in(dir.path(), &args);
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{message}");
+    assert_eq!(message.lines().count(), 1, "{message}");
+    assert!(
+        message.contains("broken.py")
+            && message.contains("RuntimeError: the benchmark broke")
+            && !message.contains("Traceback"),
+        "{message}"
+    );
+
+    let mut args = quick.to_vec();
+    args.extend(["--oiio-script", "missing.py"]);
+    let out = run_in(dir.path(), &args);
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{message}");
+    assert!(
+        message.contains("missing.py: --oiio-script: no such file"),
+        "{message}"
+    );
+}
+
+/// Without a terminal (a farm's log), a render that takes longer than the progress interval
+/// prints plain lines: fraction done, rate and time left, and a last line at the end.
+#[test]
+fn without_a_terminal_a_long_render_prints_plain_progress_lines() {
+    let dir = temp_dir();
+    let out = conetrace()
+        .args([
+            "render",
+            "-o",
+            "p.exr",
+            "--no-png",
+            "--threads",
+            "1",
+            "--width",
+            "160",
+            "--height",
+            "96",
+            "--spp",
+            "16",
+        ])
+        .env("CONETRACE_PROGRESS_INTERVAL", "0.02")
+        .current_dir(dir.path())
+        .output()
+        .expect("conetrace runs");
+    let text = stderr(&out);
+    assert!(out.status.success(), "{text}");
+    // 10 x 6 tiles of 16 pixels.
+    let total = 60;
+    let mut last_done = 0;
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines.len() >= 2, "{text}");
+    for (index, line) in lines.iter().enumerate() {
+        let rest = line
+            .strip_prefix("progress: ")
+            .unwrap_or_else(|| panic!("not a progress line: {line}"));
+        let (percent, rest) = rest.split_once("% (").expect(line);
+        let (done, rest) = rest.split_once('/').expect(line);
+        let (count, rest) = rest.split_once(" tiles), ").expect(line);
+        let (rate, rest) = rest.split_once(" tiles/s, ").expect(line);
+        let (percent, done): (usize, usize) = (percent.parse().unwrap(), done.parse().unwrap());
+        assert_eq!(count, total.to_string(), "{line}");
+        assert!(done >= last_done && done <= total, "{line}");
+        assert_eq!(percent, 100 * done / total, "{line}");
+        assert!(rate.parse::<f64>().unwrap() > 0.0, "{line}");
+        if index + 1 < lines.len() {
+            let eta = rest.strip_prefix("ETA ").expect(line);
+            assert!(eta.ends_with(" s"), "{line}");
+        } else {
+            assert_eq!(done, total, "the last line is the end: {line}");
+        }
+        last_done = done;
+    }
+
+    // --quiet prints none, and neither does a bad interval setting: it is refused.
+    let out = conetrace()
+        .args([
+            "render", "-o", "q.exr", "--no-png", "--quiet", "--width", "32",
+        ])
+        .env("CONETRACE_PROGRESS_INTERVAL", "0.02")
+        .current_dir(dir.path())
+        .output()
+        .expect("conetrace runs");
+    assert!(
+        out.status.success() && out.stderr.is_empty(),
+        "{}",
+        stderr(&out)
+    );
+    let out = conetrace()
+        .args(["render", "-o", "r.exr", "--no-png", "--width", "32"])
+        .env("CONETRACE_PROGRESS_INTERVAL", "soon")
+        .current_dir(dir.path())
+        .output()
+        .expect("conetrace runs");
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("CONETRACE_PROGRESS_INTERVAL=soon"));
+    assert!(!dir.path().join("r.exr").exists());
+}
+
+/// Outputs in one directory named once relatively and once absolutely are committed under
+/// one directory lock: the second lock of the same directory used to wait forever.
+#[test]
+fn one_directory_spelt_two_ways_does_not_hang_the_commit() {
+    let dir = temp_dir();
+    let png = dir.path().join("same.png");
+    let mut child = conetrace()
+        .args(["render", "--width", "32", "--height", "16", "--quiet"])
+        .args(["-o", "same.exr", "--png", png.to_str().unwrap()])
+        .current_dir(dir.path())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("conetrace runs");
+    let started = std::time::Instant::now();
+    while child.try_wait().expect("poll conetrace").is_none() {
+        if started.elapsed() > std::time::Duration::from_secs(120) {
+            child.kill().ok();
+            panic!("the render did not finish in 120 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let out = child.wait_with_output().expect("conetrace output");
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(dir.path().join("same.exr").exists() && png.exists());
+}
+
 /// A one-triangle glTF whose buffer is the external file `bin_name`, and its bytes.
 fn triangle_gltf_with_bin(bin_name: &str) -> (String, Vec<u8>) {
     let mut buffer = Vec::new();

@@ -230,6 +230,13 @@ fn ctrl_c_keeps_the_last_complete_pass_and_exits_with_status_3() {
         stderr.contains(&format!("({samples} samples per pixel)")),
         "{stderr}"
     );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        stdout.contains(&format!(
+            "{samples} spp reached, stopped by an interrupt (time limit 600 s)"
+        )),
+        "{stdout}"
+    );
     assert!(film.has(Layer::Depth));
     assert_same_pixels(&film, &one_shot_of_unbounded(dir.path(), samples));
 }

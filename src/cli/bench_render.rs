@@ -18,7 +18,8 @@ use clap::Args;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::cli::render_cmd::{self, RenderArgs};
+use crate::cli::bench_scene::BenchSceneArgs;
+use crate::cli::render_cmd;
 use crate::cli::summary::median;
 use crate::cli::CommandError;
 use crate::render::stats::WorkCounters;
@@ -31,7 +32,10 @@ use conetrace::integrator::Whitted;
 #[derive(Args, Debug)]
 pub struct BenchRenderArgs {
     #[command(flatten)]
-    pub render: RenderArgs,
+    pub scene: BenchSceneArgs,
+    /// Worker threads, 1 to 1024 (default: all cores).
+    #[arg(long, allow_negative_numbers = true, value_parser = render_cmd::thread_count_parser())]
+    pub threads: Option<usize>,
     /// Repetitions of each pass (the median is reported).
     #[arg(long, default_value_t = 5)]
     pub repeat: usize,
@@ -220,32 +224,13 @@ impl WatertightCost {
     }
 }
 
-/// `bench render` measures and writes no image: options about output files would be ignored,
-/// so they are refused instead.
-fn refuse_output_options(render: &RenderArgs) -> Result<(), CommandError> {
-    let given = [
-        ("-o", render.output.is_some()),
-        ("--png", render.png.is_some()),
-        ("--no-png", render.no_png),
-        ("--stats", render.stats.is_some()),
-        ("--resume", render.resume),
-        ("--max-memory", render.max_memory.is_some()),
-    ];
-    match given.iter().find(|(_, present)| *present) {
-        Some((option, _)) => Err(CommandError::bad_input(format!(
-            "bench render: {option} does not apply (the benchmark writes no image)"
-        ))),
-        None => Ok(()),
-    }
-}
-
 pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
-    refuse_output_options(&args.render)?;
-    let scene = render_cmd::load(&args.render)?;
-    let mut options = render_cmd::options(&args.render, &scene)?;
+    let render_args = args.scene.render_args(args.threads)?;
+    let scene = render_cmd::load(&render_args)?;
+    let mut options = render_cmd::options(&render_args, &scene)?;
     options.count_texture_tiles = false;
     let repeat = args.repeat.max(1);
-    let pool = crate::cli::worker_pool(args.render.threads)?;
+    let pool = crate::cli::worker_pool(args.threads)?;
     let scene = Arc::new(scene);
     pool.install(|| {
         let context = render::prepare(scene.clone(), options.clone())

@@ -24,6 +24,7 @@ use std::time::Instant;
 
 use clap::Args;
 
+use crate::cli::bench_scene::BenchSceneArgs;
 use crate::cli::render_cmd::{self, RenderArgs};
 use crate::cli::CommandError;
 use crate::film::PixelRect;
@@ -34,7 +35,7 @@ use crate::render::{self, RenderControl, WORK_TILE_SIZE};
 #[derive(Args, Debug)]
 pub struct BenchScaleOutArgs {
     #[command(flatten)]
-    pub render: RenderArgs,
+    pub scene: BenchSceneArgs,
     /// Task counts to predict.
     #[arg(
         long,
@@ -217,17 +218,6 @@ pub fn mean_merge_start(task_seconds: &[f64], slots: u32, tick: f64) -> f64 {
 }
 
 pub fn run(args: &BenchScaleOutArgs) -> Result<(), CommandError> {
-    let given = [
-        ("-o", args.render.output.is_some()),
-        ("--part", args.render.part.is_some()),
-        ("--region", args.render.region.is_some()),
-        ("--samples", args.render.samples.is_some()),
-    ];
-    if let Some((option, _)) = given.iter().find(|(_, present)| *present) {
-        return Err(CommandError::bad_input(format!(
-            "bench scale-out: {option} does not apply (it splits the whole image itself)"
-        )));
-    }
     if args.threads_per_task == 0 || args.slots == Some(0) {
         return Err(CommandError::bad_input(
             "bench scale-out: --threads-per-task and --slots must be at least 1",
@@ -243,7 +233,8 @@ pub fn run(args: &BenchScaleOutArgs) -> Result<(), CommandError> {
             "bench scale-out: --predict-spp must be at least 1",
         ));
     }
-    let (measured, options) = measure(&args.render)?;
+    // Each task is measured on one thread; --threads-per-task scales the prediction.
+    let (measured, options) = measure(&args.scene.render_args(Some(1))?)?;
     let spp = args.predict_spp.unwrap_or(options.spp);
     let total: f64 = measured.tile_seconds.iter().sum();
     println!(

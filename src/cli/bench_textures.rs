@@ -1,6 +1,7 @@
-//! `conetrace bench-textures`: single-thread lookups per second for every filter,
+//! `conetrace bench textures`: single-thread lookups per second for every filter,
 //! ours and OpenImageIO's TextureSystem (through /usr/bin/python3 and
-//! bench/oiio_texture_bench.py) on the same queries, printed as a markdown table.
+//! bench/oiio_texture_bench.py, whose text is built into the program so that it runs from
+//! any directory) on the same queries, printed as a markdown table.
 //!
 //! OIIO is timed from Python, so the script also times the same loop calling an
 //! empty Python function; the table shows OIIO's rate both raw and with that
@@ -44,9 +45,10 @@ pub struct BenchTexturesArgs {
     /// Python interpreter that has the OpenImageIO module.
     #[arg(long, default_value = "/usr/bin/python3")]
     pub python: PathBuf,
-    /// The OIIO benchmark script.
-    #[arg(long, default_value = "bench/oiio_texture_bench.py")]
-    pub oiio_script: PathBuf,
+    /// The OIIO benchmark script [default: the copy of bench/oiio_texture_bench.py built
+    /// into conetrace].
+    #[arg(long)]
+    pub oiio_script: Option<PathBuf>,
     /// Time by the wall clock instead of the thread's CPU time (both sides).
     #[arg(long)]
     pub wall_clock: bool,
@@ -98,6 +100,35 @@ const PYTHON_THREAD_TIME_SHIM: &str = "import runpy, sys, time\n\
 time.perf_counter = time.thread_time\n\
 sys.argv = sys.argv[1:]\n\
 runpy.run_path(sys.argv[0], run_name='__main__')\n";
+
+/// bench/oiio_texture_bench.py, run when `--oiio-script` is not given.
+const OIIO_SCRIPT: &str = include_str!("../../bench/oiio_texture_bench.py");
+
+/// The line of a failed Python run's standard error that says what went wrong: the last
+/// one, which a traceback ends with (`ModuleNotFoundError: ...`) and `sys.exit(message)`
+/// prints alone.
+fn python_failure_line(stderr: &str) -> &str {
+    stderr
+        .lines()
+        .map(str::trim)
+        .rfind(|line| !line.is_empty())
+        .unwrap_or("no message")
+}
+
+/// The script to run: `--oiio-script` (which must be a file), else the built-in copy written
+/// into `work`.
+fn oiio_script(args: &BenchTexturesArgs, work: &Path) -> Result<PathBuf, String> {
+    match &args.oiio_script {
+        Some(path) if path.is_file() => Ok(path.clone()),
+        Some(path) => Err(format!("{}: --oiio-script: no such file", path.display())),
+        None => {
+            let path = work.join("oiio_texture_bench.py");
+            std::fs::write(&path, OIIO_SCRIPT)
+                .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+            Ok(path)
+        }
+    }
+}
 
 /// One row of the table: a filter on a query set.
 struct Row {
@@ -215,6 +246,7 @@ struct OiioTimes {
 
 fn run_oiio(
     args: &BenchTexturesArgs,
+    script: &Path,
     tx: &Path,
     queries: &Path,
     filters: &[FilterMode],
@@ -225,7 +257,7 @@ fn run_oiio(
         command.args(["-c", PYTHON_THREAD_TIME_SHIM]);
     }
     let out = command
-        .arg(&args.oiio_script)
+        .arg(script)
         .arg(tx)
         .arg(queries)
         .args(["--filters", &names.join(",")])
@@ -234,9 +266,10 @@ fn run_oiio(
         .map_err(|e| format!("{}: cannot run: {e}", args.python.display()))?;
     if !out.status.success() {
         return Err(format!(
-            "{}: failed: {}",
-            args.oiio_script.display(),
-            String::from_utf8_lossy(&out.stderr).trim()
+            "{}: failed ({}): {}",
+            script.display(),
+            out.status,
+            python_failure_line(&String::from_utf8_lossy(&out.stderr))
         ));
     }
     // Lines "empty <ns>", "binding <ns>" and "<filter> <ns>".
@@ -249,7 +282,7 @@ fn run_oiio(
         if let (Some(k), Some(v)) = (parts.next(), parts.next()) {
             let v: f64 = v
                 .parse()
-                .map_err(|_| format!("{}: bad output line '{line}'", args.oiio_script.display()))?;
+                .map_err(|_| format!("{}: bad output line '{line}'", script.display()))?;
             if k == "empty" {
                 empty = Some(v);
             } else if k == "binding" {
@@ -259,7 +292,7 @@ fn run_oiio(
             }
         }
     }
-    let missing = |what: &str| format!("{}: no {what} timing", args.oiio_script.display());
+    let missing = |what: &str| format!("{}: no {what} timing", script.display());
     Ok(OiioTimes {
         empty: empty.ok_or_else(|| missing("empty-call"))?,
         binding: binding.ok_or_else(|| missing("binding"))?,
@@ -277,6 +310,12 @@ pub fn run(args: &BenchTexturesArgs) -> Result<(), String> {
 }
 
 fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
+    // Found before anything is measured: a missing script costs no benchmark time.
+    let script = if args.no_oiio {
+        None
+    } else {
+        Some(oiio_script(args, work)?)
+    };
     let source = match &args.texture {
         Some(p) => p.clone(),
         None => {
@@ -339,7 +378,7 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
         }
         let queries = query_set(set, args.queries.max(1), size);
         let mut oiio = Vec::new();
-        if !args.no_oiio {
+        if let Some(script) = &script {
             let qpath = work.join(format!("{set}.csv"));
             write_queries(
                 &qpath,
@@ -350,7 +389,7 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
                 .copied()
                 .filter(|f| *f != FilterMode::Ewa)
                 .collect();
-            let times = run_oiio(args, &tx, &qpath, &oiio_filters)?;
+            let times = run_oiio(args, script, &tx, &qpath, &oiio_filters)?;
             overhead = Some((times.empty, times.binding));
             oiio = times.filters;
         }
@@ -421,4 +460,24 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_python_failure_is_reported_by_its_last_line() {
+        let traceback = "Traceback (most recent call last):\n  File \"x.py\", line 3, in <module>\n    \
+                         import OpenImageIO\nModuleNotFoundError: No module named 'OpenImageIO'\n\n";
+        assert_eq!(
+            python_failure_line(traceback),
+            "ModuleNotFoundError: No module named 'OpenImageIO'"
+        );
+        assert_eq!(
+            python_failure_line("OpenImageIO Python module missing\n"),
+            "OpenImageIO Python module missing"
+        );
+        assert_eq!(python_failure_line(""), "no message");
+    }
 }

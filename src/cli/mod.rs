@@ -7,11 +7,13 @@ pub mod accuracy;
 pub mod bench_effects;
 pub mod bench_render;
 pub mod bench_scale_out;
+pub mod bench_scene;
 pub mod bench_textures;
 pub mod bench_tiles;
 pub mod merge;
 pub mod outputs;
 pub mod patch_mode;
+pub mod progress;
 pub mod progressive;
 pub mod render_cmd;
 pub mod resume;
@@ -65,14 +67,14 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Render a scene (TOML, OBJ, glTF); with no scene, the built-in default scene into out/.
-    Render(render_cmd::RenderArgs),
+    Render(Box<render_cmd::RenderArgs>),
     /// Filter a texture at the (s, t, derivatives) queries of a CSV file; print r,g,b,a rows.
     SampleTexture(sample_texture::SampleTextureArgs),
     /// Benchmarks: raw packet traversal vs full shading, texture filtering vs OpenImageIO.
     #[command(subcommand)]
     Bench(BenchCommand),
     /// Error against a supersampled ground truth and time of every footprint strategy and
-    /// filter; writes CSV, markdown, an error-vs-time plot and crops (default docs/accuracy).
+    /// filter; writes CSV, markdown, an error-vs-time plot and crops (default out/accuracy).
     Accuracy(accuracy::AccuracyArgs),
     /// Merge the parts of a split render (--region, --samples, --part) into the image a
     /// single render gives, bit for bit.
@@ -202,6 +204,27 @@ mod tests {
     }
 
     use super::*;
+
+    /// Every command's `--help`, long form, and its name.
+    fn all_help_texts(command: &mut clap::Command, path: String, out: &mut Vec<(String, String)>) {
+        out.push((path.clone(), command.render_long_help().to_string()));
+        for sub in command.get_subcommands_mut() {
+            let name = format!("{path} {}", sub.get_name());
+            all_help_texts(sub, name, out);
+        }
+    }
+
+    #[test]
+    fn help_texts_carry_no_rustdoc_link_syntax() {
+        use clap::CommandFactory;
+        let mut texts = Vec::new();
+        all_help_texts(&mut Cli::command(), "conetrace".to_string(), &mut texts);
+        assert!(texts.len() > 8, "{} commands", texts.len());
+        for (command, help) in &texts {
+            let link = help.lines().find(|line| line.contains("[`"));
+            assert!(link.is_none(), "{command} --help: {link:?}");
+        }
+    }
 
     #[test]
     fn a_failed_traversal_is_an_internal_error_with_its_message() {

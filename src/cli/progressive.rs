@@ -386,8 +386,13 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
     }
     let mut line = stats.summary_line();
+    let stopper = if stopped_by == "interrupted" {
+        "an interrupt"
+    } else {
+        stopped_by
+    };
     line.push_str(&format!(
-        "; progressive: {}, {} spp reached, stopped by {stopped_by} (time limit {time_limit} s)",
+        "; progressive: {}, {} spp reached, stopped by {stopper} (time limit {time_limit} s)",
         pass_count(passes),
         accumulated.samples
     ));

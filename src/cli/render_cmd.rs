@@ -21,7 +21,11 @@ use std::time::Instant;
 use clap::Args;
 
 use crate::cli::outputs::OutputPlan;
-use crate::cli::resume::{encoded_texture_digest, read_resume_state, RenderSignature};
+use crate::cli::progress::RenderProgress;
+use crate::cli::resume::{
+    encoded_texture_digest, partial_stats_record, read_resume_state, RenderSignature, ResumeState,
+    PARTIAL_STATS_ATTRIBUTE,
+};
 use crate::cli::{CommandError, EXIT_INTERRUPTED};
 use crate::film::AovSelection;
 use crate::film::{self, ExrAttributes, OutputSet};
@@ -46,6 +50,9 @@ pub enum AovName {
     All,
 }
 
+/// The longest image side a render takes, in pixels.
+pub const MAX_IMAGE_SIDE: u32 = 65_536;
+
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
     /// Scene file (.toml, .obj, .gltf, .glb). Without it, the built-in default scene.
@@ -60,14 +67,16 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_png: bool,
     /// Image width in pixels, 1 to 65536 [default: the scene's width, else 640].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_IMAGE_SIDE)))]
     pub width: Option<u32>,
     /// Image height in pixels, 1 to 65536 [default: the scene's height, else 360].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_IMAGE_SIDE)))]
     pub height: Option<u32>,
     /// Samples per pixel (Owen-scrambled Sobol; 1 = pixel centre) [default: the scene's,
     /// else 1].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
     /// Seed of the sample positions, 0 to 4294967295; the same seed gives the same image
     /// [default: the scene's, else 0].
@@ -82,8 +91,8 @@ pub struct RenderArgs {
     /// else 8].
     #[arg(long, allow_negative_numbers = true)]
     pub max_depth: Option<u32>,
-    /// Worker threads (default: all cores).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Worker threads, 1 to 1024 (default: all cores).
+    #[arg(long, allow_negative_numbers = true, value_parser = thread_count_parser())]
     pub threads: Option<usize>,
     /// Write the statistics as JSON to this file.
     #[arg(long)]
@@ -151,11 +160,12 @@ pub struct RenderArgs {
     pub part: Option<String>,
     /// Voxel cone tracing: voxels across the scene's longest side, 2 to 1024 [default: the
     /// scene's, else 128, halved until the voxel pyramid fits in 256 MiB].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(2..=i64::from(conetrace::vct::build::MAX_RESOLUTION)))]
     pub vct_resolution: Option<u32>,
     /// Voxel cone tracing: light bounces held by the voxels, 1 (direct light) to 8
     /// [default: the scene's, else 1].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=8))]
     pub vct_bounces: Option<u32>,
     /// Fog: integrate each segment's optical depth by ray marching with N steps (midpoint
     /// rule) instead of the closed form, for comparison [default: the scene's
@@ -200,6 +210,11 @@ pub fn lod_parser() -> impl clap::builder::TypedValueParser<Value = LodStrategy>
     use clap::builder::TypedValueParser;
     clap::builder::PossibleValuesParser::new(LodStrategy::ALL.map(LodStrategy::name))
         .try_map(|name| name.parse::<LodStrategy>())
+}
+
+/// `--threads`' values, 1 to [`render::MAX_WORKER_THREADS`], the range errors name.
+pub fn thread_count_parser() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::new().range(1..=render::MAX_WORKER_THREADS as u64)
 }
 
 /// `--filter`'s values, listed in `--help` and in errors.
@@ -361,9 +376,9 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
             "{label}: image size {width}x{height} has zero area"
         )));
     }
-    if width > 65_536 || height > 65_536 {
+    if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
         return Err(CommandError::bad_input(format!(
-            "{label}: image size {width}x{height} is larger than 65536 on a side"
+            "{label}: image size {width}x{height} is larger than {MAX_IMAGE_SIDE} on a side"
         )));
     }
     let (spp, _) = samples_per_pixel(args, scene);
@@ -447,6 +462,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     }
     // Outputs are checked before anything is loaded or rendered: a bad path costs nothing.
     let outputs = OutputPlan::from_args(args)?;
+    let progress_interval = crate::cli::progress::plain_interval()?;
     catch_interrupts(&outputs.exr);
     let started = Instant::now();
     let mut scene = load(args)?;
@@ -504,16 +520,19 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         let integrator = select_integrator(&context, resolution.kind)?;
         let part = split.resolve(&context, &integrator)?;
         let tiles = part.tiles(options.width, options.height);
-        let bar = progress_bar(args.quiet, tiles.len());
-        let progress = |done: usize, _total: usize| bar.set_position(done as u64);
+        let already = earlier.as_ref().map_or(0, |state| {
+            state.finished.iter().filter(|&&done| done).count()
+        });
+        let bar = RenderProgress::new(args.quiet, tiles.len(), already, progress_interval);
+        let progress = |done: usize, _total: usize| bar.update(done);
         let control = RenderControl {
             progress: Some(&progress),
             cancel: Some(&INTERRUPTED),
-            skip: earlier.as_ref().map(|(_, finished)| finished.as_slice()),
+            skip: earlier.as_ref().map(|state| state.finished.as_slice()),
             part: Some(&part),
         };
         let result = render::render(&context, &integrator, &control);
-        bar.finish_and_clear();
+        bar.finish();
         let mut result = result.map_err(crate::cli::render_failed)?;
         result.stats.integrator = Some(resolution.to_string());
         let unsupported = selection::unsupported_effects(resolution.kind, &context.scene);
@@ -533,23 +552,12 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     })?;
 
     // Tiles an earlier run finished come from its file, a film of the part's region.
-    if let Some((earlier_film, earlier_finished)) = &earlier {
-        for ((tile, done), &done_before) in tiles
-            .iter()
-            .zip(result.finished_tiles.iter_mut())
-            .zip(earlier_finished)
-        {
-            if done_before && !*done {
-                let in_film = film::PixelRect {
-                    x0: tile.x0 - part.region.x0,
-                    y0: tile.y0 - part.region.y0,
-                    ..*tile
-                };
-                result.film.copy_region_from(earlier_film, in_film);
-                *done = true;
-            }
-        }
+    if let Some(state) = &earlier {
+        copy_resumed_tiles(state, &tiles, &part, &mut result, &outputs.partial_exr);
     }
+    let earlier_stats = earlier
+        .as_ref()
+        .and_then(|state| superseded_partial_stats(state, &outputs));
     let finished_count = result.finished_tiles.iter().filter(|&&d| d).count();
     let complete = finished_count == tiles.len();
     result.stats.complete = complete;
@@ -601,6 +609,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     if !complete {
         // The finished part goes to the partial files only: the outputs of an earlier,
         // complete run stay as they were.
+        record_partial_stats(&mut set, &mut attributes, &outputs, earlier_stats);
         film::stage_exr(&mut set, &result.film, &outputs.partial_exr, &attributes)
             .map_err(written)?;
         if let Some(partial_stats) = &outputs.partial_stats {
@@ -644,6 +653,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     if let Some(partial_stats) = &outputs.partial_stats {
         set.remove_on_commit(partial_stats);
     }
+    if let Some(earlier_stats) = earlier_stats {
+        set.remove_on_commit(earlier_stats);
+    }
     set.commit().map_err(written)?;
 
     let mut line = result.stats.summary_line();
@@ -653,6 +665,72 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     }
     println!("{line}");
     Ok(())
+}
+
+/// Copies the tiles an earlier, interrupted run finished from its partial file into
+/// `result`, and notes how many on the summary line.
+fn copy_resumed_tiles(
+    state: &ResumeState,
+    tiles: &[film::PixelRect],
+    part: &render::part::RenderPart,
+    result: &mut render::RenderResult,
+    partial_exr: &Path,
+) {
+    let mut resumed = 0;
+    for ((tile, done), &done_before) in tiles
+        .iter()
+        .zip(result.finished_tiles.iter_mut())
+        .zip(&state.finished)
+    {
+        if done_before && !*done {
+            let in_film = film::PixelRect {
+                x0: tile.x0 - part.region.x0,
+                y0: tile.y0 - part.region.y0,
+                ..*tile
+            };
+            result.film.copy_region_from(&state.film, in_film);
+            *done = true;
+            resumed += 1;
+        }
+    }
+    result.stats.notes.push(format!(
+        "resumed: {resumed} of {} tiles from {}",
+        tiles.len(),
+        partial_exr.display()
+    ));
+}
+
+/// The statistics file an earlier interrupted run wrote beside its partial EXR, unless this
+/// run writes the same one: this run's partial or final statistics supersede it.
+fn superseded_partial_stats<'a>(state: &'a ResumeState, outputs: &OutputPlan) -> Option<&'a Path> {
+    let earlier = state.partial_stats.as_deref()?;
+    let current = outputs.partial_stats.as_deref().map(partial_stats_record);
+    (current != Some(partial_stats_record(earlier))).then_some(earlier)
+}
+
+/// Records in a partial EXR's `attributes` the partial statistics that belong to it: this
+/// run's, replacing (removing in `set`'s commit) an earlier run's; else the earlier run's,
+/// which stay.
+fn record_partial_stats(
+    set: &mut OutputSet,
+    attributes: &mut ExrAttributes,
+    outputs: &OutputPlan,
+    earlier_stats: Option<&Path>,
+) {
+    let recorded = match (&outputs.partial_stats, earlier_stats) {
+        (Some(current), superseded) => {
+            if let Some(superseded) = superseded {
+                set.remove_on_commit(superseded);
+            }
+            current.as_path()
+        }
+        (None, Some(kept)) => kept,
+        (None, None) => return,
+    };
+    attributes.strings.insert(
+        PARTIAL_STATS_ATTRIBUTE.to_string(),
+        partial_stats_record(recorded),
+    );
 }
 
 /// The part of the image and samples the command line asks for, before the scene is
@@ -818,18 +896,4 @@ pub(crate) fn stage_text(
         w.write_all(text.as_bytes())
             .map_err(|e| film::OutputError::io(path, "write", e))
     })
-}
-
-fn progress_bar(quiet: bool, tiles: usize) -> indicatif::ProgressBar {
-    if quiet {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(tiles as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{elapsed_precise} [{bar:40}] {pos}/{len} tiles, {per_sec}, ETA {eta}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
 }

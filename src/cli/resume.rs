@@ -20,7 +20,7 @@
 //! The finished tiles are listed in `conetrace.tiles_done` ([`encode_tiles`]).
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use sha2::{Digest, Sha256};
 
@@ -34,6 +34,10 @@ use crate::scene::SceneDescription;
 
 /// Header attribute listing the finished work tiles (see [`encode_tiles`]).
 pub const TILES_DONE_ATTRIBUTE: &str = "conetrace.tiles_done";
+/// Header attribute of a partial render: the absolute path of the statistics it wrote beside
+/// it (`<stats>.partial.json`), so that the render that completes it removes that file even
+/// when `--stats` is not given again.
+pub const PARTIAL_STATS_ATTRIBUTE: &str = "conetrace.partial_stats";
 /// Prefix of the option items of a signature.
 const OPTION_PREFIX: &str = "conetrace.option.";
 /// Prefix of the input digests of a signature.
@@ -276,6 +280,36 @@ impl RenderSignature {
     }
 }
 
+/// The earlier, partial render `--resume` continues.
+pub struct ResumeState {
+    /// The earlier run's film, of the part's region.
+    pub film: film::Film,
+    /// Per work tile: finished by the earlier run.
+    pub finished: Vec<bool>,
+    /// The statistics file the earlier run wrote beside its partial EXR, when it still holds
+    /// an incomplete render's statistics.
+    pub partial_stats: Option<PathBuf>,
+}
+
+/// The partial statistics file named by a partial EXR's header, if that file is one: a JSON
+/// object whose `complete` is false. A header is data anyone can edit, and the file it names
+/// is going to be removed.
+fn recorded_partial_stats(attributes: &film::ExrAttributes) -> Option<PathBuf> {
+    let path = PathBuf::from(attributes.strings.get(PARTIAL_STATS_ATTRIBUTE)?);
+    let text = std::fs::read_to_string(&path).ok()?;
+    let stats: serde_json::Value = serde_json::from_str(&text).ok()?;
+    (stats.get("complete") == Some(&serde_json::Value::Bool(false))).then_some(path)
+}
+
+/// The header value recording `partial_stats` (see [`PARTIAL_STATS_ATTRIBUTE`]): absolute,
+/// so a resume from another working directory finds it.
+pub fn partial_stats_record(partial_stats: &Path) -> String {
+    std::path::absolute(partial_stats)
+        .unwrap_or_else(|_| partial_stats.to_path_buf())
+        .display()
+        .to_string()
+}
+
 /// The earlier, partial render `--resume` continues: its film (of `part`'s region) and
 /// finished tiles (`part`'s), after checking that it was made with the same `signature` and
 /// the same region and sample range.
@@ -285,7 +319,7 @@ pub fn read_resume_state(
     scene: &SceneDescription,
     options: &RenderOptions,
     part: &RenderPart,
-) -> Result<(film::Film, Vec<bool>), CommandError> {
+) -> Result<ResumeState, CommandError> {
     let label = partial_path.display();
     if !partial_path.exists() {
         return Err(CommandError::bad_input(format!(
@@ -321,7 +355,11 @@ pub fn read_resume_state(
                 "{label}: --resume: missing or malformed {TILES_DONE_ATTRIBUTE} attribute"
             ))
         })?;
-    Ok((earlier, finished))
+    Ok(ResumeState {
+        film: earlier,
+        finished,
+        partial_stats: recorded_partial_stats(&attributes),
+    })
 }
 
 /// Checks that a partial render's film and header hold `part`: the same region of an image
@@ -372,6 +410,37 @@ fn check_same_part(
 mod tests {
     use super::*;
     use crate::scene::TextureSource;
+
+    #[test]
+    fn only_an_incomplete_render_s_statistics_are_taken_for_partial_ones() {
+        let dir = tempfile::tempdir().expect("temporary directory");
+        let header = |path: &Path| {
+            let mut attributes = film::ExrAttributes::default();
+            attributes.strings.insert(
+                PARTIAL_STATS_ATTRIBUTE.to_string(),
+                partial_stats_record(path),
+            );
+            attributes
+        };
+        let partial = dir.path().join("s.partial.json");
+        std::fs::write(&partial, r#"{"scene": "a.toml", "complete": false}"#).unwrap();
+        assert_eq!(recorded_partial_stats(&header(&partial)), Some(partial));
+        for (name, text) in [
+            ("complete.json", r#"{"complete": true}"#),
+            ("other.json", r#"{"scene": "a.toml"}"#),
+            ("notes.txt", "complete: false"),
+        ] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).unwrap();
+            assert_eq!(recorded_partial_stats(&header(&path)), None, "{name}");
+        }
+        let missing = dir.path().join("gone.partial.json");
+        assert_eq!(recorded_partial_stats(&header(&missing)), None);
+        assert_eq!(
+            recorded_partial_stats(&film::ExrAttributes::default()),
+            None
+        );
+    }
 
     #[test]
     fn tile_lists_round_trip_through_their_text() {

@@ -157,8 +157,15 @@ impl OutputSet {
     /// their old contents back (or are removed if they did not exist), so the set is
     /// replaced whole or not at all, and the error names the user's path.
     pub fn commit(mut self) -> Result<(), OutputError> {
-        let mut dirs: Vec<PathBuf> = self.staged.iter().map(|f| parent_dir(&f.target)).collect();
-        dirs.extend(self.superseded.iter().map(|p| parent_dir(p)));
+        // One lock per directory however its paths are spelt (`.` and its absolute path are
+        // one directory): flock through a second handle would wait for the first forever.
+        let mut dirs: Vec<PathBuf> = self
+            .staged
+            .iter()
+            .map(|f| parent_dir(&f.target))
+            .chain(self.superseded.iter().map(|p| parent_dir(p)))
+            .map(|dir| fs::canonicalize(&dir).unwrap_or(dir))
+            .collect();
         dirs.sort();
         dirs.dedup();
         // Locks are taken in sorted order, so two sets never wait for each other in a cycle.
@@ -250,6 +257,28 @@ mod tests {
             w.write_all(data)
                 .map_err(|e| OutputError::io("x", "write", e))
         }
+    }
+
+    #[test]
+    fn one_directory_spelt_two_ways_is_locked_once() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::create_dir(dir.path().join("sub")).unwrap();
+        let a = dir.path().join("a.bin");
+        let b = dir.path().join("sub/../b.bin");
+        let (sender, receiver) = std::sync::mpsc::channel();
+        // On a thread: a commit that locks the directory twice never returns.
+        std::thread::spawn(move || {
+            let mut set = OutputSet::default();
+            let staged = set
+                .stage(&a, bytes(b"a"))
+                .and_then(|_| set.stage(&b, bytes(b"b")));
+            let _ = sender.send(staged.and_then(|_| set.commit()));
+        });
+        let committed = receiver
+            .recv_timeout(std::time::Duration::from_secs(20))
+            .expect("the commit returns");
+        assert!(committed.is_ok(), "{committed:?}");
+        assert_eq!(fs::read(dir.path().join("b.bin")).unwrap(), b"b");
     }
 
     #[test]

@@ -27,7 +27,7 @@
 //! axis shows. A row is on the Pareto front when no other row is at least as fast and at
 //! least as accurate (RMSE) and strictly better in one of them.
 //!
-//! Outputs in `--out`/lighting (docs/accuracy/lighting), per scene: `<scene>.csv`,
+//! Outputs in `--out`/lighting (checked in: docs/accuracy/lighting), per scene: `<scene>.csv`,
 //! `<scene>.md`, `<scene>_error_vs_time.png` (RMSE and FLIP against total seconds, log-log,
 //! the front in red) and `<scene>_crop.png` (the window where the rows err most on average,
 //! the reference first). Bad input stops the command before it renders anything.

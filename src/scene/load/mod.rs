@@ -81,6 +81,12 @@ fn format_of(path: &Path) -> Result<Format, SceneError> {
 /// adds a camera and lights when missing, and validates the result.
 pub fn load_scene(path: &Path) -> Result<SceneDescription, SceneError> {
     let label = path.display().to_string();
+    if path.is_dir() {
+        return Err(SceneError::invalid(
+            &label,
+            "is a directory, not a scene file",
+        ));
+    }
     let base_dir = path.parent().unwrap_or(Path::new(""));
     let files = Files::disk(base_dir);
     let format = format_of(path)?;
@@ -144,11 +150,30 @@ fn load_bounds_mesh(files: &Files, path: &Path) -> Result<SceneDescription, Scen
     }
 }
 
-/// Adds a missing camera and lights (counting emitters by `rule`), then validates.
+/// Adds a missing camera and lights (counting emitters by `rule`), then validates, and
+/// refuses a scene with nothing to see.
 fn finish(mut scene: SceneDescription, rule: EmitterRule) -> Result<SceneDescription, SceneError> {
     framing::add_missing_camera_and_lights(&mut scene, rule);
     validate(&scene)?;
+    if !has_something_to_render(&scene) {
+        return Err(SceneError::invalid(
+            &scene.source,
+            "no geometry: no mesh, sphere, patch, fog or environment map to render",
+        ));
+    }
     Ok(scene)
+}
+
+/// Whether `scene` holds anything a camera ray can meet: geometry (emitters included), fog,
+/// or an environment map (an environment-only scene shows the map). Without any, every
+/// pixel is the same colour: an empty file or a scene whose geometry was left out.
+fn has_something_to_render(scene: &SceneDescription) -> bool {
+    scene.meshes.iter().any(|mesh| !mesh.triangles.is_empty())
+        || !scene.spheres.is_empty()
+        || !scene.patches.is_empty()
+        || !scene.height_patches.is_empty()
+        || !scene.fog.is_empty()
+        || matches!(scene.environment, crate::scene::Environment::LatLong { .. })
 }
 
 #[cfg(test)]
@@ -163,6 +188,34 @@ mod tests {
         let e = format_of(Path::new("x.fbx")).unwrap_err().to_string();
         assert!(e.starts_with("x.fbx: unknown scene format 'fbx'"), "{e}");
         assert!(load_scene(Path::new("noext")).is_err());
+    }
+
+    #[test]
+    fn a_directory_is_not_a_scene_file() {
+        let dir = std::env::temp_dir();
+        let e = load_scene(&dir).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            format!("{}: is a directory, not a scene file", dir.display())
+        );
+    }
+
+    #[test]
+    fn a_scene_with_nothing_to_render_is_an_error_naming_it() {
+        for text in [
+            "",
+            "[render]\nwidth = 8\n",
+            "[[light]]\ntype = \"point\"\nposition = [0, 1, 0]\n",
+            "[environment]\ncolor = [0.2, 0.3, 0.4]\n",
+        ] {
+            let e = load_toml_str(text, Path::new("."), "empty.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("empty.toml: no geometry"), "{text:?}: {e}");
+        }
+        // Fog alone is something to see.
+        let fog = "[[fog]]\ndensity = \"constant\"\nsigma = 0.1\n";
+        assert!(load_toml_str(fog, Path::new("."), "fog.toml").is_ok());
     }
 
     #[test]
