@@ -272,7 +272,7 @@ fn bad_input_is_rejected_before_anything_is_written() {
     assert_rejected(
         &["accuracy", scene_arg, "--out", out_arg, "--width", "0"],
         &out,
-        "zero area",
+        "0 is not in 1..=65536",
     );
     // An output directory that cannot be created (its parent is a file).
     let blocker = write(dir.path(), "blocker", "a file, not a directory");

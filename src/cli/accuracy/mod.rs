@@ -83,10 +83,12 @@ pub struct AccuracyArgs {
     #[arg(long, default_value = "out/accuracy")]
     pub out: PathBuf,
     /// Image width of every render.
-    #[arg(long, default_value_t = 320)]
+    #[arg(long, default_value_t = 320,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(render_cmd::MAX_IMAGE_SIDE)))]
     pub width: u32,
     /// Image height of every render.
-    #[arg(long, default_value_t = 180)]
+    #[arg(long, default_value_t = 180,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(render_cmd::MAX_IMAGE_SIDE)))]
     pub height: u32,
     /// Samples per pixel of the ground truth (mip0 + bilinear, drawn with another seed).
     /// Smaller values are accepted for quick checks; the checked-in results use 1024.
