@@ -532,8 +532,9 @@ unsafe extern "C" fn cancel_after_two(done: u32, _total: u32, user: *mut c_void)
     i32::from(done >= 2)
 }
 
-#[test]
-fn a_render_cancelled_from_the_progress_callback_leaves_a_valid_partial_image() {
+/// The default scene at 320x180 on one thread, cancelled by the progress callback once two
+/// tiles are done: the scene, its partial image and how often the callback was called.
+fn render_cancelled_after_two_tiles() -> (CtScene, CtImage, usize) {
     let scene = default_scene();
     let calls = AtomicUsize::new(0);
     let mut options = small_options();
@@ -545,6 +546,12 @@ fn a_render_cancelled_from_the_progress_callback_leaves_a_valid_partial_image() 
     let mut image = CtImage::default();
     let status = unsafe { ct_render(scene, &options, &mut image) };
     assert_eq!(status, CtStatus::CT_CANCELLED, "{}", last_error());
+    (scene, image, calls.load(Ordering::Relaxed))
+}
+
+#[test]
+fn a_render_cancelled_from_the_progress_callback_leaves_a_valid_partial_image() {
+    let (scene, image, calls) = render_cancelled_after_two_tiles();
     assert_ne!(
         image,
         CtImage::default(),
@@ -552,7 +559,7 @@ fn a_render_cancelled_from_the_progress_callback_leaves_a_valid_partial_image() 
     );
     // One call may report several tiles (workers do not wait for the callback), so the
     // callback saw at least one call, and stopped the render at its first count >= 2.
-    assert!(calls.load(Ordering::Relaxed) >= 1);
+    assert!(calls >= 1);
     let mut complete = 1;
     assert_eq!(
         unsafe { ct_image_is_complete(image, &mut complete) },
@@ -601,17 +608,7 @@ fn a_cancelled_render_leaves_its_own_message() {
     let stale = last_error();
     assert!(stale.contains("null"), "{stale}");
 
-    let scene = default_scene();
-    let calls = AtomicUsize::new(0);
-    let mut options = small_options();
-    options.width = 320;
-    options.height = 180;
-    options.threads = 1;
-    options.progress = Some(cancel_after_two);
-    options.progress_user_data = &calls as *const AtomicUsize as *mut c_void;
-    let mut image = CtImage::default();
-    let status = unsafe { ct_render(scene, &options, &mut image) };
-    assert_eq!(status, CtStatus::CT_CANCELLED, "{}", last_error());
+    let (scene, image, _) = render_cancelled_after_two_tiles();
     let message = last_error();
     assert_ne!(message, stale, "the message of an earlier failure was left");
     assert!(
