@@ -186,6 +186,42 @@ fn a_progressive_render_that_reaches_spp_equals_the_one_shot_render() {
     );
 }
 
+/// Without --quiet, each completed pass is one plain line on stderr, so a farm's log shows
+/// how far a progressive render has come (it printed nothing before).
+#[test]
+fn each_completed_pass_prints_a_plain_progress_line() {
+    let dir = temp_dir();
+    let out = run_in(
+        dir.path(),
+        &[
+            "render",
+            "-o",
+            "p.exr",
+            "--threads",
+            "2",
+            "--spp",
+            "4",
+            "--time-limit",
+            "600",
+        ],
+    );
+    assert!(out.status.success(), "{out:?}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("progress: pass"))
+        .collect();
+    // Passes of 1, 1 and 2 samples reach 4.
+    assert_eq!(lines.len(), 3, "{stderr}");
+    for (line, (pass, spp)) in lines.iter().zip([(1, 1), (2, 2), (3, 4)]) {
+        assert!(
+            line.starts_with(&format!("progress: pass {pass} done, {spp} spp, "))
+                && line.contains(" s of 600 s; wrote p.exr"),
+            "{line}"
+        );
+    }
+}
+
 #[test]
 fn a_progressive_render_of_one_pass_says_one_pass() {
     let dir = temp_dir();

@@ -101,6 +101,23 @@ struct ProgressiveStatsFile<'a> {
     progressive: &'a ProgressiveStats,
 }
 
+/// The line printed after each completed pass, e.g. `progress: pass 3 done, 4 spp, 1.2 s of
+/// 60 s; wrote out/x.exr`.
+fn pass_line(
+    passes: u32,
+    samples: u32,
+    elapsed: std::time::Duration,
+    budget: std::time::Duration,
+    exr: &std::path::Path,
+) -> String {
+    format!(
+        "progress: pass {passes} done, {samples} spp, {:.1} s of {:.0} s; wrote {}",
+        elapsed.as_secs_f64(),
+        budget.as_secs_f64(),
+        exr.display()
+    )
+}
+
 /// The sample range of the pass after `done` samples: as many as were done (one for the
 /// first pass), at most `bound - done` and at most `fits` (the samples the remaining time
 /// holds, `None` before anything was measured). Empty when nothing more is to be rendered.
@@ -358,6 +375,19 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
         last_write_seconds = writing.elapsed().as_secs_f64();
         write_seconds += last_write_seconds;
         last_stats = Some(stats);
+        if !args.quiet {
+            // One plain line a pass: a farm's log shows how far the render has come.
+            eprintln!(
+                "{}",
+                pass_line(
+                    passes,
+                    accumulated.samples,
+                    started.elapsed(),
+                    budget,
+                    &outputs.exr
+                )
+            );
+        }
     };
 
     let Some(mut stats) = last_stats else {
@@ -509,6 +539,20 @@ fn write_outputs(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_pass_is_one_plain_line() {
+        assert_eq!(
+            pass_line(
+                3,
+                4,
+                std::time::Duration::from_millis(1234),
+                std::time::Duration::from_secs(60),
+                std::path::Path::new("out/x.exr")
+            ),
+            "progress: pass 3 done, 4 spp, 1.2 s of 60 s; wrote out/x.exr"
+        );
+    }
 
     #[test]
     fn passes_double_and_respect_the_bound_and_the_time() {
