@@ -665,6 +665,18 @@ fn zero_march_steps_exit_2_with_one_line() {
             "--fog-march-steps must be at least 1",
         ),
         (
+            vec![
+                "render",
+                "good.toml",
+                "-o",
+                "bad.exr",
+                "--quiet",
+                "--fog-march-steps",
+                "-3",
+            ],
+            "--fog-march-steps must be at least 1 and at most 4294967295, got -3",
+        ),
+        (
             vec!["render", "bad.toml", "-o", "bad.exr", "--quiet"],
             "fog_march_steps must be at least 1",
         ),

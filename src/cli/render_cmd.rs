@@ -171,7 +171,7 @@ pub struct RenderArgs {
     /// rule) instead of the closed form, for comparison [default: the scene's
     /// `fog_march_steps`, else the closed form].
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
-    pub fog_march_steps: Option<u32>,
+    pub fog_march_steps: Option<i64>,
     /// Render progressively for this many seconds: passes of samples (1, 1, 2, 4, ...), the
     /// outputs rewritten after each; --spp is then an upper bound, and without it the render
     /// runs until the time is up (`cli::progressive`).
@@ -244,8 +244,17 @@ pub(crate) fn apply_integrator_options(
         settings.vct_bounces = bounces;
     }
     if let Some(steps) = args.fog_march_steps {
-        settings.fog_integration = conetrace::medium::FogIntegration::march(steps)
-            .ok_or_else(|| CommandError::bad_input("--fog-march-steps must be at least 1"))?;
+        // Read as a signed number, so that a negative count gets this message rather than
+        // the parser's "not in 0..=4294967295".
+        settings.fog_integration = u32::try_from(steps)
+            .ok()
+            .and_then(conetrace::medium::FogIntegration::march)
+            .ok_or_else(|| {
+                CommandError::bad_input(format!(
+                    "--fog-march-steps must be at least 1 and at most {}, got {steps}",
+                    u32::MAX
+                ))
+            })?;
     }
     Ok(())
 }
