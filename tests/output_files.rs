@@ -645,3 +645,79 @@ fn no_output_may_overwrite_any_file_the_render_reads() {
     );
     assert!(out.status.success(), "{}", stderr(&out));
 }
+
+/// Only outputs the render will write are checked against its inputs: a region or a sample
+/// range writes no PNG unless --png names one; the default PNG is named as such when it
+/// would overwrite an input. The partial files are always checked: a completed render,
+/// progressive too, removes them.
+#[test]
+fn outputs_the_render_will_not_write_do_not_block_it() {
+    let dir = temp_dir();
+    let at = |name: &str| dir.path().join(name);
+    image::RgbImage::from_pixel(4, 4, image::Rgb([200, 100, 50]))
+        .save(at("tex.png"))
+        .unwrap();
+    // An EXR texture named like the partial file of `-o t.exr`.
+    let out = render(dir.path(), &["-o", "t.partial.exr", "--no-png"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let scene = "[[texture]]\nname = \"t\"\nfile = \"tex.png\"\n\
+         [[texture]]\nname = \"p\"\nfile = \"t.partial.exr\"\n\
+         [[material]]\nname = \"m\"\nbase_color_texture = \"t\"\n\
+         [[material]]\nname = \"n\"\nbase_color_texture = \"p\"\n\
+         [[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n\
+         [[sphere]]\ncenter = [3, 0, 0]\nradius = 1\nmaterial = \"n\"\n";
+    write(dir.path(), "s.toml", scene);
+    let texture = std::fs::read(at("tex.png")).unwrap();
+    let partial = std::fs::read(at("t.partial.exr")).unwrap();
+
+    // The whole image writes tex.png beside tex.exr: refused, naming the default PNG.
+    let out = render(dir.path(), &["s.toml", "-o", "tex.exr"]);
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{message}");
+    assert!(
+        message.contains("the PNG beside the EXR would overwrite"),
+        "{message}"
+    );
+    // A region or a sample range writes no PNG: it renders.
+    for part in [
+        &["--region", "0,0,16,16"][..],
+        &["--samples", "0..1", "--spp", "2"],
+    ] {
+        let mut args = vec!["s.toml", "-o", "tex.exr"];
+        args.extend_from_slice(part);
+        let out = render(dir.path(), &args);
+        assert!(out.status.success(), "{part:?}: {}", stderr(&out));
+    }
+    // A progressive render removes the partial file of its EXR when it completes.
+    let out = render(
+        dir.path(),
+        &[
+            "s.toml",
+            "-o",
+            "t.exr",
+            "--no-png",
+            "--time-limit",
+            "30",
+            "--spp",
+            "1",
+        ],
+    );
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{message}");
+    assert!(
+        message.contains("the partial render would overwrite"),
+        "{message}"
+    );
+    assert_eq!(std::fs::read(at("tex.png")).unwrap(), texture);
+    assert_eq!(std::fs::read(at("t.partial.exr")).unwrap(), partial);
+
+    // --quiet shows no progress, so a bad progress interval setting does not matter.
+    let out = conetrace()
+        .args(["render", "s.toml", "-o", "q.exr", "--no-png", "--quiet"])
+        .args(["--width", "16", "--height", "16"])
+        .env("CONETRACE_PROGRESS_INTERVAL", "abc")
+        .current_dir(dir.path())
+        .output()
+        .expect("conetrace runs");
+    assert!(out.status.success(), "{}", stderr(&out));
+}

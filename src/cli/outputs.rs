@@ -30,6 +30,8 @@ pub struct OutputPlan {
     pub partial_exr: PathBuf,
     /// The interrupted render's statistics (when `--stats` is given).
     pub partial_stats: Option<PathBuf>,
+    /// The PNG is the default one beside the EXR, not named by `--png`.
+    pub png_is_default: bool,
 }
 
 /// `dir/name.ext` to `dir/name.partial.ext`.
@@ -189,6 +191,7 @@ impl OutputPlan {
             exr,
             png,
             stats: args.stats.clone(),
+            png_is_default: args.png.is_none(),
         };
         plan.check()?;
         Ok(plan)
@@ -214,15 +217,30 @@ impl OutputPlan {
         Ok(())
     }
 
-    /// Every output with its option name.
+    /// Leaves out the default PNG, which a render of part of the image or of its samples
+    /// does not write (an explicit `--png` stays).
+    pub fn without_default_png(&mut self) {
+        if self.png_is_default {
+            self.png = None;
+        }
+    }
+
+    /// Every output the render may write, with the option (or default) that names it.
     fn named(&self) -> Vec<(&'static str, &Path)> {
         let mut all = vec![("-o", self.exr.as_path())];
         if let Some(png) = &self.png {
-            all.push(("--png", png.as_path()));
+            let option = if self.png_is_default {
+                "the PNG beside the EXR"
+            } else {
+                "--png"
+            };
+            all.push((option, png.as_path()));
         }
         if let Some(stats) = &self.stats {
             all.push(("--stats", stats.as_path()));
         }
+        // Written by an interrupted render, and removed by a completed one (a progressive
+        // render's too): either would destroy an input of the same name.
         all.push(("the partial render", self.partial_exr.as_path()));
         if let Some(partial) = &self.partial_stats {
             all.push(("the partial statistics", partial.as_path()));

@@ -31,7 +31,7 @@ pub fn plain_interval() -> Result<Duration, CommandError> {
         .map(Duration::from_secs_f64)
         .ok_or_else(|| {
             CommandError::bad_input(format!(
-                "{INTERVAL_VARIABLE}={text}: not a number of seconds above 0"
+                "{INTERVAL_VARIABLE}={text}: not a finite number of seconds above 0 (and below 1e9)"
             ))
         })
 }

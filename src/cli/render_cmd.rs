@@ -470,8 +470,13 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         return crate::cli::progressive::run(args, seconds);
     }
     // Outputs are checked before anything is loaded or rendered: a bad path costs nothing.
-    let outputs = OutputPlan::from_args(args)?;
-    let progress_interval = crate::cli::progress::plain_interval()?;
+    let mut outputs = OutputPlan::from_args(args)?;
+    // --quiet shows no progress, so the interval's setting is not read.
+    let progress_interval = if args.quiet {
+        std::time::Duration::ZERO
+    } else {
+        crate::cli::progress::plain_interval()?
+    };
     catch_interrupts(&outputs.exr);
     let started = Instant::now();
     let mut scene = load(args)?;
@@ -481,15 +486,19 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         load: started.elapsed().as_secs_f64(),
         ..PhaseSeconds::default()
     };
-    outputs.check_inputs(scene.input_files.iter().map(PathBuf::as_path))?;
     let options = options(args, &scene)?;
     scene.notes.extend(samples_per_pixel(args, &scene).1);
     let tonemap = tonemap(args, &scene)?;
     let exposure = scene.settings.exposure;
+    let split = requested_split(args, &options)?;
+    // A part of the image or of its samples writes no PNG unless --png names one.
+    if split.samples_partial(&options) || split.is_partial(&options) {
+        outputs.without_default_png();
+    }
+    outputs.check_inputs(scene.input_files.iter().map(PathBuf::as_path))?;
 
     // Refused before anything large is allocated: an image or texture set that cannot fit
     // gets the estimate, not an allocation failure halfway.
-    let split = requested_split(args, &options)?;
     let mut estimate = memory_estimate(&scene, &options)?;
     if split.samples_partial(&options) {
         // A part holding a sample range also carries its exact sums.
@@ -640,12 +649,11 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     film::stage_exr(&mut set, &result.film, &outputs.exr, &attributes).map_err(written)?;
     // A part's PNG is written only when asked for (farm parts need none), and never for a
     // sample range, whose colour is not final.
-    let png =
-        if split.samples_partial(&options) || (split.is_partial(&options) && args.png.is_none()) {
-            None
-        } else {
-            outputs.png.as_ref()
-        };
+    let png = if split.samples_partial(&options) {
+        None
+    } else {
+        outputs.png.as_ref()
+    };
     if let Some(png_path) = png {
         film::stage_png(&mut set, &result.film, png_path, tonemap, exposure).map_err(written)?;
     }

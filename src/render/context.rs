@@ -48,6 +48,11 @@ pub fn parse_sample_clamp(value: f64) -> Result<f32, String> {
     let single = value as f32;
     if value.is_finite() && single.is_finite() && single > 0.0 {
         Ok(single)
+    } else if value.is_finite() && value > 0.0 && single.is_infinite() {
+        Err(format!(
+            "must be at most {:e}, the largest single-precision number, got {value:e}",
+            f32::MAX
+        ))
     } else {
         Err(format!(
             "must be a finite number above 0 (the largest colour component a sample keeps), \
@@ -218,5 +223,25 @@ impl WorkerState {
                 sum.merge(part);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sample_clamp_is_a_positive_single_precision_number() {
+        assert_eq!(parse_sample_clamp(2.5), Ok(2.5));
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, -1e40, 1e-50] {
+            let message = parse_sample_clamp(bad).unwrap_err();
+            assert!(
+                message.contains("finite number above 0"),
+                "{bad}: {message}"
+            );
+        }
+        // Finite, but beyond what a single-precision film holds: the message says so.
+        let message = parse_sample_clamp(1e40).unwrap_err();
+        assert!(message.contains("at most 3.4028235e38"), "{message}");
     }
 }
