@@ -956,11 +956,40 @@ impl Preamble {
         }
     }
 
+    /// The version a file needs beyond 2.0, if any: its `asset.version` of another major
+    /// version, or an `asset.minVersion` above 2.0 (glTF 2.0, "Versioning": a 2.0 loader must
+    /// not load either).
+    fn later_version(&self) -> Option<String> {
+        let field = |name: &str| {
+            let text = self.asset.as_ref()?.get(name)?.as_str()?.trim().to_owned();
+            let (major, minor) = text.split_once('.').unwrap_or((text.as_str(), "0"));
+            Some((
+                major.parse::<u64>().ok()?,
+                minor.parse::<u64>().ok()?,
+                text.clone(),
+            ))
+        };
+        if let Some((major, _, text)) = field("version") {
+            if major > 2 {
+                return Some(text);
+            }
+        }
+        match field("minVersion") {
+            Some((major, minor, text)) if (major, minor) > (2, 0) => Some(text),
+            _ => None,
+        }
+    }
+
     /// Refuses a glTF 1.0 file and one that requires an extension this loader lacks;
     /// returns the used extensions it ignores, in the file's order.
     fn check(&self) -> Result<Vec<String>, String> {
         if self.is_version_1() {
             return Err("glTF 1.0 files are not supported (only glTF 2.0)".into());
+        }
+        if let Some(version) = self.later_version() {
+            return Err(format!(
+                "the file needs glTF {version}, which is not supported (only glTF 2.0)"
+            ));
         }
         let unsupported = |list: &Option<serde_json::Value>| -> Vec<String> {
             let names = list.as_ref().and_then(|l| l.as_array());
@@ -1789,6 +1818,28 @@ mod tests {
             .check()
             .unwrap_err();
         assert_eq!(e, "glTF 1.0 files are not supported (only glTF 2.0)");
+    }
+
+    /// A file of a later major version, or whose minVersion is above 2.0, is refused naming
+    /// the version; 2.0 files with a minVersion of 2.0 load.
+    #[test]
+    fn later_gltf_versions_are_refused() {
+        let check = |json: &[u8]| Preamble::of(json).unwrap().check();
+        for (json, version) in [
+            (&br#"{"asset": {"version": "3.0"}}"#[..], "3.0"),
+            (
+                br#"{"asset": {"version": "2.0", "minVersion": "2.1"}}"#,
+                "2.1",
+            ),
+        ] {
+            let e = check(json).unwrap_err();
+            assert_eq!(
+                e,
+                format!("the file needs glTF {version}, which is not supported (only glTF 2.0)")
+            );
+        }
+        assert!(check(br#"{"asset": {"version": "2.0", "minVersion": "2.0"}}"#).is_ok());
+        assert!(check(br#"{"asset": {"version": "2.1"}}"#).is_ok());
     }
 
     /// A required extension the loader lacks is named, not the validation problems it causes
