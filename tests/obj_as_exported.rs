@@ -238,7 +238,22 @@ fn malformed_mtl_lines_are_named() {
             "newmtl a\nKd 2 0 0\n",
             "m.mtl: line 2: 'Kd 2 0 0': Kd is a reflectance, its components must lie in [0, 1]",
         ),
-        ("newmtl a\nTr half\n", "m.mtl: line 2: bad Tr value 'half'"),
+        (
+            "newmtl a\nTr half\n",
+            "m.mtl: line 2: 'Tr half': Tr must be a number in [0, 1]",
+        ),
+        (
+            "newmtl a\nd -1\n",
+            "m.mtl: line 2: 'd -1': d must be a number in [0, 1]",
+        ),
+        (
+            "newmtl a\nd -halo 2\n",
+            "m.mtl: line 2: 'd -halo 2': d must be a number in [0, 1]",
+        ),
+        (
+            "newmtl a\nTr 3\n",
+            "m.mtl: line 2: 'Tr 3': Tr must be a number in [0, 1]",
+        ),
     ];
     for (mtl, expected) in cases {
         let dir = temp_dir();

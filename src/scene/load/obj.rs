@@ -431,10 +431,13 @@ fn prepare_mtl(
             "Ns" if rest.parse::<f32>().is_ok_and(|x| x < 0.0) => {
                 return Err(at(number, format!("Ns {rest} is negative")));
             }
-            "Pr" | "Pm" => {
+            // Dissolve and its complement are fractions of light (MTL: `d` from 0,
+            // transparent, to 1, opaque; `d -halo f` names the same fraction): outside
+            // [0, 1] they mean nothing, as a reflectance above 1 does.
+            "Pr" | "Pm" | "d" | "Tr" => {
                 let value = rest
                     .split_whitespace()
-                    .next()
+                    .find(|w| *w != "-halo")
                     .and_then(|v| v.parse::<f32>().ok());
                 if !value.is_some_and(|v| (0.0..=1.0).contains(&v)) {
                     return Err(at(
@@ -449,15 +452,6 @@ fn prepare_mtl(
             keyword if keyword.starts_with("map_") || matches!(keyword, "bump" | "norm") => {
                 if let Err(message) = MapStatement::parse(rest) {
                     return Err(at(number, format!("'{}': {message}", excerpt(line, 60))));
-                }
-            }
-            "Tr" => {
-                let readable = rest
-                    .split_whitespace()
-                    .next()
-                    .is_some_and(|v| v.parse::<f32>().is_ok());
-                if !readable {
-                    return Err(at(number, format!("bad Tr value '{}'", excerpt(rest, 60))));
                 }
             }
             _ => {}
