@@ -145,11 +145,11 @@ def conetrace_render(binary, out_exr, width, height, spp, lod, filt, threads, se
     return peers.rgb(peers.read_exr(out_exr)), float(stats["seconds"]), stats
 
 
-def conetrace_floor(binary, width, height, threads, repeat):
-    """`conetrace bench render` at 1 spp: (raw camera-ray traversal seconds, camera + shadow
-    rays traced with nothing shaded seconds), medians of `repeat` runs."""
-    command = [binary, "bench", "render", SCENE_TOML, "--width", str(width), "--height",
-               str(height), "--max-depth", "0", "--threads", str(threads), "--quiet",
+def conetrace_floor(binary, width, height, threads, repeat, scene=SCENE_TOML):
+    """`conetrace bench render` of `scene` at 1 spp: (raw camera-ray traversal seconds, camera
+    + shadow rays traced with nothing shaded seconds), medians of `repeat` runs."""
+    command = [binary, "bench", "render", scene, "--width", str(width), "--height",
+               str(height), "--spp", "1", "--max-depth", "0", "--threads", str(threads),
                "--repeat", str(repeat)]
     done = subprocess.run(command, capture_output=True, text=True)
     if done.returncode != 0:

@@ -171,6 +171,11 @@ def main():
             f"{cornell.load_average()}")
     for config in configs:
         config["seconds"] = min(config["times"])
+    # The traversal floor: camera rays alone through Embree at 1 spp (`bench render`'s raw
+    # pass), what N samples cost before anything is shaded or bounced.
+    info["floor"] = direct.conetrace_floor(args.conetrace, *info["size"], threads, 3,
+                                           scene=SCENE_TOML)[0]
+    log(f"traversal floor (raw camera rays, 1 spp): {info['floor']:.4f} s")
     info["load_after"] = cornell.load_average()
     log(f"load average after: {info['load_after']}")
     write_results(args, configs, agreement, info)
@@ -250,12 +255,18 @@ def write_results(args, configs, agreement, info):
               "Equal RMSE: the time Mitsuba needs to reach our RMSE at N spp; equal time: the "
               "RMSE Mitsuba reaches in our time at N spp. Both interpolated log-log along "
               "Mitsuba's curve.", "",
+              "Floor: N times conetrace's raw camera-ray traversal at 1 spp (`conetrace bench "
+              f"render`'s raw pass, {info['floor']:.4f} s at 1 spp): what the samples cost in "
+              "Embree before anything is shaded or bounced; ours / floor is the rest.", "",
               "| spp | conetrace s | conetrace RMSE | Mitsuba s at that RMSE | time ratio | "
-              "Mitsuba RMSE at that time | RMSE ratio |", "|---|---|---|---|---|---|---|"]
+              "Mitsuba RMSE at that time | RMSE ratio | floor s | ours / floor |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for r in comparisons(configs):
+        floor = info["floor"] * r["spp"]
         lines.append(f"| {r['spp']} | {r['seconds']:.3f} | {r['rmse']:.5f} | "
                      f"{fmt(r['mitsuba_time'], '{:.3f}')} | {fmt(r['time_ratio'], '{:.2f}')} | "
-                     f"{fmt(r['mitsuba_rmse'], '{:.5f}')} | {fmt(r['rmse_ratio'], '{:.2f}')} |")
+                     f"{fmt(r['mitsuba_rmse'], '{:.5f}')} | {fmt(r['rmse_ratio'], '{:.2f}')} | "
+                     f"{floor:.3f} | {r['seconds'] / floor:.2f} |")
     md_path = os.path.join(args.results, "path.md")
     with open(md_path, "w") as f:
         f.write("\n".join(lines) + "\n")
