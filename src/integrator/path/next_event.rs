@@ -16,7 +16,9 @@ use crate::medium::{segment_fog, FogModel, HenyeyGreenstein};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::surface_textures::area_light_radiance;
-use crate::shading::{self, Bsdf, LightRef, MaterialBsdf};
+use crate::shading::{
+    self, AreaLight, Bsdf, EmissionLookup, EnvironmentLight, LightRef, MaterialBsdf,
+};
 
 /// A shadow ray and the radiance it delivers to its pixel if unoccluded.
 #[derive(Clone, Copy, Debug)]
@@ -129,66 +131,40 @@ pub(super) fn sample_light(
         return;
     };
     let strategy = tracer.strategy;
+    let delta = lights.is_delta(light);
     // Delta lights always; lights with an area only when light sampling takes part.
-    let (wi, distance, light_point, radiance, pdf) = match light {
-        LightRef::Punctual(index) => {
-            let light = &context.scene.lights[index];
-            let sample = shading::sample_li(light, point.position);
-            (
-                sample.direction_to_light,
-                sample.distance,
-                shading::light_position(light).map(|position| (position.as_dvec3(), 0.0)),
-                sample.radiance_scale,
-                f32::INFINITY,
-            )
-        }
-        _ if strategy == LightStrategy::BsdfSampling => return,
-        LightRef::Environment => {
-            let sample = lights.environment.sample_li(u_point);
-            if !point.scatterer.admits(sample.wi) {
-                return;
-            }
-            // The environment as a light: what a BSDF ray that finds it reads too
-            // (`vertex::shade`), so that both strategies estimate one function.
-            let radiance = environment_light_lookup(context, sample.wi, worker);
-            (sample.wi, f32::INFINITY, None, radiance, sample.pdf)
-        }
-        LightRef::Area(index) => {
-            let light = &lights.area.lights[index];
-            let Some(sample) = light.sample(point.position, u_point) else {
-                return;
-            };
-            // Emission textures are read at the sampled point, as for a ray that hits it.
-            let radiance = area_light_radiance(context, light, sample.st, worker);
-            (
-                sample.direction_to_light,
-                sample.distance,
-                Some((sample.point, light.coordinate_scale())),
-                radiance,
-                sample.pdf,
-            )
-        }
+    if !delta && strategy == LightStrategy::BsdfSampling {
+        return;
+    }
+    let mut emission = AdmittedEmission {
+        scatterer: &point.scatterer,
+        lookup: ContextEmission { context, worker },
     };
-    if !point.scatterer.admits(wi) || radiance.max_element() <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
+    let Some(sample) = lights.sample_li(light, point.position, u_point, &mut emission) else {
+        return;
+    };
+    let (wi, pdf) = (sample.wi, sample.pdf);
+    if !point.scatterer.admits(wi)
+        || sample.radiance.max_element() <= 0.0
+        || pdf.is_nan()
+        || pdf <= 0.0
+    {
         return;
     }
     let f = point.scatterer.value(point.wo, wi);
     if f.max_element() <= 0.0 {
         return;
     }
-    // Delta lights carry irradiance (no density); lights with an area radiance over a
-    // solid-angle density, weighted against the BSDF's density of the same direction.
-    let contribution = if pdf.is_infinite() {
-        point.throughput * f * radiance / pmf
+    let unweighted = point.throughput * f * sample.radiance;
+    let contribution = if delta {
+        delta_contribution(unweighted, pmf)
     } else {
-        let light_pdf = pmf * pdf;
-        let weight = if point.last || strategy == LightStrategy::LightSampling {
-            1.0
-        } else {
-            power_heuristic(light_pdf, point.scatterer.pdf(point.wo, wi))
-        };
-        point.throughput * f * radiance * (weight / light_pdf)
+        let alone = point.last || strategy == LightStrategy::LightSampling;
+        weighted_contribution(unweighted, pmf * pdf, alone, || {
+            point.scatterer.pdf(point.wo, wi)
+        })
     };
+    let distance = sample.distance;
     // Beer's law along the shadow ray inside an absorbing medium on its side.
     let crosses = point.scatterer.crosses(wi);
     let sigma = if crosses {
@@ -213,7 +189,8 @@ pub(super) fn sample_light(
     } else {
         point.origin
     };
-    let Some((direction, tfar)) = shading::shadow_ray_towards(origin, light_point, wi) else {
+    let Some((direction, tfar)) = shading::shadow_ray_towards(origin, sample.light_point, wi)
+    else {
         return;
     };
     // A sphere lamp hides nothing of itself from the surface point, but the offset origin
@@ -229,6 +206,74 @@ pub(super) fn sample_light(
         contribution,
         slot: point.slot,
     });
+}
+
+/// What a delta light's sample adds: it arrives from one direction with probability 1, so
+/// no BSDF-sampled ray finds it and only the choice of the light (`pmf`) divides it.
+#[inline]
+fn delta_contribution(unweighted: Vec3, pmf: f32) -> Vec3 {
+    unweighted / pmf
+}
+
+/// What a sample of a light with an area (or the environment) adds, drawn with density
+/// `light_pdf` (choice times direction): weighted by the power heuristic against the density
+/// `bsdf_pdf()` with which BSDF sampling draws the same direction, unless it stands
+/// `alone`. A density that overflowed to infinity leaves nothing.
+#[inline]
+fn weighted_contribution(
+    unweighted: Vec3,
+    light_pdf: f32,
+    alone: bool,
+    bsdf_pdf: impl FnOnce() -> f32,
+) -> Vec3 {
+    let weight = if alone {
+        1.0
+    } else {
+        power_heuristic(light_pdf, bsdf_pdf())
+    };
+    unweighted * (weight / light_pdf)
+}
+
+/// Emission read by the render stage's texture lookups: the environment as a BSDF-sampled
+/// ray that escapes reads it, and area lights' emission textures at the sampled point.
+pub(super) struct ContextEmission<'a, 'w> {
+    pub(super) context: &'a RenderContext,
+    pub(super) worker: &'w mut WorkerState,
+}
+
+impl EmissionLookup for ContextEmission<'_, '_> {
+    #[inline]
+    fn environment(&mut self, _environment: &EnvironmentLight, wi: Vec3) -> Vec3 {
+        environment_light_lookup(self.context, wi, self.worker)
+    }
+
+    #[inline]
+    fn area(&mut self, light: &AreaLight, st: Vec2) -> Vec3 {
+        area_light_radiance(self.context, light, st, self.worker)
+    }
+}
+
+/// [`ContextEmission`] for a shading point: a direction its scatterer cannot receive light
+/// from reads nothing (black), as its sample is dropped anyway.
+struct AdmittedEmission<'s, 'a, 'w> {
+    scatterer: &'s Scatterer<'s>,
+    lookup: ContextEmission<'a, 'w>,
+}
+
+impl EmissionLookup for AdmittedEmission<'_, '_, '_> {
+    #[inline]
+    fn environment(&mut self, environment: &EnvironmentLight, wi: Vec3) -> Vec3 {
+        if self.scatterer.admits(wi) {
+            self.lookup.environment(environment, wi)
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    #[inline]
+    fn area(&mut self, light: &AreaLight, st: Vec2) -> Vec3 {
+        self.lookup.area(light, st)
+    }
 }
 
 /// Trace the wave's shadow rays as one occlusion stream and add what reaches the lights.
