@@ -335,3 +335,35 @@ pub(super) fn trace_shadow_rays(
         add_radiance(image, shadow.slot, contribution);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_delta_light_is_divided_by_its_choice_alone() {
+        let unweighted = Vec3::new(0.5, 1.0, 2.0);
+        assert_eq!(delta_contribution(unweighted, 0.25), unweighted * 4.0);
+    }
+
+    #[test]
+    fn a_light_sample_with_an_overflowed_density_adds_nothing() {
+        // A density that overflowed: the sample is worth nothing, however the weight comes
+        // out (no density stands for a delta light).
+        let unweighted = Vec3::splat(3.0);
+        for alone in [false, true] {
+            let contribution = weighted_contribution(unweighted, f32::INFINITY, alone, || 0.7);
+            assert_eq!(contribution, Vec3::ZERO, "alone: {alone}");
+        }
+        // A finite density: p_l^2 / (p_l^2 + p_b^2) / p_l, with p_l = 2 and p_b = 1.
+        let weighted = weighted_contribution(unweighted, 2.0, false, || 1.0);
+        assert!(
+            (weighted - unweighted * 0.4).abs().max_element() < 1e-6,
+            "{weighted}"
+        );
+        assert_eq!(
+            weighted_contribution(unweighted, 2.0, true, || 1.0),
+            unweighted * 0.5
+        );
+    }
+}
