@@ -17,7 +17,7 @@ use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::surface_textures::area_light_radiance;
 use crate::shading::{
-    self, AreaLight, Bsdf, EmissionLookup, EnvironmentLight, LightRef, MaterialBsdf,
+    self, AreaLight, Bsdf, EmissionLookup, EnvironmentLight, LiSample, LightRef, MaterialBsdf,
 };
 
 /// A shadow ray and the radiance it delivers to its pixel if unoccluded.
@@ -164,8 +164,21 @@ pub(super) fn sample_light(
             point.scatterer.pdf(point.wo, wi)
         })
     };
-    let distance = sample.distance;
-    // Beer's law along the shadow ray inside an absorbing medium on its side.
+    queue_shadow_ray(context, point, light, &sample, contribution, waves, worker);
+}
+
+/// Queue the shadow ray towards `sample` of `light`, carrying `contribution` (attenuated by
+/// Beer's law inside an absorbing medium on its side) if nothing blocks it.
+fn queue_shadow_ray(
+    context: &RenderContext,
+    point: &ShadingPoint,
+    light: LightRef,
+    sample: &LiSample,
+    contribution: Vec3,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) {
+    let wi = sample.wi;
     let crosses = point.scatterer.crosses(wi);
     let sigma = if crosses {
         point.sigma_through
@@ -174,7 +187,7 @@ pub(super) fn sample_light(
     };
     let contribution = if context.effects.absorption && sigma != Vec3::ZERO {
         worker.counters.absorption_evaluations += 1;
-        contribution * shading::transmittance(sigma, distance)
+        contribution * shading::transmittance(sigma, sample.distance)
     } else {
         contribution
     };
@@ -196,7 +209,9 @@ pub(super) fn sample_light(
     // A sphere lamp hides nothing of itself from the surface point, but the offset origin
     // sits closer to it and sees less of it: the segment stops where it enters the lamp.
     let tfar = match light {
-        LightRef::Area(index) => lights.area.lights[index].clip_shadow_ray(origin, direction, tfar),
+        LightRef::Area(index) => {
+            context.lights.area.lights[index].clip_shadow_ray(origin, direction, tfar)
+        }
         _ => tfar,
     };
     waves.shadows.push(ShadowRay {
