@@ -491,7 +491,7 @@ impl SphereCone {
         let r = f64::from(radius);
         let r2 = r * r;
         let d2_minus_r2 = d2 - r2;
-        if !(d2_minus_r2 > 0.0) || !d2.is_finite() {
+        if d2_minus_r2.is_nan() || d2_minus_r2 <= 0.0 || !d2.is_finite() {
             return None;
         }
         let d = d2.sqrt();
