@@ -239,8 +239,15 @@ impl AreaLight {
 
     /// A direction towards the light from `p`, drawn from the uniform numbers `u`; `None`
     /// when nothing of the light can be seen from `p` in that way (inside a sphere,
-    /// degenerate sample).
+    /// degenerate sample), or when its density overflows: a sliver seen edge-on from afar,
+    /// `d^2 / (A cos theta_l)` beyond the largest f32, whose sample would be worth nothing
+    /// (and [`AreaLight::pdf`] is zero there, so BSDF sampling alone finds it).
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<AreaLightSample> {
+        self.sample_shape(p, u).filter(|s| s.pdf.is_finite())
+    }
+
+    /// [`AreaLight::sample`] before its density is checked.
+    fn sample_shape(&self, p: Vec3, u: Vec2) -> Option<AreaLightSample> {
         match self.shape {
             AreaShape::Triangle {
                 p: v, normal, area, ..
@@ -321,8 +328,19 @@ impl AreaLight {
     }
 
     /// Solid-angle density with which [`AreaLight::sample`] picks the direction from `p`
-    /// that reaches the light at `point` (a hit on the light's front side).
+    /// that reaches the light at `point` (a hit on the light's front side): zero where the
+    /// density overflows, as `sample` never picks such a direction.
     pub fn pdf(&self, p: Vec3, point: Vec3) -> f32 {
+        let pdf = self.shape_pdf(p, point);
+        if pdf.is_finite() {
+            pdf
+        } else {
+            0.0
+        }
+    }
+
+    /// [`AreaLight::pdf`] before overflow is checked.
+    fn shape_pdf(&self, p: Vec3, point: Vec3) -> f32 {
         match self.shape {
             AreaShape::Triangle { normal, area, .. } => {
                 let to_light = point - p;
@@ -473,7 +491,7 @@ impl SphereCone {
         let r = f64::from(radius);
         let r2 = r * r;
         let d2_minus_r2 = d2 - r2;
-        if !(d2_minus_r2 > 0.0) || !d2.is_finite() {
+        if d2_minus_r2.is_nan() || d2_minus_r2 <= 0.0 || !d2.is_finite() {
             return None;
         }
         let d = d2.sqrt();
@@ -930,6 +948,42 @@ mod tests {
             0.0
         );
         assert!((light.power() - 2.0 * PI).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_sliver_seen_edge_on_from_afar_is_not_sampled_and_has_no_density() {
+        // A triangle 1e-22 wide, seen from 1e6 away at 1e-8 above its plane: d^2 / (A cos)
+        // is about 2e42, beyond f32. Its light sample would carry an infinite density (which
+        // next-event estimation took for a delta light, adding it whole).
+        let light = AreaLight {
+            two_sided: false,
+            shape: AreaShape::triangle([
+                Vec3::ZERO,
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.5, 0.0, 1e-22),
+            ]),
+            radiance: Vec3::ONE,
+            textured: None,
+        };
+        assert!(
+            light.area() > 0.0 && light.power() > 0.0,
+            "it can be chosen"
+        );
+        let p = Vec3::new(0.5, -1e-2, 1e6);
+        let mut u = Uniforms(13);
+        for _ in 0..100 {
+            let uv = u.vec2();
+            let shape_sample = light.sample_shape(p, uv).expect("the front faces p");
+            assert!(shape_sample.pdf.is_infinite(), "{shape_sample:?}");
+            assert_eq!(light.sample(p, uv), None);
+            assert_eq!(light.pdf(p, shape_sample.point.as_vec3()), 0.0);
+        }
+        // Nearer, the same sliver has a finite density, both ways.
+        let near = Vec3::new(0.5, -1.0, 0.0);
+        let s = light
+            .sample(near, Vec2::splat(0.5))
+            .expect("finite density");
+        assert!((light.pdf(near, s.point.as_vec3()) - s.pdf).abs() < 1e-4 * s.pdf);
     }
 
     /// A scene with one emissive triangle whose material has an emission texture, black in

@@ -207,6 +207,17 @@ impl EnvironmentLight {
         }
     }
 
+    /// The radiance arriving along the unit direction `wi` as this light holds it: the
+    /// map's level-0 texel there, or the constant colour (for an environment an external
+    /// texture system serves, its mean: the map itself is not held here).
+    #[inline]
+    pub fn radiance_towards(&self, wi: Vec3) -> Vec3 {
+        match &self.map {
+            Some(map) => map.radiance(direction_to_lat_long(wi)),
+            None => self.mean_radiance,
+        }
+    }
+
     /// True when the environment delivers no light at all.
     #[inline]
     pub fn is_black(&self) -> bool {

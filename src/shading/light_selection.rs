@@ -77,8 +77,8 @@ pub struct SceneLights {
     pub area: AreaLights,
     /// One choice among the punctual lights, the environment and the area lights, by power.
     pub selection: LightSelection,
-    /// Number of punctual lights (the environment's selection index).
-    pub punctual_count: usize,
+    /// The scene's punctual lights, in the scene's order (their selection indices).
+    pub punctual: Vec<Light>,
     /// Radius of the scene's bounding sphere, over which lights at infinity deliver power.
     pub scene_radius: f32,
 }
@@ -141,7 +141,7 @@ impl SceneLights {
             environment,
             area,
             selection: LightSelection::from_weights(&probabilities),
-            punctual_count: lights.len(),
+            punctual: lights.to_vec(),
             scene_radius,
         }
     }
@@ -150,7 +150,7 @@ impl SceneLights {
     #[inline]
     pub fn choose(&self, u: f32) -> Option<(LightRef, f32)> {
         let (index, pmf) = self.selection.select(u)?;
-        let n = self.punctual_count;
+        let n = self.punctual.len();
         let light = match index {
             i if i < n => LightRef::Punctual(i),
             i if i == n => LightRef::Environment,
@@ -162,7 +162,7 @@ impl SceneLights {
     /// Probability that [`SceneLights::choose`] picks `light`.
     #[inline]
     pub fn pmf(&self, light: LightRef) -> f32 {
-        let n = self.punctual_count;
+        let n = self.punctual.len();
         self.selection.pmf(match light {
             LightRef::Punctual(i) => i,
             LightRef::Environment => n,

@@ -9,8 +9,9 @@
 //!
 //! For integrators these are delta lights (pbrt-v4, section 12.1): [`sample_li`] returns the
 //! one direction each light arrives from, with probability 1, and [`pdf_li`] is zero for any
-//! direction a BSDF sample might pick. The environment ([`super::EnvironmentLight`]) and
-//! the choice of one light per sample ([`super::LightSelection`]) live beside them.
+//! direction a BSDF sample might pick. Integrators reach them, as every other light, through
+//! [`super::light_interface`]; the choice of one light per sample is
+//! [`super::LightSelection`].
 
 use glam::Vec3;
 

@@ -34,6 +34,8 @@
 //!   importance sampled for lat-long maps).
 //! - [`distribution_2d`]: piecewise-constant 1D and 2D distributions sampled by inversion.
 //! - [`light_selection`]: the scene's lights and the choice of one by power.
+//! - [`light_interface`]: what every light answers (`sample_li`, `pdf_li`, `le` and whether
+//!   it is a delta light), for whichever kind it is.
 //! - [`surface_inputs`]: a material's albedo, alpha, metallic, roughness, emission and
 //!   normal-mapped shading normal at a hit, from its factors and the texels the caller
 //!   filtered (normal mapping in a tangent frame from dP/ds, dP/dt).
@@ -58,6 +60,7 @@ pub mod distribution_2d;
 pub mod environment_light;
 pub mod frame;
 pub mod fresnel;
+pub mod light_interface;
 pub mod light_selection;
 pub mod lights;
 pub mod material_bsdf;
@@ -81,6 +84,7 @@ pub use conductor::RoughConductor;
 pub use dielectric::{DielectricSplit, SmoothDielectric};
 pub use environment_light::{EnvironmentLight, EnvironmentMap, EnvironmentSample};
 pub use fresnel::{fresnel, fresnel_dielectric, fresnel_schlick, DielectricBoundary};
+pub use light_interface::{EmissionLookup, LiSample, LightHit, OwnEmission};
 pub use light_selection::{LightRef, LightSelection, SceneLights};
 pub use lights::{is_delta_light, light_position, pdf_li, sample_li, LightSample};
 pub use material_bsdf::{MaterialBsdf, OpaqueLobe};

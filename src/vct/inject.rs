@@ -2,7 +2,7 @@
 //! voxel (seed 003, illumination components 1 and 2 as the voxels hold them).
 //!
 //! A fragment's outgoing radiance is its emission plus the diffuse reflection of every
-//! punctual light, `opaque * albedo / pi * sum_l E_l |n . w_l| V_l`, with the visibility
+//! delta light (the scene's punctual lights, through `shading::light_interface`), `opaque * albedo / pi * sum_l E_l |n . w_l| V_l`, with the visibility
 //! `V_l` from a shadow ray through Embree (the same rays, origins and far ends as
 //! Whitted's). Voxels are isotropic, so a fragment is lit on whichever side faces each
 //! light; the side that received the light orients the fragment's normal (used by the
@@ -10,14 +10,14 @@
 //! material contributes its texture's mean colour (the pyramid's top level): a voxel is far
 //! larger than a texel.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::voxelise::Fragment;
 use crate::render::context::RenderContext;
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::TraceRay;
-use crate::shading;
+use crate::shading::{self, OwnEmission};
 
 /// Fragments lit per batch of shadow rays.
 const BATCH: usize = 4096;
@@ -88,6 +88,7 @@ fn light_batch(
     grid_center: Vec3,
 ) -> (Vec<LitFragment>, u64) {
     let scene = &context.scene;
+    let lights = &context.lights;
     let mut out = Vec::with_capacity(batch.len());
     let mut rays = Vec::new();
     let mut pending = Vec::new();
@@ -96,27 +97,31 @@ fn light_batch(
         let opaque = (1.0 - material.mirror) * (1.0 - material.transmission);
         let reflectance = opaque * albedos[fragment.material as usize];
         let n = fragment.normal;
-        for light in &scene.lights {
-            let probe = fragment.point.position;
-            let side = if shading::sample_li(light, probe).direction_to_light.dot(n) >= 0.0 {
-                1.0
-            } else {
-                -1.0
+        for light in lights.delta_lights() {
+            // A delta light arrives from one direction, whatever the uniform numbers.
+            let towards = |p: Vec3| lights.sample_li(light, p, Vec2::ZERO, &mut OwnEmission);
+            let Some(seen) = towards(fragment.point.position) else {
+                continue;
             };
+            let side = if seen.wi.dot(n) >= 0.0 { 1.0 } else { -1.0 };
             let origin = fragment.point.offset_origin(n * side);
-            let sample = shading::sample_li(light, origin);
-            let cos = (sample.direction_to_light.dot(n) * side).max(0.0);
-            let radiance = shading::brdf::lambert(reflectance) * sample.radiance_scale * cos;
+            let Some(sample) = towards(origin) else {
+                continue;
+            };
+            let cos = (sample.wi.dot(n) * side).max(0.0);
+            let radiance = shading::brdf::lambert(reflectance) * sample.radiance * cos;
             if radiance.max_element() <= 0.0 {
                 continue;
             }
-            let tfar = match shading::light_position(light) {
-                Some(position) => shading::shadow_ray_end(sample.distance, position, 0.0),
+            let tfar = match sample.light_point {
+                Some((position, _)) => {
+                    shading::shadow_ray_end(sample.distance, position.as_vec3(), 0.0)
+                }
                 None => f32::INFINITY,
             };
             rays.push(TraceRay {
                 origin,
-                direction: sample.direction_to_light,
+                direction: sample.wi,
                 tfar,
                 cone_width: 0.0,
                 cone_spread: 0.0,

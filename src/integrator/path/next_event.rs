@@ -16,7 +16,9 @@ use crate::medium::{segment_fog, FogModel, HenyeyGreenstein};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::surface_textures::area_light_radiance;
-use crate::shading::{self, Bsdf, LightRef, MaterialBsdf};
+use crate::shading::{
+    self, AreaLight, Bsdf, EmissionLookup, EnvironmentLight, LiSample, LightRef, MaterialBsdf,
+};
 
 /// A shadow ray and the radiance it delivers to its pixel if unoccluded.
 #[derive(Clone, Copy, Debug)]
@@ -129,67 +131,54 @@ pub(super) fn sample_light(
         return;
     };
     let strategy = tracer.strategy;
+    let delta = lights.is_delta(light);
     // Delta lights always; lights with an area only when light sampling takes part.
-    let (wi, distance, light_point, radiance, pdf) = match light {
-        LightRef::Punctual(index) => {
-            let light = &context.scene.lights[index];
-            let sample = shading::sample_li(light, point.position);
-            (
-                sample.direction_to_light,
-                sample.distance,
-                shading::light_position(light).map(|position| (position.as_dvec3(), 0.0)),
-                sample.radiance_scale,
-                f32::INFINITY,
-            )
-        }
-        _ if strategy == LightStrategy::BsdfSampling => return,
-        LightRef::Environment => {
-            let sample = lights.environment.sample_li(u_point);
-            if !point.scatterer.admits(sample.wi) {
-                return;
-            }
-            // The environment as a light: what a BSDF ray that finds it reads too
-            // (`vertex::shade`), so that both strategies estimate one function.
-            let radiance = environment_light_lookup(context, sample.wi, worker);
-            (sample.wi, f32::INFINITY, None, radiance, sample.pdf)
-        }
-        LightRef::Area(index) => {
-            let light = &lights.area.lights[index];
-            let Some(sample) = light.sample(point.position, u_point) else {
-                return;
-            };
-            // Emission textures are read at the sampled point, as for a ray that hits it.
-            let radiance = area_light_radiance(context, light, sample.st, worker);
-            (
-                sample.direction_to_light,
-                sample.distance,
-                Some((sample.point, light.coordinate_scale())),
-                radiance,
-                sample.pdf,
-            )
-        }
+    if !delta && strategy == LightStrategy::BsdfSampling {
+        return;
+    }
+    let mut emission = AdmittedEmission {
+        scatterer: &point.scatterer,
+        lookup: ContextEmission { context, worker },
     };
-    if !point.scatterer.admits(wi) || radiance.max_element() <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
+    let Some(sample) = lights.sample_li(light, point.position, u_point, &mut emission) else {
+        return;
+    };
+    let (wi, pdf) = (sample.wi, sample.pdf);
+    if !point.scatterer.admits(wi)
+        || sample.radiance.max_element() <= 0.0
+        || pdf.is_nan()
+        || pdf <= 0.0
+    {
         return;
     }
     let f = point.scatterer.value(point.wo, wi);
     if f.max_element() <= 0.0 {
         return;
     }
-    // Delta lights carry irradiance (no density); lights with an area radiance over a
-    // solid-angle density, weighted against the BSDF's density of the same direction.
-    let contribution = if pdf.is_infinite() {
-        point.throughput * f * radiance / pmf
+    let unweighted = point.throughput * f * sample.radiance;
+    let contribution = if delta {
+        delta_contribution(unweighted, pmf)
     } else {
-        let light_pdf = pmf * pdf;
-        let weight = if point.last || strategy == LightStrategy::LightSampling {
-            1.0
-        } else {
-            power_heuristic(light_pdf, point.scatterer.pdf(point.wo, wi))
-        };
-        point.throughput * f * radiance * (weight / light_pdf)
+        let alone = point.last || strategy == LightStrategy::LightSampling;
+        weighted_contribution(unweighted, pmf * pdf, alone, || {
+            point.scatterer.pdf(point.wo, wi)
+        })
     };
-    // Beer's law along the shadow ray inside an absorbing medium on its side.
+    queue_shadow_ray(context, point, light, &sample, contribution, waves, worker);
+}
+
+/// Queue the shadow ray towards `sample` of `light`, carrying `contribution` (attenuated by
+/// Beer's law inside an absorbing medium on its side) if nothing blocks it.
+fn queue_shadow_ray(
+    context: &RenderContext,
+    point: &ShadingPoint,
+    light: LightRef,
+    sample: &LiSample,
+    contribution: Vec3,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) {
+    let wi = sample.wi;
     let crosses = point.scatterer.crosses(wi);
     let sigma = if crosses {
         point.sigma_through
@@ -198,7 +187,7 @@ pub(super) fn sample_light(
     };
     let contribution = if context.effects.absorption && sigma != Vec3::ZERO {
         worker.counters.absorption_evaluations += 1;
-        contribution * shading::transmittance(sigma, distance)
+        contribution * shading::transmittance(sigma, sample.distance)
     } else {
         contribution
     };
@@ -213,13 +202,16 @@ pub(super) fn sample_light(
     } else {
         point.origin
     };
-    let Some((direction, tfar)) = shading::shadow_ray_towards(origin, light_point, wi) else {
+    let Some((direction, tfar)) = shading::shadow_ray_towards(origin, sample.light_point, wi)
+    else {
         return;
     };
     // A sphere lamp hides nothing of itself from the surface point, but the offset origin
     // sits closer to it and sees less of it: the segment stops where it enters the lamp.
     let tfar = match light {
-        LightRef::Area(index) => lights.area.lights[index].clip_shadow_ray(origin, direction, tfar),
+        LightRef::Area(index) => {
+            context.lights.area.lights[index].clip_shadow_ray(origin, direction, tfar)
+        }
         _ => tfar,
     };
     waves.shadows.push(ShadowRay {
@@ -229,6 +221,74 @@ pub(super) fn sample_light(
         contribution,
         slot: point.slot,
     });
+}
+
+/// What a delta light's sample adds: it arrives from one direction with probability 1, so
+/// no BSDF-sampled ray finds it and only the choice of the light (`pmf`) divides it.
+#[inline]
+fn delta_contribution(unweighted: Vec3, pmf: f32) -> Vec3 {
+    unweighted / pmf
+}
+
+/// What a sample of a light with an area (or the environment) adds, drawn with density
+/// `light_pdf` (choice times direction): weighted by the power heuristic against the density
+/// `bsdf_pdf()` with which BSDF sampling draws the same direction, unless it stands
+/// `alone`. A density that overflowed to infinity leaves nothing.
+#[inline]
+fn weighted_contribution(
+    unweighted: Vec3,
+    light_pdf: f32,
+    alone: bool,
+    bsdf_pdf: impl FnOnce() -> f32,
+) -> Vec3 {
+    let weight = if alone {
+        1.0
+    } else {
+        power_heuristic(light_pdf, bsdf_pdf())
+    };
+    unweighted * (weight / light_pdf)
+}
+
+/// Emission read by the render stage's texture lookups: the environment as a BSDF-sampled
+/// ray that escapes reads it, and area lights' emission textures at the sampled point.
+pub(super) struct ContextEmission<'a, 'w> {
+    pub(super) context: &'a RenderContext,
+    pub(super) worker: &'w mut WorkerState,
+}
+
+impl EmissionLookup for ContextEmission<'_, '_> {
+    #[inline]
+    fn environment(&mut self, _environment: &EnvironmentLight, wi: Vec3) -> Vec3 {
+        environment_light_lookup(self.context, wi, self.worker)
+    }
+
+    #[inline]
+    fn area(&mut self, light: &AreaLight, st: Vec2) -> Vec3 {
+        area_light_radiance(self.context, light, st, self.worker)
+    }
+}
+
+/// [`ContextEmission`] for a shading point: a direction its scatterer cannot receive light
+/// from reads nothing (black), as its sample is dropped anyway.
+struct AdmittedEmission<'s, 'a, 'w> {
+    scatterer: &'s Scatterer<'s>,
+    lookup: ContextEmission<'a, 'w>,
+}
+
+impl EmissionLookup for AdmittedEmission<'_, '_, '_> {
+    #[inline]
+    fn environment(&mut self, environment: &EnvironmentLight, wi: Vec3) -> Vec3 {
+        if self.scatterer.admits(wi) {
+            self.lookup.environment(environment, wi)
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    #[inline]
+    fn area(&mut self, light: &AreaLight, st: Vec2) -> Vec3 {
+        self.lookup.area(light, st)
+    }
 }
 
 /// Trace the wave's shadow rays as one occlusion stream and add what reaches the lights.
@@ -288,5 +348,37 @@ pub(super) fn trace_shadow_rays(
             contribution *= fog.transmittance(FogModel::Exact);
         }
         add_radiance(image, shadow.slot, contribution);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_delta_light_is_divided_by_its_choice_alone() {
+        let unweighted = Vec3::new(0.5, 1.0, 2.0);
+        assert_eq!(delta_contribution(unweighted, 0.25), unweighted * 4.0);
+    }
+
+    #[test]
+    fn a_light_sample_with_an_overflowed_density_adds_nothing() {
+        // A density that overflowed: the sample is worth nothing, however the weight comes
+        // out (no density stands for a delta light).
+        let unweighted = Vec3::splat(3.0);
+        for alone in [false, true] {
+            let contribution = weighted_contribution(unweighted, f32::INFINITY, alone, || 0.7);
+            assert_eq!(contribution, Vec3::ZERO, "alone: {alone}");
+        }
+        // A finite density: p_l^2 / (p_l^2 + p_b^2) / p_l, with p_l = 2 and p_b = 1.
+        let weighted = weighted_contribution(unweighted, 2.0, false, || 1.0);
+        assert!(
+            (weighted - unweighted * 0.4).abs().max_element() < 1e-6,
+            "{weighted}"
+        );
+        assert_eq!(
+            weighted_contribution(unweighted, 2.0, true, || 1.0),
+            unweighted * 0.5
+        );
     }
 }

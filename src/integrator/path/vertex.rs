@@ -6,19 +6,18 @@ use glam::Vec3;
 
 use super::medium;
 use super::mis::power_heuristic;
-use super::next_event::{sample_light, Scatterer, ShadingPoint};
+use super::next_event::{sample_light, ContextEmission, Scatterer, ShadingPoint};
 use super::{add_radiance, LightStrategy, PathRay, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::footprint::{bsdf_spread_angle, Footprint, LodStrategy, RayDifferential};
 use crate::hit::SurfaceHit;
-use crate::integrator::texturing::{self, environment_light_lookup, environment_lookup, LookupRay};
+use crate::integrator::texturing::{self, environment_lookup, LookupRay};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{GeometryRef, SurfaceDetail};
 use crate::render::stats::RayKind;
-use crate::render::surface_textures::area_light_radiance;
 use crate::render::tracer::TraceHit;
 use crate::shading::surface_inputs::SurfaceInputs;
-use crate::shading::{self, area_lights::luminance, Bsdf, LightRef, MaterialBsdf};
+use crate::shading::{self, area_lights::luminance, Bsdf, LightHit, LightRef, MaterialBsdf};
 
 /// Bounces after which Russian roulette may end a path.
 const ROULETTE_AFTER: u32 = 3;
@@ -60,14 +59,19 @@ pub(super) fn shade(
         // light, weighted against light sampling, and reads what light sampling reads: the
         // map's nearest level-0 texel. A filtered lookup there would count a sharp sun's
         // blurred glow under both strategies, and shift it to coarse texel centres.
+        let environment = LightRef::Environment;
+        let escape = LightHit::escaping(ray.direction);
         let radiance = if ray.bsdf_pdf.is_some() {
-            environment_light_lookup(context, ray.direction, worker)
+            lights.le(
+                environment,
+                &escape,
+                &mut ContextEmission { context, worker },
+            )
         } else {
             environment_lookup(context, ray.direction, &ray.footprint, worker)
         };
-        let environment = LightRef::Environment;
         let weight = found_light_weight(tracer, ray, lights.pmf(environment), || {
-            lights.environment.pdf_li(ray.direction)
+            lights.pdf_li(environment, ray.from, &escape)
         });
         add_radiance(image, ray.slot, ray.throughput * radiance * weight);
         return;
@@ -112,31 +116,31 @@ pub(super) fn shade(
 
     // Emission, from the front side unless the material is two-sided
     // (`shading::area_lights`).
-    if material.emission.max_element() > 0.0
-        && shading::area_lights::emits_towards(material, &surface, ray.direction)
-    {
+    if material.emission.max_element() > 0.0 {
         let light = match context.surfaces.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(mesh) => lights.area.mesh_light(mesh, hit.primitive),
             GeometryRef::Spheres => lights.area.sphere_light(hit.primitive as usize),
             GeometryRef::Patches | GeometryRef::HeightPatches => None,
         };
-        let (emission, weight) = match light {
-            // A BSDF-sampled ray reads the light's emission as light sampling does
-            // (`area_light_radiance`), so both strategies estimate the same radiance.
-            Some(index) if ray.bsdf_pdf.is_some() => {
-                let pmf = lights.pmf(LightRef::Area(index));
-                let area_light = &lights.area.lights[index];
-                let weight = found_light_weight(tracer, ray, pmf, || {
-                    area_light.pdf(ray.from, surface.position)
-                });
-                let emission = area_light_radiance(context, area_light, surface.st, worker);
-                (emission, weight)
-            }
+        let found = match light {
+            // A BSDF-sampled ray reads the light's emission as light sampling does, so both
+            // strategies estimate the same radiance.
+            Some(index) if ray.bsdf_pdf.is_some() => found_area_light(
+                tracer,
+                context,
+                ray,
+                &surface,
+                LightRef::Area(index),
+                worker,
+            ),
             // Seen by the camera or through a delta lobe: taken whole, filtered by the
             // ray's footprint. Emitters that are not lights are found by BSDF rays alone.
-            _ => (inputs.emission, 1.0),
+            _ => shading::area_lights::emits_towards(material, &surface, ray.direction)
+                .then_some((inputs.emission, 1.0)),
         };
-        add_radiance(image, ray.slot, ray.throughput * emission * weight);
+        if let Some((emission, weight)) = found {
+            add_radiance(image, ray.slot, ray.throughput * emission * weight);
+        }
     }
     if ray.depth > context.options.max_depth {
         // Past the last bounce a delta lobe's ray only collects emission (below).
@@ -348,6 +352,34 @@ fn found_light_weight(
         LightStrategy::LightSampling => 0.0,
         LightStrategy::MultipleImportance => power_heuristic(bsdf_pdf, pmf * light_pdf()),
     }
+}
+
+/// The emission a BSDF-sampled `ray` finds on the area light `light` at `surface`, with its
+/// weight against light sampling; `None` when it emits nothing towards the ray.
+fn found_area_light(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &PathRay,
+    surface: &SurfaceHit,
+    light: LightRef,
+    worker: &mut WorkerState,
+) -> Option<(Vec3, f32)> {
+    let lights = &context.lights;
+    let hit = LightHit {
+        direction: ray.direction,
+        point: surface.position,
+        normal: surface.geometric_normal,
+        st: surface.st,
+    };
+    let emission = lights.le(light, &hit, &mut ContextEmission { context, worker });
+    if emission == Vec3::ZERO {
+        // Behind a one-sided light (or on a black texel): nothing to add.
+        return None;
+    }
+    let weight = found_light_weight(tracer, ray, lights.pmf(light), || {
+        lights.pdf_li(light, ray.from, &hit)
+    });
+    Some((emission, weight))
 }
 
 /// Whether the BSDF has a non-delta part that light sampling can reach from `wo`: its

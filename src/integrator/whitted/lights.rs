@@ -1,13 +1,14 @@
 //! Light at a hit: the environment seen by rays that leave the scene, and the shadow rays
-//! that carry each punctual light's direct contribution to the opaque part of a surface.
+//! that carry each delta light's direct contribution to the opaque part of a surface (the
+//! delta subset of the scene's lights, `shading::light_interface`).
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::integrator::texturing::environment_lookup;
 use crate::render::context::{RenderContext, WorkerState};
-use crate::shading::{self, Bsdf, OpaqueLobe, SpawnPoint};
+use crate::shading::{self, Bsdf, OpaqueLobe, OwnEmission, SpawnPoint};
 
 /// A shadow ray and the radiance it delivers if unoccluded.
 #[derive(Clone, Copy, Debug)]
@@ -58,23 +59,27 @@ pub(super) fn queue_shadow_rays(
     let ns = bsdf.normal();
     let wo = -ray.direction;
     let origin = spawn.offset_origin(ng);
-    for light in &context.scene.lights {
+    let lights = &context.lights;
+    for light in lights.delta_lights() {
         // The light as the surface point sees it; the shadow ray starts from the offset
-        // origin and runs to the light (`shading::shadow_ray_towards`).
-        let sample = shading::sample_li(light, spawn.position);
-        let wi = sample.direction_to_light;
+        // origin and runs to the light (`shading::shadow_ray_towards`). A delta light
+        // arrives from one direction whatever the uniform numbers, and has no emission to
+        // look up.
+        let Some(sample) = lights.sample_li(light, spawn.position, Vec2::ZERO, &mut OwnEmission)
+        else {
+            continue;
+        };
+        let wi = sample.wi;
         if wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0 {
             continue;
         }
         // The opaque lobe times the cosine at the surface (seed 001's local illumination).
         let f = bsdf.eval(wo, wi) * ns.dot(wi);
-        let contribution = ray.throughput * opaque * f * sample.radiance_scale;
+        let contribution = ray.throughput * opaque * f * sample.radiance;
         if contribution.max_element() <= 0.0 {
             continue;
         }
-        let light_position = shading::light_position(light);
-        let Some((direction, tfar)) =
-            shading::shadow_ray_towards(origin, light_position.map(|p| (p.as_dvec3(), 0.0)), wi)
+        let Some((direction, tfar)) = shading::shadow_ray_towards(origin, sample.light_point, wi)
         else {
             continue;
         };
@@ -82,7 +87,7 @@ pub(super) fn queue_shadow_rays(
             origin,
             direction,
             tfar,
-            light: light_position,
+            light: sample.light_point.map(|(position, _)| position.as_vec3()),
             contribution,
             slot: ray.slot,
         });
