@@ -112,7 +112,7 @@ pub(super) fn shade(
 
     // Emission, from the front side unless the material is two-sided
     // (`shading::area_lights`).
-    if material.emission.max_element() > 0.0
+    if shading::material_features::emits(material)
         && shading::area_lights::emits_towards(material, &surface, ray.direction)
     {
         let light = match context.surfaces.geometries[hit.geometry as usize] {
@@ -167,7 +167,8 @@ pub(super) fn shade(
     let spawn = surface.spawn_point();
     let continues = ray.depth < context.options.max_depth;
 
-    if bsdf_has_smooth_part(&bsdf, wo, ns) {
+    let lobes = bsdf.flags();
+    if lobes.has_density() && bsdf_has_smooth_part(&bsdf, wo, ns) {
         let transmits = bsdf.transmits_with_density();
         let point = ShadingPoint {
             position: spawn.position,
@@ -206,24 +207,25 @@ pub(super) fn shade(
     // (mirror, smooth glass) still sends its ray, which only collects the emission or
     // environment it reaches: a path of `max_depth + 2` segments counts whichever kind of
     // lobe its last vertex has, as in pbrt-v4 and Mitsuba 3.
-    if !continues && !bsdf.has_delta() {
+    if !continues && !lobes.is_specular() {
         return;
     }
     let Some(sample) = bsdf.sample(wo, u_lobe, u_direction) else {
         return;
     };
-    let delta = sample.lobe.is_delta();
+    let delta = sample.is_specular();
     if !delta && (!continues || ray.diffuse_depth >= tracer.diffuse_bounces) {
         return;
     }
     let wi = sample.wi;
-    let crosses = wi.dot(ng) < 0.0;
+    // The lobe says whether the path enters the medium beyond the surface.
+    let crosses = sample.is_transmission();
     // A lobe sampled about a tilted shading normal (normal map, smooth vertex normals) can
-    // reflect below the geometric surface. Only a boundary that transmits with a density
-    // sends light through; for any other such sample the light would leak through an
-    // opaque surface, so the path ends (as light sampling, which `admits` only the
-    // viewer's side, already treats that direction).
-    if crosses && !delta && !bsdf.transmits_with_density() {
+    // reflect below the geometric surface, or transmit back above it. The light would leak
+    // through the surface, or a transmission would stay in its medium, so the path ends
+    // (as light sampling, which `admits` only the viewer's side for a reflection, already
+    // treats such directions).
+    if crosses != (wi.dot(ng) < 0.0) {
         return;
     }
     let throughput = ray.throughput * sample.weight;
@@ -237,8 +239,8 @@ pub(super) fn shade(
         ray.footprint.reflect(ray.direction, &surface, wi)
     } else if delta {
         worker.counters.footprint_updates += 1;
-        let eta = bsdf.dielectric.split(ray.direction).boundary.eta;
-        ray.footprint.refract(ray.direction, &surface, eta, wi)
+        ray.footprint
+            .refract(ray.direction, &surface, sample.eta, wi)
     } else {
         worker.counters.footprint_updates += 1;
         approximate_footprint = true;
