@@ -245,6 +245,28 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn lobe_flags_combine_sides_and_shapes() {
+        let glass = LobeFlags::SPECULAR_REFLECTION | LobeFlags::SPECULAR_TRANSMISSION;
+        assert!(glass.is_specular() && glass.is_reflective() && glass.is_transmissive());
+        assert!(!glass.has_density() && !glass.is_diffuse() && !glass.is_glossy());
+        assert!(glass.contains(LobeFlags::SPECULAR_TRANSMISSION));
+        assert!(!glass.contains(LobeFlags::GLOSSY_TRANSMISSION));
+        let plastic = LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION;
+        assert!(plastic.has_density() && !plastic.is_specular() && !plastic.is_transmissive());
+        assert!(LobeFlags::NONE.is_empty() && !LobeFlags::NONE.has_density());
+        let mut both = plastic;
+        both |= glass;
+        assert!(both.contains(plastic) && both.contains(glass) && both.has_density());
+        assert_eq!(
+            format!("{:?}", LobeFlags::GLOSSY_TRANSMISSION),
+            "LobeFlags(transmission | glossy)"
+        );
+        let sample = BsdfSample::reflected(Vec3::Z, Vec3::ONE, 1.0, LobeFlags::DIFFUSE_REFLECTION);
+        assert_eq!(sample.eta, 1.0);
+        assert!(!sample.is_specular() && !sample.is_transmission());
+    }
+
+    #[test]
     fn basis_is_orthonormal_for_any_normal() {
         let mut u = Uniforms(7);
         for _ in 0..1000 {

@@ -348,6 +348,80 @@ mod tests {
         cases
     }
 
+    /// Every sample is named by one lobe (one side, one shape) among the BSDF's `flags`,
+    /// reflects or transmits as its side says, and carries the index ratio it crossed
+    /// (1 for a reflection).
+    #[test]
+    fn samples_name_their_lobe_and_carry_their_eta() {
+        use crate::shading::bsdf::LobeFlags as F;
+        let sides = [F::REFLECTION, F::TRANSMISSION];
+        let shapes = [F::DIFFUSE, F::GLOSSY, F::SPECULAR];
+        let mut seen: Vec<(String, F)> = Vec::new();
+        let mut u = Uniforms(99);
+        for case in smooth_cases(5, 8, 0.05)
+            .into_iter()
+            .chain(delta_cases(6, 8))
+        {
+            let lobes = case.bsdf.flags();
+            for _ in 0..400 {
+                let u_lobe = u.next();
+                let Some(s) = case.bsdf.sample(case.wo, u_lobe, u.vec2()) else {
+                    continue;
+                };
+                let label = &case.label;
+                assert_eq!(sides.iter().filter(|f| s.flags.contains(**f)).count(), 1);
+                assert_eq!(shapes.iter().filter(|f| s.flags.contains(**f)).count(), 1);
+                assert!(
+                    lobes.contains(s.flags),
+                    "{label}: {:?} not in {lobes:?}",
+                    s.flags
+                );
+                let crossed = s.wi.dot(case.normal) * case.wo.dot(case.normal) < 0.0;
+                assert_eq!(s.is_transmission(), crossed, "{label}: {:?}", s.flags);
+                let expected_eta = if crossed {
+                    case.index_of_side(case.wo) / case.index_of_side(s.wi)
+                } else {
+                    1.0
+                };
+                // A smooth boundary carries radiance unscaled (`ior: None` in its case), so
+                // its eta is checked in `dielectric`'s own tests.
+                if case.ior.is_some() || !crossed {
+                    assert!(
+                        (s.eta - expected_eta).abs() <= 1e-6 * expected_eta,
+                        "{label}: eta {} vs {expected_eta}",
+                        s.eta
+                    );
+                }
+                let kind = label
+                    .split_whitespace()
+                    .next()
+                    .unwrap_or_default()
+                    .to_string();
+                if !seen.contains(&(kind.clone(), s.flags)) {
+                    seen.push((kind, s.flags));
+                }
+            }
+        }
+        // Every lobe kind of every BSDF is met.
+        for expected in [
+            ("classic", F::DIFFUSE_REFLECTION),
+            ("conductor", F::GLOSSY_REFLECTION),
+            ("metallic-roughness", F::DIFFUSE_REFLECTION),
+            ("metallic-roughness", F::GLOSSY_REFLECTION),
+            ("rough", F::GLOSSY_REFLECTION),
+            ("rough", F::GLOSSY_TRANSMISSION),
+            ("material", F::GLOSSY_TRANSMISSION),
+        ] {
+            let expected = (expected.0.to_string(), expected.1);
+            assert!(
+                seen.contains(&expected),
+                "{expected:?} never sampled: {seen:?}"
+            );
+        }
+        assert!(seen.iter().any(|(_, f)| *f == F::SPECULAR_REFLECTION));
+        assert!(seen.iter().any(|(_, f)| *f == F::SPECULAR_TRANSMISSION));
+    }
+
     /// (a) For every lobe with a density, `sample` reports `pdf(wo, wi)` and the weight
     /// `f cos / pdf`.
     #[test]

@@ -96,6 +96,38 @@ struct LobeInputs {
     metallic: f32,
 }
 
+/// A lobe of the mixture with its weight in the material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Weighted<'a, L> {
+    pub weight: f32,
+    pub lobe: &'a L,
+}
+
+/// The lobes Whitted follows at a hit, each present only with a positive weight: the opaque
+/// lobe it evaluates for every light (diffuse, and glossy with the classic highlight or the
+/// metallic-roughness GGX lobe), the mirror (specular reflection) and the smooth boundary
+/// (specular reflection and transmission), whose single directions it traces. It follows a
+/// rough boundary as the smooth one: it traces delta directions only.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WhittedLobes<'a> {
+    pub opaque: Option<Weighted<'a, OpaqueLobe>>,
+    pub mirror: Option<Weighted<'a, SmoothMirror>>,
+    pub boundary: Option<Weighted<'a, SmoothDielectric>>,
+}
+
+impl WhittedLobes<'_> {
+    /// The lobes present.
+    pub fn flags(&self) -> LobeFlags {
+        let opaque = self.opaque.map(|o| o.lobe.flags());
+        let mirror = self.mirror.map(|m| m.lobe.flags());
+        let boundary = self.boundary.map(|b| b.lobe.flags());
+        [opaque, mirror, boundary]
+            .into_iter()
+            .flatten()
+            .fold(LobeFlags::NONE, |all, flags| all | flags)
+    }
+}
+
 /// A material's lobes at one hit, with their weights.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MaterialBsdf {
@@ -234,6 +266,19 @@ impl MaterialBsdf {
     #[inline]
     pub fn transmits_with_density(&self) -> bool {
         self.flags().contains(LobeFlags::GLOSSY_TRANSMISSION)
+    }
+
+    /// The lobes Whitted follows (see [`WhittedLobes`]).
+    #[inline]
+    pub fn whitted_lobes(&self) -> WhittedLobes<'_> {
+        fn weighted<L>(weight: f32, lobe: &L) -> Option<Weighted<'_, L>> {
+            (weight > 0.0).then_some(Weighted { weight, lobe })
+        }
+        WhittedLobes {
+            opaque: weighted(self.opaque_weight, &self.opaque),
+            mirror: weighted(self.mirror_weight, &self.mirror),
+            boundary: weighted(self.dielectric_weight, &self.dielectric),
+        }
     }
 
     /// The lobe weights, clamped at zero, in the order opaque, mirror, dielectric.
@@ -381,6 +426,42 @@ mod tests {
         assert_eq!((b.mirror_weight, b.dielectric_weight), (0.25, 0.5));
         assert!(b.flags().is_specular());
         assert!(!bsdf_of(&material(0.0, 0.0)).flags().is_specular());
+    }
+
+    #[test]
+    fn whitted_follows_the_weighted_lobes_and_rough_glass_as_smooth() {
+        let b = bsdf_of(&material(0.25, 0.5));
+        let lobes = b.whitted_lobes();
+        assert_eq!(lobes.opaque.map(|o| o.weight), Some(0.75 * 0.5));
+        assert_eq!(lobes.mirror.map(|m| m.weight), Some(0.25));
+        assert_eq!(lobes.boundary.map(|d| d.weight), Some(0.5));
+        assert_eq!(
+            lobes.flags(),
+            LobeFlags::DIFFUSE_REFLECTION
+                | LobeFlags::SPECULAR_REFLECTION
+                | LobeFlags::SPECULAR_TRANSMISSION
+        );
+        assert_eq!(b.flags(), lobes.flags());
+        // A matte material: only the diffuse lobe.
+        let matte = bsdf_of(&material(0.0, 0.0));
+        let lobes = matte.whitted_lobes();
+        assert!(lobes.mirror.is_none() && lobes.boundary.is_none());
+        assert_eq!(lobes.flags(), LobeFlags::DIFFUSE_REFLECTION);
+        // Full glass hides the opaque lobe.
+        let glass = bsdf_of(&material(0.0, 1.0));
+        assert!(glass.whitted_lobes().opaque.is_none());
+        // Rough glass: sampled as a glossy boundary, followed by Whitted as the smooth one.
+        let mut rough = material(0.0, 1.0);
+        rough.model = metallic_roughness(0.3, 0.0);
+        let b = bsdf_of(&rough);
+        assert_eq!(
+            b.flags(),
+            LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION
+        );
+        assert_eq!(
+            b.whitted_lobes().flags(),
+            LobeFlags::SPECULAR_REFLECTION | LobeFlags::SPECULAR_TRANSMISSION
+        );
     }
 
     #[test]
