@@ -18,7 +18,7 @@ use crate::render::stats::RayKind;
 use crate::render::surface_textures::area_light_radiance;
 use crate::render::tracer::TraceHit;
 use crate::shading::surface_inputs::SurfaceInputs;
-use crate::shading::{self, area_lights::luminance, Bsdf, LightRef, MaterialBsdf};
+use crate::shading::{self, area_lights::luminance, Bsdf, BsdfSample, LightRef, MaterialBsdf};
 
 /// Bounces after which Russian roulette may end a path.
 const ROULETTE_AFTER: u32 = 3;
@@ -218,16 +218,9 @@ pub(super) fn shade(
         return;
     }
     let wi = sample.wi;
-    // The lobe says whether the path enters the medium beyond the surface.
-    let crosses = sample.is_transmission();
-    // A lobe sampled about a tilted shading normal (normal map, smooth vertex normals) can
-    // reflect below the geometric surface, or transmit back above it. The light would leak
-    // through the surface, or a transmission would stay in its medium, so the path ends
-    // (as light sampling, which `admits` only the viewer's side for a reflection, already
-    // treats such directions).
-    if crosses != (wi.dot(ng) < 0.0) {
+    let Some(crosses) = crosses_surface(&sample, ng) else {
         return;
-    }
+    };
     let throughput = ray.throughput * sample.weight;
     // Footprint of the continuing ray: mirror and refraction as in Whitted, a widened cone
     // for a rough bounce (seed 000, "BSDF scattering").
@@ -281,6 +274,19 @@ pub(super) fn shade(
         first_sample: ray.first_sample,
         sampler: ray.sampler,
     });
+}
+
+/// Whether the path continuing with `sample` crosses into the medium beyond the surface
+/// (unit geometric normal `ng` on the viewer's side): the sample's lobe says so. `None` when
+/// the lobe and the geometric side disagree: a lobe sampled about a tilted shading normal
+/// (normal map, smooth vertex normals) can reflect below the geometric surface, or transmit
+/// back above it. The light would leak through the surface, or a transmission would stay
+/// in its medium, so the path ends there (as light sampling, which `admits` only the
+/// viewer's side for a reflection, already treats such directions).
+#[inline]
+fn crosses_surface(sample: &BsdfSample, ng: Vec3) -> Option<bool> {
+    let crosses = sample.is_transmission();
+    (crosses == (sample.wi.dot(ng) < 0.0)).then_some(crosses)
 }
 
 /// The absorption coefficient of the medium on the far side of `surface` seen from its
@@ -426,4 +432,50 @@ fn record_hidden_surface_aovs(
     let material = &context.scene.materials[surface.material as usize];
     let inputs = texturing::surface_inputs(context, lookup, material, &surface, image, worker);
     write_material_aovs(image, ray.slot, &inputs);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shading::LobeFlags;
+
+    #[test]
+    fn the_lobe_decides_the_crossing_and_a_disagreeing_side_ends_the_path() {
+        let ng = Vec3::Z;
+        let (above, below) = (Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.6, 0.0, -0.8));
+        let sample = |wi: Vec3, flags: LobeFlags| BsdfSample {
+            wi,
+            weight: Vec3::ONE,
+            pdf: 1.0,
+            flags,
+            eta: if flags.is_transmissive() {
+                1.0 / 1.5
+            } else {
+                1.0
+            },
+        };
+        for flags in [
+            LobeFlags::DIFFUSE_REFLECTION,
+            LobeFlags::GLOSSY_REFLECTION,
+            LobeFlags::SPECULAR_REFLECTION,
+        ] {
+            assert_eq!(crosses_surface(&sample(above, flags), ng), Some(false));
+            assert_eq!(
+                crosses_surface(&sample(below, flags), ng),
+                None,
+                "{flags:?}"
+            );
+        }
+        for flags in [
+            LobeFlags::GLOSSY_TRANSMISSION,
+            LobeFlags::SPECULAR_TRANSMISSION,
+        ] {
+            assert_eq!(crosses_surface(&sample(below, flags), ng), Some(true));
+            assert_eq!(
+                crosses_surface(&sample(above, flags), ng),
+                None,
+                "{flags:?}"
+            );
+        }
+    }
 }
