@@ -18,7 +18,7 @@ use crate::render::stats::RayKind;
 use crate::render::surface_textures::area_light_radiance;
 use crate::render::tracer::TraceHit;
 use crate::shading::surface_inputs::SurfaceInputs;
-use crate::shading::{self, area_lights::luminance, Bsdf, BsdfSample, LightRef, MaterialBsdf};
+use crate::shading::{self, area_lights::luminance, Bsdf, LightRef, MaterialBsdf};
 
 /// Bounces after which Russian roulette may end a path.
 const ROULETTE_AFTER: u32 = 3;
@@ -112,7 +112,7 @@ pub(super) fn shade(
 
     // Emission, from the front side unless the material is two-sided
     // (`shading::area_lights`).
-    if shading::material_features::emits(material)
+    if material.emission.max_element() > 0.0
         && shading::area_lights::emits_towards(material, &surface, ray.direction)
     {
         let light = match context.surfaces.geometries[hit.geometry as usize] {
@@ -284,7 +284,7 @@ pub(super) fn shade(
 /// in its medium, so the path ends there (as light sampling, which `admits` only the
 /// viewer's side for a reflection, already treats such directions).
 #[inline]
-fn crosses_surface(sample: &BsdfSample, ng: Vec3) -> Option<bool> {
+fn crosses_surface(sample: &shading::BsdfSample, ng: Vec3) -> Option<bool> {
     let crosses = sample.is_transmission();
     (crosses == (sample.wi.dot(ng) < 0.0)).then_some(crosses)
 }
@@ -443,7 +443,7 @@ mod tests {
     fn the_lobe_decides_the_crossing_and_a_disagreeing_side_ends_the_path() {
         let ng = Vec3::Z;
         let (above, below) = (Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.6, 0.0, -0.8));
-        let sample = |wi: Vec3, flags: LobeFlags| BsdfSample {
+        let sample = |wi: Vec3, flags: LobeFlags| shading::BsdfSample {
             wi,
             weight: Vec3::ONE,
             pdf: 1.0,
