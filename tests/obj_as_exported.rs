@@ -301,7 +301,8 @@ fn one_number_colours_mean_grey() {
     let scene = load_scene(&dir.path().join("m.obj")).unwrap_or_else(|e| panic!("{e}"));
     let a = scene.materials.iter().find(|m| m.name == "a").unwrap();
     assert_eq!(a.base_color, glam::Vec3::splat(0.25));
-    assert_eq!(a.specular, 0.0);
+    let classic = a.model.classic().expect("the classic model");
+    assert_eq!(classic.specular, 0.0);
 }
 
 /// Renders `scene` (with `files` beside it) orthographically in a fresh directory at `size` x

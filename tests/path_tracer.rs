@@ -15,7 +15,7 @@ use conetrace::integrator::selection::{self, IntegratorChoice, IntegratorKind};
 use conetrace::integrator::Whitted;
 use conetrace::render::{self, Integrator, RenderControl, RenderOptions, RenderStats};
 use conetrace::scene::load::load_toml_str;
-use conetrace::scene::SceneDescription;
+use conetrace::scene::{MaterialModel, MetallicRoughnessModel, SceneDescription};
 
 fn load(dir: &Path, text: &str) -> SceneDescription {
     load_toml_str(text, dir, "test.toml").unwrap_or_else(|e| panic!("scene: {e}"))
@@ -647,7 +647,9 @@ fn auto_selection_names_the_integrator_and_why() {
     );
 
     let mut rough = matte.clone();
-    rough.materials[1].roughness = Some(0.4);
+    let metallic_roughness =
+        || MaterialModel::MetallicRoughness(MetallicRoughnessModel::new(0.4, 0.0));
+    rough.materials[1].model = metallic_roughness();
     let chosen = selection::resolve(IntegratorChoice::Auto, &rough);
     assert_eq!(
         chosen.to_string(),
@@ -657,7 +659,7 @@ fn auto_selection_names_the_integrator_and_why() {
     let mut unworn = matte.clone();
     unworn.materials.push(conetrace::scene::Material {
         name: "unworn".into(),
-        roughness: Some(0.4),
+        model: metallic_roughness(),
         ..Default::default()
     });
     let chosen = selection::resolve(IntegratorChoice::Auto, &unworn);

@@ -4,9 +4,11 @@
 //! `vct` (voxel cone tracing, seed 003) is only ever chosen by name.
 //!
 //! `auto` picks the path tracer when the scene calls for global illumination: emissive
-//! geometry (area lights), rough or glossy materials (a material with a metallic-roughness
-//! `roughness`; the classic Blinn-Phong highlight does not count, so classic ray-tracing
-//! scenes stay with Whitted), or `[render] gi = true`. Otherwise Whitted renders it.
+//! geometry (area lights), rough or glossy materials (the metallic-roughness model's
+//! microfacet lobes, `MaterialFeatures::rough`; the classic Blinn-Phong highlight does not
+//! count, so classic ray-tracing scenes stay with Whitted), or `[render] gi = true`.
+//! Otherwise Whitted renders it. What each material does comes from
+//! `crate::shading::MaterialFeatures`.
 //!
 //! Only the voxel cone tracer needs work before rendering (its voxel scene, built by
 //! [`select`]); Whitted and the path tracer build nothing extra.
@@ -27,6 +29,7 @@ use crate::integrator::whitted::{Waves, Whitted};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::{Integrator, RenderControl, RenderError, RenderResult};
 use crate::scene::{RenderSettings, SceneDescription};
+use crate::shading::{material_features, MaterialFeatures};
 use crate::vct::build::pyramid_bytes_for;
 use crate::vct::{build_voxel_scene, VctBuildStats, VctError, VctSettings};
 
@@ -131,7 +134,7 @@ pub fn resolve(choice: IntegratorChoice, scene: &SceneDescription) -> Resolution
         .materials
         .iter()
         .zip(&used)
-        .filter(|(m, &worn)| worn && m.roughness.is_some())
+        .filter(|(m, &worn)| worn && MaterialFeatures::of(m).rough)
         .map(|(m, _)| m.name.as_str())
         .collect();
     if !rough.is_empty() {
@@ -163,7 +166,7 @@ fn emissive_geometry(scene: &SceneDescription) -> Option<String> {
         scene
             .materials
             .get(material)
-            .is_some_and(|m| m.emission.max_element() > 0.0)
+            .is_some_and(material_features::emits)
     };
     let triangles: usize = scene
         .meshes

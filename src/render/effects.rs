@@ -4,11 +4,13 @@
 //! per-effect branch on these flags, so a scene pays nothing for an effect it does not use:
 //! no shadow rays without lights, no secondary rays without specular materials, no footprint
 //! math without filtered textures, no absorption without media. `--all-effects` forces the
-//! general path (every flag on) for comparison.
+//! general path (every flag on) for comparison. What each material does (its lobes,
+//! absorption, cut-out, textures) is `crate::shading::MaterialFeatures`'s answer.
 
 use crate::footprint::LodStrategy;
 use crate::render::stats::EffectReason;
-use crate::scene::{Environment, Projection, SceneDescription};
+use crate::scene::{Environment, Material, Projection, SceneDescription};
+use crate::shading::MaterialFeatures;
 
 /// The effects a render switches on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -69,13 +71,20 @@ impl EffectSet {
             })
         };
         let used = scene.worn_materials();
+        let features: Vec<MaterialFeatures> =
+            scene.materials.iter().map(MaterialFeatures::of).collect();
+        // The worn materials with what they do.
         let materials = || {
             scene
                 .materials
                 .iter()
+                .zip(&features)
                 .zip(&used)
                 .filter(|(_, used)| **used)
-                .map(|(m, _)| m)
+                .map(|(pair, _)| pair)
+        };
+        let find = |test: fn(&MaterialFeatures) -> bool| -> Option<&Material> {
+            materials().find(|(_, f)| test(f)).map(|(m, _)| m)
         };
         if let Some(light) = scene.lights.first() {
             set.shadows = true;
@@ -88,20 +97,20 @@ impl EffectSet {
                 ),
             );
         }
-        if let Some(m) = materials().find(|m| m.mirror > 0.0) {
+        if let Some(m) = find(|f| !f.mirror.is_empty()) {
             set.mirror_reflection = true;
             because(
                 "mirror reflection",
                 format!("material '{}' has mirror {}", m.name, m.mirror),
             );
         }
-        if let Some(m) = materials().find(|m| m.transmission > 0.0) {
+        if let Some(m) = find(MaterialFeatures::refracts) {
             set.refraction = true;
             because(
                 "refraction",
                 format!("material '{}' has transmission {}", m.name, m.transmission),
             );
-            if let Some(m) = materials().find(|m| m.transmission > 0.0 && m.ior != 1.0) {
+            if let Some(m) = find(MaterialFeatures::boundary_reflects) {
                 set.fresnel = true;
                 because(
                     "Fresnel",
@@ -119,11 +128,7 @@ impl EffectSet {
                 );
             }
         }
-        if let Some(m) = materials().find(|m| {
-            m.transmission > 0.0
-                && m.attenuation_distance.is_finite()
-                && m.attenuation_color != glam::Vec3::ONE
-        }) {
+        if let Some(m) = find(|f| f.absorbs) {
             set.absorption = true;
             because(
                 "Beer's-law absorption",
@@ -133,7 +138,9 @@ impl EffectSet {
                 ),
             );
         }
-        let textured = materials().find(|m| m.base_color_texture.is_some());
+        let textured = materials()
+            .map(|(m, _)| m)
+            .find(|m| m.base_color_texture.is_some());
         let env_texture = matches!(scene.environment, Environment::LatLong { .. });
         if lod != LodStrategy::Mip0 {
             if let Some(m) = textured {
@@ -142,9 +149,7 @@ impl EffectSet {
                     "ray footprints",
                     format!("material '{}' has a base-colour texture", m.name),
                 );
-            } else if let Some(m) =
-                materials().find(|m| crate::render::surface_textures::reads_textures(m))
-            {
+            } else if let Some(m) = find(|f| f.reads_textures) {
                 set.footprints = true;
                 because(
                     "ray footprints",
@@ -156,9 +161,7 @@ impl EffectSet {
                     "ray footprints",
                     "the environment is a lat-long texture".to_string(),
                 );
-            } else if let Some(m) =
-                materials().find(|m| m.alpha_cutoff.is_some() && m.alpha_texture.is_some())
-            {
+            } else if let Some(m) = find(|f| f.cutout) {
                 // Alpha cut-outs filter their mask over the ray cone (no shimmering leaves).
                 set.footprints = true;
                 because(
@@ -171,9 +174,8 @@ impl EffectSet {
         // texture (a constant alpha either keeps the whole mesh or drops it before tracing).
         if let Some(mesh) = scene.meshes.iter().find(|mesh| {
             !mesh.triangles.is_empty()
-                && scene.materials.get(mesh.material).is_some_and(|m| {
-                    m.alpha_cutoff.is_some() && m.alpha_texture.is_some() && !mesh.st.is_empty()
-                })
+                && !mesh.st.is_empty()
+                && features.get(mesh.material).is_some_and(|f| f.cutout)
         }) {
             set.alpha_cutout = true;
             let m = &scene.materials[mesh.material];
@@ -190,8 +192,8 @@ impl EffectSet {
             .iter()
             .map(|p| p.material)
             .chain(scene.height_patches.iter().map(|p| p.material))
-            .filter_map(|index| scene.materials.get(index))
-            .find(|m| m.alpha_cutoff.is_some() && m.alpha_texture.is_some())
+            .filter(|&index| features.get(index).is_some_and(|f| f.cutout))
+            .find_map(|index| scene.materials.get(index))
         {
             // Curved patches always have texture coordinates: their alpha test runs in
             // their user geometry's callbacks.

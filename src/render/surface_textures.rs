@@ -97,14 +97,4 @@ pub fn shading_inputs(
     })
 }
 
-/// Whether shading `material` reads any texture (so hits need texture coordinates and
-/// dP/ds, dP/dt, and lookups need the footprint's gradients).
-pub fn reads_textures(material: &Material) -> bool {
-    material.base_color_texture.is_some()
-        || (material.roughness.is_some()
-            && (material.metallic_roughness_texture.is_some()
-                || material.roughness_texture.is_some()
-                || material.metallic_texture.is_some()))
-        || (material.emission_texture.is_some() && material.emission != glam::Vec3::ZERO)
-        || material.normal_texture.is_some()
-}
+pub use crate::shading::material_features::reads_textures;

@@ -159,19 +159,26 @@ pub struct TextureBinding {
     pub transform: glam::Affine2,
 }
 
-/// A Whitted-style material (seeds 001 and 004). Weights are in [0, 1].
+/// A surface material: the scattering model of its opaque part ([`MaterialModel`]), the
+/// perfect-mirror and dielectric layers every model mixes in, and what every model shares
+/// (emission, alpha cut-out, normal map, two-sidedness). Weights are in [0, 1].
+///
+/// What a material does (its lobes, whether it emits, cuts out or reads textures) is
+/// answered in one place, `crate::shading::material_features`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
-    /// Linear RGB diffuse albedo (multiplied by the base-colour texture when present).
+    /// The opaque part's scattering model.
+    pub model: MaterialModel,
+    /// Linear RGB base colour (multiplied by the base-colour texture when present): the
+    /// classic model's diffuse albedo, the metallic-roughness model's base colour.
     pub base_color: Vec3,
     pub base_color_texture: Option<TextureBinding>,
-    /// Blinn-Phong highlight weight and exponent.
-    pub specular: f32,
-    pub shininess: f32,
     /// Perfect-mirror reflectivity (0 = none).
     pub mirror: f32,
     /// Weight of the dielectric (Fresnel-split reflection + refraction) lobe (0 = opaque).
+    /// The boundary is smooth, or rough with the metallic-roughness model's roughness
+    /// (`crate::shading::material_bsdf`).
     pub transmission: f32,
     /// Index of refraction of the material's inside (the outside is 1).
     pub ior: f32,
@@ -187,23 +194,6 @@ pub struct Material {
     pub alpha: f32,
     /// Texture whose alpha channel gives coverage (glTF: the base-colour texture).
     pub alpha_texture: Option<TextureBinding>,
-    /// glTF 2.0 metallic-roughness model (its Appendix B): `Some(perceptual roughness)` in
-    /// [0, 1] selects it (GGX lobes, alpha = roughness^2); `None` keeps the classic
-    /// Lambert plus Blinn-Phong opaque lobe.
-    pub roughness: Option<f32>,
-    /// Metalness in [0, 1] of the metallic-roughness model (0 = dielectric over diffuse,
-    /// 1 = conductor with the base colour as its reflectance at normal incidence).
-    pub metallic: f32,
-    /// Linear texture whose blue channel scales `metallic` and green channel scales
-    /// `roughness` (glTF's `metallicRoughnessTexture`); read only by the metallic-roughness
-    /// model (`roughness: Some(_)`).
-    pub metallic_roughness_texture: Option<TextureBinding>,
-    /// Separate single-channel maps of the metallic-roughness model (MTL's `map_Pr` and
-    /// `map_Pm`, greyscale images): the green channel of `roughness_texture` scales
-    /// `roughness`, the blue channel of `metallic_texture` scales `metallic` (for a grey
-    /// image every channel holds the value).
-    pub roughness_texture: Option<TextureBinding>,
-    pub metallic_texture: Option<TextureBinding>,
     /// Texture multiplying `emission` (sRGB colour, glTF's `emissiveTexture`).
     pub emission_texture: Option<TextureBinding>,
     /// Whether a surface emits from both sides (glTF's `doubleSided`, TOML's
@@ -217,18 +207,125 @@ pub struct Material {
     pub normal_scale: f32,
 }
 
+/// The scattering model of a material's opaque part.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialModel {
+    /// Lambert diffuse plus an energy-normalised Blinn-Phong highlight (seeds 001 and 004),
+    /// `crate::shading::brdf`.
+    Classic(ClassicModel),
+    /// The glTF 2.0 metallic-roughness model (its Appendix B): GGX lobes,
+    /// `crate::shading::metallic_roughness`.
+    MetallicRoughness(MetallicRoughnessModel),
+}
+
+/// The classic model's highlight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClassicModel {
+    /// Blinn-Phong highlight weight and exponent.
+    pub specular: f32,
+    pub shininess: f32,
+}
+
+impl Default for ClassicModel {
+    fn default() -> Self {
+        ClassicModel {
+            specular: 0.0,
+            shininess: 32.0,
+        }
+    }
+}
+
+/// The metallic-roughness model's factors and maps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MetallicRoughnessModel {
+    /// Perceptual roughness in [0, 1] (GGX alpha = roughness^2).
+    pub roughness: f32,
+    /// Metalness in [0, 1] (0 = dielectric over diffuse, 1 = conductor with the base colour
+    /// as its reflectance at normal incidence).
+    pub metallic: f32,
+    /// Linear texture whose blue channel scales `metallic` and green channel scales
+    /// `roughness` (glTF's `metallicRoughnessTexture`).
+    pub metallic_roughness_texture: Option<TextureBinding>,
+    /// Separate single-channel maps (MTL's `map_Pr` and `map_Pm`, greyscale images): the
+    /// green channel of `roughness_texture` scales `roughness`, the blue channel of
+    /// `metallic_texture` scales `metallic` (for a grey image every channel holds the value).
+    pub roughness_texture: Option<TextureBinding>,
+    pub metallic_texture: Option<TextureBinding>,
+}
+
+impl MetallicRoughnessModel {
+    /// The model with these factors and no maps.
+    pub fn new(roughness: f32, metallic: f32) -> Self {
+        MetallicRoughnessModel {
+            roughness,
+            metallic,
+            metallic_roughness_texture: None,
+            roughness_texture: None,
+            metallic_texture: None,
+        }
+    }
+}
+
+impl MaterialModel {
+    /// The metallic-roughness model's factors and maps, if that is the model.
+    pub fn metallic_roughness(&self) -> Option<&MetallicRoughnessModel> {
+        match self {
+            MaterialModel::MetallicRoughness(model) => Some(model),
+            MaterialModel::Classic(_) => None,
+        }
+    }
+
+    /// The classic model's highlight, if that is the model.
+    pub fn classic(&self) -> Option<&ClassicModel> {
+        match self {
+            MaterialModel::Classic(model) => Some(model),
+            MaterialModel::MetallicRoughness(_) => None,
+        }
+    }
+}
+
+impl Default for MaterialModel {
+    fn default() -> Self {
+        MaterialModel::Classic(ClassicModel::default())
+    }
+}
+
 impl Material {
-    /// Every texture slot of the material, for code that re-indexes or drops textures.
-    pub fn texture_slots_mut(&mut self) -> [&mut Option<TextureBinding>; 7] {
+    /// Every texture the material binds.
+    pub fn texture_bindings(&self) -> impl Iterator<Item = &TextureBinding> {
+        let model_maps = match &self.model {
+            MaterialModel::MetallicRoughness(model) => [
+                &model.metallic_roughness_texture,
+                &model.roughness_texture,
+                &model.metallic_texture,
+            ],
+            MaterialModel::Classic(_) => [&None, &None, &None],
+        };
         [
+            &self.base_color_texture,
+            &self.alpha_texture,
+            &self.emission_texture,
+            &self.normal_texture,
+        ]
+        .into_iter()
+        .chain(model_maps)
+        .flatten()
+    }
+
+    /// Every texture slot of the material, for code that re-indexes or drops textures.
+    pub fn texture_slots_mut(&mut self) -> Vec<&mut Option<TextureBinding>> {
+        let mut slots = vec![
             &mut self.base_color_texture,
             &mut self.alpha_texture,
-            &mut self.metallic_roughness_texture,
-            &mut self.roughness_texture,
-            &mut self.metallic_texture,
             &mut self.emission_texture,
             &mut self.normal_texture,
-        ]
+        ];
+        if let MaterialModel::MetallicRoughness(model) = &mut self.model {
+            slots.push(&mut model.metallic_roughness_texture);
+            slots.push(&mut model.roughness_texture);
+            slots.push(&mut model.metallic_texture);
+        }
+        slots
     }
 }
 
@@ -236,10 +333,9 @@ impl Default for Material {
     fn default() -> Self {
         Material {
             name: String::new(),
+            model: MaterialModel::default(),
             base_color: Vec3::splat(0.8),
             base_color_texture: None,
-            specular: 0.0,
-            shininess: 32.0,
             mirror: 0.0,
             transmission: 0.0,
             ior: 1.5,
@@ -249,11 +345,6 @@ impl Default for Material {
             alpha_cutoff: None,
             alpha: 1.0,
             alpha_texture: None,
-            roughness: None,
-            metallic: 0.0,
-            metallic_roughness_texture: None,
-            roughness_texture: None,
-            metallic_texture: None,
             emission_texture: None,
             two_sided: false,
             normal_texture: None,

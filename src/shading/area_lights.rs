@@ -557,7 +557,9 @@ impl AreaLights {
         };
         let emissive = |material: usize| {
             scene.materials.get(material).is_some_and(|m| {
-                m.emission.max_element() > 0.0 && m.emission.is_finite() && m.alpha_cutoff.is_none()
+                super::material_features::emits(m)
+                    && m.emission.is_finite()
+                    && m.alpha_cutoff.is_none()
             })
         };
         let mut out = AreaLights::default();

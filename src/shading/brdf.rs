@@ -12,7 +12,7 @@ use glam::{Vec2, Vec3};
 
 use std::f32::consts::PI;
 
-use super::bsdf::{sample_cosine_hemisphere, Bsdf, BsdfSample, Lobe};
+use super::bsdf::{sample_cosine_hemisphere, Bsdf, BsdfSample, LobeFlags};
 
 /// Lambertian BRDF value `albedo / pi`.
 #[inline]
@@ -65,12 +65,14 @@ impl Bsdf for OpaqueBsdf {
         if pdf <= 0.0 {
             return None;
         }
-        Some(BsdfSample {
+        // Drawn by the diffuse lobe's cosine, whatever the highlight adds to its value.
+        let weight = self.eval(wo, wi) * self.n.dot(wi) / pdf;
+        Some(BsdfSample::reflected(
             wi,
-            weight: self.eval(wo, wi) * self.n.dot(wi) / pdf,
+            weight,
             pdf,
-            lobe: Lobe::Smooth,
-        })
+            LobeFlags::DIFFUSE_REFLECTION,
+        ))
     }
 
     #[inline]
@@ -82,8 +84,12 @@ impl Bsdf for OpaqueBsdf {
         cos_i / PI
     }
 
-    fn has_delta(&self) -> bool {
-        false
+    fn flags(&self) -> LobeFlags {
+        if self.specular > 0.0 {
+            LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION
+        } else {
+            LobeFlags::DIFFUSE_REFLECTION
+        }
     }
 }
 
@@ -200,7 +206,7 @@ mod tests {
         let mut u = Uniforms(5);
         for _ in 0..1000 {
             let s = bsdf.sample(wo, u.next(), u.vec2()).expect("wo is above");
-            assert_eq!(s.lobe, Lobe::Smooth);
+            assert_eq!((s.flags, s.eta), (LobeFlags::DIFFUSE_REFLECTION, 1.0));
             assert!((s.pdf - bsdf.pdf(wo, s.wi)).abs() <= 1e-6);
             let expected = bsdf.eval(wo, s.wi) * bsdf.n.dot(s.wi) / s.pdf;
             assert!((s.weight - expected).abs().max_element() <= 1e-5);

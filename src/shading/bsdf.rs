@@ -7,28 +7,113 @@
 //! space. [`Bsdf::eval`] is `f(wo, wi)` without the cosine; [`Bsdf::pdf`] the solid-angle
 //! density with which [`Bsdf::sample`] picks `wi`. Delta lobes (a smooth mirror, a smooth
 //! dielectric) scatter into single directions: `eval` and `pdf` are zero for them, and only
-//! `sample` finds those directions, flagging the sample with [`Lobe::is_delta`].
+//! `sample` finds those directions, flagging the sample with [`LobeFlags::SPECULAR`]. Every sample carries its lobe's
+//! [`LobeFlags`] and the relative index of refraction it crosses (pbrt-v4's `BSDFSample`).
 
 use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-/// Which kind of lobe produced a sample.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Lobe {
-    /// A lobe with a density over directions (diffuse, glossy highlight).
-    Smooth,
-    /// A perfect mirror direction (delta).
-    DeltaReflection,
-    /// A refracted direction through a smooth boundary (delta).
-    DeltaTransmission,
+/// Which kinds of lobe a BSDF has, or which one produced a sample: pbrt-v4's `BxDFFlags`
+/// (section 9.1.2), the side (reflection, transmission) combined with the shape (diffuse,
+/// glossy, specular). A specular (delta) lobe scatters into single directions and has no
+/// density; diffuse and glossy lobes have one.
+#[derive(Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct LobeFlags(u8);
+
+impl LobeFlags {
+    pub const NONE: LobeFlags = LobeFlags(0);
+    pub const REFLECTION: LobeFlags = LobeFlags(1);
+    pub const TRANSMISSION: LobeFlags = LobeFlags(2);
+    pub const DIFFUSE: LobeFlags = LobeFlags(4);
+    pub const GLOSSY: LobeFlags = LobeFlags(8);
+    pub const SPECULAR: LobeFlags = LobeFlags(16);
+    pub const DIFFUSE_REFLECTION: LobeFlags = LobeFlags(4 | 1);
+    pub const GLOSSY_REFLECTION: LobeFlags = LobeFlags(8 | 1);
+    pub const GLOSSY_TRANSMISSION: LobeFlags = LobeFlags(8 | 2);
+    pub const SPECULAR_REFLECTION: LobeFlags = LobeFlags(16 | 1);
+    pub const SPECULAR_TRANSMISSION: LobeFlags = LobeFlags(16 | 2);
+
+    /// Whether every flag of `other` is set in `self`.
+    #[inline]
+    pub const fn contains(self, other: LobeFlags) -> bool {
+        self.0 & other.0 == other.0
+    }
+
+    /// Whether `self` and `other` share a flag.
+    #[inline]
+    pub const fn intersects(self, other: LobeFlags) -> bool {
+        self.0 & other.0 != 0
+    }
+
+    #[inline]
+    pub const fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    #[inline]
+    pub const fn is_reflective(self) -> bool {
+        self.intersects(LobeFlags::REFLECTION)
+    }
+
+    #[inline]
+    pub const fn is_transmissive(self) -> bool {
+        self.intersects(LobeFlags::TRANSMISSION)
+    }
+
+    #[inline]
+    pub const fn is_diffuse(self) -> bool {
+        self.intersects(LobeFlags::DIFFUSE)
+    }
+
+    #[inline]
+    pub const fn is_glossy(self) -> bool {
+        self.intersects(LobeFlags::GLOSSY)
+    }
+
+    /// A delta lobe: its directions are found only by sampling.
+    #[inline]
+    pub const fn is_specular(self) -> bool {
+        self.intersects(LobeFlags::SPECULAR)
+    }
+
+    /// A lobe with a density (diffuse or glossy), which light sampling can reach.
+    #[inline]
+    pub const fn has_density(self) -> bool {
+        self.intersects(LobeFlags(LobeFlags::DIFFUSE.0 | LobeFlags::GLOSSY.0))
+    }
 }
 
-impl Lobe {
-    /// True for lobes that scatter into a single direction (no density).
+impl std::ops::BitOr for LobeFlags {
+    type Output = LobeFlags;
     #[inline]
-    pub fn is_delta(self) -> bool {
-        self != Lobe::Smooth
+    fn bitor(self, other: LobeFlags) -> LobeFlags {
+        LobeFlags(self.0 | other.0)
+    }
+}
+
+impl std::ops::BitOrAssign for LobeFlags {
+    #[inline]
+    fn bitor_assign(&mut self, other: LobeFlags) {
+        self.0 |= other.0;
+    }
+}
+
+impl std::fmt::Debug for LobeFlags {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names = [
+            (LobeFlags::REFLECTION, "reflection"),
+            (LobeFlags::TRANSMISSION, "transmission"),
+            (LobeFlags::DIFFUSE, "diffuse"),
+            (LobeFlags::GLOSSY, "glossy"),
+            (LobeFlags::SPECULAR, "specular"),
+        ];
+        let set: Vec<&str> = names
+            .iter()
+            .filter(|(flag, _)| self.contains(*flag))
+            .map(|(_, name)| *name)
+            .collect();
+        write!(f, "LobeFlags({})", set.join(" | "))
     }
 }
 
@@ -38,13 +123,45 @@ pub struct BsdfSample {
     /// Unit direction the light comes from.
     pub wi: Vec3,
     /// What the sample multiplies the path throughput by: `f(wo, wi) |n . wi| / pdf` for a
-    /// smooth lobe; for a delta lobe, the energy it carries divided by the probability of
-    /// choosing it.
+    /// lobe with a density; for a delta lobe, the energy it carries divided by the
+    /// probability of choosing it.
     pub weight: Vec3,
-    /// Solid-angle density of `wi` for a smooth lobe; the discrete probability of the
-    /// chosen lobe for a delta one.
+    /// Solid-angle density of `wi` for a lobe with a density; the discrete probability of
+    /// the chosen lobe for a delta one.
     pub pdf: f32,
-    pub lobe: Lobe,
+    /// The lobe that produced the sample: exactly one of reflection and transmission, and
+    /// one of diffuse, glossy and specular.
+    pub flags: LobeFlags,
+    /// The relative index of refraction across the boundary the sample crosses: the index on
+    /// `wo`'s side over the index on `wi`'s side (`n_incident / n_transmitted` for the ray
+    /// arriving along `-wo`, as [`super::refract`] takes it), 1 for a reflection. pbrt-v4's
+    /// `BSDFSample::eta` is the reciprocal.
+    pub eta: f32,
+}
+
+impl BsdfSample {
+    /// A reflected sample (`eta` 1).
+    #[inline]
+    pub fn reflected(wi: Vec3, weight: Vec3, pdf: f32, flags: LobeFlags) -> BsdfSample {
+        BsdfSample {
+            wi,
+            weight,
+            pdf,
+            flags,
+            eta: 1.0,
+        }
+    }
+
+    /// A delta lobe's sample: no density (light sampling cannot find its direction).
+    #[inline]
+    pub fn is_specular(&self) -> bool {
+        self.flags.is_specular()
+    }
+
+    #[inline]
+    pub fn is_transmission(&self) -> bool {
+        self.flags.is_transmissive()
+    }
 }
 
 /// A material's scattering at one shading point.
@@ -56,8 +173,8 @@ pub trait Bsdf {
     fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample>;
     /// Solid-angle density of [`Bsdf::sample`] choosing `wi`; zero for delta lobes.
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32;
-    /// True when the BSDF has delta lobes, whose directions only `sample` finds.
-    fn has_delta(&self) -> bool;
+    /// The lobes the BSDF has here: a delta lobe's directions only `sample` finds.
+    fn flags(&self) -> LobeFlags;
 }
 
 /// Two unit vectors completing the unit `n` to an orthonormal basis, without a division by
@@ -125,6 +242,28 @@ pub(crate) mod tests {
         pub(crate) fn vec2(&mut self) -> Vec2 {
             Vec2::new(self.next(), self.next())
         }
+    }
+
+    #[test]
+    fn lobe_flags_combine_sides_and_shapes() {
+        let glass = LobeFlags::SPECULAR_REFLECTION | LobeFlags::SPECULAR_TRANSMISSION;
+        assert!(glass.is_specular() && glass.is_reflective() && glass.is_transmissive());
+        assert!(!glass.has_density() && !glass.is_diffuse() && !glass.is_glossy());
+        assert!(glass.contains(LobeFlags::SPECULAR_TRANSMISSION));
+        assert!(!glass.contains(LobeFlags::GLOSSY_TRANSMISSION));
+        let plastic = LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION;
+        assert!(plastic.has_density() && !plastic.is_specular() && !plastic.is_transmissive());
+        assert!(LobeFlags::NONE.is_empty() && !LobeFlags::NONE.has_density());
+        let mut both = plastic;
+        both |= glass;
+        assert!(both.contains(plastic) && both.contains(glass) && both.has_density());
+        assert_eq!(
+            format!("{:?}", LobeFlags::GLOSSY_TRANSMISSION),
+            "LobeFlags(transmission | glossy)"
+        );
+        let sample = BsdfSample::reflected(Vec3::Z, Vec3::ONE, 1.0, LobeFlags::DIFFUSE_REFLECTION);
+        assert_eq!(sample.eta, 1.0);
+        assert!(!sample.is_specular() && !sample.is_transmission());
     }
 
     #[test]

@@ -153,9 +153,9 @@ pub(crate) use crate::shading::bsdf::sample_uniform_sphere as uniform_sphere;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{FresnelMode, Material};
+    use crate::scene::{FresnelMode, Material, MaterialModel, MetallicRoughnessModel};
     use crate::shading::brdf::OpaqueBsdf;
-    use crate::shading::bsdf::{Bsdf, Lobe};
+    use crate::shading::bsdf::Bsdf;
     use crate::shading::conductor::RoughConductor;
     use crate::shading::dielectric::SmoothDielectric;
     use crate::shading::material_bsdf::MaterialBsdf;
@@ -322,8 +322,9 @@ mod tests {
                 base_color: random_color(&mut u),
                 transmission,
                 ior,
-                roughness: Some(roughness),
-                metallic,
+                model: MaterialModel::MetallicRoughness(MetallicRoughnessModel::new(
+                    roughness, metallic,
+                )),
                 ..Material::default()
             };
             cases.push(Case {
@@ -347,6 +348,80 @@ mod tests {
         cases
     }
 
+    /// Every sample is named by one lobe (one side, one shape) among the BSDF's `flags`,
+    /// reflects or transmits as its side says, and carries the index ratio it crossed
+    /// (1 for a reflection).
+    #[test]
+    fn samples_name_their_lobe_and_carry_their_eta() {
+        use crate::shading::bsdf::LobeFlags as F;
+        let sides = [F::REFLECTION, F::TRANSMISSION];
+        let shapes = [F::DIFFUSE, F::GLOSSY, F::SPECULAR];
+        let mut seen: Vec<(String, F)> = Vec::new();
+        let mut u = Uniforms(99);
+        for case in smooth_cases(5, 8, 0.05)
+            .into_iter()
+            .chain(delta_cases(6, 8))
+        {
+            let lobes = case.bsdf.flags();
+            for _ in 0..400 {
+                let u_lobe = u.next();
+                let Some(s) = case.bsdf.sample(case.wo, u_lobe, u.vec2()) else {
+                    continue;
+                };
+                let label = &case.label;
+                assert_eq!(sides.iter().filter(|f| s.flags.contains(**f)).count(), 1);
+                assert_eq!(shapes.iter().filter(|f| s.flags.contains(**f)).count(), 1);
+                assert!(
+                    lobes.contains(s.flags),
+                    "{label}: {:?} not in {lobes:?}",
+                    s.flags
+                );
+                let crossed = s.wi.dot(case.normal) * case.wo.dot(case.normal) < 0.0;
+                assert_eq!(s.is_transmission(), crossed, "{label}: {:?}", s.flags);
+                let expected_eta = if crossed {
+                    case.index_of_side(case.wo) / case.index_of_side(s.wi)
+                } else {
+                    1.0
+                };
+                // A smooth boundary carries radiance unscaled (`ior: None` in its case), so
+                // its eta is checked in `dielectric`'s own tests.
+                if case.ior.is_some() || !crossed {
+                    assert!(
+                        (s.eta - expected_eta).abs() <= 1e-6 * expected_eta,
+                        "{label}: eta {} vs {expected_eta}",
+                        s.eta
+                    );
+                }
+                let kind = label
+                    .split_whitespace()
+                    .next()
+                    .unwrap_or_default()
+                    .to_string();
+                if !seen.contains(&(kind.clone(), s.flags)) {
+                    seen.push((kind, s.flags));
+                }
+            }
+        }
+        // Every lobe kind of every BSDF is met.
+        for expected in [
+            ("classic", F::DIFFUSE_REFLECTION),
+            ("conductor", F::GLOSSY_REFLECTION),
+            ("metallic-roughness", F::DIFFUSE_REFLECTION),
+            ("metallic-roughness", F::GLOSSY_REFLECTION),
+            ("rough", F::GLOSSY_REFLECTION),
+            ("rough", F::GLOSSY_TRANSMISSION),
+            ("material", F::GLOSSY_TRANSMISSION),
+        ] {
+            let expected = (expected.0.to_string(), expected.1);
+            assert!(
+                seen.contains(&expected),
+                "{expected:?} never sampled: {seen:?}"
+            );
+        }
+        assert!(seen.iter().any(|(_, f)| *f == F::SPECULAR_REFLECTION));
+        assert!(seen.iter().any(|(_, f)| *f == F::SPECULAR_TRANSMISSION));
+    }
+
     /// (a) For every lobe with a density, `sample` reports `pdf(wo, wi)` and the weight
     /// `f cos / pdf`.
     #[test]
@@ -361,7 +436,7 @@ mod tests {
                 let Some(s) = case.bsdf.sample(case.wo, u_lobe, u.vec2()) else {
                     continue;
                 };
-                assert_eq!(s.lobe, Lobe::Smooth, "{}", case.label);
+                assert!(s.flags.has_density(), "{}: {:?}", case.label, s.flags);
                 checked += 1;
                 let pdf = case.bsdf.pdf(case.wo, s.wi);
                 let pdf_error = (s.pdf - pdf).abs() / pdf.max(1e-6);
@@ -492,9 +567,14 @@ mod tests {
             } else {
                 (0.0, u.next())
             };
+            let base_color = random_color(&mut u);
+            let specular = 0.3 * u.next();
             let material = Material {
-                base_color: random_color(&mut u),
-                specular: 0.3 * u.next(),
+                base_color,
+                model: MaterialModel::Classic(crate::scene::ClassicModel {
+                    specular,
+                    ..Default::default()
+                }),
                 mirror,
                 transmission,
                 ior,
@@ -506,7 +586,7 @@ mod tests {
                 ),
                 bsdf: Box::new(MaterialBsdf::new(
                     &material,
-                    material.base_color * (1.0 - material.specular),
+                    material.base_color * (1.0 - specular),
                     -either,
                     n,
                     n,
@@ -595,8 +675,9 @@ mod tests {
                 base_color: Vec3::new(0.8, 0.5, 0.3),
                 transmission,
                 ior: 1.5,
-                roughness: Some(roughness),
-                metallic,
+                model: MaterialModel::MetallicRoughness(MetallicRoughnessModel::new(
+                    roughness, metallic,
+                )),
                 ..Material::default()
             };
             let b = MaterialBsdf::new(
@@ -607,7 +688,7 @@ mod tests {
                 Vec3::Z,
                 Some(FresnelMode::Exact),
             );
-            assert!(!b.has_delta());
+            assert!(!b.flags().is_specular());
             b
         };
         let configurations: Vec<(String, Box<dyn Bsdf>, Vec3)> = vec![

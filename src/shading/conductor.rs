@@ -22,7 +22,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::bsdf::{Bsdf, BsdfSample, Lobe};
+use super::bsdf::{Bsdf, BsdfSample, LobeFlags};
 use super::frame::ShadingFrame;
 use super::microfacet::Ggx;
 use super::multiple_scattering::MultipleScattering;
@@ -145,20 +145,21 @@ impl Bsdf for RoughConductor {
 
     fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let (wi, weight, pdf) = self.sample_local(self.frame.to_local(wo), u_lobe, u)?;
-        Some(BsdfSample {
-            wi: self.frame.to_world(wi),
+        let wi = self.frame.to_world(wi);
+        Some(BsdfSample::reflected(
+            wi,
             weight,
             pdf,
-            lobe: Lobe::Smooth,
-        })
+            LobeFlags::GLOSSY_REFLECTION,
+        ))
     }
 
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         self.pdf_local(self.frame.to_local(wo), self.frame.to_local(wi))
     }
 
-    fn has_delta(&self) -> bool {
-        false
+    fn flags(&self) -> LobeFlags {
+        LobeFlags::GLOSSY_REFLECTION
     }
 }
 

@@ -10,7 +10,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::bsdf::{Bsdf, BsdfSample, Lobe};
+use super::bsdf::{Bsdf, BsdfSample, LobeFlags};
 use super::fresnel::{fresnel, DielectricBoundary};
 use super::reflection::reflect_above;
 use super::refraction::refract;
@@ -98,14 +98,15 @@ impl Bsdf for SmoothDielectric {
                 wi,
                 weight: Vec3::ONE,
                 pdf: 1.0 - split.reflectance,
-                lobe: Lobe::DeltaTransmission,
+                flags: LobeFlags::SPECULAR_TRANSMISSION,
+                eta: split.boundary.eta,
             }),
-            _ => Some(BsdfSample {
-                wi: reflect_above(d, split.incident_shading_normal, split.incident_normal),
-                weight: Vec3::ONE,
-                pdf: split.reflectance,
-                lobe: Lobe::DeltaReflection,
-            }),
+            _ => Some(BsdfSample::reflected(
+                reflect_above(d, split.incident_shading_normal, split.incident_normal),
+                Vec3::ONE,
+                split.reflectance,
+                LobeFlags::SPECULAR_REFLECTION,
+            )),
         }
     }
 
@@ -113,8 +114,10 @@ impl Bsdf for SmoothDielectric {
         0.0
     }
 
-    fn has_delta(&self) -> bool {
-        true
+    /// Both directions: the reflection carries Fresnel's share or total internal
+    /// reflection.
+    fn flags(&self) -> LobeFlags {
+        LobeFlags::SPECULAR_REFLECTION | LobeFlags::SPECULAR_TRANSMISSION
     }
 }
 
@@ -155,7 +158,7 @@ mod tests {
         assert!(!split.boundary.entering && split.refracted.is_none());
         assert_eq!(split.reflectance, 1.0);
         let s = bsdf.sample(-d, 0.99, Vec2::ZERO).expect("reflects");
-        assert_eq!(s.lobe, Lobe::DeltaReflection);
+        assert_eq!((s.flags, s.eta), (LobeFlags::SPECULAR_REFLECTION, 1.0));
         assert_eq!(s.pdf, 1.0);
         assert!(s.wi.z < 0.0, "stays inside: {}", s.wi);
     }
@@ -170,14 +173,20 @@ mod tests {
         let mut reflected = 0;
         for _ in 0..count {
             let s = bsdf.sample(wo, u.next(), u.vec2()).expect("scatters");
-            assert!(s.lobe.is_delta() && s.weight == Vec3::ONE);
-            match s.lobe {
-                Lobe::DeltaReflection => {
+            assert!(s.is_specular() && s.weight == Vec3::ONE);
+            match s.flags {
+                LobeFlags::SPECULAR_REFLECTION => {
+                    assert_eq!(s.eta, 1.0);
                     reflected += 1;
                     assert_eq!(s.pdf, reflectance);
                     assert!(s.wi.z > 0.0);
                 }
-                _ => {
+                flags => {
+                    // Entering glass: n_incident / n_transmitted = 1 / 1.5.
+                    assert_eq!(
+                        (flags, s.eta),
+                        (LobeFlags::SPECULAR_TRANSMISSION, 1.0 / 1.5)
+                    );
                     assert_eq!(s.pdf, 1.0 - reflectance);
                     assert!(s.wi.z < 0.0);
                 }
@@ -197,5 +206,19 @@ mod tests {
         let split = glass(None).split(Vec3::new(0.6, 0.0, -0.8));
         assert_eq!(split.reflectance, 0.0);
         assert!(split.refracted.is_some());
+    }
+
+    #[test]
+    fn a_sample_leaving_glass_carries_the_inverse_ratio() {
+        let bsdf = glass(Some(FresnelMode::Exact));
+        // From inside at 10 degrees: below the critical angle, so u_lobe near 1 refracts.
+        let wo = Vec3::new(0.1736, 0.0, -0.9848).normalize();
+        let s = bsdf.sample(wo, 0.999, Vec2::ZERO).expect("scatters");
+        assert_eq!((s.flags, s.eta), (LobeFlags::SPECULAR_TRANSMISSION, 1.5));
+        assert!(s.wi.z > 0.0);
+        assert_eq!(
+            bsdf.flags(),
+            LobeFlags::SPECULAR_REFLECTION | LobeFlags::SPECULAR_TRANSMISSION
+        );
     }
 }

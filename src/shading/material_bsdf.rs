@@ -5,10 +5,10 @@
 //! `mirror` and `transmission` for the other two, the weights of seed 001's recursion
 //! `local + k_r * reflected + k_t * refracted`.
 //!
-//! The opaque lobe is the classic Lambert plus Blinn-Phong ([`OpaqueBsdf`]) when the
-//! material's `roughness` is `None`, and the glTF 2.0 metallic-roughness lobe
-//! ([`MetallicRoughnessBsdf`]) when it is `Some`. The dielectric boundary of a material with
-//! `transmission > 0` is rough when the material has a roughness of at least
+//! The opaque lobe is the classic Lambert plus Blinn-Phong ([`OpaqueBsdf`]) for the
+//! material's classic model, and the glTF 2.0 metallic-roughness lobe
+//! ([`MetallicRoughnessBsdf`]) for its metallic-roughness model. The dielectric boundary of a
+//! material with `transmission > 0` is rough when that model's roughness at the hit is at least
 //! [`ROUGH_DIELECTRIC_MIN_ROUGHNESS`], the media are not index-matched (`ior != 1`) and
 //! Fresnel reflection is on; otherwise it is smooth.
 //!
@@ -21,13 +21,13 @@
 use glam::{Vec2, Vec3};
 
 use super::brdf::OpaqueBsdf;
-use super::bsdf::{Bsdf, BsdfSample};
+use super::bsdf::{Bsdf, BsdfSample, LobeFlags};
 use super::dielectric::SmoothDielectric;
 use super::metallic_roughness::MetallicRoughnessBsdf;
 use super::mirror::SmoothMirror;
 use super::rough_dielectric::RoughDielectric;
 use super::surface_inputs::SurfaceInputs;
-use crate::scene::{FresnelMode, Material};
+use crate::scene::{FresnelMode, Material, MaterialModel};
 
 /// Below this perceptual roughness a transmissive material keeps the smooth (delta)
 /// boundary: at `alpha = 0.05^2` the rough lobe is a mirror for every practical purpose,
@@ -37,9 +37,9 @@ pub const ROUGH_DIELECTRIC_MIN_ROUGHNESS: f32 = 0.05;
 /// The opaque lobe of a material: classic, or glTF metallic-roughness.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum OpaqueLobe {
-    /// Lambert plus normalised Blinn-Phong (`roughness: None`).
+    /// Lambert plus normalised Blinn-Phong ([`MaterialModel::Classic`]).
     Classic(OpaqueBsdf),
-    /// The glTF 2.0 metallic-roughness lobe (`roughness: Some(r)`).
+    /// The glTF 2.0 metallic-roughness lobe ([`MaterialModel::MetallicRoughness`]).
     MetallicRoughness(MetallicRoughnessBsdf),
 }
 
@@ -79,17 +79,53 @@ impl Bsdf for OpaqueLobe {
         }
     }
 
-    fn has_delta(&self) -> bool {
-        false
+    fn flags(&self) -> LobeFlags {
+        match self {
+            OpaqueLobe::Classic(lobe) => lobe.flags(),
+            OpaqueLobe::MetallicRoughness(lobe) => lobe.flags(),
+        }
     }
 }
 
-/// What the opaque lobe takes from the hit: the (textured) albedo, roughness and metallic.
+/// What the opaque lobe takes from the hit: the (textured) albedo, and the
+/// metallic-roughness model's roughness and metallic (unread by the classic model).
 #[derive(Clone, Copy, Debug)]
 struct LobeInputs {
     albedo: Vec3,
-    roughness: Option<f32>,
+    roughness: f32,
     metallic: f32,
+}
+
+/// A lobe of the mixture with its weight in the material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Weighted<'a, L> {
+    pub weight: f32,
+    pub lobe: &'a L,
+}
+
+/// The lobes Whitted follows at a hit, each present only with a positive weight: the opaque
+/// lobe it evaluates for every light (diffuse, and glossy with the classic highlight or the
+/// metallic-roughness GGX lobe), the mirror (specular reflection) and the smooth boundary
+/// (specular reflection and transmission), whose single directions it traces. It follows a
+/// rough boundary as the smooth one: it traces delta directions only.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WhittedLobes<'a> {
+    pub opaque: Option<Weighted<'a, OpaqueLobe>>,
+    pub mirror: Option<Weighted<'a, SmoothMirror>>,
+    pub boundary: Option<Weighted<'a, SmoothDielectric>>,
+}
+
+impl WhittedLobes<'_> {
+    /// The lobes present.
+    pub fn flags(&self) -> LobeFlags {
+        let opaque = self.opaque.map(|o| o.lobe.flags());
+        let mirror = self.mirror.map(|m| m.lobe.flags());
+        let boundary = self.boundary.map(|b| b.lobe.flags());
+        [opaque, mirror, boundary]
+            .into_iter()
+            .flatten()
+            .fold(LobeFlags::NONE, |all, flags| all | flags)
+    }
 }
 
 /// A material's lobes at one hit, with their weights.
@@ -118,10 +154,14 @@ impl MaterialBsdf {
         outward_shading: Vec3,
         fresnel: Option<FresnelMode>,
     ) -> MaterialBsdf {
+        let (roughness, metallic) = match material.model.metallic_roughness() {
+            Some(model) => (model.roughness, model.metallic),
+            None => (0.0, 0.0),
+        };
         let inputs = LobeInputs {
             albedo,
-            roughness: material.roughness,
-            metallic: material.metallic,
+            roughness,
+            metallic,
         };
         MaterialBsdf::with_inputs(
             material,
@@ -146,7 +186,7 @@ impl MaterialBsdf {
     ) -> MaterialBsdf {
         let lobe = LobeInputs {
             albedo: inputs.albedo,
-            roughness: inputs.roughness,
+            roughness: inputs.roughness.unwrap_or(0.0),
             metallic: inputs.metallic,
         };
         MaterialBsdf::with_inputs(
@@ -180,31 +220,26 @@ impl MaterialBsdf {
         } else {
             (-outward_geometric, -outward_shading)
         };
-        let opaque = match roughness {
-            None => OpaqueLobe::Classic(OpaqueBsdf {
-                n: ns,
-                albedo,
-                specular: material.specular,
-                shininess: material.shininess,
-            }),
-            Some(roughness) => OpaqueLobe::MetallicRoughness(MetallicRoughnessBsdf::new(
-                ns, albedo, roughness, metallic,
-            )),
-        };
-        let rough_dielectric = match roughness {
-            Some(roughness)
-                if material.transmission > 0.0
+        let (opaque, rough_dielectric) = match &material.model {
+            MaterialModel::Classic(classic) => {
+                let lobe = OpaqueBsdf {
+                    n: ns,
+                    albedo,
+                    specular: classic.specular,
+                    shininess: classic.shininess,
+                };
+                (OpaqueLobe::Classic(lobe), None)
+            }
+            MaterialModel::MetallicRoughness(_) => {
+                let lobe = MetallicRoughnessBsdf::new(ns, albedo, roughness, metallic);
+                let rough = material.transmission > 0.0
                     && roughness >= ROUGH_DIELECTRIC_MIN_ROUGHNESS
                     && material.ior != 1.0
-                    && fresnel.is_some() =>
-            {
-                Some(RoughDielectric::new(
-                    outward_shading,
-                    roughness,
-                    material.ior,
-                ))
+                    && fresnel.is_some();
+                let boundary =
+                    rough.then(|| RoughDielectric::new(outward_shading, roughness, material.ior));
+                (OpaqueLobe::MetallicRoughness(lobe), boundary)
             }
-            _ => None,
         };
         MaterialBsdf {
             opaque_weight: (1.0 - material.mirror) * (1.0 - material.transmission),
@@ -230,7 +265,20 @@ impl MaterialBsdf {
     /// rough boundary), which light sampling can then reach from the far side.
     #[inline]
     pub fn transmits_with_density(&self) -> bool {
-        self.rough_dielectric.is_some() && self.dielectric_weight > 0.0
+        self.flags().contains(LobeFlags::GLOSSY_TRANSMISSION)
+    }
+
+    /// The lobes Whitted follows (see [`WhittedLobes`]).
+    #[inline]
+    pub fn whitted_lobes(&self) -> WhittedLobes<'_> {
+        fn weighted<L>(weight: f32, lobe: &L) -> Option<Weighted<'_, L>> {
+            (weight > 0.0).then_some(Weighted { weight, lobe })
+        }
+        WhittedLobes {
+            opaque: weighted(self.opaque_weight, &self.opaque),
+            mirror: weighted(self.mirror_weight, &self.mirror),
+            boundary: weighted(self.dielectric_weight, &self.dielectric),
+        }
     }
 
     /// The lobe weights, clamped at zero, in the order opaque, mirror, dielectric.
@@ -292,7 +340,7 @@ impl Bsdf for MaterialBsdf {
                     None => self.dielectric.sample(wo, u_inner, u)?,
                 },
             };
-            if !sample.lobe.is_delta() {
+            if !sample.is_specular() {
                 // A lobe with a density: the sample could have come from every smooth lobe
                 // of the mixture, so it carries the mixture's value and density (one-sample
                 // MIS, balance heuristic), which is what eval and pdf report.
@@ -320,9 +368,22 @@ impl Bsdf for MaterialBsdf {
         }
     }
 
-    fn has_delta(&self) -> bool {
-        self.mirror_weight > 0.0
-            || (self.dielectric_weight > 0.0 && self.rough_dielectric.is_none())
+    /// The lobes with a positive weight.
+    fn flags(&self) -> LobeFlags {
+        let mut flags = LobeFlags::NONE;
+        if self.opaque_weight > 0.0 {
+            flags |= self.opaque.flags();
+        }
+        if self.mirror_weight > 0.0 {
+            flags |= self.mirror.flags();
+        }
+        if self.dielectric_weight > 0.0 {
+            flags |= match &self.rough_dielectric {
+                Some(rough) => rough.flags(),
+                None => self.dielectric.flags(),
+            };
+        }
+        flags
     }
 }
 
@@ -330,7 +391,6 @@ impl Bsdf for MaterialBsdf {
 mod tests {
     use super::*;
     use crate::shading::bsdf::tests::Uniforms;
-    use crate::shading::bsdf::Lobe;
 
     fn material(mirror: f32, transmission: f32) -> Material {
         Material {
@@ -340,6 +400,12 @@ mod tests {
             ior: 1.5,
             ..Material::default()
         }
+    }
+
+    fn metallic_roughness(roughness: f32, metallic: f32) -> MaterialModel {
+        MaterialModel::MetallicRoughness(crate::scene::MetallicRoughnessModel::new(
+            roughness, metallic,
+        ))
     }
 
     fn bsdf_of(material: &Material) -> MaterialBsdf {
@@ -358,8 +424,44 @@ mod tests {
         let b = bsdf_of(&material(0.25, 0.5));
         assert_eq!(b.opaque_weight, 0.75 * 0.5);
         assert_eq!((b.mirror_weight, b.dielectric_weight), (0.25, 0.5));
-        assert!(b.has_delta());
-        assert!(!bsdf_of(&material(0.0, 0.0)).has_delta());
+        assert!(b.flags().is_specular());
+        assert!(!bsdf_of(&material(0.0, 0.0)).flags().is_specular());
+    }
+
+    #[test]
+    fn whitted_follows_the_weighted_lobes_and_rough_glass_as_smooth() {
+        let b = bsdf_of(&material(0.25, 0.5));
+        let lobes = b.whitted_lobes();
+        assert_eq!(lobes.opaque.map(|o| o.weight), Some(0.75 * 0.5));
+        assert_eq!(lobes.mirror.map(|m| m.weight), Some(0.25));
+        assert_eq!(lobes.boundary.map(|d| d.weight), Some(0.5));
+        assert_eq!(
+            lobes.flags(),
+            LobeFlags::DIFFUSE_REFLECTION
+                | LobeFlags::SPECULAR_REFLECTION
+                | LobeFlags::SPECULAR_TRANSMISSION
+        );
+        assert_eq!(b.flags(), lobes.flags());
+        // A matte material: only the diffuse lobe.
+        let matte = bsdf_of(&material(0.0, 0.0));
+        let lobes = matte.whitted_lobes();
+        assert!(lobes.mirror.is_none() && lobes.boundary.is_none());
+        assert_eq!(lobes.flags(), LobeFlags::DIFFUSE_REFLECTION);
+        // Full glass hides the opaque lobe.
+        let glass = bsdf_of(&material(0.0, 1.0));
+        assert!(glass.whitted_lobes().opaque.is_none());
+        // Rough glass: sampled as a glossy boundary, followed by Whitted as the smooth one.
+        let mut rough = material(0.0, 1.0);
+        rough.model = metallic_roughness(0.3, 0.0);
+        let b = bsdf_of(&rough);
+        assert_eq!(
+            b.flags(),
+            LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION
+        );
+        assert_eq!(
+            b.whitted_lobes().flags(),
+            LobeFlags::SPECULAR_REFLECTION | LobeFlags::SPECULAR_TRANSMISSION
+        );
     }
 
     #[test]
@@ -371,15 +473,16 @@ mod tests {
         let count = 60_000;
         for _ in 0..count {
             let s = b.sample(wo, u.next(), u.vec2()).expect("scatters");
-            match s.lobe {
-                Lobe::Smooth => {
+            match s.flags {
+                LobeFlags::DIFFUSE_REFLECTION => {
                     counts[0] += 1;
                     assert!((s.pdf - b.pdf(wo, s.wi)).abs() <= 1e-5 * s.pdf);
                     let expected = b.eval(wo, s.wi) * b.opaque.normal().dot(s.wi) / s.pdf;
                     assert!((s.weight - expected).abs().max_element() <= 1e-4);
                 }
-                Lobe::DeltaReflection => counts[1] += 1,
-                Lobe::DeltaTransmission => counts[2] += 1,
+                LobeFlags::SPECULAR_REFLECTION => counts[1] += 1,
+                LobeFlags::SPECULAR_TRANSMISSION => counts[2] += 1,
+                flags => panic!("a classic mirror and glass has no {flags:?} lobe"),
             }
         }
         // The opaque lobe is chosen in proportion to its weight.
@@ -407,8 +510,7 @@ mod tests {
         let classic = bsdf_of(&material(0.0, 0.0));
         assert!(matches!(classic.opaque, OpaqueLobe::Classic(_)));
         let mut metal = material(0.0, 0.0);
-        metal.roughness = Some(0.3);
-        metal.metallic = 1.0;
+        metal.model = metallic_roughness(0.3, 1.0);
         let b = bsdf_of(&metal);
         let OpaqueLobe::MetallicRoughness(lobe) = b.opaque else {
             panic!("expected the metallic-roughness lobe, got {:?}", b.opaque);
@@ -420,19 +522,19 @@ mod tests {
         let mirror = Vec3::new(0.3, 0.0, 0.954).normalize();
         let side = Vec3::new(-0.5, 0.5, 0.707).normalize();
         assert!(b.eval(wo, mirror).x > 20.0 * b.eval(wo, side).x);
-        assert!(b.rough_dielectric.is_none() && !b.has_delta());
+        assert!(b.rough_dielectric.is_none() && !b.flags().is_specular());
     }
 
     #[test]
     fn rough_transmission_replaces_the_smooth_boundary_above_the_threshold() {
         let mut glass = material(0.0, 1.0);
-        glass.roughness = Some(0.3);
+        glass.model = metallic_roughness(0.3, 0.0);
         let b = bsdf_of(&glass);
-        assert!(b.rough_dielectric.is_some() && !b.has_delta());
+        assert!(b.rough_dielectric.is_some() && !b.flags().is_specular());
         // Below the threshold, index-matched, or without Fresnel: the smooth boundary.
-        glass.roughness = Some(0.5 * ROUGH_DIELECTRIC_MIN_ROUGHNESS);
+        glass.model = metallic_roughness(0.5 * ROUGH_DIELECTRIC_MIN_ROUGHNESS, 0.0);
         assert!(bsdf_of(&glass).rough_dielectric.is_none());
-        glass.roughness = Some(0.3);
+        glass.model = metallic_roughness(0.3, 0.0);
         glass.ior = 1.0;
         assert!(bsdf_of(&glass).rough_dielectric.is_none());
         glass.ior = 1.5;
@@ -444,13 +546,13 @@ mod tests {
             Vec3::Z,
             None,
         );
-        assert!(index_matched.rough_dielectric.is_none() && index_matched.has_delta());
+        assert!(index_matched.rough_dielectric.is_none() && index_matched.flags().is_specular());
         // A rough glass scatters light through the surface with a density.
         let wo = Vec3::new(-0.3, 0.0, 0.954).normalize();
         let mut u = Uniforms(31);
         let transmitted = (0..1000)
             .filter_map(|_| b.sample(wo, u.next(), u.vec2()))
-            .filter(|s| s.wi.z < 0.0 && s.lobe == Lobe::Smooth && s.pdf > 0.0)
+            .filter(|s| s.wi.z < 0.0 && s.flags == LobeFlags::GLOSSY_TRANSMISSION && s.pdf > 0.0)
             .count();
         assert!(transmitted > 800, "{transmitted}");
     }

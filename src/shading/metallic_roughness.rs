@@ -37,7 +37,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::bsdf::{sample_cosine_hemisphere, Bsdf, BsdfSample, Lobe};
+use super::bsdf::{sample_cosine_hemisphere, Bsdf, BsdfSample, LobeFlags};
 use super::conductor::schlick_f0;
 use super::frame::ShadingFrame;
 use super::microfacet::Ggx;
@@ -152,17 +152,21 @@ impl MetallicRoughnessBsdf {
         p_specular * specular + p_diffuse * wi.z / PI + compensation
     }
 
-    pub(crate) fn sample_local(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+    /// A local sample, flagged by the lobe that drew it: the GGX highlight and the metal's
+    /// compensation are glossy, the coated base diffuse.
+    pub(crate) fn sample_local(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }
         let (p_specular, p_diffuse) = self.lobe_probabilities(wo);
-        let wi = if u_lobe < p_specular {
-            self.ggx.sample_reflection(wo, u)?.0
+        let (wi, flags) = if u_lobe < p_specular {
+            let wi = self.ggx.sample_reflection(wo, u)?.0;
+            (wi, LobeFlags::GLOSSY_REFLECTION)
         } else if u_lobe < p_specular + p_diffuse || !self.multiple.is_on() {
-            sample_cosine_hemisphere(Vec3::Z, u)
+            let wi = sample_cosine_hemisphere(Vec3::Z, u);
+            (wi, LobeFlags::DIFFUSE_REFLECTION)
         } else {
-            self.multiple.sample(u)
+            (self.multiple.sample(u), LobeFlags::GLOSSY_REFLECTION)
         };
         if wi.z <= 0.0 {
             return None;
@@ -171,7 +175,8 @@ impl MetallicRoughnessBsdf {
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
-        Some((wi, self.eval_local(wo, wi) * (wi.z / pdf), pdf))
+        let weight = self.eval_local(wo, wi) * (wi.z / pdf);
+        Some(BsdfSample::reflected(wi, weight, pdf, flags))
     }
 }
 
@@ -181,12 +186,10 @@ impl Bsdf for MetallicRoughnessBsdf {
     }
 
     fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        let (wi, weight, pdf) = self.sample_local(self.frame.to_local(wo), u_lobe, u)?;
+        let local = self.sample_local(self.frame.to_local(wo), u_lobe, u)?;
         Some(BsdfSample {
-            wi: self.frame.to_world(wi),
-            weight,
-            pdf,
-            lobe: Lobe::Smooth,
+            wi: self.frame.to_world(local.wi),
+            ..local
         })
     }
 
@@ -194,8 +197,13 @@ impl Bsdf for MetallicRoughnessBsdf {
         self.pdf_local(self.frame.to_local(wo), self.frame.to_local(wi))
     }
 
-    fn has_delta(&self) -> bool {
-        false
+    /// A fully metallic lobe has no diffuse base.
+    fn flags(&self) -> LobeFlags {
+        if self.metallic < 1.0 {
+            LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION
+        } else {
+            LobeFlags::GLOSSY_REFLECTION
+        }
     }
 }
 

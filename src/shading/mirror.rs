@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::bsdf::{Bsdf, BsdfSample, Lobe};
+use super::bsdf::{Bsdf, BsdfSample, LobeFlags};
 use super::reflection::reflect_above;
 
 /// A perfect mirror reflecting `reflectance` of the light, about the unit shading normal
@@ -33,20 +33,20 @@ impl Bsdf for SmoothMirror {
         if wo.dot(self.ng) <= 0.0 || self.reflectance.max_element() <= 0.0 {
             return None;
         }
-        Some(BsdfSample {
-            wi: self.direction(wo),
-            weight: self.reflectance,
-            pdf: 1.0,
-            lobe: Lobe::DeltaReflection,
-        })
+        Some(BsdfSample::reflected(
+            self.direction(wo),
+            self.reflectance,
+            1.0,
+            LobeFlags::SPECULAR_REFLECTION,
+        ))
     }
 
     fn pdf(&self, _wo: Vec3, _wi: Vec3) -> f32 {
         0.0
     }
 
-    fn has_delta(&self) -> bool {
-        true
+    fn flags(&self) -> LobeFlags {
+        LobeFlags::SPECULAR_REFLECTION
     }
 }
 
@@ -65,7 +65,8 @@ mod tests {
         let s = mirror.sample(wo, 0.3, Vec2::new(0.1, 0.9)).expect("above");
         assert!((s.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-6);
         assert_eq!(s.weight, mirror.reflectance);
-        assert!(s.lobe.is_delta() && mirror.has_delta());
+        assert_eq!((s.flags, s.eta), (LobeFlags::SPECULAR_REFLECTION, 1.0));
+        assert!(s.is_specular() && mirror.flags().is_specular());
         assert_eq!(mirror.eval(wo, s.wi), Vec3::ZERO);
         assert_eq!(mirror.pdf(wo, s.wi), 0.0);
         // Never more light than arrives.

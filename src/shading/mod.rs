@@ -9,7 +9,8 @@
 //!   refracted ray (exact unpolarised Fresnel equations, and Schlick's approximation with
 //!   total internal reflection as in seed 004, "Fresnel").
 //! - [`beer`]: absorption inside a transmissive medium (seed 004, "Beer's Law").
-//! - [`bsdf`]: the BSDF interface (`eval`, `sample`, `pdf`, delta lobes flagged) and
+//! - [`bsdf`]: the BSDF interface (`eval`, `sample`, `pdf`; lobes named by pbrt-style
+//!   [`LobeFlags`], samples carrying their lobe and relative index of refraction) and
 //!   cosine-weighted hemisphere sampling.
 //! - [`brdf`]: the opaque lobe of a hit (Lambert plus normalised Blinn-Phong).
 //! - [`microfacet`]: the GGX distribution (visible-normal sampling, Smith masking) of the
@@ -23,6 +24,9 @@
 //!   al. 2007, exact Fresnel, total internal reflection).
 //! - [`metallic_roughness`]: the glTF 2.0 metallic-roughness opaque lobe.
 //! - [`material_bsdf`]: a scene material's lobes with their weights, as one BSDF.
+//! - [`material_features`]: what a material does (its lobes, emission, absorption, cut-out,
+//!   normal map, textures read), the one answer effects, integrator selection, area lights
+//!   and the integrators read.
 //! - [`lights`]: direction, distance and irradiance scale towards each punctual light, for
 //!   shadow rays (seed 001, "Shadow Rays"); punctual lights are delta lights.
 //! - [`environment_light`]: the environment as a light (mean radiance, direction sampling).
@@ -64,6 +68,7 @@ pub mod light_interface;
 pub mod light_selection;
 pub mod lights;
 pub mod material_bsdf;
+pub mod material_features;
 pub mod metallic_roughness;
 pub mod microfacet;
 pub mod mirror;
@@ -79,7 +84,7 @@ pub use alias_table::AliasTable;
 pub use area_lights::{AreaLight, AreaLightSample, AreaLights, AreaShape};
 pub use beer::{sigma_from_attenuation, transmittance};
 pub use brdf::OpaqueBsdf;
-pub use bsdf::{Bsdf, BsdfSample, Lobe};
+pub use bsdf::{Bsdf, BsdfSample, LobeFlags};
 pub use conductor::RoughConductor;
 pub use dielectric::{DielectricSplit, SmoothDielectric};
 pub use environment_light::{EnvironmentLight, EnvironmentMap, EnvironmentSample};
@@ -88,6 +93,7 @@ pub use light_interface::{EmissionLookup, LiSample, LightHit, OwnEmission};
 pub use light_selection::{LightRef, LightSelection, SceneLights};
 pub use lights::{is_delta_light, light_position, pdf_li, sample_li, LightSample};
 pub use material_bsdf::{MaterialBsdf, OpaqueLobe};
+pub use material_features::MaterialFeatures;
 pub use metallic_roughness::MetallicRoughnessBsdf;
 pub use mirror::SmoothMirror;
 pub use ray_offset::{

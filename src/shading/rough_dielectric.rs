@@ -24,7 +24,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::bsdf::{Bsdf, BsdfSample, Lobe};
+use super::bsdf::{Bsdf, BsdfSample, LobeFlags};
 use super::frame::ShadingFrame;
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::Ggx;
@@ -149,20 +149,21 @@ impl RoughDielectric {
         }
     }
 
-    /// A local sample (`wi`, weight, pdf).
-    pub(crate) fn sample_local(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+    /// A local sample, flagged glossy reflection or transmission; a refraction's `eta` is
+    /// the index on `wo`'s side over that on `wi`'s (the ratio it refracts with).
+    pub(crate) fn sample_local(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         if wo.z == 0.0 {
             return None;
         }
         let m = self.ggx.sample_visible_normal(wo, u);
         let wo_m = wo.dot(m);
         let f = self.fresnel(wo_m);
-        let wi = if u_lobe < f {
+        let (wi, flags, eta) = if u_lobe < f {
             let wi = 2.0 * wo_m * m - wo;
             if wi.z * wo.z <= 0.0 {
                 return None;
             }
-            wi
+            (wi, LobeFlags::GLOSSY_REFLECTION, 1.0)
         } else {
             let eta = if wo_m >= 0.0 {
                 1.0 / self.ior
@@ -173,7 +174,7 @@ impl RoughDielectric {
             if wi.z * wo.z >= 0.0 {
                 return None;
             }
-            wi
+            (wi, LobeFlags::GLOSSY_TRANSMISSION, eta)
         };
         // Value and density from the pair itself, so the sample agrees with eval and pdf.
         let pdf = self.pdf_local(wo, wi);
@@ -181,7 +182,13 @@ impl RoughDielectric {
             return None;
         }
         let weight = self.eval_local(wo, wi) * (wi.z.abs() / pdf);
-        Some((wi, weight, pdf))
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf,
+            flags,
+            eta,
+        })
     }
 }
 
@@ -191,12 +198,10 @@ impl Bsdf for RoughDielectric {
     }
 
     fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        let (wi, weight, pdf) = self.sample_local(self.frame.to_local(wo), u_lobe, u)?;
+        let local = self.sample_local(self.frame.to_local(wo), u_lobe, u)?;
         Some(BsdfSample {
-            wi: self.frame.to_world(wi),
-            weight,
-            pdf,
-            lobe: Lobe::Smooth,
+            wi: self.frame.to_world(local.wi),
+            ..local
         })
     }
 
@@ -204,8 +209,8 @@ impl Bsdf for RoughDielectric {
         self.pdf_local(self.frame.to_local(wo), self.frame.to_local(wi))
     }
 
-    fn has_delta(&self) -> bool {
-        false
+    fn flags(&self) -> LobeFlags {
+        LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION
     }
 }
 

@@ -9,7 +9,7 @@
 //! - alpha = alpha factor x alpha texture (A);
 //! - metallic = factor x metallic-roughness texture's blue channel, roughness = factor x its
 //!   green channel (glTF 2.0, section 3.9.2), the texture read only by the metallic-roughness
-//!   model (`roughness: Some(_)`); separate roughness and metalness maps (MTL's greyscale
+//!   model; separate roughness and metalness maps (MTL's greyscale
 //!   `map_Pr`, `map_Pm`) multiply in their green and blue channels the same way;
 //! - emission = emissive factor (times `KHR_materials_emissive_strength`, folded in by the
 //!   loader) x emission texture (RGB);
@@ -71,18 +71,19 @@ pub fn surface_inputs(
         (Some(binding), true) => material.alpha * sample(TextureSlot::Alpha, binding).w,
         _ => material.alpha,
     };
-    let (mut metallic, mut roughness) = (material.metallic, material.roughness);
-    if let Some(r) = roughness {
-        let mut r = r;
-        if let Some(binding) = &material.metallic_roughness_texture {
+    let (mut metallic, mut roughness) = (0.0, None);
+    if let Some(model) = material.model.metallic_roughness() {
+        metallic = model.metallic;
+        let mut r = model.roughness;
+        if let Some(binding) = &model.metallic_roughness_texture {
             let texel = sample(TextureSlot::MetallicRoughness, binding);
             metallic *= texel.z;
             r *= texel.y;
         }
-        if let Some(binding) = &material.roughness_texture {
+        if let Some(binding) = &model.roughness_texture {
             r *= sample(TextureSlot::Roughness, binding).y;
         }
-        if let Some(binding) = &material.metallic_texture {
+        if let Some(binding) = &model.metallic_texture {
             metallic *= sample(TextureSlot::Metallic, binding).z;
         }
         roughness = Some(r);
@@ -148,6 +149,7 @@ pub fn perturb_normal(n: Vec3, dpds: Vec3, dpdt: Vec3, texel: Vec3, scale: f32) 
 mod tests {
     use super::*;
     use crate::hit::Patch;
+    use crate::scene::{MaterialModel, MetallicRoughnessModel};
     use glam::Vec2;
 
     /// A hit on the z = 0 plane facing +z, with s along +x and t along -y (t grows down the
@@ -299,10 +301,12 @@ mod tests {
 
     #[test]
     fn metallic_roughness_channels_are_blue_and_green() {
-        let material = Material {
-            roughness: Some(0.8),
-            metallic: 0.5,
+        let model = MetallicRoughnessModel {
             metallic_roughness_texture: binding(0),
+            ..MetallicRoughnessModel::new(0.8, 0.5)
+        };
+        let material = Material {
+            model: MaterialModel::MetallicRoughness(model.clone()),
             ..Material::default()
         };
         let (inputs, slots) = inputs_with(&material, Vec4::new(0.9, 0.25, 0.6, 1.0));
@@ -311,23 +315,26 @@ mod tests {
         assert!((inputs.roughness.unwrap() - 0.2).abs() < 1e-6);
         // Separate greyscale maps multiply in the same channels.
         let separate = Material {
-            metallic_roughness_texture: None,
-            roughness_texture: binding(1),
-            metallic_texture: binding(2),
+            model: MaterialModel::MetallicRoughness(MetallicRoughnessModel {
+                metallic_roughness_texture: None,
+                roughness_texture: binding(1),
+                metallic_texture: binding(2),
+                ..model
+            }),
             ..material.clone()
         };
         let (inputs, slots) = inputs_with(&separate, Vec4::new(0.9, 0.25, 0.6, 1.0));
         assert_eq!(slots, [TextureSlot::Roughness, TextureSlot::Metallic]);
         assert!((inputs.metallic - 0.3).abs() < 1e-6);
         assert!((inputs.roughness.unwrap() - 0.2).abs() < 1e-6);
-        // The classic model does not read it.
+        // The classic model has neither.
         let classic = Material {
-            roughness: None,
+            model: MaterialModel::default(),
             ..material
         };
         let (inputs, slots) = inputs_with(&classic, Vec4::ZERO);
         assert!(slots.is_empty());
-        assert_eq!((inputs.metallic, inputs.roughness), (0.5, None));
+        assert_eq!((inputs.metallic, inputs.roughness), (0.0, None));
     }
 
     #[test]

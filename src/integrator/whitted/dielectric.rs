@@ -9,24 +9,23 @@ use super::{PathRay, Waves};
 use crate::hit::SurfaceHit;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
-use crate::scene::Material;
+use crate::shading::material_bsdf::Weighted;
 use crate::shading::{self, SmoothDielectric};
 
 /// Spawn the refracted and reflected rays of `ray` at a transmissive `surface` (the
-/// material's `dielectric` lobe), weighted by the material's transmission.
-#[allow(clippy::too_many_arguments)]
+/// material's smooth boundary, with its weight: the material's transmission).
 pub(super) fn scatter_dielectric(
     context: &RenderContext,
     ray: &PathRay,
     surface: &SurfaceHit,
-    material: &Material,
-    dielectric: &SmoothDielectric,
+    boundary: Weighted<SmoothDielectric>,
     spawner: &Spawner,
     waves: &mut Waves,
     worker: &mut WorkerState,
 ) {
     let effects = &context.effects;
-    let split = dielectric.split(ray.direction);
+    let transmission = boundary.weight;
+    let split = boundary.lobe.split(ray.direction);
     let (boundary, reflectance) = (split.boundary, split.reflectance);
     let (ng, ns) = (split.incident_normal, split.incident_shading_normal);
     if let Some(refracted) = split.refracted {
@@ -48,14 +47,14 @@ pub(super) fn scatter_dielectric(
             worker,
             refracted,
             -ng,
-            Vec3::splat(material.transmission * (1.0 - reflectance)),
+            Vec3::splat(transmission * (1.0 - reflectance)),
             RayKind::Refraction,
             footprint,
             sigma,
         );
     }
     if reflectance > 0.0 {
-        let weight = material.transmission * reflectance;
+        let weight = transmission * reflectance;
         let reflected = shading::reflect_above(ray.direction, ns, ng);
         spawner.spawn_reflection(context, surface, reflected, ng, weight, waves, worker);
     }

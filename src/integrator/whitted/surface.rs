@@ -153,29 +153,29 @@ pub(super) fn shade_hit(
         effects.fresnel.then_some(options.fresnel),
     );
 
-    // Local illumination of the opaque part: direct light with shadow rays, plus indirect
-    // light (Whitted: the ambient environment term).
+    // Local illumination of the opaque lobe: direct light with shadow rays, plus indirect
+    // light (Whitted: the ambient environment term); the delta lobes' rays below.
+    let lobes = bsdf.whitted_lobes();
     // The geometric normal on the incident side: rays leaving on that side start above it.
     let ng = bsdf.mirror.ng;
-    let opaque = bsdf.opaque_weight;
-    let shadows = effects.shadows && opaque > 0.0;
-    let reflects = effects.mirror_reflection && bsdf.mirror_weight > 0.0;
-    let refracts = effects.refraction && bsdf.dielectric_weight > 0.0;
-    let spawns = ray.depth < options.max_depth && (reflects || refracts);
+    let shadows = effects.shadows && lobes.opaque.is_some();
+    let mirror = lobes.mirror.filter(|_| effects.mirror_reflection);
+    let boundary = lobes.boundary.filter(|_| effects.refraction);
+    let spawns = ray.depth < options.max_depth && (mirror.is_some() || boundary.is_some());
     // The spawn point (with its error bounds) only when a ray leaves the hit.
     let spawn = (shadows || spawns).then(|| surface.spawn_point());
-    if opaque > 0.0 {
+    if let Some(opaque) = lobes.opaque {
         if let (true, Some(spawn)) = (shadows, spawn) {
-            queue_shadow_rays(context, &ray, &bsdf.opaque, opaque, spawn, ng, waves);
+            queue_shadow_rays(context, &ray, opaque.lobe, opaque.weight, spawn, ng, waves);
         }
         let query = IndirectQuery {
             surface,
             spawn,
             geometric_normal: ng,
             outgoing: -ray.direction,
-            bsdf: &bsdf.opaque,
+            bsdf: opaque.lobe,
             albedo,
-            weight: opaque,
+            weight: opaque.weight,
         };
         radiance += indirect.opaque_indirect(context, &query, worker);
     }
@@ -189,17 +189,13 @@ pub(super) fn shade_hit(
         spawn,
         min_throughput: options.min_throughput,
     };
-    if reflects {
-        let reflected = bsdf.mirror.direction(-ray.direction);
-        let weight = bsdf.mirror_weight;
+    if let Some(mirror) = mirror {
+        let reflected = mirror.lobe.direction(-ray.direction);
+        let weight = mirror.weight;
         spawner.spawn_reflection(context, surface, reflected, ng, weight, waves, worker);
     }
-
-    if refracts {
-        let dielectric = &bsdf.dielectric;
-        scatter_dielectric(
-            context, &ray, surface, material, dielectric, &spawner, waves, worker,
-        );
+    if let Some(boundary) = boundary {
+        scatter_dielectric(context, &ray, surface, boundary, &spawner, waves, worker);
     }
 }
 

@@ -91,7 +91,7 @@ fn has_emitters(scene: &SceneDescription) -> bool {
         scene
             .materials
             .get(material)
-            .is_some_and(|m| m.emission.max_element() > 0.0)
+            .is_some_and(crate::shading::material_features::emits)
     })
 }
 

@@ -13,7 +13,7 @@
 //! (`normals::repair_zero_normals`).
 //!
 //! Material mapping: base colour factor/texture (sRGB), the metallic-roughness model itself
-//! (`metallic`, `roughness: Some(..)`, factors defaulting to 1, and the linear
+//! (`MaterialModel::MetallicRoughness`, factors defaulting to 1, and the linear
 //! metallic-roughness texture, B = metalness, G = roughness), emissive factor times
 //! `KHR_materials_emissive_strength` with the emissive texture (sRGB), the normal texture
 //! (linear) with its scale, `KHR_materials_transmission` factor, `KHR_materials_ior`,
@@ -35,8 +35,8 @@ use super::merge::Transform;
 use super::normals::repair_zero_normals;
 use super::uri::{decode_data_uri, percent_decode};
 use crate::scene::{
-    CameraDesc, ColorSpace, Light, Material, Projection, SceneDescription, TextureBinding,
-    TextureDesc, TextureSource, TriangleMesh, WrapMode,
+    CameraDesc, ColorSpace, Light, Material, MaterialModel, MetallicRoughnessModel, Projection,
+    SceneDescription, TextureBinding, TextureDesc, TextureSource, TriangleMesh, WrapMode,
 };
 
 /// Loads the glTF file at `path` as a scene part: world-space meshes, materials, textures,
@@ -634,11 +634,11 @@ impl Loader<'_> {
         };
         // The metallic-roughness model itself (glTF 2.0, Appendix B); the factors default to
         // 1 when `pbrMetallicRoughness` leaves them out.
-        material.metallic = pbr.metallic_factor();
-        material.roughness = Some(pbr.roughness_factor());
+        let mut model = MetallicRoughnessModel::new(pbr.roughness_factor(), pbr.metallic_factor());
         if let Some(info) = pbr.metallic_roughness_texture() {
-            material.metallic_roughness_texture = self.binding(&info, ColorSpace::Linear)?;
+            model.metallic_roughness_texture = self.binding(&info, ColorSpace::Linear)?;
         }
+        material.model = MaterialModel::MetallicRoughness(model);
         // KHR_materials_emissive_strength scales the emissive factor beyond [0, 1].
         material.emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
         // Double-sided materials are lit, and emit, on both sides (glTF 2.0, 3.9.5).
@@ -1513,9 +1513,13 @@ mod tests {
         )
         .unwrap();
         let m = &part.materials[0];
-        assert_eq!((m.metallic, m.roughness), (1.0, Some(1.0)));
+        let factors = m
+            .model
+            .metallic_roughness()
+            .map(|mr| (mr.roughness, mr.metallic));
+        assert_eq!(factors, Some((1.0, 1.0)));
         assert_eq!(m.base_color, Vec3::new(0.5, 0.6, 0.7), "no longer scaled");
-        assert_eq!((m.mirror, m.specular), (0.0, 0.0));
+        assert_eq!(m.mirror, 0.0);
         let part = synthetic(
             |j| {
                 let pbr = &mut j["materials"][0]["pbrMetallicRoughness"];
@@ -1526,8 +1530,13 @@ mod tests {
         )
         .unwrap();
         let m = &part.materials[0];
-        assert_eq!((m.metallic, m.roughness), (0.25, Some(0.5)));
-        assert!(m.metallic_roughness_texture.is_none() && m.normal_texture.is_none());
+        let factors = m
+            .model
+            .metallic_roughness()
+            .map(|mr| (mr.roughness, mr.metallic));
+        assert_eq!(factors, Some((0.5, 0.25)));
+        let maps = m.model.metallic_roughness().unwrap();
+        assert!(maps.metallic_roughness_texture.is_none() && m.normal_texture.is_none());
     }
 
     #[test]
@@ -1558,12 +1567,16 @@ mod tests {
         assert_eq!(m.normal_scale, 0.5);
         let space =
             |b: &Option<TextureBinding>| part.textures[b.as_ref().unwrap().texture].color_space;
-        assert_eq!(space(&m.metallic_roughness_texture), ColorSpace::Linear);
+        let model = m
+            .model
+            .metallic_roughness()
+            .expect("the metallic-roughness model");
+        assert_eq!(space(&model.metallic_roughness_texture), ColorSpace::Linear);
         assert_eq!(space(&m.normal_texture), ColorSpace::Linear);
         assert_eq!(space(&m.emission_texture), ColorSpace::Srgb);
         // The same image as data (metallic-roughness, normal) is one texture.
         assert_eq!(
-            m.metallic_roughness_texture.as_ref().unwrap().texture,
+            model.metallic_roughness_texture.as_ref().unwrap().texture,
             m.normal_texture.as_ref().unwrap().texture
         );
         let normal = m.normal_texture.as_ref().unwrap();

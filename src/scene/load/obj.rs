@@ -32,7 +32,8 @@ use super::normals::repair_zero_normals;
 use super::obj_text::{decode_lines, excerpt, join_continued_lines, LineCountingReader};
 use super::polygon;
 use crate::scene::{
-    ColorSpace, Material, SceneDescription, TextureBinding, TextureDesc, TriangleMesh, WrapMode,
+    ClassicModel, ColorSpace, Material, MaterialModel, MetallicRoughnessModel, SceneDescription,
+    TextureBinding, TextureDesc, TriangleMesh, WrapMode,
 };
 
 /// Loads the OBJ file at `path` (and its MTL libraries and texture references) as a
@@ -556,9 +557,12 @@ fn convert_material(
         material.base_color = Vec3::from(kd);
     }
     let ks = m.specular.map(|ks| Vec3::from(ks).max_element());
-    material.specular = ks.unwrap_or(0.0);
+    let mut classic = ClassicModel {
+        specular: ks.unwrap_or(0.0),
+        ..ClassicModel::default()
+    };
     if let Some(ns) = m.shininess {
-        material.shininess = ns;
+        classic.shininess = ns;
     }
     if let Some(ke) = m.emissive {
         material.emission = Vec3::from(ke);
@@ -579,7 +583,7 @@ fn convert_material(
     match m.illumination_model {
         Some(3) => {
             material.mirror = ks.filter(|&k| k > 0.0).unwrap_or(1.0);
-            material.specular = 0.0;
+            classic.specular = 0.0;
         }
         Some(4 | 6 | 7) => material.transmission = 1.0,
         _ => {}
@@ -602,32 +606,37 @@ fn convert_material(
     let number =
         |key: &str| param(key).and_then(|v| v.split_whitespace().next()?.parse::<f32>().ok());
     // The PBR extension of MTL (`Pr`, `Pm`, `map_Pr`, `map_Pm`, as Blender and three.js
-    // write them) selects the metallic-roughness model.
+    // write them) selects the metallic-roughness model; otherwise the classic one.
     let (roughness_map, metallic_map) = (param("map_Pr"), param("map_Pm"));
-    if number("Pr").is_some()
+    material.model = if number("Pr").is_some()
         || number("Pm").is_some()
         || roughness_map.is_some()
         || metallic_map.is_some()
     {
-        material.roughness = Some(number("Pr").unwrap_or(1.0));
         // Without `Pm`, a metalness map gives the metalness by itself (factor 1).
         let default_metallic = if metallic_map.is_some() { 1.0 } else { 0.0 };
-        material.metallic = number("Pm").unwrap_or(default_metallic);
+        let mut model = MetallicRoughnessModel::new(
+            number("Pr").unwrap_or(1.0),
+            number("Pm").unwrap_or(default_metallic),
+        );
         match (roughness_map, metallic_map) {
             // One file for both: glTF's packing (green = roughness, blue = metalness).
             (Some(r), Some(m)) if MapStatement::parse(r) == MapStatement::parse(m) => {
-                material.metallic_roughness_texture = texture("map_Pr", r, ColorSpace::Linear)?;
+                model.metallic_roughness_texture = texture("map_Pr", r, ColorSpace::Linear)?;
             }
             (r, m) => {
                 if let Some(r) = r {
-                    material.roughness_texture = texture("map_Pr", r, ColorSpace::Linear)?;
+                    model.roughness_texture = texture("map_Pr", r, ColorSpace::Linear)?;
                 }
                 if let Some(m) = m {
-                    material.metallic_texture = texture("map_Pm", m, ColorSpace::Linear)?;
+                    model.metallic_texture = texture("map_Pm", m, ColorSpace::Linear)?;
                 }
             }
         }
-    }
+        MaterialModel::MetallicRoughness(model)
+    } else {
+        MaterialModel::Classic(classic)
+    };
     if let Some(file) = param("map_Ke") {
         material.emission_texture = texture("map_Ke", file, ColorSpace::Srgb)?;
         // The texture gives the emission by itself unless `Ke` scales it.
@@ -873,8 +882,13 @@ mod tests {
         }
         let m = &part.materials[mesh.material];
         assert_eq!(m.base_color, Vec3::new(1.0, 0.0, 0.0));
-        assert_eq!(m.specular, 0.5);
-        assert_eq!(m.shininess, 50.0);
+        assert_eq!(
+            m.model,
+            MaterialModel::Classic(ClassicModel {
+                specular: 0.5,
+                shininess: 50.0
+            })
+        );
         let binding = m.base_color_texture.as_ref().unwrap();
         assert_eq!(part.textures[binding.texture].color_space, ColorSpace::Srgb);
     }
@@ -927,11 +941,17 @@ mod tests {
         }
         let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap();
         let m = &part.materials[0];
-        assert_eq!((m.roughness, m.metallic), (Some(0.4), 0.8));
+        assert_eq!(
+            m.model
+                .metallic_roughness()
+                .map(|mr| (mr.roughness, mr.metallic)),
+            Some((0.4, 0.8))
+        );
+        let model = m.model.metallic_roughness().unwrap();
         assert_eq!(m.emission, Vec3::splat(2.0));
         assert_eq!(m.normal_scale, 0.5);
         let texture = |b: &Option<TextureBinding>| &part.textures[b.as_ref().unwrap().texture];
-        let orm = texture(&m.metallic_roughness_texture);
+        let orm = texture(&model.metallic_roughness_texture);
         assert_eq!(
             (orm.name.as_str(), orm.color_space),
             ("orm.png", ColorSpace::Linear)
@@ -955,11 +975,17 @@ mod tests {
         );
         let part = load_obj(&Files::disk(dir.path()), &dir.path().join("quad.obj")).unwrap();
         let m = &part.materials[0];
-        assert_eq!((m.roughness, m.metallic), (Some(1.0), 1.0));
-        assert!(m.metallic_roughness_texture.is_none());
+        assert_eq!(
+            m.model
+                .metallic_roughness()
+                .map(|mr| (mr.roughness, mr.metallic)),
+            Some((1.0, 1.0))
+        );
+        let model = m.model.metallic_roughness().unwrap();
+        assert!(model.metallic_roughness_texture.is_none());
         let texture = |b: &Option<TextureBinding>| &part.textures[b.as_ref().unwrap().texture];
-        assert_eq!(texture(&m.roughness_texture).name, "orm.png");
-        let metal = texture(&m.metallic_texture);
+        assert_eq!(texture(&model.roughness_texture).name, "orm.png");
+        let metal = texture(&model.metallic_texture);
         assert_eq!(
             (metal.name.as_str(), metal.color_space),
             ("glow.png", ColorSpace::Linear)

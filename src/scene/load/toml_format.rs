@@ -17,8 +17,9 @@ use super::error::{line_column, SceneError};
 use super::files::{leave_out_textures, note_not_loaded, Files};
 use super::merge::{append, Placement, Transform};
 use crate::scene::{
-    CameraDesc, ColorSpace, Environment, FresnelMode, Light, Material, Projection, RenderSettings,
-    SceneDescription, Sphere, TextureBinding, TextureDesc, TextureSource, ToneMap, WrapMode,
+    CameraDesc, ClassicModel, ColorSpace, Environment, FresnelMode, Light, Material, MaterialModel,
+    MetallicRoughnessModel, Projection, RenderSettings, SceneDescription, Sphere, TextureBinding,
+    TextureDesc, TextureSource, ToneMap, WrapMode,
 };
 
 /// A finite number: TOML's `nan` and `inf` literals (and overflow past f32) are rejected.
@@ -526,7 +527,8 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
                 transform,
             });
         }
-        unit_weight(loc, &mut material.specular, &m.specular, "specular")?;
+        let mut classic = ClassicModel::default();
+        unit_weight(loc, &mut classic.specular, &m.specular, "specular")?;
         unit_weight(loc, &mut material.mirror, &m.mirror, "mirror")?;
         unit_weight(
             loc,
@@ -536,6 +538,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
         )?;
         unit_weight(loc, &mut material.alpha, &m.alpha, "alpha")?;
         // The metallic-roughness model (glTF 2.0 Appendix B): roughness selects it.
+        let (mut roughness, mut metallic) = (None, None);
         if let Some(r) = &m.roughness {
             let x = *r.get_ref();
             if !(0.0..=1.0).contains(&x) {
@@ -544,7 +547,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
                     format!("material '{name}': roughness = {x} must lie in [0, 1]"),
                 ));
             }
-            material.roughness = Some(x as f32);
+            roughness = Some(x as f32);
         }
         if let Some(v) = &m.metallic {
             let x = *v.get_ref();
@@ -554,22 +557,28 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
                     format!("material '{name}': metallic = {x} must lie in [0, 1]"),
                 ));
             }
-            material.metallic = x as f32;
-        }
-        // `metallic` or a metallic-roughness texture without `roughness` selects the model
-        // with glTF's default roughness factor, 1, as MTL's `Pm` and `map_Pm` do (it was
-        // ignored: a classic Lambert material).
-        if material.roughness.is_none()
-            && (m.metallic.is_some() || m.metallic_roughness_texture.is_some())
-        {
-            material.roughness = Some(1.0);
+            metallic = Some(x as f32);
         }
         if let Some(s) = &m.shininess {
             if s.get_ref().0 < 0.0 {
                 return Err(loc.at(s, "shininess must be >= 0"));
             }
-            material.shininess = s.get_ref().0;
+            classic.shininess = s.get_ref().0;
         }
+        // `metallic` or a metallic-roughness texture without `roughness` selects the model
+        // with glTF's default roughness factor, 1, as MTL's `Pm` and `map_Pm` do; the classic
+        // model's `specular` and `shininess` then have no lobe to shape.
+        material.model = if roughness.is_some()
+            || metallic.is_some()
+            || m.metallic_roughness_texture.is_some()
+        {
+            MaterialModel::MetallicRoughness(MetallicRoughnessModel::new(
+                roughness.unwrap_or(1.0),
+                metallic.unwrap_or(0.0),
+            ))
+        } else {
+            MaterialModel::Classic(classic)
+        };
         if let Some(ior) = &m.ior {
             if ior.get_ref().0 <= 0.0 {
                 return Err(loc.at(ior, format!("ior = {} must be > 0", ior.get_ref().0)));
@@ -715,7 +724,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
 /// The keys of a material's textured inputs (metallic-roughness, emission, normal map), all
 /// with the material's texture transform. Data textures (metallic-roughness, normal) must be
 /// declared linear; the metallic-roughness texture belongs to the metallic-roughness model
-/// (selected with roughness 1 when the material does not set `roughness`).
+/// (which it selects, with roughness 1 when the material does not set `roughness`).
 fn textured_inputs(
     loc: &Located,
     textures: &[TextureDesc],
@@ -740,8 +749,10 @@ fn textured_inputs(
             transform,
         })
     };
-    if let Some(t) = &m.metallic_roughness_texture {
-        material.metallic_roughness_texture = Some(linear(t, "metallic_roughness_texture")?);
+    if let (Some(t), MaterialModel::MetallicRoughness(model)) =
+        (&m.metallic_roughness_texture, &mut material.model)
+    {
+        model.metallic_roughness_texture = Some(linear(t, "metallic_roughness_texture")?);
     }
     if let Some(t) = &m.emission_texture {
         material.emission_texture = Some(TextureBinding {
@@ -990,18 +1001,8 @@ fn clamp_lat_long_poles(scene: &mut SceneDescription, wrap_t_written: &[bool]) {
         return;
     }
     let used_by_materials = scene.materials.iter().any(|m| {
-        [
-            &m.base_color_texture,
-            &m.alpha_texture,
-            &m.metallic_roughness_texture,
-            &m.roughness_texture,
-            &m.metallic_texture,
-            &m.emission_texture,
-            &m.normal_texture,
-        ]
-        .into_iter()
-        .flatten()
-        .any(|binding| binding.texture == *texture)
+        m.texture_bindings()
+            .any(|binding| binding.texture == *texture)
     });
     if used_by_materials {
         let mut own = scene.textures[*texture].clone();
@@ -1462,22 +1463,18 @@ material = "glass"
             )
         };
         let s = parse_here(&scene("roughness = 0.3\nmetallic = 1.0")).unwrap();
-        assert_eq!(s.materials[0].roughness, Some(0.3));
-        assert_eq!(s.materials[0].metallic, 1.0);
+        let factors = |s: &SceneDescription| {
+            s.materials[0]
+                .model
+                .metallic_roughness()
+                .map(|mr| (mr.roughness, mr.metallic))
+        };
+        assert_eq!(factors(&s), Some((0.3, 1.0)));
         // `metallic` alone selects the model with glTF's default roughness, as MTL's `Pm`.
         let s = parse_here(&scene("metallic = 1.0")).unwrap();
-        assert_eq!(
-            (s.materials[0].roughness, s.materials[0].metallic),
-            (Some(1.0), 1.0)
-        );
+        assert_eq!(factors(&s), Some((1.0, 1.0)));
         let classic = parse_here(&scene("base_color = [0.5, 0.5, 0.5]")).unwrap();
-        assert_eq!(
-            (
-                classic.materials[0].roughness,
-                classic.materials[0].metallic
-            ),
-            (None, 0.0)
-        );
+        assert_eq!(classic.materials[0].model, MaterialModel::default());
         for (keys, key) in [
             ("roughness = 1.5", "roughness"),
             ("roughness = -0.1", "roughness"),

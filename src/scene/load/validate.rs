@@ -10,7 +10,9 @@
 use glam::{Vec2, Vec3};
 
 use super::error::SceneError;
-use crate::scene::{Environment, Light, Material, Projection, SceneDescription, TextureBinding};
+use crate::scene::{
+    Environment, Light, Material, MaterialModel, Projection, SceneDescription, TextureBinding,
+};
 
 /// The first problem found, as a one-line error naming `scene.source`.
 pub fn validate(scene: &SceneDescription) -> Result<(), SceneError> {
@@ -278,9 +280,10 @@ fn check_material(m: &Material, texture_count: usize) -> Result<(), String> {
     }
     non_negative3(m.attenuation_color, &format!("{what} attenuation_color"))?;
     non_negative3(m.emission, &format!("{what} emission"))?;
+    let classic = m.model.classic().copied().unwrap_or_default();
     for (name, value) in [
-        ("specular", m.specular),
-        ("shininess", m.shininess),
+        ("specular", classic.specular),
+        ("shininess", classic.shininess),
         ("mirror", m.mirror),
         ("transmission", m.transmission),
         ("ior", m.ior),
@@ -289,7 +292,7 @@ fn check_material(m: &Material, texture_count: usize) -> Result<(), String> {
         finite(value, &format!("{what} {name}"))?;
     }
     for (name, value) in [
-        ("specular", m.specular),
+        ("specular", classic.specular),
         ("mirror", m.mirror),
         ("transmission", m.transmission),
         ("alpha", m.alpha),
@@ -299,8 +302,11 @@ fn check_material(m: &Material, texture_count: usize) -> Result<(), String> {
         }
     }
     finite(m.normal_scale, &format!("{what} normal_scale"))?;
-    if m.shininess < 0.0 {
-        return Err(format!("{what}: shininess {} must be >= 0", m.shininess));
+    if classic.shininess < 0.0 {
+        return Err(format!(
+            "{what}: shininess {} must be >= 0",
+            classic.shininess
+        ));
     }
     if m.ior <= 0.0 {
         return Err(format!("{what}: ior {} must be > 0", m.ior));
@@ -314,12 +320,21 @@ fn check_material(m: &Material, texture_count: usize) -> Result<(), String> {
     if let Some(cutoff) = m.alpha_cutoff {
         finite(cutoff, &format!("{what} alpha_cutoff"))?;
     }
+    let none = None;
+    let model_maps = match &m.model {
+        MaterialModel::MetallicRoughness(model) => [
+            &model.metallic_roughness_texture,
+            &model.roughness_texture,
+            &model.metallic_texture,
+        ],
+        MaterialModel::Classic(_) => [&none; 3],
+    };
     for (slot, binding) in [
         ("base_color_texture", &m.base_color_texture),
         ("alpha_texture", &m.alpha_texture),
-        ("metallic_roughness_texture", &m.metallic_roughness_texture),
-        ("roughness_texture", &m.roughness_texture),
-        ("metallic_texture", &m.metallic_texture),
+        ("metallic_roughness_texture", model_maps[0]),
+        ("roughness_texture", model_maps[1]),
+        ("metallic_texture", model_maps[2]),
         ("emission_texture", &m.emission_texture),
         ("normal_texture", &m.normal_texture),
     ] {
