@@ -116,7 +116,7 @@ pub(super) fn shade(
 
     // Emission, from the front side unless the material is two-sided
     // (`shading::area_lights`).
-    if material.emission.max_element() > 0.0 {
+    if shading::material_features::emits(material) {
         let light = match context.surfaces.geometries[hit.geometry as usize] {
             GeometryRef::Mesh(mesh) => lights.area.mesh_light(mesh, hit.primitive),
             GeometryRef::Spheres => lights.area.sphere_light(hit.primitive as usize),
@@ -222,9 +222,15 @@ pub(super) fn shade(
         return;
     }
     let wi = sample.wi;
-    let Some(crosses) = crosses_surface(&sample, ng) else {
+    let crosses = wi.dot(ng) < 0.0;
+    // A lobe sampled about a tilted shading normal (normal map, smooth vertex normals) can
+    // reflect below the geometric surface. Only a boundary that transmits with a density
+    // sends light through; for any other such sample the light would leak through an
+    // opaque surface, so the path ends (as light sampling, which `admits` only the
+    // viewer's side, already treats that direction).
+    if crosses && !delta && !bsdf.transmits_with_density() {
         return;
-    };
+    }
     let throughput = ray.throughput * sample.weight;
     // Footprint of the continuing ray: mirror and refraction as in Whitted, a widened cone
     // for a rough bounce (seed 000, "BSDF scattering").
@@ -236,8 +242,14 @@ pub(super) fn shade(
         ray.footprint.reflect(ray.direction, &surface, wi)
     } else if delta {
         worker.counters.footprint_updates += 1;
-        ray.footprint
-            .refract(ray.direction, &surface, sample.eta, wi)
+        // A delta reflection that leaves below the geometric surface bends the footprint as
+        // the boundary's refraction would.
+        let eta = if sample.is_transmission() {
+            sample.eta
+        } else {
+            bsdf.dielectric.split(ray.direction).boundary.eta
+        };
+        ray.footprint.refract(ray.direction, &surface, eta, wi)
     } else {
         worker.counters.footprint_updates += 1;
         approximate_footprint = true;
@@ -278,19 +290,6 @@ pub(super) fn shade(
         first_sample: ray.first_sample,
         sampler: ray.sampler,
     });
-}
-
-/// Whether the path continuing with `sample` crosses into the medium beyond the surface
-/// (unit geometric normal `ng` on the viewer's side): the sample's lobe says so. `None` when
-/// the lobe and the geometric side disagree: a lobe sampled about a tilted shading normal
-/// (normal map, smooth vertex normals) can reflect below the geometric surface, or transmit
-/// back above it. The light would leak through the surface, or a transmission would stay
-/// in its medium, so the path ends there (as light sampling, which `admits` only the
-/// viewer's side for a reflection, already treats such directions).
-#[inline]
-fn crosses_surface(sample: &shading::BsdfSample, ng: Vec3) -> Option<bool> {
-    let crosses = sample.is_transmission();
-    (crosses == (sample.wi.dot(ng) < 0.0)).then_some(crosses)
 }
 
 /// The absorption coefficient of the medium on the far side of `surface` seen from its
@@ -464,50 +463,4 @@ fn record_hidden_surface_aovs(
     let material = &context.scene.materials[surface.material as usize];
     let inputs = texturing::surface_inputs(context, lookup, material, &surface, image, worker);
     write_material_aovs(image, ray.slot, &inputs);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::shading::LobeFlags;
-
-    #[test]
-    fn the_lobe_decides_the_crossing_and_a_disagreeing_side_ends_the_path() {
-        let ng = Vec3::Z;
-        let (above, below) = (Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.6, 0.0, -0.8));
-        let sample = |wi: Vec3, flags: LobeFlags| shading::BsdfSample {
-            wi,
-            weight: Vec3::ONE,
-            pdf: 1.0,
-            flags,
-            eta: if flags.is_transmissive() {
-                1.0 / 1.5
-            } else {
-                1.0
-            },
-        };
-        for flags in [
-            LobeFlags::DIFFUSE_REFLECTION,
-            LobeFlags::GLOSSY_REFLECTION,
-            LobeFlags::SPECULAR_REFLECTION,
-        ] {
-            assert_eq!(crosses_surface(&sample(above, flags), ng), Some(false));
-            assert_eq!(
-                crosses_surface(&sample(below, flags), ng),
-                None,
-                "{flags:?}"
-            );
-        }
-        for flags in [
-            LobeFlags::GLOSSY_TRANSMISSION,
-            LobeFlags::SPECULAR_TRANSMISSION,
-        ] {
-            assert_eq!(crosses_surface(&sample(below, flags), ng), Some(true));
-            assert_eq!(
-                crosses_surface(&sample(above, flags), ng),
-                None,
-                "{flags:?}"
-            );
-        }
-    }
 }
