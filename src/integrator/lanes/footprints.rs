@@ -40,8 +40,8 @@ pub(crate) fn lane_footprint(footprint: &Footprint, t: f32) -> Option<LaneFootpr
 pub(crate) fn texture_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_aniso: f32) {
     let len = lanes.len();
     refill(&mut lanes.gradients, len, [0.0; 4]);
-    for lane in 0..len {
-        let (Some(width), true) = (cone_width[lane], lanes.has_st[lane]) else {
+    for (lane, &width) in cone_width.iter().enumerate().take(len) {
+        let (Some(width), true) = (width, lanes.has_st[lane]) else {
             continue;
         };
         let d = unit_direction(lanes.direction[lane]);

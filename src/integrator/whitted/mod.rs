@@ -109,8 +109,9 @@ pub struct Waves {
     walk: ShadowWalk,
     /// The current wave's hits shaded in lanes (`lane_waves`), each ray's lane
     /// (`lane_waves::SCALAR` for the scalar path), and each lane's footprint width at its hit
-    /// (`None`: a point sample).
-    lanes: WaveLanes,
+    /// (`None`: a point sample). Boxed: the lanes' many arrays would make `Waves` the
+    /// largest of the integrators' states by far.
+    lanes: Box<WaveLanes>,
     lane_of_ray: Vec<u32>,
     cone_width: Vec<Option<f32>>,
 }
