@@ -4,6 +4,12 @@
 //! for bit with the reference EXRs in tests/data/whitted_images/ (rendered by
 //! `regenerate.sh` there, with the same options, from the code the references stand for).
 //!
+//! A second set renders every scene with 4 samples per pixel and only the default AOVs (Z, N,
+//! albedo, uv), the scene's own effects: there the hits of later samples, and the first
+//! samples' (which write no texture-lookup AOV), are shaded in lanes
+//! (`integrator::lanes`), which the set above, all first samples writing every AOV, leaves
+//! to the scalar path.
+//!
 //! Restructuring the integrator must not move a single bit; a change that is meant to alter
 //! the images regenerates the references and says why in its commit.
 
@@ -65,15 +71,41 @@ fn shipped_scenes() -> Vec<(String, PathBuf)> {
         .collect()
 }
 
+/// The options of the second set: 4 samples per pixel, the default AOVs.
+const SAMPLE_WAVE_OPTIONS: [&str; 11] = [
+    "--width",
+    "64",
+    "--height",
+    "36",
+    "--spp",
+    "4",
+    "--no-png",
+    "--quiet",
+    "--threads",
+    "2",
+    "--integrator",
+];
+
 /// Renders `scene` (the built-in one for `None`) into `dir` and returns the EXR's path.
 fn render(dir: &Path, name: &str, scene: Option<&Path>, all_effects: bool) -> PathBuf {
+    render_with(dir, name, scene, all_effects, &OPTIONS)
+}
+
+/// [`render`] with `options`.
+fn render_with(
+    dir: &Path,
+    name: &str,
+    scene: Option<&Path>,
+    all_effects: bool,
+    options: &[&str],
+) -> PathBuf {
     let output = dir.join(format!("{name}.exr"));
     let mut command = conetrace();
     command.current_dir(manifest_dir()).arg("render");
     if let Some(scene) = scene {
         command.arg(scene);
     }
-    command.args(OPTIONS).arg("--output").arg(&output);
+    command.args(options).arg("--output").arg(&output);
     if all_effects {
         command.arg("--all-effects");
     }
@@ -162,5 +194,36 @@ fn every_shipped_scene_renders_bit_for_bit_as_its_reference() {
     eprintln!(
         "{} renders, {compared} channels identical to their references",
         cases.len() * 2
+    );
+}
+
+#[test]
+fn every_shipped_scene_renders_its_sample_waves_bit_for_bit() {
+    let dir = temp_dir();
+    let references = manifest_dir().join("tests/data/whitted_images");
+    let mut options = SAMPLE_WAVE_OPTIONS.to_vec();
+    options.push("whitted");
+    let mut failures = Vec::new();
+    let scenes = shipped_scenes();
+    assert!(scenes.len() > 10, "found only {} scenes", scenes.len());
+    for (name, scene) in &scenes {
+        let label = format!("{name}.spp4");
+        let reference_path = references.join(format!("{label}.exr"));
+        assert!(
+            reference_path.is_file(),
+            "no reference image {} for a shipped scene: render it with regenerate.sh",
+            reference_path.display()
+        );
+        let rendered = render_with(dir.path(), &label, Some(scene), false, &options);
+        let reference = read_exr(&reference_path);
+        let rendered = read_exr(&rendered);
+        for difference in differences(&reference, &rendered) {
+            failures.push(format!("{label}: {difference}"));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "images differ from their references:\n{}",
+        failures.join("\n")
     );
 }

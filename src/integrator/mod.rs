@@ -11,6 +11,7 @@
 //! how the wave integrators trace a wave and in which order their waves run.
 
 mod camera_sample;
+pub(crate) mod lanes;
 pub mod path;
 pub mod selection;
 mod texturing;

@@ -111,7 +111,12 @@ pub(crate) fn environment_lookup(
     footprint: &Footprint,
     worker: &mut WorkerState,
 ) -> Vec3 {
-    let gradients = if context.effects.footprints {
+    // A constant colour reads no texture: no footprint gradients either.
+    let textured = matches!(
+        context.scene.environment,
+        crate::scene::Environment::LatLong { .. }
+    );
+    let gradients = if context.effects.footprints && textured {
         let g = footprint.environment_gradients(direction);
         [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
     } else {

@@ -153,6 +153,16 @@ impl SurfaceLookup {
         }
     }
 
+    /// The mesh (index into `SceneDescription::meshes`) `hit` lies on, and its material;
+    /// `None` for spheres and patches.
+    #[inline]
+    pub fn mesh_at(&self, hit: &TraceHit) -> Option<(usize, usize)> {
+        match self.geometries[hit.geometry as usize] {
+            GeometryRef::Mesh(index) => Some((index, self.scene.meshes[index].material)),
+            _ => None,
+        }
+    }
+
     /// The index of the material at `hit`.
     #[inline]
     fn material_index(&self, hit: &TraceHit) -> usize {
@@ -288,7 +298,7 @@ impl SurfaceLookup {
 
 /// dP/ds and dP/dt of a triangle with texture coordinates `t` (zero if the st mapping is
 /// degenerate).
-fn triangle_position_derivatives(p: [Vec3; 3], t: [Vec2; 3]) -> (Vec3, Vec3) {
+pub(crate) fn triangle_position_derivatives(p: [Vec3; 3], t: [Vec2; 3]) -> (Vec3, Vec3) {
     let dp1 = p[1] - p[0];
     let dp2 = p[2] - p[0];
     let dt1 = t[1] - t[0];

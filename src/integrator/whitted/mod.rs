@@ -31,6 +31,7 @@
 mod camera_rays;
 mod dielectric;
 mod fog;
+mod lane_waves;
 mod lights;
 mod shadow_walk;
 mod spawn;
@@ -43,6 +44,7 @@ use glam::Vec3;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
 use crate::integrator::camera_sample::{sample_runs, slot_place, MAX_SAMPLES_IN_FLIGHT};
+use crate::integrator::lanes::WaveLanes;
 use crate::integrator::trace_wave::WaveRay;
 use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
@@ -105,6 +107,13 @@ pub struct Waves {
     camera_wave: bool,
     /// Walks of shadow rays through transmissive occluders.
     walk: ShadowWalk,
+    /// The current wave's hits shaded in lanes (`lane_waves`), each ray's lane
+    /// (`lane_waves::SCALAR` for the scalar path), and each lane's footprint width at its hit
+    /// (`None`: a point sample). Boxed: the lanes' many arrays would make `Waves` the
+    /// largest of the integrators' states by far.
+    lanes: Box<WaveLanes>,
+    lane_of_ray: Vec<u32>,
+    cone_width: Vec<Option<f32>>,
 }
 
 impl Integrator for Whitted {
@@ -206,6 +215,9 @@ fn trace_wave(context: &RenderContext, waves: &mut Waves, wave: &Wave, worker: &
     );
 }
 
+/// Shade the wave's hits: those the lanes cover together, stage by stage
+/// (`lane_waves`), the others one by one; then, in the wave's order, each ray's light joins
+/// the film and its shadow rays the queue, so the sums are the same whichever path shaded it.
 fn shade_wave(
     context: &RenderContext,
     waves: &mut Waves,
@@ -214,7 +226,14 @@ fn shade_wave(
     indirect: &dyn IndirectLight,
 ) {
     waves.shadows.clear();
+    lane_waves::pick_lanes(context, waves, image, worker, indirect);
+    lane_waves::shade_lanes(context, waves, worker);
     for index in 0..waves.rays.current.len() {
+        let lane = waves.lane_of_ray[index];
+        if lane != lane_waves::SCALAR {
+            lane_waves::finish_lane(context, waves, index, lane as usize, image);
+            continue;
+        }
         let ray = waves.rays.current[index];
         let hit = &waves.trace_hits[index];
         if !hit.is_hit() {

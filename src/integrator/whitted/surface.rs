@@ -58,6 +58,12 @@ pub(crate) trait IndirectLight: Sync {
         query: &IndirectQuery,
         worker: &mut WorkerState,
     ) -> Vec3;
+
+    /// Whether this is [`AmbientEnvironment`], which depends on the lobe's weight and albedo
+    /// alone, so shading waves add it over lane arrays without a hit record.
+    fn is_ambient_environment(&self) -> bool {
+        false
+    }
 }
 
 /// Whitted's indirect light: the environment's mean radiance on the diffuse albedo, a
@@ -71,8 +77,20 @@ impl IndirectLight for AmbientEnvironment {
         query: &IndirectQuery,
         _worker: &mut WorkerState,
     ) -> Vec3 {
+        AmbientEnvironment::radiance(context, query.weight, query.albedo)
+    }
+
+    fn is_ambient_environment(&self) -> bool {
+        true
+    }
+}
+
+impl AmbientEnvironment {
+    /// The ambient light an opaque lobe of weight `weight` and albedo `albedo` reflects.
+    #[inline]
+    pub(crate) fn radiance(context: &RenderContext, weight: f32, albedo: Vec3) -> Vec3 {
         if context.effects.environment {
-            query.weight * query.albedo * context.lights.environment.mean_radiance
+            weight * albedo * context.lights.environment.mean_radiance
         } else {
             Vec3::ZERO
         }

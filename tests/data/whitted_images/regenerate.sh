@@ -3,7 +3,9 @@
 # scene (assets/scenes/**/*.toml and the built-in default scene) with the Whitted integrator
 # (also for scenes that select another one),
 # 64x36, one sample per pixel, every AOV, once with the scene's own effects and once with
-# every effect forced on (the general path). The options must match tests/whitted_images.rs.
+# every effect forced on (the general path); and again with 4 samples per pixel and the
+# default AOVs, the scene's own effects (`NAME.spp4.exr`, where hits are shaded in lanes).
+# The options must match tests/whitted_images.rs.
 #
 # Usage: tests/data/whitted_images/regenerate.sh [path/to/conetrace]
 # Run it from the repository root with the binary of the code whose images are the
@@ -19,8 +21,15 @@ render() {
     "$bin" render "$@" --width 64 --height 36 --spp 1 --aov all --no-png --quiet \
         --threads 2 --integrator whitted --all-effects --output "$out/$name.all_effects.exr"
 }
+render_sample_waves() {
+    name=$1
+    shift
+    "$bin" render "$@" --width 64 --height 36 --spp 4 --no-png --quiet \
+        --threads 2 --integrator whitted --output "$out/$name.spp4.exr"
+}
 render builtin_default
 for scene in $(find assets/scenes -name '*.toml' | sort); do
     name=$(echo "${scene#assets/scenes/}" | sed 's/\.toml$//; s#/#_#g')
     render "$name" "$scene"
+    render_sample_waves "$name" "$scene"
 done

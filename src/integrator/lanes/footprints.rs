@@ -1,0 +1,107 @@
+//! Stage 3: footprints at the hits and the texture gradients they give, for the lanes that
+//! read a texture (`footprint::Footprint::texture_gradients` over lane arrays: the cone's
+//! circle projected onto the tangent plane as an ellipse, whose axes map to st through the
+//! triangle's barycentric derivatives).
+
+use glam::{Vec2, Vec3};
+
+use super::{refill, WaveLanes};
+use crate::footprint::robust::{unit_direction, unit_normal};
+use crate::footprint::{general_st_offset, project_cone_to_ellipse, Footprint, TextureGradients};
+
+/// A footprint at a hit as the lanes take it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum LaneFootprint {
+    /// No footprint: texture lookups are point samples at level 0.
+    Point,
+    /// A cone-like footprint (distance metric, one cone, the two-cone envelope) this wide
+    /// at the hit.
+    Cone(f32),
+}
+
+/// `footprint` moved `t` along its ray (`Footprint::transfer`) as the lanes take it; `None`
+/// for ray differentials, whose transfer needs the whole hit record (the scalar path's).
+#[inline]
+pub(crate) fn lane_footprint(footprint: &Footprint, t: f32) -> Option<LaneFootprint> {
+    match footprint {
+        Footprint::Mip0 => Some(LaneFootprint::Point),
+        Footprint::Distance(f) => Some(LaneFootprint::Cone(f.propagate(t).width())),
+        Footprint::Cone1(c) => Some(LaneFootprint::Cone(c.propagate(t).abs_width())),
+        Footprint::Cone(e) => Some(LaneFootprint::Cone(e.propagate(t).width())),
+        Footprint::Differential(_) => None,
+    }
+}
+
+/// Texture gradients of every lane into `lanes.gradients`: zero (a point sample) for lanes
+/// with no footprint width (`cone_width` `None`), or without texture coordinates; otherwise
+/// the projected cone mapped to st, the stretch clamped to `max_aniso`.
+// Not inlined: one call per wave, and `perf` attributes each stage's time to it.
+#[inline(never)]
+pub(crate) fn texture_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_aniso: f32) {
+    let len = lanes.len();
+    refill(&mut lanes.gradients, len, [0.0; 4]);
+    for (lane, &width) in cone_width.iter().enumerate().take(len) {
+        let (Some(width), true) = (width, lanes.has_st[lane]) else {
+            continue;
+        };
+        let d = unit_direction(lanes.direction[lane]);
+        let n = unit_normal(lanes.geometric_normal[lane], d);
+        let (dpdx, dpdy) = project_cone_to_ellipse(width, d, n, max_aniso);
+        let g = triangle_gradients(lanes, lane, dpdx, dpdy);
+        lanes.gradients[lane] = [g.dsdx, g.dtdx, g.dsdy, g.dtdy];
+    }
+}
+
+/// The st axes of the world-space footprint axes `dpdx`, `dpdy` on lane `lane`'s triangle:
+/// barycentric, or through dP/ds, dP/dt where the triangle is degenerate
+/// (`footprint::surface_gradients`).
+fn triangle_gradients(lanes: &WaveLanes, lane: usize, dpdx: Vec3, dpdy: Vec3) -> TextureGradients {
+    let frame = BarycentricFrame {
+        e1: lanes.edge1[lane],
+        e2: lanes.edge2[lane],
+        n: lanes.area_normal[lane],
+    };
+    let st = [0, 1, 2].map(|i| lanes.st_vertices[i][lane]);
+    let (ddx, ddy) = match frame.offsets(dpdx) {
+        Some(bx) => {
+            let along = |b: Vec2| (st[1] - st[0]) * b.x + (st[2] - st[0]) * b.y;
+            (along(bx), frame.offsets(dpdy).map_or(Vec2::ZERO, along))
+        }
+        None => {
+            let p = [0, 1, 2].map(|i| lanes.p[i][lane]);
+            let (dpds, dpdt) = crate::render::prepared::triangle_position_derivatives(p, st);
+            (
+                general_st_offset(dpds, dpdt, dpdx),
+                general_st_offset(dpds, dpdt, dpdy),
+            )
+        }
+    };
+    TextureGradients::from_axes(ddx, ddy)
+}
+
+/// A triangle's edges `e1 = p1 - p0`, `e2 = p2 - p0` and `n = e1 x e2`, from which
+/// barycentric offsets follow (`footprint::barycentric_offsets`, whose operations these are,
+/// with the edges interpolation already computed).
+struct BarycentricFrame {
+    e1: Vec3,
+    e2: Vec3,
+    n: Vec3,
+}
+
+impl BarycentricFrame {
+    /// Barycentric offsets (du, dv) of the displacement `d`; `None` for a degenerate
+    /// triangle or non-finite offsets.
+    #[inline]
+    fn offsets(&self, d: Vec3) -> Option<Vec2> {
+        let (e1, e2, n) = (self.e1, self.e2, self.n);
+        let nn = n.length_squared();
+        let scale = e1.length_squared() * e2.length_squared();
+        if !(nn.is_finite() && scale.is_finite()) || nn <= 1.0e-12 * scale || nn < 1.0e-36 {
+            return None;
+        }
+        let inv = nn.recip();
+        let du = d.cross(e2).dot(n) * inv;
+        let dv = e1.cross(d).dot(n) * inv;
+        (du.is_finite() && dv.is_finite()).then_some(Vec2::new(du, dv))
+    }
+}

@@ -1,0 +1,280 @@
+//! Shading a wave's triangle hits together, stage by stage, over lane arrays (structure of
+//! arrays): each stage is a plain loop over slices that reads the arrays the stages before it
+//! wrote, so no per-ray record (`SurfaceHit` with its `Patch`, `SurfaceInputs`,
+//! `MaterialBsdf`) is built or copied between stages, and the arrays live in the per-thread
+//! state, reused from wave to wave.
+//!
+//! The stages, in order:
+//! 1. [`gather`]: the triangles' vertex positions, normals and texture coordinates;
+//! 2. [`interpolate`]: the point and its rounding-error bound, the geometric and shading
+//!    normals, texture coordinates, and the triangle's barycentric derivatives;
+//! 3. [`footprints`]: each textured lane's footprint width at the hit and its texture
+//!    gradients;
+//! 4. [`textures`]: the lookups, lanes grouped by material so that each texture binding is
+//!    read for all its lanes in one loop;
+//! 5. [`lights`]: the punctual lights' samples, one light at a time over all lanes;
+//! 6. [`bsdf`]: the opaque lobe evaluated for every lane and light, lanes grouped by
+//!    material, so each group runs one lobe's code.
+//!
+//! Accumulating into the film (stage 7) is the integrator's: it keeps the order in which
+//! the wave's rays add to their pixels, so the sums are those of the scalar path.
+//!
+//! The arithmetic is the scalar path's (`render::prepared::SurfaceLookup::surface_hit`,
+//! `footprint::Footprint::texture_gradients`, `shading::surface_inputs`, the lobes' `eval`),
+//! operation for operation, so images are bit for bit the same. Which hits and materials
+//! the lanes cover is [`LaneMaterial::covers`] and the integrator's choice of lanes; the
+//! rest takes the scalar path.
+
+pub(crate) mod bsdf;
+pub(crate) mod footprints;
+pub(crate) mod gather;
+pub(crate) mod interpolate;
+pub(crate) mod lights;
+pub(crate) mod textures;
+
+use glam::{Vec2, Vec3};
+
+use crate::render::context::RenderContext;
+use crate::scene::Material;
+
+/// What the lanes need to know of a material, computed once per render.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct LaneMaterial {
+    /// Whether the lanes shade this material: an opaque lobe that spawns no ray in this
+    /// render, emits nothing and bends no normal (see [`LaneMaterial::of`]).
+    pub covers: bool,
+    /// Whether shading reads a texture (`render::surface_textures::reads_textures`).
+    pub textured: bool,
+    /// The opaque lobe's weight, `(1 - mirror) (1 - transmission)` as
+    /// `shading::MaterialBsdf` computes it.
+    pub opaque_weight: f32,
+}
+
+impl LaneMaterial {
+    /// Emissive materials (the emission test needs the hit's side), normal-mapped ones (their
+    /// tangent frame needs dP/ds, dP/dt), and those whose mirror or dielectric lobe spawns
+    /// rays in this render take the scalar path, as does an opaque weight of zero (nothing to
+    /// light).
+    pub(crate) fn of(context: &RenderContext, material: &Material) -> LaneMaterial {
+        let effects = &context.effects;
+        let opaque_weight = (1.0 - material.mirror) * (1.0 - material.transmission);
+        let spawns = (effects.mirror_reflection && material.mirror > 0.0)
+            || (effects.refraction && material.transmission > 0.0);
+        let covers = material.emission == Vec3::ZERO
+            && material.normal_texture.is_none()
+            && !spawns
+            && opaque_weight > 0.0;
+        LaneMaterial {
+            covers,
+            textured: crate::render::surface_textures::reads_textures(material),
+            opaque_weight,
+        }
+    }
+}
+
+/// The lane arrays of one wave, reused from wave to wave (nothing is allocated once they
+/// have grown to the largest wave).
+#[derive(Default)]
+pub(crate) struct WaveLanes {
+    /// Per material of the scene being rendered.
+    pub materials: Vec<LaneMaterial>,
+    /// The scene the table was made for (its address), so a state reused for another
+    /// scene rebuilds it.
+    scene: usize,
+
+    // Set by the integrator when it picks the lanes.
+    /// Index of each lane's ray and hit in the wave.
+    pub wave_index: Vec<u32>,
+    pub material: Vec<u32>,
+    /// The mesh (index into `SceneDescription::meshes`) and triangle of each lane.
+    pub mesh: Vec<u32>,
+    pub triangle: Vec<u32>,
+    pub u: Vec<f32>,
+    pub v: Vec<f32>,
+    /// Hit distance along the ray, as the intersector reported it.
+    pub t: Vec<f32>,
+    /// Unit ray direction.
+    pub direction: Vec<Vec3>,
+    /// Whether the lane needs texture coordinates (its material reads a texture, or the
+    /// uv AOV is written from it).
+    pub wants_st: Vec<bool>,
+    /// The ray's throughput (what it carries from the camera).
+    pub throughput: Vec<Vec3>,
+
+    // Stage 1.
+    pub p: [Vec<Vec3>; 3],
+    /// Vertex normals as stored (zero for meshes without them, which interpolate to zero
+    /// and fall back to the geometric normal as the scalar path's missing normals do).
+    pub n: [Vec<Vec3>; 3],
+    /// Vertex texture coordinates, read only for textured lanes.
+    pub st_vertices: [Vec<Vec2>; 3],
+    /// Whether the lane wants texture coordinates and its mesh has them.
+    pub has_st: Vec<bool>,
+
+    // Stage 2.
+    pub position: Vec<Vec3>,
+    /// The bound on the rounding error of `position` (`shading::SpawnPoint`).
+    pub error: Vec<Vec3>,
+    pub edge1: Vec<Vec3>,
+    pub edge2: Vec<Vec3>,
+    /// `edge1 x edge2`, the triangle's unnormalised normal.
+    pub area_normal: Vec<Vec3>,
+    /// Unit normals, facing outward (geometric) and to the same side (shading).
+    pub geometric_normal: Vec<Vec3>,
+    pub shading_normal: Vec<Vec3>,
+    pub st: Vec<Vec2>,
+
+    // Stage 3.
+    /// `[ds/dx, dt/dx, ds/dy, dt/dy]`, zero for a point sample.
+    pub gradients: Vec<[f32; 4]>,
+
+    // Stage 4.
+    pub albedo: Vec<Vec3>,
+    pub metallic: Vec<f32>,
+    /// Perceptual roughness of metallic-roughness lanes (unused by classic ones).
+    pub roughness: Vec<f32>,
+
+    // Stage 5.
+    /// Per light and lane (light-major): unit direction to the light and its irradiance
+    /// scale (`shading::LightSample`).
+    pub light_direction: Vec<Vec3>,
+    pub light_scale: Vec<Vec3>,
+    /// Per lane: where its shadow rays start; per light and lane: their direction and far
+    /// end.
+    pub shadow_origin: Vec<Vec3>,
+    pub shadow_direction: Vec<Vec3>,
+    pub shadow_tfar: Vec<f32>,
+
+    // Stage 6.
+    /// The normals on the viewer's side.
+    pub incident_geometric: Vec<Vec3>,
+    pub incident_shading: Vec<Vec3>,
+    /// Per light and lane: what the light delivers if unoccluded, and whether it delivers
+    /// anything (a shadow ray is traced).
+    pub contribution: Vec<Vec3>,
+    pub lit: Vec<bool>,
+
+    /// Lane indices ordered by material, and the runs of one material in that order:
+    /// `(material, end)`.
+    pub by_material: Vec<u32>,
+    pub material_runs: Vec<(u32, usize)>,
+    material_counts: Vec<usize>,
+}
+
+impl WaveLanes {
+    /// Make the material table for `context`'s scene unless it was made for it already.
+    pub(crate) fn prepare(&mut self, context: &RenderContext) {
+        let scene = std::sync::Arc::as_ptr(&context.scene) as usize;
+        if self.scene == scene && self.materials.len() == context.scene.materials.len() {
+            return;
+        }
+        self.scene = scene;
+        self.materials.clear();
+        self.materials.extend(
+            context
+                .scene
+                .materials
+                .iter()
+                .map(|m| LaneMaterial::of(context, m)),
+        );
+    }
+
+    /// Number of lanes.
+    #[inline]
+    pub(crate) fn len(&self) -> usize {
+        self.wave_index.len()
+    }
+
+    /// Forget the previous wave's lanes.
+    pub(crate) fn clear(&mut self) {
+        self.wave_index.clear();
+        self.material.clear();
+        self.mesh.clear();
+        self.triangle.clear();
+        self.u.clear();
+        self.v.clear();
+        self.t.clear();
+        self.direction.clear();
+        self.throughput.clear();
+        self.wants_st.clear();
+    }
+
+    /// Add a lane: the ray at `wave_index` (unit `direction`, carrying `throughput`) hit
+    /// triangle `triangle` of mesh `mesh`, of material `material`, at barycentrics `(u, v)`
+    /// and distance `t`; `wants_st`: whether it needs texture coordinates.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(crate) fn push(
+        &mut self,
+        wave_index: u32,
+        material: u32,
+        mesh: u32,
+        triangle: u32,
+        (u, v): (f32, f32),
+        t: f32,
+        direction: Vec3,
+        throughput: Vec3,
+        wants_st: bool,
+    ) {
+        self.wave_index.push(wave_index);
+        self.material.push(material);
+        self.mesh.push(mesh);
+        self.triangle.push(triangle);
+        self.u.push(u);
+        self.v.push(v);
+        self.t.push(t);
+        self.direction.push(direction);
+        self.throughput.push(throughput);
+        self.wants_st.push(wants_st);
+    }
+
+    /// Order the lanes by material (a counting sort, stable: lanes of one material keep
+    /// the wave's order) into `by_material` and `material_runs`.
+    pub(crate) fn group_by_material(&mut self) {
+        let len = self.len();
+        let counts = &mut self.material_counts;
+        counts.clear();
+        counts.resize(self.materials.len(), 0);
+        for &m in &self.material {
+            counts[m as usize] += 1;
+        }
+        self.material_runs.clear();
+        let mut end = 0;
+        for (material, count) in counts.iter_mut().enumerate() {
+            let start = end;
+            end += *count;
+            if *count > 0 {
+                self.material_runs.push((material as u32, end));
+            }
+            // From here on, where the material's next lane goes.
+            *count = start;
+        }
+        self.by_material.clear();
+        self.by_material.resize(len, 0);
+        for (lane, &m) in self.material.iter().enumerate() {
+            let next = &mut counts[m as usize];
+            self.by_material[*next] = lane as u32;
+            *next += 1;
+        }
+    }
+
+    /// Run `run` of `by_material`: its material and its range of `by_material`.
+    pub(crate) fn material_run(&self, run: usize) -> (u32, std::ops::Range<usize>) {
+        let start = match run {
+            0 => 0,
+            _ => self.material_runs[run - 1].1,
+        };
+        let (material, end) = self.material_runs[run];
+        (material, start..end)
+    }
+}
+
+/// `buffer` cleared and filled with `len` copies of `value`, reusing its allocation.
+#[inline]
+pub(crate) fn refill<T: Copy>(buffer: &mut Vec<T>, len: usize, value: T) {
+    buffer.clear();
+    buffer.resize(len, value);
+}
+
+#[cfg(test)]
+mod tests;

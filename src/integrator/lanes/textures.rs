@@ -1,0 +1,111 @@
+//! Stage 4: the materials' textures read at the lanes' hits, lanes grouped by material so
+//! that each texture binding is looked up for all its lanes in one loop, and the texels
+//! combined into albedo, metallic and roughness as `shading::surface_inputs` combines them
+//! (glTF 2.0: the base colour's RGB, the metallic-roughness texture's blue and green).
+
+use glam::{Vec3, Vec4};
+
+use super::{refill, WaveLanes};
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::surface_textures::sample_binding;
+use crate::scene::{Material, TextureBinding};
+
+/// Albedo, metallic and roughness of every lane (`lanes.by_material` must be grouped).
+// Not inlined: one call per wave, and `perf` attributes each stage's time to it.
+#[inline(never)]
+pub(crate) fn shading_inputs(
+    context: &RenderContext,
+    lanes: &mut WaveLanes,
+    worker: &mut WorkerState,
+) {
+    let len = lanes.len();
+    refill(&mut lanes.albedo, len, Vec3::ZERO);
+    refill(&mut lanes.metallic, len, 0.0);
+    refill(&mut lanes.roughness, len, 0.0);
+    for run in 0..lanes.material_runs.len() {
+        let (material, lane_range) = lanes.material_run(run);
+        let material = &context.scene.materials[material as usize];
+        for &lane in &lanes.by_material[lane_range.clone()] {
+            let lane = lane as usize;
+            lanes.albedo[lane] = material.base_color;
+            lanes.metallic[lane] = material.metallic;
+            lanes.roughness[lane] = material.roughness.unwrap_or(0.0);
+        }
+        for (binding, channel) in texture_reads(material) {
+            for index in lane_range.clone() {
+                let lane = lanes.by_material[index] as usize;
+                let (_, texel) = sample_binding(
+                    context,
+                    binding,
+                    lanes.st[lane],
+                    lanes.gradients[lane],
+                    worker,
+                );
+                apply_texel(lanes, lane, channel, material, texel);
+            }
+        }
+    }
+}
+
+/// What a texel multiplies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Channel {
+    /// The base colour (RGB).
+    BaseColor,
+    /// Roughness (green) and metallic (blue).
+    MetallicRoughness,
+    Roughness,
+    Metallic,
+}
+
+/// The textures shading `material` reads, in the order `shading::surface_inputs` reads them
+/// (emission and normal maps are not the lanes'; alpha is resolved while tracing).
+fn texture_reads(material: &Material) -> impl Iterator<Item = (&TextureBinding, Channel)> {
+    let metallic_roughness = material.roughness.is_some();
+    let reads = [
+        (material.base_color_texture.as_ref(), Channel::BaseColor),
+        (
+            material
+                .metallic_roughness_texture
+                .as_ref()
+                .filter(|_| metallic_roughness),
+            Channel::MetallicRoughness,
+        ),
+        (
+            material
+                .roughness_texture
+                .as_ref()
+                .filter(|_| metallic_roughness),
+            Channel::Roughness,
+        ),
+        (
+            material
+                .metallic_texture
+                .as_ref()
+                .filter(|_| metallic_roughness),
+            Channel::Metallic,
+        ),
+    ];
+    reads
+        .into_iter()
+        .filter_map(|(binding, channel)| binding.map(|b| (b, channel)))
+}
+
+#[inline]
+fn apply_texel(
+    lanes: &mut WaveLanes,
+    lane: usize,
+    channel: Channel,
+    material: &Material,
+    texel: Vec4,
+) {
+    match channel {
+        Channel::BaseColor => lanes.albedo[lane] = material.base_color * texel.truncate(),
+        Channel::MetallicRoughness => {
+            lanes.metallic[lane] *= texel.z;
+            lanes.roughness[lane] *= texel.y;
+        }
+        Channel::Roughness => lanes.roughness[lane] *= texel.y,
+        Channel::Metallic => lanes.metallic[lane] *= texel.z,
+    }
+}

@@ -1,0 +1,181 @@
+//! Whitted's waves shaded in lanes (`integrator::lanes`): which hits take the lanes, the
+//! stages run over them, and what each lane adds to the film and the shadow queue.
+//!
+//! A hit takes the lanes when it lies on a triangle mesh, its material is one the lanes
+//! cover (`lanes::LaneMaterial::of`: opaque, not emissive, not normal-mapped), and the light
+//! beyond the shadow rays is Whitted's ambient term. These take the scalar path
+//! (`surface::shade_hit`), hit by hit: misses; spheres, curved and height patches; mirrors,
+//! dielectrics, emitters and normal-mapped materials; rays inside an absorbing medium;
+//! footprints kept as ray differentials at textured materials; first samples of a render
+//! that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`); every hit
+//! when fog is on or the indirect light is voxel cone tracing's.
+
+use glam::Vec3;
+
+use super::lights::ShadowRay;
+use super::surface::{AmbientEnvironment, IndirectLight};
+use super::{add_radiance, Waves};
+use crate::film::TileImage;
+use crate::integrator::lanes::bsdf::{eval_lights, incident_normals};
+use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, LaneFootprint};
+use crate::integrator::lanes::gather::gather_triangles;
+use crate::integrator::lanes::interpolate::interpolate;
+use crate::integrator::lanes::lights::{sample_lights, shadow_rays};
+use crate::integrator::lanes::textures::shading_inputs;
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::stats::RayKind;
+use crate::shading;
+
+/// `Waves::lane_of_ray` for a ray shaded by the scalar path.
+pub(super) const SCALAR: u32 = u32::MAX;
+
+/// Pick the wave's rays the lanes shade into `waves.lanes`, and each ray's lane (or
+/// [`SCALAR`]) into `waves.lane_of_ray`. Counts the lanes' footprint updates.
+// Not inlined: one call per wave, and `perf` attributes each stage's time to it.
+#[inline(never)]
+pub(super) fn pick_lanes(
+    context: &RenderContext,
+    waves: &mut Waves,
+    image: &TileImage,
+    worker: &mut WorkerState,
+    indirect: &dyn IndirectLight,
+) {
+    let rays = waves.rays.current.len();
+    waves.lane_of_ray.clear();
+    waves.lane_of_ray.resize(rays, SCALAR);
+    waves.lanes.clear();
+    waves.cone_width.clear();
+    let effects = &context.effects;
+    if effects.fog || !indirect.is_ambient_environment() {
+        return;
+    }
+    waves.lanes.prepare(context);
+    let records_lookups = !image.lookup_done.is_empty();
+    let uv_aov = context.options.aovs.surface;
+    for index in 0..rays {
+        let ray = &waves.rays.current[index];
+        let hit = &waves.trace_hits[index];
+        if !hit.is_hit()
+            || (ray.first_sample && records_lookups)
+            || (effects.absorption && ray.sigma != Vec3::ZERO)
+        {
+            continue;
+        }
+        let Some((mesh, material)) = context.surfaces.mesh_at(hit) else {
+            continue;
+        };
+        let lane_material = waves.lanes.materials[material];
+        if !lane_material.covers {
+            continue;
+        }
+        let cone_width = if effects.footprints && lane_material.textured {
+            match lane_footprint(&ray.footprint, hit.t) {
+                None => continue,
+                Some(LaneFootprint::Point) => None,
+                Some(LaneFootprint::Cone(width)) => Some(width),
+            }
+        } else {
+            None
+        };
+        let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
+        waves.lane_of_ray[index] = waves.lanes.len() as u32;
+        waves.cone_width.push(cone_width);
+        waves.lanes.push(
+            index as u32,
+            material as u32,
+            mesh as u32,
+            hit.primitive,
+            (hit.u, hit.v),
+            hit.t,
+            ray.direction,
+            ray.throughput,
+            lane_material.textured || (camera_first && uv_aov),
+        );
+    }
+    if effects.footprints {
+        worker.counters.footprint_updates += waves.lanes.len() as u64;
+    }
+}
+
+/// Stages 1-6 over the picked lanes.
+pub(super) fn shade_lanes(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerState) {
+    let lanes = &mut waves.lanes;
+    if lanes.len() == 0 {
+        return;
+    }
+    let scene = &context.scene;
+    gather_triangles(lanes, &context.surfaces.scene.meshes);
+    interpolate(lanes);
+    lanes.group_by_material();
+    texture_gradients(lanes, &waves.cone_width, context.options.filter.max_aniso);
+    shading_inputs(context, lanes, worker);
+    if context.effects.shadows {
+        incident_normals(lanes);
+        sample_lights(lanes, &scene.lights);
+        eval_lights(lanes, &scene.materials, scene.lights.len());
+        shadow_rays(lanes, &scene.lights);
+    }
+}
+
+/// Stage 7 for the lane `lane` of the wave's ray `index`: its shadow rays join the queue and
+/// its ambient light the film, as `surface::shade_hit` adds them.
+pub(super) fn finish_lane(
+    context: &RenderContext,
+    waves: &mut Waves,
+    index: usize,
+    lane: usize,
+    image: &mut TileImage,
+) {
+    let ray = &waves.rays.current[index];
+    let lanes = &waves.lanes;
+    let lights = &context.scene.lights;
+    if context.effects.shadows {
+        for (light_index, light) in lights.iter().enumerate() {
+            let at = light_index * lanes.len() + lane;
+            if !lanes.lit[at] {
+                continue;
+            }
+            waves.shadows.push(ShadowRay {
+                origin: lanes.shadow_origin[lane],
+                direction: lanes.shadow_direction[at],
+                tfar: lanes.shadow_tfar[at],
+                light: shading::light_position(light),
+                contribution: lanes.contribution[at],
+                slot: ray.slot,
+            });
+        }
+    }
+    if ray.kind == RayKind::Camera && ray.first_sample {
+        write_surface_aovs(context, waves, index, lane, image);
+    }
+    let lanes = &waves.lanes;
+    let ray = &waves.rays.current[index];
+    let material = lanes.materials[lanes.material[lane] as usize];
+    let ambient = AmbientEnvironment::radiance(context, material.opaque_weight, lanes.albedo[lane]);
+    add_radiance(image, ray.slot, ray.throughput * (Vec3::ZERO + ambient));
+}
+
+/// The camera hit's depth, normal, uv and albedo AOVs of a pixel's first sample (whose slot
+/// is its pixel), as `surface::shade_hit` writes them.
+fn write_surface_aovs(
+    context: &RenderContext,
+    waves: &Waves,
+    index: usize,
+    lane: usize,
+    image: &mut TileImage,
+) {
+    let ray = &waves.rays.current[index];
+    let lanes = &waves.lanes;
+    let pixel = ray.slot as usize;
+    if !image.depth.is_empty() {
+        image.depth[pixel] = lanes.t[lane] * ray.direction.dot(context.camera_forward);
+        image.normal[pixel] = lanes.shading_normal[lane].to_array();
+        image.uv[pixel] = lanes.st[lane].to_array();
+    }
+    if !image.albedo.is_empty() {
+        image.albedo[pixel] = lanes.albedo[lane].to_array();
+        if !image.normal.is_empty() {
+            image.normal[pixel] = lanes.shading_normal[lane].to_array();
+        }
+    }
+}
