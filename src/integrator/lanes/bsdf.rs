@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 use super::{refill, WaveLanes};
-use crate::scene::Material;
+use crate::scene::{Material, MaterialModel};
 use crate::shading::{Bsdf, MetallicRoughnessBsdf, OpaqueBsdf};
 
 /// The normals on the viewer's side (`incident_geometric`, `incident_shading`): the
@@ -38,20 +38,20 @@ pub(crate) fn eval_lights(lanes: &mut WaveLanes, materials: &[Material], lights:
         let (material_index, range) = lanes.material_run(run);
         let material = &materials[material_index as usize];
         let weight = lanes.materials[material_index as usize].opaque_weight;
-        match material.roughness {
-            None => {
+        match &material.model {
+            MaterialModel::Classic(classic) => {
                 for index in range {
                     let lane = lanes.by_material[index] as usize;
                     let lobe = OpaqueBsdf {
                         n: lanes.incident_shading[lane],
                         albedo: lanes.albedo[lane],
-                        specular: material.specular,
-                        shininess: material.shininess,
+                        specular: classic.specular,
+                        shininess: classic.shininess,
                     };
                     eval_lane(lanes, lane, &lobe, weight, lights);
                 }
             }
-            Some(_) => {
+            MaterialModel::MetallicRoughness(_) => {
                 for index in range {
                     let lane = lanes.by_material[index] as usize;
                     let lobe = MetallicRoughnessBsdf::new(

@@ -28,8 +28,9 @@ pub(crate) fn shading_inputs(
         for &lane in &lanes.by_material[lane_range.clone()] {
             let lane = lane as usize;
             lanes.albedo[lane] = material.base_color;
-            lanes.metallic[lane] = material.metallic;
-            lanes.roughness[lane] = material.roughness.unwrap_or(0.0);
+            let model = material.model.metallic_roughness();
+            lanes.metallic[lane] = model.map_or(0.0, |model| model.metallic);
+            lanes.roughness[lane] = model.map_or(0.0, |model| model.roughness);
         }
         for (binding, channel) in texture_reads(material) {
             for index in lane_range.clone() {
@@ -61,28 +62,19 @@ enum Channel {
 /// The textures shading `material` reads, in the order `shading::surface_inputs` reads them
 /// (emission and normal maps are not the lanes'; alpha is resolved while tracing).
 fn texture_reads(material: &Material) -> impl Iterator<Item = (&TextureBinding, Channel)> {
-    let metallic_roughness = material.roughness.is_some();
+    let model = material.model.metallic_roughness();
     let reads = [
         (material.base_color_texture.as_ref(), Channel::BaseColor),
         (
-            material
-                .metallic_roughness_texture
-                .as_ref()
-                .filter(|_| metallic_roughness),
+            model.and_then(|m| m.metallic_roughness_texture.as_ref()),
             Channel::MetallicRoughness,
         ),
         (
-            material
-                .roughness_texture
-                .as_ref()
-                .filter(|_| metallic_roughness),
+            model.and_then(|m| m.roughness_texture.as_ref()),
             Channel::Roughness,
         ),
         (
-            material
-                .metallic_texture
-                .as_ref()
-                .filter(|_| metallic_roughness),
+            model.and_then(|m| m.metallic_texture.as_ref()),
             Channel::Metallic,
         ),
     ];
