@@ -203,7 +203,10 @@ impl CameraBlock {
     ) {
         let camera = &context.camera;
         let spp = context.options.spp.max(1);
-        let lanes = simd::dispatch(|| self.lanes(context, image_width));
+        let lanes = simd::dispatch(
+            #[inline(always)]
+            || self.lanes(context, image_width),
+        );
         let BlockLanes {
             draws,
             fx,
@@ -269,12 +272,18 @@ impl CameraBlock {
             std::array::from_fn(|lane| self.y[lane] as f32 + draws.offset[1][lane]);
         let bounds = context.surfaces.bounds;
         // A pinhole's rays share their origin: their starts are computed lane by lane too.
-        let pinhole = camera.pinhole_directions(&fx, &fy).map(|d| {
-            let starts = bounds.map_or([0.0; PACKET], |b| {
-                shading::entry_distances(camera.eye(), &d, b)
-            });
-            (d, starts)
-        });
+        // A `match`, not closures: a closure the compiler leaves out of line would run
+        // at the baseline level.
+        let pinhole = match camera.pinhole_directions(&fx, &fy) {
+            Some(d) => {
+                let starts = match bounds {
+                    Some(b) => shading::entry_distances(camera.eye(), &d, b),
+                    None => [0.0; PACKET],
+                };
+                Some((d, starts))
+            }
+            None => None,
+        };
         BlockLanes {
             draws,
             fx,

@@ -103,7 +103,10 @@ impl Sampler {
         samples_per_pixel: u32,
         lens: bool,
     ) -> CameraLanes<N> {
-        simd::dispatch(|| self.camera_lanes_inline(pixels, indices, samples_per_pixel, lens))
+        simd::dispatch(
+            #[inline(always)]
+            || self.camera_lanes_inline(pixels, indices, samples_per_pixel, lens),
+        )
     }
 
     /// [`Sampler::camera_lanes`] compiled into its caller, for a caller that is itself a

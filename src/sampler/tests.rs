@@ -288,9 +288,11 @@ fn camera_lanes_are_the_one_pixel_draws_bit_for_bit() {
                         (&runs, &indices),
                     ] {
                         for level in simd::Level::supported() {
-                            let lanes = simd::run_at(level, || {
-                                sampler.camera_lanes_inline(pixels, indices, spp, lens)
-                            });
+                            let lanes = simd::run_at(
+                                level,
+                                #[inline(always)]
+                                || sampler.camera_lanes_inline(pixels, indices, spp, lens),
+                            );
                             for (lane, (&pixel, &index)) in pixels.iter().zip(indices).enumerate() {
                                 let mut one = sampler.pixel(pixel, index);
                                 let sample = one.camera_sample_drawing(spp, lens);

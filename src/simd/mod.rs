@@ -20,22 +20,28 @@
 //!
 //! # Wrapping a loop
 //!
+//! Only code inlined into a level's function is compiled for that level: a function it
+//! calls keeps the baseline. Each level calls the kernel from its own function, so a
+//! kernel of any size is only inlined when the closure is marked `#[inline(always)]`, and
+//! so must be every function of the loop that the compiler might leave out of line.
+//!
 //! ```
 //! use conetrace::simd;
 //!
-//! // The loop's own function, forced inline so that it is compiled inside each level's
-//! // function (a closure that only calls it is inlined there anyway).
 //! #[inline(always)]
 //! fn scaled<const N: usize>(values: &[f32; N], scale: f32) -> [f32; N] {
 //!     std::array::from_fn(|lane| values[lane] * scale)
 //! }
 //!
 //! let values = [1.0f32; 16];
-//! let out = simd::dispatch(|| scaled(&values, 0.5));
+//! let out = simd::dispatch(
+//!     #[inline(always)]
+//!     || scaled(&values, 0.5),
+//! );
 //! assert_eq!(out, [0.5; 16]);
 //! // A test forces each level the processor has and compares with the baseline.
 //! for level in simd::Level::supported() {
-//!     assert_eq!(simd::run_at(level, || scaled(&values, 0.5)), out);
+//!     assert_eq!(simd::run_at(level, #[inline(always)] || scaled(&values, 0.5)), out);
 //! }
 //! ```
 
@@ -151,7 +157,7 @@ pub fn active() -> Level {
     })
 }
 
-/// Runs `kernel` compiled for the [`active`] level. Its lane loop should be inlined into it
+/// Runs `kernel` compiled for the [`active`] level. Mark the closure `#[inline(always)]`
 /// (see the module's example): code behind a call that is not inlined keeps the baseline.
 #[inline]
 pub fn dispatch<R>(kernel: impl FnOnce() -> R) -> R {
@@ -247,10 +253,14 @@ mod tests {
                     state
                 }
             });
-            let baseline = run_at(Level::Baseline, || mixed_lanes(&values));
+            let baseline = mixed_lanes(&values);
             for level in Level::supported() {
                 assert_eq!(
-                    run_at(level, || mixed_lanes(&values)),
+                    run_at(
+                        level,
+                        #[inline(always)]
+                        || mixed_lanes(&values)
+                    ),
                     baseline,
                     "{level:?}"
                 );
