@@ -225,7 +225,9 @@ impl Camera {
     /// by lane the bits [`Camera::generate_ray`] gives (the same operations in the same
     /// order), computed as structure-of-arrays so that the divisions and square roots of a
     /// packet's lanes run as vector instructions. Every ray starts at [`Camera::eye`].
-    /// Returns `None` unless the camera is a pinhole.
+    /// Returns `None` unless the camera is a pinhole. Always inlined, so that a
+    /// `simd::dispatch` kernel compiles it for its level.
+    #[inline(always)]
     pub fn pinhole_directions<const N: usize>(
         &self,
         px: &[f32; N],

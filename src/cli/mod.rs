@@ -167,6 +167,11 @@ pub(crate) fn print_error(message: &str) {
 
 /// Run the parsed command line; returns the exit status.
 pub fn run(cli: Cli) -> i32 {
+    // Checked before any work, so that a level the processor lacks is refused, not ignored.
+    if let Err(message) = conetrace::simd::level_from_environment() {
+        print_error(&message);
+        return EXIT_BAD_INPUT;
+    }
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
         Command::SampleTexture(args) => sample_texture::run(&args).map_err(CommandError::bad_input),

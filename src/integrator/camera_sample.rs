@@ -18,8 +18,9 @@ use glam::{Vec2, Vec3};
 use crate::film::{block_order, PixelRect};
 use crate::footprint::Footprint;
 use crate::render::context::RenderContext;
-use crate::sampler::{PixelSampler, Sampler};
+use crate::sampler::{CameraLanes, PixelSampler, Sampler};
 use crate::shading;
+use crate::simd;
 
 /// One camera ray of a tile.
 #[derive(Clone, Copy, Debug)]
@@ -182,6 +183,15 @@ struct CameraBlock {
     kept: [bool; PACKET],
 }
 
+/// The lane values of a block's rays: the sampler's draws, the positions on the image and,
+/// for a pinhole camera, the directions and starts.
+struct BlockLanes {
+    draws: CameraLanes<PACKET>,
+    fx: [f32; PACKET],
+    fy: [f32; PACKET],
+    pinhole: Option<([[f32; PACKET]; 3], [f32; PACKET])>,
+}
+
 impl CameraBlock {
     /// Makes the block's rays, emits them in lane order and empties the block. Lanes past
     /// `len` keep the previous block's pixels: computed and ignored.
@@ -193,30 +203,19 @@ impl CameraBlock {
     ) {
         let camera = &context.camera;
         let spp = context.options.spp.max(1);
-        let image_pixels: [u32; PACKET] =
-            std::array::from_fn(|lane| self.y[lane] * image_width + self.x[lane]);
-        // Only the values the camera uses are computed (the lens centre without depth of
-        // field); the samplers' dimensions move on the same either way.
-        let draws = Sampler::new(context.options.seed).camera_lanes(
-            &image_pixels,
-            &self.index,
-            spp,
-            context.effects.depth_of_field,
+        let lanes = simd::dispatch(
+            #[inline(always)]
+            || self.lanes(context, image_width),
         );
-        let fx: [f32; PACKET] =
-            std::array::from_fn(|lane| self.x[lane] as f32 + draws.offset[0][lane]);
-        let fy: [f32; PACKET] =
-            std::array::from_fn(|lane| self.y[lane] as f32 + draws.offset[1][lane]);
+        let BlockLanes {
+            draws,
+            fx,
+            fy,
+            pinhole,
+        } = &lanes;
         let bounds = context.surfaces.bounds;
-        // A pinhole's rays share their origin: their starts are computed lane by lane too.
-        let pinhole = camera.pinhole_directions(&fx, &fy).map(|d| {
-            let starts = bounds.map_or([0.0; PACKET], |b| {
-                shading::entry_distances(camera.eye(), &d, b)
-            });
-            (d, starts)
-        });
         for lane in 0..self.len {
-            let (origin, direction, start) = match &pinhole {
+            let (origin, direction, start) = match pinhole {
                 Some((d, starts)) => (
                     camera.eye(),
                     Vec3::new(d[0][lane], d[1][lane], d[2][lane]),
@@ -249,6 +248,48 @@ impl CameraBlock {
             });
         }
         self.len = 0;
+    }
+
+    /// The block's lane values, every lane the same bits as the one-ray functions give. A
+    /// [`simd::dispatch`] kernel: the lanes' hashing, bit reversals, divisions and square
+    /// roots run as vector instructions.
+    #[inline(always)]
+    fn lanes(&self, context: &RenderContext, image_width: u32) -> BlockLanes {
+        let camera = &context.camera;
+        let image_pixels: [u32; PACKET] =
+            std::array::from_fn(|lane| self.y[lane] * image_width + self.x[lane]);
+        // Only the values the camera uses are computed (the lens centre without depth of
+        // field); the samplers' dimensions move on the same either way.
+        let draws = Sampler::new(context.options.seed).camera_lanes_inline(
+            &image_pixels,
+            &self.index,
+            context.options.spp.max(1),
+            context.effects.depth_of_field,
+        );
+        let fx: [f32; PACKET] =
+            std::array::from_fn(|lane| self.x[lane] as f32 + draws.offset[0][lane]);
+        let fy: [f32; PACKET] =
+            std::array::from_fn(|lane| self.y[lane] as f32 + draws.offset[1][lane]);
+        let bounds = context.surfaces.bounds;
+        // A pinhole's rays share their origin: their starts are computed lane by lane too.
+        // A `match`, not closures: a closure the compiler leaves out of line would run
+        // at the baseline level.
+        let pinhole = match camera.pinhole_directions(&fx, &fy) {
+            Some(d) => {
+                let starts = match bounds {
+                    Some(b) => shading::entry_distances(camera.eye(), &d, b),
+                    None => [0.0; PACKET],
+                };
+                Some((d, starts))
+            }
+            None => None,
+        };
+        BlockLanes {
+            draws,
+            fx,
+            fy,
+            pinhole,
+        }
     }
 }
 

@@ -425,6 +425,7 @@ pub fn render<I: Integrator>(
             .chain(film_clamp_notes(&context.scene))
             .collect(),
         complete: finished_tiles.iter().all(|&f| f),
+        simd: crate::simd::active().name().to_string(),
         phases: None,
         texture_memory: context
             .scene

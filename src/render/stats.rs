@@ -136,6 +136,8 @@ pub struct RenderStats {
     /// The integrator that rendered and why it was chosen (e.g. "path: emissive geometry
     /// (12 triangles)"); `None` when the caller rendered with an integrator directly.
     pub integrator: Option<String>,
+    /// The vector instructions the lane loops ran with ([`crate::simd::Level::name`]).
+    pub simd: String,
 }
 
 /// Seconds spent in each phase of a render, and in all of them.

@@ -44,6 +44,7 @@ mod sobol;
 
 use glam::Vec2;
 
+use crate::simd;
 use scramble::{
     hash_u32, hash_words, nested_uniform_scramble, scramble_mirrored, unit_float, HASH_START,
 };
@@ -93,8 +94,25 @@ pub struct CameraLanes<const N: usize> {
 impl Sampler {
     /// [`PixelSampler::camera_sample_drawing`] of sample `indices[lane]` of each of
     /// `pixels[lane]` (numbered as for [`Sampler::pixel`]): the same values, bit for bit.
-    /// The lanes may be different pixels, different samples of one pixel, or both.
+    /// The lanes may be different pixels, different samples of one pixel, or both. Runs
+    /// with the processor's widest vector instructions ([`simd::dispatch`]).
     pub fn camera_lanes<const N: usize>(
+        &self,
+        pixels: &[u32; N],
+        indices: &[u32; N],
+        samples_per_pixel: u32,
+        lens: bool,
+    ) -> CameraLanes<N> {
+        simd::dispatch(
+            #[inline(always)]
+            || self.camera_lanes_inline(pixels, indices, samples_per_pixel, lens),
+        )
+    }
+
+    /// [`Sampler::camera_lanes`] compiled into its caller, for a caller that is itself a
+    /// [`simd::dispatch`] kernel.
+    #[inline(always)]
+    pub fn camera_lanes_inline<const N: usize>(
         &self,
         pixels: &[u32; N],
         indices: &[u32; N],
@@ -139,7 +157,7 @@ impl Sampler {
 /// [`PixelSampler::next_2d`] at `dimension` for the pixel states `states` and sample
 /// indices `indices`, lane by lane. A lane of the same pixel as the lane before it reuses
 /// that lane's keys, which depend on the pixel and the dimension alone.
-#[inline]
+#[inline(always)]
 fn next_2d_lanes<const N: usize>(
     states: &[u32; N],
     indices: &[u32; N],

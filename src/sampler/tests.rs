@@ -265,7 +265,7 @@ fn a_camera_sample_without_the_lens_keeps_the_dimensions() {
 fn camera_lanes_are_the_one_pixel_draws_bit_for_bit() {
     // The packet form of the camera's draws gives every lane the values, and the sampler
     // state, that one pixel at a time gives: with and without a lens, at one sample per
-    // pixel (the centre) and more.
+    // pixel (the centre) and more, compiled for every vector level this processor has.
     let mut state = 0x9e37_79b9u32;
     let mut next = move || crate::test_rng::xorshift32(&mut state);
     for seed in [0u32, 7, u32::MAX] {
@@ -287,23 +287,33 @@ fn camera_lanes_are_the_one_pixel_draws_bit_for_bit() {
                         (&one_pixel, &indices),
                         (&runs, &indices),
                     ] {
-                        let lanes = sampler.camera_lanes(pixels, indices, spp, lens);
-                        for (lane, (&pixel, &index)) in pixels.iter().zip(indices).enumerate() {
-                            let mut one = sampler.pixel(pixel, index);
-                            let sample = one.camera_sample_drawing(spp, lens);
-                            let offset = Vec2::new(lanes.offset[0][lane], lanes.offset[1][lane]);
-                            let on_lens = Vec2::new(lanes.lens[0][lane], lanes.lens[1][lane]);
-                            assert_eq!(
-                                offset.to_array().map(f32::to_bits),
-                                sample.pixel_offset.to_array().map(f32::to_bits)
+                        for level in simd::Level::supported() {
+                            let lanes = simd::run_at(
+                                level,
+                                #[inline(always)]
+                                || sampler.camera_lanes_inline(pixels, indices, spp, lens),
                             );
-                            assert_eq!(
-                                on_lens.to_array().map(f32::to_bits),
-                                sample.lens.to_array().map(f32::to_bits)
-                            );
-                            let mut packed = lanes.samplers[lane];
-                            assert_eq!(packed, one, "seed {seed}, pixel {pixel}, index {index}");
-                            assert_eq!(packed.next_2d(), one.next_2d());
+                            for (lane, (&pixel, &index)) in pixels.iter().zip(indices).enumerate() {
+                                let mut one = sampler.pixel(pixel, index);
+                                let sample = one.camera_sample_drawing(spp, lens);
+                                let offset =
+                                    Vec2::new(lanes.offset[0][lane], lanes.offset[1][lane]);
+                                let on_lens = Vec2::new(lanes.lens[0][lane], lanes.lens[1][lane]);
+                                assert_eq!(
+                                    offset.to_array().map(f32::to_bits),
+                                    sample.pixel_offset.to_array().map(f32::to_bits)
+                                );
+                                assert_eq!(
+                                    on_lens.to_array().map(f32::to_bits),
+                                    sample.lens.to_array().map(f32::to_bits)
+                                );
+                                let mut packed = lanes.samplers[lane];
+                                assert_eq!(
+                                    packed, one,
+                                    "seed {seed}, pixel {pixel}, index {index}"
+                                );
+                                assert_eq!(packed.next_2d(), one.next_2d());
+                            }
                         }
                     }
                 }

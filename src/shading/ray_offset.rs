@@ -270,7 +270,9 @@ pub fn entry_distance(origin: Vec3, direction: Vec3, bounds: (Vec3, Vec3)) -> f3
 
 /// [`entry_distance`] of the rays from one `origin` along each of `directions` (unit
 /// vectors as structure-of-arrays: x, y and z of every lane), each lane on its own, the
-/// lanes' divisions running as vector instructions.
+/// lanes' divisions running as vector instructions. Always inlined, so that a
+/// `simd::dispatch` kernel compiles it for its level.
+#[inline(always)]
 pub fn entry_distances<const N: usize>(
     origin: Vec3,
     directions: &[[f32; N]; 3],
