@@ -102,6 +102,25 @@ impl AlphaTests {
     }
 }
 
+/// How analytic spheres are traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SphereTraversal {
+    /// Embree's point geometry (`RTC_GEOMETRY_TYPE_SPHERE_POINT`) and its sphere test.
+    EmbreePoints,
+    /// A user geometry running our own test (`crate::render::sphere_geometry`).
+    UserGeometry,
+}
+
+/// How the rays of an incoherent wave (bounce, reflection, refraction and later shadow
+/// rays) are handed to Embree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IncoherentLayout {
+    /// AoS ray streams (`rtcIntersect1M` / `rtcOccluded1M`), which Embree regroups itself.
+    Streams,
+    /// The rays in wave order, cut in 16s, as 16-wide SoA packets without the coherent flag.
+    Packets,
+}
+
 /// How to build a [`Tracer`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TracerSettings {
@@ -110,6 +129,11 @@ pub struct TracerSettings {
     pub robust: bool,
     /// Threads Embree may use to build the BVH (its `threads=N` device option).
     pub threads: usize,
+    pub spheres: SphereTraversal,
+    pub incoherent: IncoherentLayout,
+    /// Embree's high build quality (spatial splits) for scenes of at least this many
+    /// triangles; medium quality below.
+    pub high_quality_min_triangles: usize,
 }
 
 impl TracerSettings {
@@ -123,10 +147,21 @@ impl TracerSettings {
         } else {
             needed
         };
+        TracerSettings::new(AlphaTests::for_effects(&effects, &needed))
+    }
+
+    /// The defaults of a render that runs `alpha_tests`: robust traversal, as many
+    /// BVH-build threads as the current rayon pool has workers, and the sphere test, wave
+    /// layout and build quality measured fastest (docs/benchmarks.md, "Traversal after the
+    /// structure-of-arrays issue").
+    pub fn new(alpha_tests: AlphaTests) -> TracerSettings {
         TracerSettings {
-            alpha_tests: AlphaTests::for_effects(&effects, &needed),
+            alpha_tests,
             robust: true,
             threads: rayon::current_num_threads(),
+            spheres: SphereTraversal::EmbreePoints,
+            incoherent: IncoherentLayout::Streams,
+            high_quality_min_triangles: usize::MAX,
         }
     }
 }
@@ -183,6 +218,10 @@ impl Tracer {
         let device = Device::with_threads(settings.threads).map_err(embree_error)?;
         let mut builder = SceneBuilder::new(&device).map_err(embree_error)?;
         builder.set_robust(settings.robust).map_err(embree_error)?;
+        let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
+        builder
+            .set_high_build_quality(triangles >= settings.high_quality_min_triangles)
+            .map_err(embree_error)?;
         let mut geometries = Vec::new();
         for (index, mesh) in scene.meshes.iter().enumerate() {
             let material = &scene.materials[mesh.material];
@@ -229,7 +268,13 @@ impl Tracer {
         if !scene.spheres.is_empty() {
             let spheres: Vec<(glam::Vec3, f32)> =
                 scene.spheres.iter().map(|s| (s.center, s.radius)).collect();
-            builder.add_spheres(&spheres).map_err(embree_error)?;
+            match settings.spheres {
+                SphereTraversal::EmbreePoints => builder.add_spheres(&spheres),
+                SphereTraversal::UserGeometry => builder.add_user_geometry(Arc::new(
+                    crate::render::sphere_geometry::SphereGeometry::new(&spheres),
+                )),
+            }
+            .map_err(embree_error)?;
             geometries.push(GeometryRef::Spheres);
         }
         if !scene.patches.is_empty() {
@@ -328,9 +373,9 @@ impl Tracer {
         hits.clear();
         hits.resize(rays.len(), TraceHit::MISS);
         if coherent {
-            self.intersect_packets(rays, hits);
+            self.intersect_packets(rays.iter().copied(), TraceOptions::coherent(), hits);
         } else {
-            self.intersect_stream_into(rays, hits);
+            self.intersect_incoherent_into(rays, hits);
         }
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
@@ -355,7 +400,7 @@ impl Tracer {
         let mut start = 0;
         for &end in group_ends {
             if end > start {
-                self.intersect_stream_into(&rays[start..end], &mut hits[start..end]);
+                self.intersect_incoherent_into(&rays[start..end], &mut hits[start..end]);
             }
             start = end;
         }
@@ -373,16 +418,28 @@ impl Tracer {
         counters: &mut WorkCounters,
     ) {
         hits.clear();
-        self.with_stream_of(rays, |ray_hits, payload| {
-            self.note(
-                self.scene
-                    .intersect_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
-            );
-            hits.extend(ray_hits.iter().map(|ray_hit| match ray_hit.hit() {
-                Some(hit) => trace_hit(&hit),
-                None => TraceHit::MISS,
-            }));
-        });
+        match self.settings.incoherent {
+            IncoherentLayout::Streams => {
+                self.with_stream_of(rays, |ray_hits, payload| {
+                    self.note(self.scene.intersect_stream(
+                        ray_hits,
+                        TraceOptions::incoherent().with_payload(payload),
+                    ));
+                    hits.extend(ray_hits.iter().map(|ray_hit| match ray_hit.hit() {
+                        Some(hit) => trace_hit(&hit),
+                        None => TraceHit::MISS,
+                    }));
+                })
+            }
+            IncoherentLayout::Packets => {
+                self.trace_packets(rays, TraceOptions::incoherent(), false, |packet, lanes| {
+                    hits.extend((0..lanes).map(|lane| match packet.hit(lane) {
+                        Some(hit) => trace_hit(&hit),
+                        None => TraceHit::MISS,
+                    }));
+                });
+            }
+        }
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
@@ -395,13 +452,22 @@ impl Tracer {
         counters: &mut WorkCounters,
     ) {
         blocked.clear();
-        self.with_stream_of(rays, |ray_hits, payload| {
-            self.note(
-                self.scene
-                    .occluded_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
-            );
-            blocked.extend(ray_hits.iter().map(|r| r.is_occluded()));
-        });
+        match self.settings.incoherent {
+            IncoherentLayout::Streams => {
+                self.with_stream_of(rays, |ray_hits, payload| {
+                    self.note(self.scene.occluded_stream(
+                        ray_hits,
+                        TraceOptions::incoherent().with_payload(payload),
+                    ));
+                    blocked.extend(ray_hits.iter().map(|r| r.is_occluded()));
+                })
+            }
+            IncoherentLayout::Packets => {
+                self.trace_packets(rays, TraceOptions::incoherent(), true, |packet, lanes| {
+                    blocked.extend((0..lanes).map(|lane| packet.is_occluded(lane)));
+                });
+            }
+        }
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
@@ -429,6 +495,17 @@ impl Tracer {
             }
             trace(ray_hits, payload);
         });
+    }
+
+    /// Closest hits of incoherent `rays` into `hits` (misses left as they are), laid out as
+    /// the settings say ([`IncoherentLayout`]).
+    fn intersect_incoherent_into(&self, rays: &[TraceRay], hits: &mut [TraceHit]) {
+        match self.settings.incoherent {
+            IncoherentLayout::Streams => self.intersect_stream_into(rays, hits),
+            IncoherentLayout::Packets => {
+                self.intersect_packets(rays.iter().copied(), TraceOptions::incoherent(), hits)
+            }
+        }
     }
 
     /// Closest hits of `rays` as one incoherent stream into `hits` (misses left as they are).
@@ -474,21 +551,46 @@ impl Tracer {
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
-    fn intersect_packets(&self, rays: &[TraceRay], hits: &mut [TraceHit]) {
-        let mut packet = RayPacket::<16>::new();
-        let mut payload = [RayPayload::default(); 16];
-        for (chunk_index, chunk) in rays.chunks(16).enumerate() {
-            fill_packet(chunk, &mut packet, &mut payload);
-            self.note(
-                self.scene
-                    .intersect_tile(&mut packet, TraceOptions::coherent().with_payload(&payload)),
-            );
-            let out = &mut hits[chunk_index * 16..];
-            for (lane, slot) in out.iter_mut().enumerate().take(chunk.len()) {
+    /// Closest hits of `rays` into `hits` (misses left as they are), as 16-wide packets
+    /// of consecutive rays traced with `options`' coherence.
+    fn intersect_packets(
+        &self,
+        rays: impl Iterator<Item = TraceRay>,
+        options: TraceOptions<'static>,
+        hits: &mut [TraceHit],
+    ) {
+        let mut out = hits.iter_mut();
+        self.trace_packets(rays, options, false, |packet, lanes| {
+            for (lane, slot) in out.by_ref().take(lanes).enumerate() {
                 if let Some(hit) = packet.hit(lane) {
                     *slot = trace_hit(&hit);
                 }
             }
+        });
+    }
+
+    /// Traces `rays` in order as 16-wide packets (the last one partly filled) with
+    /// `options`' coherence and the rays' cones as payloads, for closest hits or, with
+    /// `occlusion`, for occlusion; `read` gets each traced packet and its number of rays.
+    fn trace_packets(
+        &self,
+        rays: impl Iterator<Item = TraceRay>,
+        options: TraceOptions<'static>,
+        occlusion: bool,
+        mut read: impl FnMut(&RayPacket<16>, usize),
+    ) {
+        let mut rays = rays.peekable();
+        let mut packet = RayPacket::<16>::new();
+        let mut payload = [RayPayload::default(); 16];
+        while rays.peek().is_some() {
+            let lanes = fill_packet(&mut rays, &mut packet, &mut payload);
+            let options = options.with_payload(&payload);
+            self.note(if occlusion {
+                self.scene.occluded_tile(&mut packet, options)
+            } else {
+                self.scene.intersect_tile(&mut packet, options)
+            });
+            read(&packet, lanes);
         }
     }
 
@@ -504,16 +606,12 @@ impl Tracer {
         counters: &mut WorkCounters,
     ) {
         blocked.clear();
-        let mut packet = RayPacket::<16>::new();
-        let mut payload = [RayPayload::default(); 16];
-        for chunk in rays.chunks(16) {
-            fill_packet(chunk, &mut packet, &mut payload);
-            self.note(
-                self.scene
-                    .occluded_tile(&mut packet, TraceOptions::coherent().with_payload(&payload)),
-            );
-            blocked.extend((0..chunk.len()).map(|lane| packet.is_occluded(lane)));
-        }
+        self.trace_packets(
+            rays.iter().copied(),
+            TraceOptions::coherent(),
+            true,
+            |packet, lanes| blocked.extend((0..lanes).map(|lane| packet.is_occluded(lane))),
+        );
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
@@ -545,21 +643,26 @@ impl Tracer {
     }
 }
 
-/// Puts up to 16 `rays` into `packet` and their cones into `payload`; lanes past them are
-/// switched off.
-fn fill_packet(rays: &[TraceRay], packet: &mut RayPacket<16>, payload: &mut [RayPayload; 16]) {
-    for (lane, lane_payload) in payload.iter_mut().enumerate() {
-        match rays.get(lane) {
-            Some(ray) => {
-                packet.set_ray(lane, &embree_ray(ray));
-                *lane_payload = RayPayload {
-                    cone_width: ray.cone_width,
-                    cone_spread: ray.cone_spread,
-                };
-            }
-            None => packet.set_valid(lane, false),
-        }
+/// Puts the next (up to) 16 of `rays` into `packet` and their cones into `payload`, lanes
+/// past them switched off; returns how many it took.
+fn fill_packet(
+    rays: &mut impl Iterator<Item = TraceRay>,
+    packet: &mut RayPacket<16>,
+    payload: &mut [RayPayload; 16],
+) -> usize {
+    let mut lanes = 0;
+    for (lane, ray) in rays.take(16).enumerate() {
+        packet.set_ray(lane, &embree_ray(&ray));
+        payload[lane] = RayPayload {
+            cone_width: ray.cone_width,
+            cone_spread: ray.cone_spread,
+        };
+        lanes = lane + 1;
     }
+    for lane in lanes..16 {
+        packet.set_valid(lane, false);
+    }
+    lanes
 }
 
 thread_local! {
