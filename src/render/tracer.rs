@@ -107,7 +107,8 @@ impl AlphaTests {
 pub enum SphereTraversal {
     /// Embree's point geometry (`RTC_GEOMETRY_TYPE_SPHERE_POINT`) and its sphere test.
     EmbreePoints,
-    /// A user geometry running our own test (`crate::render::sphere_geometry`).
+    /// A user geometry running our own test (`crate::render::sphere_geometry`): the
+    /// default, measured faster on the path peer scene's bounce and shadow rays.
     UserGeometry,
 }
 
@@ -130,9 +131,13 @@ pub struct TracerSettings {
     /// Threads Embree may use to build the BVH (its `threads=N` device option).
     pub threads: usize,
     pub spheres: SphereTraversal,
+    /// Streams by default: 16-wide packets were slower on bounce rays and tied on
+    /// whole renders.
     pub incoherent: IncoherentLayout,
     /// Embree's high build quality (spatial splits) for scenes of at least this many
-    /// triangles; medium quality below.
+    /// triangles; medium quality below. Never by default: on both peer scenes it saved no
+    /// measurable trace time (docs/benchmarks.md, "Traversal after the structure-of-arrays
+    /// issue").
     pub high_quality_min_triangles: usize,
 }
 
@@ -159,7 +164,7 @@ impl TracerSettings {
             alpha_tests,
             robust: true,
             threads: rayon::current_num_threads(),
-            spheres: SphereTraversal::EmbreePoints,
+            spheres: SphereTraversal::UserGeometry,
             incoherent: IncoherentLayout::Streams,
             high_quality_min_triangles: usize::MAX,
         }
@@ -193,7 +198,7 @@ pub struct Tracer {
 
 impl Tracer {
     /// Build and commit the Embree scene of `scene`: one triangle geometry per mesh, one
-    /// sphere geometry for all spheres, alpha-test filters as [`TracerSettings::for_render`]
+    /// sphere geometry (Embree's points or our user geometry) for all spheres, alpha-test filters as [`TracerSettings::for_render`]
     /// decides.
     pub fn build(
         scene: &Arc<SceneDescription>,
@@ -358,11 +363,10 @@ impl Tracer {
     ///
     /// Coherent rays (camera rays, 16 consecutive slots per 4x4 pixel block) go through
     /// 16-wide packets (split into 8- or 4-wide calls, or single rays, on devices without
-    /// 16-wide support). Incoherent rays (reflection, refraction, shadow walks) go through
-    /// Embree ray streams (`rtcIntersect1M`, single rays on devices without streams):
-    /// measured level with 16-wide packets on closest hits and a few percent ahead on
-    /// occlusion (see `crate::embree::stream`), and they need no repacking. A failed trace
-    /// is recorded (see the module doc); the hits Embree produced are kept.
+    /// 16-wide support). Incoherent rays (reflection, refraction, shadow walks) go as the
+    /// settings' [`IncoherentLayout`] says: Embree ray streams (`rtcIntersect1M`, single
+    /// rays on devices without streams) or 16-wide packets without the coherent flag. A
+    /// failed trace is recorded (see the module doc); the hits Embree produced are kept.
     pub fn intersect(
         &self,
         rays: &[TraceRay],
@@ -381,11 +385,12 @@ impl Tracer {
     }
 
     /// [`Tracer::intersect`] of an incoherent batch cut into groups, each traced as its own
-    /// stream: the rays of `rays[..group_ends[0]]`, then of `rays[group_ends[0]..group_ends[1]]`,
+    /// stream (or its own run of packets): the rays of `rays[..group_ends[0]]`, then of `rays[group_ends[0]..group_ends[1]]`,
     /// and so on (the last end is `rays.len()`).
     ///
-    /// Embree packs a stream's rays into packets of its own choosing, and which of two
-    /// triangles hit at the same distance a ray reports can depend on its packet. The
+    /// Embree packs a stream's rays into packets of its own choosing (and the packet layout
+    /// cuts the group in 16s), and which of two triangles hit at the same distance a ray
+    /// reports can depend on its packet. The
     /// integrators trace each sample's rays as one group, so a ray's hit does not depend on
     /// which other samples are traced with it (`integrator::camera_sample::SampleRun`).
     pub fn intersect_grouped(
@@ -408,9 +413,10 @@ impl Tracer {
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
-    /// Closest hits of the incoherent `rays` as one stream into `hits` (resized to match),
-    /// the stream filled straight from the iterator: [`Tracer::intersect`] of a later wave
-    /// without first collecting its rays. A failed trace is recorded as there.
+    /// Closest hits of the incoherent `rays` as one stream (or run of packets,
+    /// [`IncoherentLayout`]) into `hits` (resized to match), filled straight from the
+    /// iterator: [`Tracer::intersect`] of a later wave without first collecting its rays. A
+    /// failed trace is recorded as there.
     pub fn intersect_stream(
         &self,
         rays: impl Iterator<Item = TraceRay>,
@@ -443,8 +449,9 @@ impl Tracer {
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
-    /// Whether each of `rays` is blocked before its `tfar`, one incoherent stream filled
-    /// straight from the iterator ([`Tracer::occluded`] of a slice).
+    /// Whether each of `rays` is blocked before its `tfar`, one incoherent stream (or run of
+    /// packets, [`IncoherentLayout`]) filled straight from the iterator
+    /// ([`Tracer::occluded`] of a slice).
     pub fn occluded_stream(
         &self,
         rays: impl Iterator<Item = TraceRay>,
@@ -615,8 +622,8 @@ impl Tracer {
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
-    /// Whether each of `rays` is blocked before its `tfar` (an `rtcOccluded1M` stream: shadow
-    /// rays from a wave of hits are incoherent).
+    /// Whether each of `rays` is blocked before its `tfar`, traced as incoherent rays (shadow
+    /// rays from a wave of hits), laid out as [`IncoherentLayout`] says.
     pub fn occluded(
         &self,
         rays: &[TraceRay],
