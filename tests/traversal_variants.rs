@@ -335,3 +335,43 @@ fn shipped_sphere_scenes_render_identically_with_either_build_quality() {
         0.0,
     );
 }
+
+/// A sphere the renderer cannot trace is refused at build time whichever test traces it,
+/// not left out of the BVH in silence.
+#[test]
+fn an_invalid_sphere_is_refused_by_either_sphere_test() {
+    for spheres in [SphereTraversal::UserGeometry, SphereTraversal::EmbreePoints] {
+        for (center, radius) in [
+            (Vec3::ZERO, f32::NAN),
+            (Vec3::new(f32::INFINITY, 0.0, 0.0), 1.0),
+        ] {
+            let scene = Arc::new(SceneDescription {
+                source: "bad sphere".to_string(),
+                materials: vec![Material::default()],
+                spheres: vec![
+                    Sphere {
+                        center: Vec3::ZERO,
+                        radius: 1.0,
+                        material: 0,
+                    },
+                    Sphere {
+                        center,
+                        radius,
+                        material: 0,
+                    },
+                ],
+                ..SceneDescription::default()
+            });
+            let options = RenderOptions::from_settings(&scene.settings);
+            let settings = TracerSettings {
+                spheres,
+                ..TracerSettings::new(AlphaTests::Off)
+            };
+            let error = match Tracer::build_with(&scene, &[], &options, settings) {
+                Ok(_) => panic!("{spheres:?}: sphere ({center}, {radius}) was accepted"),
+                Err(error) => error.to_string(),
+            };
+            assert!(error.contains("sphere 1"), "{spheres:?}: {error}");
+        }
+    }
+}

@@ -271,15 +271,8 @@ impl Tracer {
             }
         }
         if !scene.spheres.is_empty() {
-            let spheres: Vec<(glam::Vec3, f32)> =
-                scene.spheres.iter().map(|s| (s.center, s.radius)).collect();
-            match settings.spheres {
-                SphereTraversal::EmbreePoints => builder.add_spheres(&spheres),
-                SphereTraversal::UserGeometry => builder.add_user_geometry(Arc::new(
-                    crate::render::sphere_geometry::SphereGeometry::new(&spheres),
-                )),
-            }
-            .map_err(embree_error)?;
+            add_sphere_geometry(&mut builder, &scene.spheres, settings.spheres)
+                .map_err(embree_error)?;
             geometries.push(GeometryRef::Spheres);
         }
         if !scene.patches.is_empty() {
@@ -690,6 +683,32 @@ fn trace_hit(hit: &crate::embree::Hit) -> TraceHit {
         primitive: hit.prim_id,
         u: hit.u,
         v: hit.v,
+    }
+}
+
+/// Adds `spheres` as one geometry, traced as `traversal` says; returns its geometry id.
+fn add_sphere_geometry(
+    builder: &mut SceneBuilder,
+    spheres: &[crate::scene::Sphere],
+    traversal: SphereTraversal,
+) -> Result<u32, EmbreeError> {
+    let spheres: Vec<(glam::Vec3, f32)> = spheres.iter().map(|s| (s.center, s.radius)).collect();
+    match traversal {
+        SphereTraversal::EmbreePoints => builder.add_spheres(&spheres),
+        SphereTraversal::UserGeometry => {
+            // Refused as Embree's point geometry refuses them: a user geometry would give
+            // such a sphere empty bounds and never hit it, without a word.
+            let invalid = spheres
+                .iter()
+                .position(|(c, r)| !(c.is_finite() && r.is_finite() && *r >= 0.0));
+            if let Some(index) = invalid {
+                let radius = spheres[index].1;
+                return Err(EmbreeError::InvalidSphere { index, radius });
+            }
+            builder.add_user_geometry(Arc::new(
+                crate::render::sphere_geometry::SphereGeometry::new(&spheres),
+            ))
+        }
     }
 }
 
