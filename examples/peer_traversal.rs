@@ -12,7 +12,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use conetrace::render::stats::WorkCounters;
-use conetrace::render::tracer::{TraceHit, TraceRay, Tracer, TracerSettings};
+use conetrace::render::tracer::{
+    IncoherentLayout, SphereTraversal, TraceHit, TraceRay, Tracer, TracerSettings,
+};
 use conetrace::render::RenderOptions;
 use glam::Vec3;
 
@@ -35,7 +37,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // `CONETRACE_NOT_ROBUST=1`: Embree's faster, non-watertight default instead of robust
     // mode, to see what watertightness costs on these rays.
     settings.robust = std::env::var_os("CONETRACE_NOT_ROBUST").is_none();
+    // The other traversal choices, to measure each against the default on these rays:
+    // `CONETRACE_SPHERES=user|embree`, `CONETRACE_INCOHERENT=packets|streams`,
+    // `CONETRACE_BUILD_QUALITY=high|medium`.
+    let var = |name: &str| std::env::var(name).ok();
+    match var("CONETRACE_SPHERES").as_deref() {
+        Some("user") => settings.spheres = SphereTraversal::UserGeometry,
+        Some("embree") => settings.spheres = SphereTraversal::EmbreePoints,
+        _ => {}
+    }
+    match var("CONETRACE_INCOHERENT").as_deref() {
+        Some("packets") => settings.incoherent = IncoherentLayout::Packets,
+        Some("streams") => settings.incoherent = IncoherentLayout::Streams,
+        _ => {}
+    }
+    match var("CONETRACE_BUILD_QUALITY").as_deref() {
+        Some("high") => settings.high_quality_min_triangles = 0,
+        Some("medium") => settings.high_quality_min_triangles = usize::MAX,
+        _ => {}
+    }
+    let build_start = Instant::now();
     let (tracer, _) = Tracer::build_with(&scene, &[], &options, settings)?;
+    let build_seconds = build_start.elapsed().as_secs_f64();
     let bytes = std::fs::read(&args[2])?;
     let floats: Vec<f32> = bytes
         .chunks_exact(4)
@@ -72,10 +95,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let mrays = |seconds: f64| rays.len() as f64 / seconds / 1e6;
     println!(
-        "{} rays, {hit_count} hits, robust {}; closest hit {best_hit:.4} s ({:.2} Mrays/s), occlusion \
+        "{} rays, {hit_count} hits, robust {}, spheres {:?}, waves {:?}, high build quality from {} triangles; \
+         scene build {build_seconds:.3} s; closest hit {best_hit:.4} s ({:.2} Mrays/s), occlusion \
          {best_occluded:.4} s ({:.2} Mrays/s); fastest of {passes}, 1 thread",
         rays.len(),
         settings.robust,
+        settings.spheres,
+        settings.incoherent,
+        settings.high_quality_min_triangles,
         mrays(best_hit),
         mrays(best_occluded)
     );

@@ -9,7 +9,9 @@
 //!
 //! The same passes also run on a second Embree scene built without robust mode (Embree's
 //! faster, non-watertight triangle test), interleaved with the robust ones, to state what
-//! watertight traversal costs: the "robust / fast" ratios of the last table.
+//! watertight traversal costs: the "robust / fast" ratios of the last table. Each
+//! `--against` variant (another sphere test, wave layout or build quality) is paired with
+//! the default the same way, its Embree scene build timed too.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -23,11 +25,13 @@ use crate::cli::render_cmd;
 use crate::cli::summary::median;
 use crate::cli::CommandError;
 use crate::render::stats::WorkCounters;
-use crate::render::tracer::{TraceHit, TraceRay};
+use crate::render::tracer::{
+    IncoherentLayout, SphereTraversal, TraceHit, TraceRay, TracerSettings,
+};
 use crate::render::{self, RenderContext, RenderControl, RenderOptions};
 use crate::shading::{self, SpawnPoint};
 use conetrace::film::{block_order, PixelRect};
-use conetrace::integrator::Whitted;
+use conetrace::integrator::selection::{IntegratorKind, SelectedIntegrator};
 
 #[derive(Args, Debug)]
 pub struct BenchRenderArgs {
@@ -39,6 +43,73 @@ pub struct BenchRenderArgs {
     /// Repetitions of each pass (the median is reported).
     #[arg(long, default_value_t = 5)]
     pub repeat: usize,
+    /// The integrator of the full-render passes.
+    #[arg(long, default_value = "whitted", value_parser = ["whitted", "path"])]
+    pub integrator: String,
+    /// Also time each pass with this traversal variant, paired per round with the default,
+    /// and the Embree scene build of both (repeatable).
+    #[arg(long, value_enum)]
+    pub against: Vec<TraversalVariant>,
+}
+
+/// A traversal setting `--against` pairs with the default ([`TracerSettings`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TraversalVariant {
+    /// Spheres through Embree's point geometry.
+    EmbreeSpheres,
+    /// Spheres as a user geometry with our own exact test.
+    UserSpheres,
+    /// Incoherent waves as AoS ray streams.
+    Streams,
+    /// Incoherent waves as 16-wide SoA packets.
+    Packets,
+    /// Embree's high build quality (spatial splits) whatever the triangle count.
+    HighQuality,
+    /// Embree's medium build quality whatever the triangle count.
+    MediumQuality,
+}
+
+impl TraversalVariant {
+    /// `settings` changed as this variant says.
+    fn apply(self, settings: TracerSettings) -> TracerSettings {
+        match self {
+            TraversalVariant::EmbreeSpheres => TracerSettings {
+                spheres: SphereTraversal::EmbreePoints,
+                ..settings
+            },
+            TraversalVariant::UserSpheres => TracerSettings {
+                spheres: SphereTraversal::UserGeometry,
+                ..settings
+            },
+            TraversalVariant::Streams => TracerSettings {
+                incoherent: IncoherentLayout::Streams,
+                ..settings
+            },
+            TraversalVariant::Packets => TracerSettings {
+                incoherent: IncoherentLayout::Packets,
+                ..settings
+            },
+            TraversalVariant::HighQuality => TracerSettings {
+                high_quality_min_triangles: 0,
+                ..settings
+            },
+            TraversalVariant::MediumQuality => TracerSettings {
+                high_quality_min_triangles: usize::MAX,
+                ..settings
+            },
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            TraversalVariant::EmbreeSpheres => "embree-spheres",
+            TraversalVariant::UserSpheres => "user-spheres",
+            TraversalVariant::Streams => "streams",
+            TraversalVariant::Packets => "packets",
+            TraversalVariant::HighQuality => "high-quality",
+            TraversalVariant::MediumQuality => "medium-quality",
+        }
+    }
 }
 
 /// The pixel-centre camera rays of `tile`, each run of 16 one 4x4 block (as the integrator
@@ -141,21 +212,32 @@ pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) 
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
-/// Paired times of the robust (watertight) and the fast (Embree default) scene, per pass.
-#[derive(Default)]
-struct WatertightCost {
-    /// (pass name, robust seconds, fast seconds) per round.
+/// Paired times of two Embree scenes of the same render, per pass: the default ("a") and a
+/// variant ("b"), such as the robust (watertight) scene and the fast one.
+struct PairedCost {
+    /// Column names of the two scenes.
+    a: String,
+    b: String,
+    /// (pass name, a's seconds, b's seconds) per round.
     rounds: Vec<(&'static str, f64, f64)>,
 }
 
-impl WatertightCost {
-    /// One round: each pass on both scenes, the robust one first in even rounds and the
-    /// fast one first in odd rounds, so neither profits from running second.
+impl PairedCost {
+    fn new(a: &str, b: &str) -> PairedCost {
+        PairedCost {
+            a: a.to_owned(),
+            b: b.to_owned(),
+            rounds: Vec::new(),
+        }
+    }
+
+    /// One round: each pass on both scenes, `a` first in even rounds and `b` first in odd
+    /// rounds, so neither profits from running second.
     fn measure(
         &mut self,
         round: usize,
-        robust: &RenderContext,
-        fast: &RenderContext,
+        a: &RenderContext,
+        b: &RenderContext,
         render_timed: &dyn Fn(&RenderContext) -> Result<render::RenderResult, CommandError>,
     ) -> Result<(), CommandError> {
         let time = |f: &dyn Fn()| {
@@ -163,64 +245,108 @@ impl WatertightCost {
             f();
             start.elapsed().as_secs_f64()
         };
-        let order = if round.is_multiple_of(2) {
-            [robust, fast]
-        } else {
-            [fast, robust]
-        };
-        // (robust, fast) seconds of one pass, run in `order`.
+        let even = round.is_multiple_of(2);
+        let order = if even { [a, b] } else { [b, a] };
+        // (a, b) seconds of one pass, run in `order`.
         let pair = |seconds: [f64; 2]| {
-            if round.is_multiple_of(2) {
+            if even {
                 (seconds[0], seconds[1])
             } else {
                 (seconds[1], seconds[0])
             }
         };
-        let (r, f) = pair(order.map(|c| {
+        let (x, y) = pair(order.map(|c| {
             time(&|| {
                 trace_camera_rays_only(c);
             })
         }));
-        self.rounds.push(("camera rays, no shading", r, f));
-        let (r, f) = pair(order.map(|c| {
+        self.rounds.push(("camera rays, no shading", x, y));
+        let (x, y) = pair(order.map(|c| {
             time(&|| {
                 trace_camera_and_shadow_rays_only(c);
             })
         }));
-        self.rounds.push(("camera + shadow rays, no shading", r, f));
+        self.rounds.push(("camera + shadow rays, no shading", x, y));
         let first = render_timed(order[0])?.stats.seconds;
         let second = render_timed(order[1])?.stats.seconds;
-        let (r, f) = pair([first, second]);
-        self.rounds.push(("full render", r, f));
+        let (x, y) = pair([first, second]);
+        self.rounds.push(("full render", x, y));
         Ok(())
     }
 
-    fn print(&self, repeat: usize) {
-        println!(
-            "watertight traversal (Embree robust mode) vs Embree's default, paired per round, median of {repeat}:"
-        );
-        println!("| pass | robust seconds | fast seconds | robust / fast |");
+    /// Adds one round's scene build times (in the table's "Embree scene build" row).
+    fn record_build(&mut self, a_seconds: f64, b_seconds: f64) {
+        self.rounds
+            .push(("Embree scene build", a_seconds, b_seconds));
+    }
+
+    fn print(&self, title: &str, repeat: usize) {
+        println!("{title}, paired per round, median of {repeat}:");
+        let (a, b) = (&self.a, &self.b);
+        println!("| pass | {a} seconds | {b} seconds | {a} / {b} |");
         println!("|---|---|---|---|");
         for pass in [
             "camera rays, no shading",
             "camera + shadow rays, no shading",
             "full render",
+            "Embree scene build",
         ] {
             let rows: Vec<&(&str, f64, f64)> =
                 self.rounds.iter().filter(|(p, _, _)| *p == pass).collect();
             if rows.is_empty() {
                 continue;
             }
-            let robust = median(&rows.iter().map(|r| r.1).collect::<Vec<_>>());
-            let fast = median(&rows.iter().map(|r| r.2).collect::<Vec<_>>());
+            let x = median(&rows.iter().map(|r| r.1).collect::<Vec<_>>());
+            let y = median(&rows.iter().map(|r| r.2).collect::<Vec<_>>());
             let ratio = median(
                 &rows
                     .iter()
                     .map(|r| r.1 / r.2.max(1e-12))
                     .collect::<Vec<_>>(),
             );
-            println!("| {pass} | {robust:.4} | {fast:.4} | {ratio:.3} |");
+            println!("| {pass} | {x:.4} | {y:.4} | {ratio:.3} |");
         }
+    }
+}
+
+/// The context of each `--against` variant, with its paired times.
+struct VariantRun {
+    variant: TraversalVariant,
+    context: RenderContext,
+    cost: PairedCost,
+}
+
+impl VariantRun {
+    fn new(
+        variant: TraversalVariant,
+        scene: &Arc<crate::scene::SceneDescription>,
+        options: &RenderOptions,
+    ) -> Result<VariantRun, CommandError> {
+        let bad = |e: render::PrepareError| CommandError::bad_input(e.to_string());
+        let mut context = render::prepare(scene.clone(), options.clone()).map_err(bad)?;
+        let settings = variant.apply(context.tracer.settings());
+        context.set_tracer_settings(settings).map_err(bad)?;
+        Ok(VariantRun {
+            variant,
+            context,
+            cost: PairedCost::new("default", variant.name()),
+        })
+    }
+
+    /// Times one build of the default's Embree scene and one of the variant's, on this
+    /// run's context (left with the variant's); nothing when the variant is the default.
+    fn time_builds(&mut self, default: TracerSettings) -> Result<Option<(f64, f64)>, CommandError> {
+        let bad = |e: render::PrepareError| CommandError::bad_input(e.to_string());
+        let variant = self.context.tracer.settings();
+        if variant == default {
+            return Ok(None);
+        }
+        let start = Instant::now();
+        self.context.set_tracer_settings(default).map_err(bad)?;
+        let a = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        self.context.set_tracer_settings(variant).map_err(bad)?;
+        Ok(Some((a, start.elapsed().as_secs_f64())))
     }
 }
 
@@ -249,8 +375,18 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         fast_context
             .set_robust_traversal(false)
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        let kind = match args.integrator.as_str() {
+            "path" => IntegratorKind::Path,
+            _ => IntegratorKind::Whitted,
+        };
+        let integrator: SelectedIntegrator = render_cmd::select_integrator(&context, kind)?;
+        let mut variants = args
+            .against
+            .iter()
+            .map(|&variant| VariantRun::new(variant, &scene, &options))
+            .collect::<Result<Vec<_>, _>>()?;
         let render_timed = |context: &RenderContext| {
-            render::render(context, &Whitted, &RenderControl::default())
+            render::render(context, &integrator, &RenderControl::default())
                 .map_err(crate::cli::render_failed)
         };
         // Traversal-only passes record failures in the tracer instead of returning them.
@@ -262,14 +398,17 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             None => Ok(()),
         };
         // Warm up every path once (page faults, lazy BVH parts).
-        for c in [&context, &fast_context] {
+        let warm_up = [&context, &fast_context]
+            .into_iter()
+            .chain(variants.iter().map(|v| &v.context));
+        for c in warm_up {
             trace_camera_rays_only(c);
             trace_camera_and_shadow_rays_only(c);
             check_traversal(c)?;
             render_timed(c)?;
         }
         render_timed(&direct_context)?;
-        let mut robust_cost = WatertightCost::default();
+        let mut robust_cost = PairedCost::new("robust", "fast");
 
         let mut raw_times = Vec::new();
         let mut full_times = Vec::new();
@@ -297,6 +436,14 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             robust_cost.measure(round, &context, &fast_context, &render_timed)?;
             check_traversal(&context)?;
             check_traversal(&fast_context)?;
+            for run in &mut variants {
+                run.cost
+                    .measure(round, &context, &run.context, &render_timed)?;
+                check_traversal(&run.context)?;
+                if let Some((a, b)) = run.time_builds(context.tracer.settings())? {
+                    run.cost.record_build(a, b);
+                }
+            }
         }
         let raw = median(&raw_times);
         let full = median(&full_times);
@@ -307,12 +454,13 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         let direct_camera_rate = direct_counters.camera_rays as f64 / direct / 1e6;
         let direct_ray_rate = direct_counters.total_rays() as f64 / direct / 1e6;
         println!(
-            "scene {} at {}x{}, {} spp, {} threads, median of {repeat}",
+            "scene {} at {}x{}, {} spp, {} threads, {} integrator, median of {repeat}",
             scene.source,
             options.width,
             options.height,
             options.spp,
-            rayon::current_num_threads()
+            rayon::current_num_threads(),
+            kind.name()
         );
         println!("| pass | seconds | camera Mrays/s | all Mrays/s |");
         println!("|---|---|---|---|");
@@ -350,7 +498,16 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             full_ray_rate / raw_rate,
             full_camera_rate / raw_rate
         );
-        robust_cost.print(repeat);
+        robust_cost.print(
+            "watertight traversal (Embree robust mode) vs Embree's default",
+            repeat,
+        );
+        for run in &variants {
+            run.cost.print(
+                &format!("default traversal vs {}", run.variant.name()),
+                repeat,
+            );
+        }
         Ok(())
     })
 }

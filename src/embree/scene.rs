@@ -94,6 +94,20 @@ impl SceneBuilder {
         Ok(())
     }
 
+    /// The BVH build quality: `true` for Embree's high quality (SAH with spatial splits,
+    /// `RTC_BUILD_QUALITY_HIGH`: a slower build that pays back on long renders of large
+    /// triangle meshes), `false` for its default medium quality.
+    pub fn set_high_build_quality(&mut self, high: bool) -> Result<(), EmbreeError> {
+        let quality = if high {
+            ffi::RTC_BUILD_QUALITY_HIGH
+        } else {
+            ffi::RTC_BUILD_QUALITY_MEDIUM
+        };
+        // SAFETY: the scene is live and not yet committed.
+        unsafe { ffi::rtcSetSceneBuildQuality(self.raw, quality) };
+        self.device.check("rtcSetSceneBuildQuality")
+    }
+
     /// Number of geometries added so far (the next geometry id).
     pub fn geometry_count(&self) -> u32 {
         self.geometries.len() as u32

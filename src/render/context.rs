@@ -151,11 +151,17 @@ impl RenderContext {
     /// Switches Embree's robust (watertight) mode on or off by rebuilding the Embree scene;
     /// off only to measure what watertight traversal costs (`conetrace bench render`).
     pub fn set_robust_traversal(&mut self, robust: bool) -> Result<(), PrepareError> {
-        if self.tracer.settings().robust != robust {
-            self.rebuild_tracer(TracerSettings {
-                robust,
-                ..self.tracer.settings()
-            })?;
+        self.set_tracer_settings(TracerSettings {
+            robust,
+            ..self.tracer.settings()
+        })
+    }
+
+    /// Rebuilds the Embree scene with `settings` (if they differ from the current ones):
+    /// how `conetrace bench render` pairs the default traversal with a variant of it.
+    pub fn set_tracer_settings(&mut self, settings: TracerSettings) -> Result<(), PrepareError> {
+        if self.tracer.settings() != settings {
+            self.rebuild_tracer(settings)?;
         }
         Ok(())
     }

@@ -16,6 +16,7 @@ pub mod memory;
 pub mod part;
 pub mod patch_geometry;
 pub mod prepared;
+pub mod sphere_geometry;
 pub mod stats;
 pub mod surface_textures;
 pub mod tracer;
@@ -90,11 +91,8 @@ pub fn prepare_with_textures(
     } else {
         (needed_effects, needed_reasons)
     };
-    let settings = tracer::TracerSettings {
-        alpha_tests: tracer::AlphaTests::for_effects(&effects, &needed_effects),
-        robust: true,
-        threads: rayon::current_num_threads(),
-    };
+    let settings =
+        tracer::TracerSettings::new(tracer::AlphaTests::for_effects(&effects, &needed_effects));
     let (tracer, geometries) = tracer::Tracer::build_with(&scene, &textures, &options, settings)?;
     let camera = crate::camera::Camera::new(&camera_desc, options.width, options.height);
     let camera_forward = (camera_desc.target - camera_desc.eye).normalize_or(glam::Vec3::NEG_Z);

@@ -102,6 +102,26 @@ impl AlphaTests {
     }
 }
 
+/// How analytic spheres are traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SphereTraversal {
+    /// Embree's point geometry (`RTC_GEOMETRY_TYPE_SPHERE_POINT`) and its sphere test.
+    EmbreePoints,
+    /// A user geometry running our own test (`crate::render::sphere_geometry`): the
+    /// default, measured faster on the path peer scene's bounce and shadow rays.
+    UserGeometry,
+}
+
+/// How the rays of an incoherent wave (bounce, reflection, refraction and later shadow
+/// rays) are handed to Embree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IncoherentLayout {
+    /// AoS ray streams (`rtcIntersect1M` / `rtcOccluded1M`), which Embree regroups itself.
+    Streams,
+    /// The rays in wave order, cut in 16s, as 16-wide SoA packets without the coherent flag.
+    Packets,
+}
+
 /// How to build a [`Tracer`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TracerSettings {
@@ -110,6 +130,15 @@ pub struct TracerSettings {
     pub robust: bool,
     /// Threads Embree may use to build the BVH (its `threads=N` device option).
     pub threads: usize,
+    pub spheres: SphereTraversal,
+    /// Streams by default: 16-wide packets were slower on bounce rays and tied on
+    /// whole renders.
+    pub incoherent: IncoherentLayout,
+    /// Embree's high build quality (spatial splits) for scenes of at least this many
+    /// triangles; medium quality below. Never by default: on both peer scenes it saved no
+    /// measurable trace time (docs/benchmarks.md, "Traversal after the structure-of-arrays
+    /// issue").
+    pub high_quality_min_triangles: usize,
 }
 
 impl TracerSettings {
@@ -123,10 +152,21 @@ impl TracerSettings {
         } else {
             needed
         };
+        TracerSettings::new(AlphaTests::for_effects(&effects, &needed))
+    }
+
+    /// The defaults of a render that runs `alpha_tests`: robust traversal, as many
+    /// BVH-build threads as the current rayon pool has workers, and the sphere test, wave
+    /// layout and build quality measured fastest (docs/benchmarks.md, "Traversal after the
+    /// structure-of-arrays issue").
+    pub fn new(alpha_tests: AlphaTests) -> TracerSettings {
         TracerSettings {
-            alpha_tests: AlphaTests::for_effects(&effects, &needed),
+            alpha_tests,
             robust: true,
             threads: rayon::current_num_threads(),
+            spheres: SphereTraversal::UserGeometry,
+            incoherent: IncoherentLayout::Streams,
+            high_quality_min_triangles: usize::MAX,
         }
     }
 }
@@ -158,7 +198,7 @@ pub struct Tracer {
 
 impl Tracer {
     /// Build and commit the Embree scene of `scene`: one triangle geometry per mesh, one
-    /// sphere geometry for all spheres, alpha-test filters as [`TracerSettings::for_render`]
+    /// sphere geometry (Embree's points or our user geometry) for all spheres, alpha-test filters as [`TracerSettings::for_render`]
     /// decides.
     pub fn build(
         scene: &Arc<SceneDescription>,
@@ -183,6 +223,10 @@ impl Tracer {
         let device = Device::with_threads(settings.threads).map_err(embree_error)?;
         let mut builder = SceneBuilder::new(&device).map_err(embree_error)?;
         builder.set_robust(settings.robust).map_err(embree_error)?;
+        let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
+        builder
+            .set_high_build_quality(triangles >= settings.high_quality_min_triangles)
+            .map_err(embree_error)?;
         let mut geometries = Vec::new();
         for (index, mesh) in scene.meshes.iter().enumerate() {
             let material = &scene.materials[mesh.material];
@@ -227,9 +271,8 @@ impl Tracer {
             }
         }
         if !scene.spheres.is_empty() {
-            let spheres: Vec<(glam::Vec3, f32)> =
-                scene.spheres.iter().map(|s| (s.center, s.radius)).collect();
-            builder.add_spheres(&spheres).map_err(embree_error)?;
+            add_sphere_geometry(&mut builder, &scene.spheres, settings.spheres)
+                .map_err(embree_error)?;
             geometries.push(GeometryRef::Spheres);
         }
         if !scene.patches.is_empty() {
@@ -313,11 +356,10 @@ impl Tracer {
     ///
     /// Coherent rays (camera rays, 16 consecutive slots per 4x4 pixel block) go through
     /// 16-wide packets (split into 8- or 4-wide calls, or single rays, on devices without
-    /// 16-wide support). Incoherent rays (reflection, refraction, shadow walks) go through
-    /// Embree ray streams (`rtcIntersect1M`, single rays on devices without streams):
-    /// measured level with 16-wide packets on closest hits and a few percent ahead on
-    /// occlusion (see `crate::embree::stream`), and they need no repacking. A failed trace
-    /// is recorded (see the module doc); the hits Embree produced are kept.
+    /// 16-wide support). Incoherent rays (reflection, refraction, shadow walks) go as the
+    /// settings' [`IncoherentLayout`] says: Embree ray streams (`rtcIntersect1M`, single
+    /// rays on devices without streams) or 16-wide packets without the coherent flag. A
+    /// failed trace is recorded (see the module doc); the hits Embree produced are kept.
     pub fn intersect(
         &self,
         rays: &[TraceRay],
@@ -328,19 +370,20 @@ impl Tracer {
         hits.clear();
         hits.resize(rays.len(), TraceHit::MISS);
         if coherent {
-            self.intersect_packets(rays, hits);
+            self.intersect_packets(rays.iter().copied(), TraceOptions::coherent(), hits);
         } else {
-            self.intersect_stream_into(rays, hits);
+            self.intersect_incoherent_into(rays, hits);
         }
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
     /// [`Tracer::intersect`] of an incoherent batch cut into groups, each traced as its own
-    /// stream: the rays of `rays[..group_ends[0]]`, then of `rays[group_ends[0]..group_ends[1]]`,
+    /// stream (or its own run of packets): the rays of `rays[..group_ends[0]]`, then of `rays[group_ends[0]..group_ends[1]]`,
     /// and so on (the last end is `rays.len()`).
     ///
-    /// Embree packs a stream's rays into packets of its own choosing, and which of two
-    /// triangles hit at the same distance a ray reports can depend on its packet. The
+    /// Embree packs a stream's rays into packets of its own choosing (and the packet layout
+    /// cuts the group in 16s), and which of two triangles hit at the same distance a ray
+    /// reports can depend on its packet. The
     /// integrators trace each sample's rays as one group, so a ray's hit does not depend on
     /// which other samples are traced with it (`integrator::camera_sample::SampleRun`).
     pub fn intersect_grouped(
@@ -355,7 +398,7 @@ impl Tracer {
         let mut start = 0;
         for &end in group_ends {
             if end > start {
-                self.intersect_stream_into(&rays[start..end], &mut hits[start..end]);
+                self.intersect_incoherent_into(&rays[start..end], &mut hits[start..end]);
             }
             start = end;
         }
@@ -363,9 +406,10 @@ impl Tracer {
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
-    /// Closest hits of the incoherent `rays` as one stream into `hits` (resized to match),
-    /// the stream filled straight from the iterator: [`Tracer::intersect`] of a later wave
-    /// without first collecting its rays. A failed trace is recorded as there.
+    /// Closest hits of the incoherent `rays` as one stream (or run of packets,
+    /// [`IncoherentLayout`]) into `hits` (resized to match), filled straight from the
+    /// iterator: [`Tracer::intersect`] of a later wave without first collecting its rays. A
+    /// failed trace is recorded as there.
     pub fn intersect_stream(
         &self,
         rays: impl Iterator<Item = TraceRay>,
@@ -373,21 +417,34 @@ impl Tracer {
         counters: &mut WorkCounters,
     ) {
         hits.clear();
-        self.with_stream_of(rays, |ray_hits, payload| {
-            self.note(
-                self.scene
-                    .intersect_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
-            );
-            hits.extend(ray_hits.iter().map(|ray_hit| match ray_hit.hit() {
-                Some(hit) => trace_hit(&hit),
-                None => TraceHit::MISS,
-            }));
-        });
+        match self.settings.incoherent {
+            IncoherentLayout::Streams => {
+                self.with_stream_of(rays, |ray_hits, payload| {
+                    self.note(self.scene.intersect_stream(
+                        ray_hits,
+                        TraceOptions::incoherent().with_payload(payload),
+                    ));
+                    hits.extend(ray_hits.iter().map(|ray_hit| match ray_hit.hit() {
+                        Some(hit) => trace_hit(&hit),
+                        None => TraceHit::MISS,
+                    }));
+                })
+            }
+            IncoherentLayout::Packets => {
+                self.trace_packets(rays, TraceOptions::incoherent(), false, |packet, lanes| {
+                    hits.extend((0..lanes).map(|lane| match packet.hit(lane) {
+                        Some(hit) => trace_hit(&hit),
+                        None => TraceHit::MISS,
+                    }));
+                });
+            }
+        }
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
-    /// Whether each of `rays` is blocked before its `tfar`, one incoherent stream filled
-    /// straight from the iterator ([`Tracer::occluded`] of a slice).
+    /// Whether each of `rays` is blocked before its `tfar`, one incoherent stream (or run of
+    /// packets, [`IncoherentLayout`]) filled straight from the iterator
+    /// ([`Tracer::occluded`] of a slice).
     pub fn occluded_stream(
         &self,
         rays: impl Iterator<Item = TraceRay>,
@@ -395,13 +452,22 @@ impl Tracer {
         counters: &mut WorkCounters,
     ) {
         blocked.clear();
-        self.with_stream_of(rays, |ray_hits, payload| {
-            self.note(
-                self.scene
-                    .occluded_stream(ray_hits, TraceOptions::incoherent().with_payload(payload)),
-            );
-            blocked.extend(ray_hits.iter().map(|r| r.is_occluded()));
-        });
+        match self.settings.incoherent {
+            IncoherentLayout::Streams => {
+                self.with_stream_of(rays, |ray_hits, payload| {
+                    self.note(self.scene.occluded_stream(
+                        ray_hits,
+                        TraceOptions::incoherent().with_payload(payload),
+                    ));
+                    blocked.extend(ray_hits.iter().map(|r| r.is_occluded()));
+                })
+            }
+            IncoherentLayout::Packets => {
+                self.trace_packets(rays, TraceOptions::incoherent(), true, |packet, lanes| {
+                    blocked.extend((0..lanes).map(|lane| packet.is_occluded(lane)));
+                });
+            }
+        }
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
@@ -429,6 +495,17 @@ impl Tracer {
             }
             trace(ray_hits, payload);
         });
+    }
+
+    /// Closest hits of incoherent `rays` into `hits` (misses left as they are), laid out as
+    /// the settings say ([`IncoherentLayout`]).
+    fn intersect_incoherent_into(&self, rays: &[TraceRay], hits: &mut [TraceHit]) {
+        match self.settings.incoherent {
+            IncoherentLayout::Streams => self.intersect_stream_into(rays, hits),
+            IncoherentLayout::Packets => {
+                self.intersect_packets(rays.iter().copied(), TraceOptions::incoherent(), hits)
+            }
+        }
     }
 
     /// Closest hits of `rays` as one incoherent stream into `hits` (misses left as they are).
@@ -474,21 +551,46 @@ impl Tracer {
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
-    fn intersect_packets(&self, rays: &[TraceRay], hits: &mut [TraceHit]) {
-        let mut packet = RayPacket::<16>::new();
-        let mut payload = [RayPayload::default(); 16];
-        for (chunk_index, chunk) in rays.chunks(16).enumerate() {
-            fill_packet(chunk, &mut packet, &mut payload);
-            self.note(
-                self.scene
-                    .intersect_tile(&mut packet, TraceOptions::coherent().with_payload(&payload)),
-            );
-            let out = &mut hits[chunk_index * 16..];
-            for (lane, slot) in out.iter_mut().enumerate().take(chunk.len()) {
+    /// Closest hits of `rays` into `hits` (misses left as they are), as 16-wide packets
+    /// of consecutive rays traced with `options`' coherence.
+    fn intersect_packets(
+        &self,
+        rays: impl Iterator<Item = TraceRay>,
+        options: TraceOptions<'static>,
+        hits: &mut [TraceHit],
+    ) {
+        let mut out = hits.iter_mut();
+        self.trace_packets(rays, options, false, |packet, lanes| {
+            for (lane, slot) in out.by_ref().take(lanes).enumerate() {
                 if let Some(hit) = packet.hit(lane) {
                     *slot = trace_hit(&hit);
                 }
             }
+        });
+    }
+
+    /// Traces `rays` in order as 16-wide packets (the last one partly filled) with
+    /// `options`' coherence and the rays' cones as payloads, for closest hits or, with
+    /// `occlusion`, for occlusion; `read` gets each traced packet and its number of rays.
+    fn trace_packets(
+        &self,
+        rays: impl Iterator<Item = TraceRay>,
+        options: TraceOptions<'static>,
+        occlusion: bool,
+        mut read: impl FnMut(&RayPacket<16>, usize),
+    ) {
+        let mut rays = rays.peekable();
+        let mut packet = RayPacket::<16>::new();
+        let mut payload = [RayPayload::default(); 16];
+        while rays.peek().is_some() {
+            let lanes = fill_packet(&mut rays, &mut packet, &mut payload);
+            let options = options.with_payload(&payload);
+            self.note(if occlusion {
+                self.scene.occluded_tile(&mut packet, options)
+            } else {
+                self.scene.intersect_tile(&mut packet, options)
+            });
+            read(&packet, lanes);
         }
     }
 
@@ -504,21 +606,17 @@ impl Tracer {
         counters: &mut WorkCounters,
     ) {
         blocked.clear();
-        let mut packet = RayPacket::<16>::new();
-        let mut payload = [RayPayload::default(); 16];
-        for chunk in rays.chunks(16) {
-            fill_packet(chunk, &mut packet, &mut payload);
-            self.note(
-                self.scene
-                    .occluded_tile(&mut packet, TraceOptions::coherent().with_payload(&payload)),
-            );
-            blocked.extend((0..chunk.len()).map(|lane| packet.is_occluded(lane)));
-        }
+        self.trace_packets(
+            rays.iter().copied(),
+            TraceOptions::coherent(),
+            true,
+            |packet, lanes| blocked.extend((0..lanes).map(|lane| packet.is_occluded(lane))),
+        );
         counters.filter_callbacks += FILTER_CALLS.with(|c| c.replace(0));
     }
 
-    /// Whether each of `rays` is blocked before its `tfar` (an `rtcOccluded1M` stream: shadow
-    /// rays from a wave of hits are incoherent).
+    /// Whether each of `rays` is blocked before its `tfar`, traced as incoherent rays (shadow
+    /// rays from a wave of hits), laid out as [`IncoherentLayout`] says.
     pub fn occluded(
         &self,
         rays: &[TraceRay],
@@ -545,21 +643,26 @@ impl Tracer {
     }
 }
 
-/// Puts up to 16 `rays` into `packet` and their cones into `payload`; lanes past them are
-/// switched off.
-fn fill_packet(rays: &[TraceRay], packet: &mut RayPacket<16>, payload: &mut [RayPayload; 16]) {
-    for (lane, lane_payload) in payload.iter_mut().enumerate() {
-        match rays.get(lane) {
-            Some(ray) => {
-                packet.set_ray(lane, &embree_ray(ray));
-                *lane_payload = RayPayload {
-                    cone_width: ray.cone_width,
-                    cone_spread: ray.cone_spread,
-                };
-            }
-            None => packet.set_valid(lane, false),
-        }
+/// Puts the next (up to) 16 of `rays` into `packet` and their cones into `payload`, lanes
+/// past them switched off; returns how many it took.
+fn fill_packet(
+    rays: &mut impl Iterator<Item = TraceRay>,
+    packet: &mut RayPacket<16>,
+    payload: &mut [RayPayload; 16],
+) -> usize {
+    let mut lanes = 0;
+    for (lane, ray) in rays.take(16).enumerate() {
+        packet.set_ray(lane, &embree_ray(&ray));
+        payload[lane] = RayPayload {
+            cone_width: ray.cone_width,
+            cone_spread: ray.cone_spread,
+        };
+        lanes = lane + 1;
     }
+    for lane in lanes..16 {
+        packet.set_valid(lane, false);
+    }
+    lanes
 }
 
 thread_local! {
@@ -580,6 +683,32 @@ fn trace_hit(hit: &crate::embree::Hit) -> TraceHit {
         primitive: hit.prim_id,
         u: hit.u,
         v: hit.v,
+    }
+}
+
+/// Adds `spheres` as one geometry, traced as `traversal` says; returns its geometry id.
+fn add_sphere_geometry(
+    builder: &mut SceneBuilder,
+    spheres: &[crate::scene::Sphere],
+    traversal: SphereTraversal,
+) -> Result<u32, EmbreeError> {
+    let spheres: Vec<(glam::Vec3, f32)> = spheres.iter().map(|s| (s.center, s.radius)).collect();
+    match traversal {
+        SphereTraversal::EmbreePoints => builder.add_spheres(&spheres),
+        SphereTraversal::UserGeometry => {
+            // Refused as Embree's point geometry refuses them: a user geometry would give
+            // such a sphere empty bounds and never hit it, without a word.
+            let invalid = spheres
+                .iter()
+                .position(|(c, r)| !(c.is_finite() && r.is_finite() && *r >= 0.0));
+            if let Some(index) = invalid {
+                let radius = spheres[index].1;
+                return Err(EmbreeError::InvalidSphere { index, radius });
+            }
+            builder.add_user_geometry(Arc::new(
+                crate::render::sphere_geometry::SphereGeometry::new(&spheres),
+            ))
+        }
     }
 }
 
