@@ -1,8 +1,13 @@
 //! One vertex of a path: what a ray finds where it ends (a surface or the environment), the
 //! light it adds there (emission, weighted against light sampling; light sampling itself),
 //! and the ray the BSDF continues the path with, or why the path ends.
+//!
+//! [`shade`] reads as the steps of a vertex, in the order they run: fog on the way in, the
+//! environment for a miss; at a surface its AOVs, absorption, the footprint there, the
+//! material's inputs, emission; then the vertex's uniform numbers, next-event estimation and
+//! the BSDF-sampled continuation (footprint spread, medium, Russian roulette).
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::medium;
 use super::mis::power_heuristic;
@@ -16,8 +21,12 @@ use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{GeometryRef, SurfaceDetail};
 use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
+use crate::scene::Material;
 use crate::shading::surface_inputs::SurfaceInputs;
-use crate::shading::{self, area_lights::luminance, Bsdf, LightHit, LightRef, MaterialBsdf};
+use crate::shading::{
+    self, area_lights::luminance, Bsdf, BsdfSample, LightHit, LightRef, LobeFlags, MaterialBsdf,
+    SpawnPoint,
+};
 
 /// Bounces after which Russian roulette may end a path.
 const ROULETTE_AFTER: u32 = 3;
@@ -34,46 +43,11 @@ pub(super) fn shade(
     waves: &mut PathWaves,
     worker: &mut WorkerState,
 ) {
-    let lights = &context.lights;
-    // Fog between the ray's origin and what it meets: a sampled collision makes this a
-    // medium vertex instead (`medium`); a ray that passes keeps its throughput.
-    if context.effects.fog {
-        let t_end = if hit.is_hit() { hit.t } else { f32::INFINITY };
-        let camera_footprint = ray.footprint;
-        if let Some(collision) = medium::sample_collision(context, ray, t_end, worker) {
-            if ray.depth > context.options.max_depth {
-                // A ray past the last bounce only looks for emission, which the fog
-                // stops here (collisions are sampled by the transmittance).
-                return;
-            }
-            if ray.kind == RayKind::Camera && ray.first_sample && hit.is_hit() {
-                record_hidden_surface_aovs(context, ray, camera_footprint, hit, image, worker);
-            }
-            medium::scatter(tracer, context, *ray, collision, waves, worker);
-            return;
-        }
+    if context.effects.fog && scattered_in_fog(tracer, context, ray, hit, image, waves, worker) {
+        return;
     }
     if !hit.is_hit() {
-        // A ray that sees the environment whole (from the camera or a delta lobe) reads it
-        // through its footprint. One a non-delta lobe sampled finds the environment as a
-        // light, weighted against light sampling, and reads what light sampling reads: the
-        // map's nearest level-0 texel. A filtered lookup there would count a sharp sun's
-        // blurred glow under both strategies, and shift it to coarse texel centres.
-        let environment = LightRef::Environment;
-        let escape = LightHit::escaping(ray.direction);
-        let radiance = if ray.bsdf_pdf.is_some() {
-            lights.le(
-                environment,
-                &escape,
-                &mut ContextEmission { context, worker },
-            )
-        } else {
-            environment_lookup(context, ray.direction, &ray.footprint, worker)
-        };
-        let weight = found_light_weight(tracer, ray, lights.pmf(environment), || {
-            lights.pdf_li(environment, ray.from, &escape)
-        });
-        add_radiance(image, ray.slot, ray.throughput * radiance * weight);
+        add_escaped_light(tracer, context, ray, image, worker);
         return;
     }
     let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
@@ -85,24 +59,8 @@ pub(super) fn shade(
     if camera_first {
         write_geometry_aovs(context, image, ray.slot, ray.direction, &surface);
     }
-    // Beer's law over the distance travelled inside the medium (seed 004).
-    if context.effects.absorption && ray.sigma != Vec3::ZERO {
-        ray.throughput *= shading::transmittance(ray.sigma, surface.t);
-        worker.counters.absorption_evaluations += 1;
-    }
-    if context.effects.footprints {
-        worker.counters.footprint_updates += 1;
-        if ray.approximate_footprint && ray.footprint.strategy() == LodStrategy::Differential {
-            let spp = context.options.spp;
-            let (dpdx, dpdy) =
-                context
-                    .camera
-                    .approximate_dp_dxy(surface.position, surface.geometric_normal, spp);
-            ray.footprint = Footprint::Differential(RayDifferential::parallel(dpdx, dpdy));
-        } else {
-            ray.footprint.transfer(ray.direction, &surface);
-        }
-    }
+    absorb_inside_medium(context, ray, &surface, worker);
+    carry_footprint_to_hit(context, ray, &surface, worker);
     let lookup = LookupRay {
         direction: ray.direction,
         footprint: &ray.footprint,
@@ -113,156 +71,340 @@ pub(super) fn shade(
     if camera_first {
         write_material_aovs(image, ray.slot, &inputs);
     }
-
-    // Emission, from the front side unless the material is two-sided
-    // (`shading::area_lights`).
     if shading::material_features::emits(material) {
-        let light = match context.surfaces.geometries[hit.geometry as usize] {
-            GeometryRef::Mesh(mesh) => lights.area.mesh_light(mesh, hit.primitive),
-            GeometryRef::Spheres => lights.area.sphere_light(hit.primitive as usize),
-            GeometryRef::Patches | GeometryRef::HeightPatches => None,
+        let emitter = Emitter {
+            hit,
+            surface: &surface,
+            material,
+            emission: inputs.emission,
         };
-        let found = match light {
-            // A BSDF-sampled ray reads the light's emission as light sampling does, so both
-            // strategies estimate the same radiance.
-            Some(index) if ray.bsdf_pdf.is_some() => found_area_light(
-                tracer,
-                context,
-                ray,
-                &surface,
-                LightRef::Area(index),
-                worker,
-            ),
-            // Seen by the camera or through a delta lobe: taken whole, filtered by the
-            // ray's footprint. Emitters that are not lights are found by BSDF rays alone.
-            _ => shading::area_lights::emits_towards(material, &surface, ray.direction)
-                .then_some((inputs.emission, 1.0)),
-        };
-        if let Some((emission, weight)) = found {
-            add_radiance(image, ray.slot, ray.throughput * emission * weight);
-        }
+        add_emission(tracer, context, ray, &emitter, image, worker);
     }
     if ray.depth > context.options.max_depth {
-        // Past the last bounce a delta lobe's ray only collects emission (below).
+        // Past the last bounce a delta lobe's ray only collects emission (above).
         return;
     }
+    let u = VertexSamples::draw(ray);
+    let vertex = SurfaceVertex::new(tracer, context, ray, &surface, material, &inputs);
+    if vertex.lobes.has_density() && bsdf_has_smooth_part(&vertex.bsdf, vertex.wo, vertex.ns) {
+        sample_direct_light(tracer, context, ray, &vertex, &u, waves, worker);
+    }
+    continue_by_bsdf(context, ray, &vertex, &u, waves, worker);
+}
 
-    // The same seven dimensions at every vertex, whichever are used.
-    let u_light = ray.sampler.next_1d();
-    let u_light_point = ray.sampler.next_2d();
-    let u_lobe = ray.sampler.next_1d();
-    let u_direction = ray.sampler.next_2d();
-    let u_roulette = ray.sampler.next_1d();
-
-    let bsdf = MaterialBsdf::from_surface_inputs(
-        material,
-        &inputs,
-        ray.direction,
-        surface.geometric_normal,
-        context.effects.fresnel.then_some(context.options.fresnel),
-    );
-    let front = surface.is_front_face(ray.direction);
-    let (ng, ns) = if front {
-        (surface.geometric_normal, inputs.shading_normal)
-    } else {
-        (-surface.geometric_normal, -inputs.shading_normal)
+/// Fog between the ray's origin and what it meets: a sampled collision makes this a medium
+/// vertex instead (`medium`), and the path is then done here (true); a ray that passes keeps
+/// its throughput (false).
+fn scattered_in_fog(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &mut PathRay,
+    hit: &TraceHit,
+    image: &mut TileImage,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) -> bool {
+    let t_end = if hit.is_hit() { hit.t } else { f32::INFINITY };
+    let camera_footprint = ray.footprint;
+    let Some(collision) = medium::sample_collision(context, ray, t_end, worker) else {
+        return false;
     };
-    let wo = -ray.direction;
-    let spawn = surface.spawn_point();
-    let continues = ray.depth < context.options.max_depth;
+    if ray.depth > context.options.max_depth {
+        // A ray past the last bounce only looks for emission, which the fog stops here
+        // (collisions are sampled by the transmittance).
+        return true;
+    }
+    if ray.kind == RayKind::Camera && ray.first_sample && hit.is_hit() {
+        record_hidden_surface_aovs(context, ray, camera_footprint, hit, image, worker);
+    }
+    medium::scatter(tracer, context, *ray, collision, waves, worker);
+    true
+}
 
-    let lobes = bsdf.flags();
-    if lobes.has_density() && bsdf_has_smooth_part(&bsdf, wo, ns) {
-        let transmits = bsdf.transmits_with_density();
-        let point = ShadingPoint {
-            position: spawn.position,
-            origin: spawn.offset_origin(ng),
-            origin_through: if transmits {
-                spawn.offset_origin(-ng)
-            } else {
-                Vec3::ZERO
-            },
-            sigma: ray.sigma,
-            sigma_through: medium_beyond(context, &surface, front),
-            wo,
-            scatterer: Scatterer::Surface {
-                ng,
-                ns,
-                bsdf: &bsdf,
-                transmits,
-            },
-            throughput: ray.throughput,
-            slot: ray.slot,
-            // No BSDF ray competes when none continues along a non-delta lobe.
-            last: !continues || ray.diffuse_depth >= tracer.diffuse_bounces,
-        };
-        sample_light(
+/// The environment a ray that left the scene sees. A ray that sees it whole (from the camera
+/// or a delta lobe) reads it through its footprint. One a non-delta lobe sampled finds the
+/// environment as a light, weighted against light sampling, and reads what light sampling
+/// reads: the map's nearest level-0 texel. A filtered lookup there would count a sharp sun's
+/// blurred glow under both strategies, and shift it to coarse texel centres.
+fn add_escaped_light(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &PathRay,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    let lights = &context.lights;
+    let environment = LightRef::Environment;
+    let escape = LightHit::escaping(ray.direction);
+    let radiance = if ray.bsdf_pdf.is_some() {
+        lights.le(
+            environment,
+            &escape,
+            &mut ContextEmission { context, worker },
+        )
+    } else {
+        environment_lookup(context, ray.direction, &ray.footprint, worker)
+    };
+    let weight = found_light_weight(tracer, ray, lights.pmf(environment), || {
+        lights.pdf_li(environment, ray.from, &escape)
+    });
+    add_radiance(image, ray.slot, ray.throughput * radiance * weight);
+}
+
+/// Beer's law over the distance travelled inside the medium.
+#[inline]
+fn absorb_inside_medium(
+    context: &RenderContext,
+    ray: &mut PathRay,
+    surface: &SurfaceHit,
+    worker: &mut WorkerState,
+) {
+    if context.effects.absorption && ray.sigma != Vec3::ZERO {
+        ray.throughput *= shading::transmittance(ray.sigma, surface.t);
+        worker.counters.absorption_evaluations += 1;
+    }
+}
+
+/// The ray's footprint at its hit: carried there, or, for differentials after a non-delta
+/// bounce, replaced by the camera's footprint at the hit.
+fn carry_footprint_to_hit(
+    context: &RenderContext,
+    ray: &mut PathRay,
+    surface: &SurfaceHit,
+    worker: &mut WorkerState,
+) {
+    if !context.effects.footprints {
+        return;
+    }
+    worker.counters.footprint_updates += 1;
+    if ray.approximate_footprint && ray.footprint.strategy() == LodStrategy::Differential {
+        let spp = context.options.spp;
+        let (dpdx, dpdy) =
+            context
+                .camera
+                .approximate_dp_dxy(surface.position, surface.geometric_normal, spp);
+        ray.footprint = Footprint::Differential(RayDifferential::parallel(dpdx, dpdy));
+    } else {
+        ray.footprint.transfer(ray.direction, surface);
+    }
+}
+
+/// An emitting surface a ray hit.
+struct Emitter<'a> {
+    hit: &'a TraceHit,
+    surface: &'a SurfaceHit,
+    material: &'a Material,
+    /// The material's emission at the hit, filtered by the ray's footprint.
+    emission: Vec3,
+}
+
+/// Emission, from the front side unless the material is two-sided
+/// (`shading::area_lights`).
+fn add_emission(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &PathRay,
+    emitter: &Emitter,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    let area = &context.lights.area;
+    let light = match context.surfaces.geometries[emitter.hit.geometry as usize] {
+        GeometryRef::Mesh(mesh) => area.mesh_light(mesh, emitter.hit.primitive),
+        GeometryRef::Spheres => area.sphere_light(emitter.hit.primitive as usize),
+        GeometryRef::Patches | GeometryRef::HeightPatches => None,
+    };
+    let found = match light {
+        // A BSDF-sampled ray reads the light's emission as light sampling does, so both
+        // strategies estimate the same radiance.
+        Some(index) if ray.bsdf_pdf.is_some() => found_area_light(
             tracer,
             context,
-            &point,
-            u_light,
-            u_light_point,
-            waves,
+            ray,
+            emitter.surface,
+            LightRef::Area(index),
             worker,
-        );
+        ),
+        // Seen by the camera or through a delta lobe: taken whole, filtered by the ray's
+        // footprint. Emitters that are not lights are found by BSDF rays alone.
+        _ => shading::area_lights::emits_towards(emitter.material, emitter.surface, ray.direction)
+            .then_some((emitter.emission, 1.0)),
+    };
+    if let Some((emission, weight)) = found {
+        add_radiance(image, ray.slot, ray.throughput * emission * weight);
     }
+}
 
+/// The uniform numbers of one vertex: the same seven dimensions at every vertex, drawn in
+/// this order whichever are used, so an image is a pure function of the seed.
+struct VertexSamples {
+    light: f32,
+    light_point: Vec2,
+    lobe: f32,
+    direction: Vec2,
+    roulette: f32,
+}
+
+impl VertexSamples {
+    fn draw(ray: &mut PathRay) -> VertexSamples {
+        VertexSamples {
+            light: ray.sampler.next_1d(),
+            light_point: ray.sampler.next_2d(),
+            lobe: ray.sampler.next_1d(),
+            direction: ray.sampler.next_2d(),
+            roulette: ray.sampler.next_1d(),
+        }
+    }
+}
+
+/// A surface hit where the path scatters, as the arriving ray sees it.
+struct SurfaceVertex<'a> {
+    surface: &'a SurfaceHit,
+    bsdf: MaterialBsdf,
+    lobes: LobeFlags,
+    /// Whether the ray arrived on the front side.
+    front: bool,
+    /// Geometric and shading normals on the viewer's side.
+    ng: Vec3,
+    ns: Vec3,
+    /// Towards the viewer.
+    wo: Vec3,
+    spawn: SpawnPoint,
+    /// Whether a ray may continue from here at all (the depth allows a bounce).
+    continues: bool,
+    /// Whether a non-delta (diffuse or glossy) bounce may continue from here: the depth
+    /// and the diffuse-bounce limit both allow it.
+    rough_continues: bool,
+}
+
+impl<'a> SurfaceVertex<'a> {
+    fn new(
+        tracer: &PathTracer,
+        context: &RenderContext,
+        ray: &PathRay,
+        surface: &'a SurfaceHit,
+        material: &Material,
+        inputs: &SurfaceInputs,
+    ) -> SurfaceVertex<'a> {
+        let bsdf = MaterialBsdf::from_surface_inputs(
+            material,
+            inputs,
+            ray.direction,
+            surface.geometric_normal,
+            context.effects.fresnel.then_some(context.options.fresnel),
+        );
+        let front = surface.is_front_face(ray.direction);
+        let (ng, ns) = if front {
+            (surface.geometric_normal, inputs.shading_normal)
+        } else {
+            (-surface.geometric_normal, -inputs.shading_normal)
+        };
+        let continues = ray.depth < context.options.max_depth;
+        SurfaceVertex {
+            surface,
+            lobes: bsdf.flags(),
+            bsdf,
+            front,
+            ng,
+            ns,
+            wo: -ray.direction,
+            spawn: surface.spawn_point(),
+            continues,
+            rough_continues: continues && ray.diffuse_depth < tracer.diffuse_bounces,
+        }
+    }
+}
+
+/// Next-event estimation at a surface vertex: one light sampled, its shadow ray queued.
+fn sample_direct_light(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &PathRay,
+    vertex: &SurfaceVertex,
+    u: &VertexSamples,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) {
+    let transmits = vertex.bsdf.transmits_with_density();
+    let spawn = &vertex.spawn;
+    let point = ShadingPoint {
+        position: spawn.position,
+        origin: spawn.offset_origin(vertex.ng),
+        origin_through: if transmits {
+            spawn.offset_origin(-vertex.ng)
+        } else {
+            Vec3::ZERO
+        },
+        sigma: ray.sigma,
+        sigma_through: medium_beyond(context, vertex.surface, vertex.front),
+        wo: vertex.wo,
+        scatterer: Scatterer::Surface {
+            ng: vertex.ng,
+            ns: vertex.ns,
+            bsdf: &vertex.bsdf,
+            transmits,
+        },
+        throughput: ray.throughput,
+        slot: ray.slot,
+        // No BSDF ray competes when none continues along a non-delta lobe.
+        last: !vertex.rough_continues,
+    };
+    sample_light(
+        tracer,
+        context,
+        &point,
+        u.light,
+        u.light_point,
+        waves,
+        worker,
+    );
+}
+
+/// The BSDF-sampled ray the path continues along from a surface vertex, queued for the next
+/// wave, unless the sample, the depth, the diffuse-bounce limit or Russian roulette ends the
+/// path here.
+fn continue_by_bsdf(
+    context: &RenderContext,
+    ray: &PathRay,
+    vertex: &SurfaceVertex,
+    u: &VertexSamples,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) {
     // At the last bounce light sampling alone covers the non-delta lobes; a delta lobe
     // (mirror, smooth glass) still sends its ray, which only collects the emission or
     // environment it reaches: a path of `max_depth + 2` segments counts whichever kind of
     // lobe its last vertex has, as in pbrt-v4 and Mitsuba 3.
-    if !continues && !lobes.is_specular() {
+    if !vertex.continues && !vertex.lobes.is_specular() {
         return;
     }
-    let Some(sample) = bsdf.sample(wo, u_lobe, u_direction) else {
+    let Some(sample) = vertex.bsdf.sample(vertex.wo, u.lobe, u.direction) else {
         return;
     };
     let delta = sample.is_specular();
-    if !delta && (!continues || ray.diffuse_depth >= tracer.diffuse_bounces) {
+    if !delta && !vertex.rough_continues {
         return;
     }
     let wi = sample.wi;
-    let crosses = wi.dot(ng) < 0.0;
+    let crosses = wi.dot(vertex.ng) < 0.0;
     // A lobe sampled about a tilted shading normal (normal map, smooth vertex normals) can
     // reflect below the geometric surface. Only a boundary that transmits with a density
     // sends light through; for any other such sample the light would leak through an
     // opaque surface, so the path ends (as light sampling, which `admits` only the
     // viewer's side, already treats that direction).
-    if crosses && !delta && !bsdf.transmits_with_density() {
+    if crosses && !delta && !vertex.bsdf.transmits_with_density() {
         return;
     }
     let throughput = ray.throughput * sample.weight;
-    // Footprint of the continuing ray: mirror and refraction as in Whitted, a widened cone
-    // for a rough bounce (seed 000, "BSDF scattering").
-    let mut approximate_footprint = false;
-    let footprint = if !context.effects.footprints {
-        ray.footprint
-    } else if delta && !crosses {
-        worker.counters.footprint_updates += 1;
-        ray.footprint.reflect(ray.direction, &surface, wi)
-    } else if delta {
-        worker.counters.footprint_updates += 1;
-        // A delta reflection that leaves below the geometric surface bends the footprint as
-        // the boundary's refraction would.
-        let eta = if sample.is_transmission() {
-            sample.eta
-        } else {
-            bsdf.dielectric.split(ray.direction).boundary.eta
-        };
-        ray.footprint.refract(ray.direction, &surface, eta, wi)
-    } else {
-        worker.counters.footprint_updates += 1;
-        approximate_footprint = true;
-        let f = bsdf.eval(wo, wi);
-        ray.footprint.scatter(bsdf_spread_angle(luminance(f)))
-    };
+    let (footprint, approximate_footprint) =
+        spread_footprint(context, ray, vertex, &sample, crosses, worker);
     let sigma = if crosses {
-        medium_beyond(context, &surface, front)
+        medium_beyond(context, vertex.surface, vertex.front)
     } else {
         ray.sigma
     };
     let depth = ray.depth + 1;
-    let Some(throughput) = continuing_throughput(throughput, depth, u_roulette, worker) else {
+    let Some(throughput) = continuing_throughput(throughput, depth, u.roulette, worker) else {
         return;
     };
     let kind = if crosses {
@@ -273,23 +415,58 @@ pub(super) fn shade(
     worker.counters.count_rays(kind, 1);
     worker.counters.path_bounces += 1;
     waves.rays.next.push(PathRay {
-        origin: spawn.offset_origin(if crosses { -ng } else { ng }),
+        origin: vertex
+            .spawn
+            .offset_origin(if crosses { -vertex.ng } else { vertex.ng }),
         direction: wi,
         start: 0.0,
         throughput,
         footprint,
-        // After a delta bounce the footprint was rebuilt at this hit and carried on.
         approximate_footprint,
         slot: ray.slot,
         depth,
         diffuse_depth: ray.diffuse_depth + u32::from(!delta),
         bsdf_pdf: (!delta).then_some(sample.pdf),
-        from: surface.position,
+        from: vertex.surface.position,
         kind,
         sigma,
         first_sample: ray.first_sample,
         sampler: ray.sampler,
     });
+}
+
+/// The footprint of the ray continuing along `sample`, and whether it is to be replaced by
+/// the camera's at the next hit: mirror and refraction as in Whitted, a cone widened by the
+/// BSDF spread heuristic (`crate::footprint::bsdf_spread_angle`) for a rough bounce. After a
+/// delta bounce the footprint was rebuilt at this hit and carries on.
+fn spread_footprint(
+    context: &RenderContext,
+    ray: &PathRay,
+    vertex: &SurfaceVertex,
+    sample: &BsdfSample,
+    crosses: bool,
+    worker: &mut WorkerState,
+) -> (Footprint, bool) {
+    if !context.effects.footprints {
+        return (ray.footprint, false);
+    }
+    worker.counters.footprint_updates += 1;
+    let (surface, wi) = (vertex.surface, sample.wi);
+    if !sample.is_specular() {
+        let f = vertex.bsdf.eval(vertex.wo, wi);
+        return (ray.footprint.scatter(bsdf_spread_angle(luminance(f))), true);
+    }
+    if !crosses {
+        return (ray.footprint.reflect(ray.direction, surface, wi), false);
+    }
+    // A delta reflection that leaves below the geometric surface bends the footprint as the
+    // boundary's refraction would.
+    let eta = if sample.is_transmission() {
+        sample.eta
+    } else {
+        vertex.bsdf.dielectric.split(ray.direction).boundary.eta
+    };
+    (ray.footprint.refract(ray.direction, surface, eta, wi), false)
 }
 
 /// The absorption coefficient of the medium on the far side of `surface` seen from its
