@@ -7,8 +7,10 @@
 //! footprints, BSDFs and lights ([`crate::shading`]) and film. Integrators depend on the
 //! render stage, never the reverse. [`selection`] picks one for a scene (`--integrator`,
 //! `[render] integrator`) and says why; `camera_sample` and `texturing` hold what every
-//! integrator shares (camera rays, filtered texture lookups); `trace_wave` and `wave_order`
-//! how the wave integrators trace a wave and in which order their waves run.
+//! integrator shares (camera rays, filtered texture lookups); `wave_integrator` is the layer
+//! every wave integrator renders a tile through (the tile loop, the wave state, radiance and
+//! AOVs reaching the film), `trace_wave` and `wave_order` how it traces a wave and in which
+//! order the waves run.
 
 mod camera_sample;
 pub(crate) mod lanes;
@@ -17,6 +19,7 @@ pub mod selection;
 mod texturing;
 mod trace_wave;
 pub mod vct;
+mod wave_integrator;
 mod wave_order;
 pub mod whitted;
 

@@ -157,7 +157,7 @@ pub(super) fn scatter(
     // Scattered rays are counted with the reflection rays (rays a vertex scattered).
     worker.counters.count_rays(RayKind::Reflection, 1);
     worker.counters.path_bounces += 1;
-    waves.rays.next.push(PathRay {
+    waves.buffers.rays.next.push(PathRay {
         origin: position,
         direction: sample.wi,
         start: 0.0,

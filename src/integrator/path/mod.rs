@@ -23,8 +23,8 @@
 //! (light choice, point on the light, BSDF lobe, BSDF direction, roulette), so an image is a
 //! pure function of the seed.
 //!
-//! Like Whitted, a tile is rendered breadth first (`integrator::wave_order`), but one sample
-//! at a time: the camera rays of a sample form 16-wide packets of 4x4 pixels, the shadow
+//! Like Whitted, a tile is rendered breadth first by the wave layer
+//! (`integrator::wave_integrator`, `integrator::wave_order`), but one sample at a time: the camera rays of a sample form 16-wide packets of 4x4 pixels, the shadow
 //! rays of a wave one occlusion stream (packets for the camera wave), and the continuing
 //! paths the next wave, traced as an incoherent stream.
 //!
@@ -55,13 +55,11 @@ use glam::Vec3;
 
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
-use crate::integrator::camera_sample::{for_each_camera_ray, sample_runs, slot_place};
+use crate::integrator::camera_sample::CameraRay;
 use crate::integrator::trace_wave::WaveRay;
-use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
+use crate::integrator::wave_integrator::{add_radiance, render_waves, WaveBuffers, WaveIntegrator};
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::integrator::stop_requested;
 use crate::render::stats::RayKind;
-use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::Integrator;
 use crate::sampler::PixelSampler;
 
@@ -115,7 +113,7 @@ impl PathTracer {
 
 /// A path in flight: the ray it continues along and what it carries from the camera.
 #[derive(Clone, Copy, Debug)]
-struct PathRay {
+pub(crate) struct PathRay {
     origin: Vec3,
     direction: Vec3,
     /// Where tracing starts along the ray (`shading::entry_distance` for camera rays).
@@ -148,53 +146,77 @@ struct PathRay {
 /// The path tracer's per-thread state: the buffers of a tile's waves, reused.
 #[derive(Default)]
 pub struct PathWaves {
-    /// The camera rays of a run of samples and the paths they lead to.
-    rays: WaveQueues<PathRay>,
-    trace_rays: Vec<TraceRay>,
-    trace_hits: Vec<TraceHit>,
+    buffers: WaveBuffers<PathRay>,
     shadows: Vec<ShadowRay>,
-    shadow_rays: Vec<TraceRay>,
-    shadow_blocked: Vec<bool>,
 }
 
-impl PathTracer {
-    /// Traces the current wave (a camera wave as packets, then without the rays the render
-    /// does not keep; a later one as an incoherent stream), shades its hits and traces their
-    /// shadow rays. The paths that continue are left in `waves.rays.next`.
-    fn trace_and_shade_wave(
+impl WaveIntegrator for PathTracer {
+    type Ray = PathRay;
+    type State = PathWaves;
+
+    // One sample of every pixel at a time: camera rays are a small share of a path
+    // tracer's rays, and 16 samples in flight cost more in memory traffic than their
+    // coherent packets save (docs/benchmarks.md).
+    const SAMPLES_IN_FLIGHT: u32 = 1;
+    const COUNTS_PATHS: bool = true;
+    const DROPS_NONFINITE_SAMPLES: bool = true;
+
+    fn buffers(state: &mut PathWaves) -> &mut WaveBuffers<PathRay> {
+        &mut state.buffers
+    }
+
+    fn camera_ray(ray: CameraRay) -> PathRay {
+        PathRay {
+            origin: ray.origin,
+            direction: ray.direction,
+            start: ray.start,
+            throughput: Vec3::ONE,
+            footprint: ray.footprint,
+            approximate_footprint: false,
+            slot: ray.slot,
+            depth: 0,
+            diffuse_depth: 0,
+            bsdf_pdf: None,
+            from: ray.origin,
+            kind: RayKind::Camera,
+            sigma: Vec3::ZERO,
+            first_sample: ray.sample == 0,
+            sampler: ray.sampler,
+        }
+    }
+
+    fn wave_ray(ray: &PathRay) -> WaveRay<'_> {
+        WaveRay {
+            origin: ray.origin,
+            direction: ray.direction,
+            start: ray.start,
+            footprint: &ray.footprint,
+        }
+    }
+
+    fn slot(ray: &PathRay) -> u32 {
+        ray.slot
+    }
+
+    /// Shades the wave's hits, then traces their shadow rays.
+    fn shade_wave(
         &self,
         context: &RenderContext,
         waves: &mut PathWaves,
-        wave: &Wave,
         image: &mut TileImage,
         worker: &mut WorkerState,
     ) {
-        let camera = matches!(wave, Wave::Camera(_));
-        trace_current(
-            context,
-            &mut waves.rays,
-            wave,
-            |ray| WaveRay {
-                origin: ray.origin,
-                direction: ray.direction,
-                start: ray.start,
-                footprint: &ray.footprint,
-            },
-            &mut waves.trace_rays,
-            &mut waves.trace_hits,
-            &mut worker.counters,
-        );
         waves.shadows.clear();
         // Each path is shaded where it lies in the wave, not copied out of it: a `PathRay`
         // is 152 bytes, and a copy read back in other widths stalls on store forwarding.
-        let mut current = std::mem::take(&mut waves.rays.current);
-        let hits = std::mem::take(&mut waves.trace_hits);
+        let mut current = std::mem::take(&mut waves.buffers.rays.current);
+        let hits = std::mem::take(&mut waves.buffers.trace_hits);
         for (ray, hit) in current.iter_mut().zip(&hits) {
             vertex::shade(self, context, ray, hit, image, waves, worker);
         }
-        waves.rays.current = current;
-        waves.trace_hits = hits;
-        trace_shadow_rays(context, waves, camera, image, worker);
+        waves.buffers.rays.current = current;
+        waves.buffers.trace_hits = hits;
+        trace_shadow_rays(context, waves, image, worker);
     }
 }
 
@@ -214,68 +236,6 @@ impl Integrator for PathTracer {
         waves: &mut PathWaves,
         stop: Option<&AtomicBool>,
     ) -> bool {
-        let options = &context.options;
-        let spp = options.spp.max(1);
-        let samples = image.samples.clone().unwrap_or(0..spp);
-        let sample_count = samples.len() as u32;
-        // One sample of every pixel at a time: camera rays are a small share of a path
-        // tracer's rays, and 16 samples in flight cost more in memory traffic than their
-        // coherent packets save (docs/benchmarks.md).
-        for run in sample_runs(samples, spp, 1) {
-            if stop_requested(stop) {
-                return false;
-            }
-            image.begin_samples(run.len());
-            let (current, kept) = (&mut waves.rays.camera, &mut waves.rays.kept);
-            current.clear();
-            kept.clear();
-            for_each_camera_ray(context, tile, &run, options.width, |ray| {
-                kept.push(ray.kept);
-                current.push(PathRay {
-                    origin: ray.origin,
-                    direction: ray.direction,
-                    start: ray.start,
-                    throughput: Vec3::ONE,
-                    footprint: ray.footprint,
-                    approximate_footprint: false,
-                    slot: ray.slot,
-                    depth: 0,
-                    diffuse_depth: 0,
-                    bsdf_pdf: None,
-                    from: ray.origin,
-                    kind: RayKind::Camera,
-                    sigma: Vec3::ZERO,
-                    first_sample: ray.sample == 0,
-                    sampler: ray.sampler,
-                })
-            });
-            let camera_rays = waves.rays.kept.iter().filter(|&&k| k).count() as u64;
-            worker.counters.count_rays(RayKind::Camera, camera_rays);
-            worker.counters.paths += camera_rays;
-            // Camera waves, then each sample's paths on their own (`wave_order`).
-            let tile_pixels = tile.area() as u32;
-            run_waves(
-                waves,
-                |waves| &mut waves.rays,
-                run.len(),
-                |ray| slot_place(ray.slot, tile_pixels) as usize,
-                |waves, wave| self.trace_and_shade_wave(context, waves, &wave, image, worker),
-            );
-            // These samples' radiance joins the exact sums (`film::sample_sum`); a sample
-            // whose radiance is not finite is counted and dropped.
-            worker.counters.nonfinite_samples +=
-                image.add_samples_in_flight(run.kept_places(), true, context.options.sample_clamp);
-        }
-        image.finish_mean(sample_count);
-        image.alpha.fill(1.0);
-        true
+        render_waves(self, context, tile, image, worker, waves, stop)
     }
-}
-
-#[inline]
-fn add_radiance(image: &mut TileImage, slot: u32, radiance: Vec3) {
-    let c = &mut image.color[slot as usize];
-    c[0] += radiance.x;
-    c[1] += radiance.y;
-    c[2] += radiance.z;
 }

@@ -11,10 +11,8 @@ use super::mis::power_heuristic;
 use super::{add_radiance, LightStrategy, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::integrator::texturing::environment_light_lookup;
-use crate::integrator::trace_wave::{shadow_ray, shadow_trace_rays};
 use crate::medium::{segment_fog, FogModel, HenyeyGreenstein};
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::stats::RayKind;
 use crate::render::surface_textures::area_light_radiance;
 use crate::shading::{
     self, AreaLight, Bsdf, EmissionLookup, EnvironmentLight, LiSample, LightRef, MaterialBsdf,
@@ -291,14 +289,14 @@ impl EmissionLookup for AdmittedEmission<'_, '_, '_> {
     }
 }
 
-/// Trace the wave's shadow rays as one occlusion stream and add what reaches the lights.
+/// Trace the wave's shadow rays (`WaveBuffers::trace_shadow_segments`) and add what reaches
+/// the lights.
 /// Any surface blocks a shadow ray (light through glass arrives by BSDF-sampled paths).
 /// With fog, what reaches a light is attenuated by the exact transmittance of the fog on
 /// the shadow segment, evaluated only for the rays that are not blocked.
 pub(super) fn trace_shadow_rays(
     context: &RenderContext,
     waves: &mut PathWaves,
-    camera_wave: bool,
     image: &mut TileImage,
     worker: &mut WorkerState,
 ) {
@@ -309,27 +307,10 @@ pub(super) fn trace_shadow_rays(
         .shadows
         .iter()
         .map(|s| (s.origin, s.direction, s.tfar));
-    if camera_wave {
-        // The camera wave's shadow rays are coherent: packets.
-        shadow_trace_rays(segments, &mut waves.shadow_rays, &mut worker.counters);
-        context.tracer.occluded_wave(
-            &waves.shadow_rays,
-            &mut waves.shadow_blocked,
-            true,
-            &mut worker.counters,
-        );
-    } else {
-        // A later wave's shadow rays fill Embree's stream straight from the segments.
-        worker
-            .counters
-            .count_rays(RayKind::Shadow, waves.shadows.len() as u64);
-        context.tracer.occluded_stream(
-            segments.map(|(origin, direction, tfar)| shadow_ray(origin, direction, tfar)),
-            &mut waves.shadow_blocked,
-            &mut worker.counters,
-        );
-    }
-    for (shadow, blocked) in waves.shadows.iter().zip(&waves.shadow_blocked) {
+    waves
+        .buffers
+        .trace_shadow_segments(context, segments, &mut worker.counters);
+    for (shadow, blocked) in waves.shadows.iter().zip(&waves.buffers.shadow_blocked) {
         if *blocked {
             continue;
         }

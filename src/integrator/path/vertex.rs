@@ -17,6 +17,7 @@ use crate::film::TileImage;
 use crate::footprint::{bsdf_spread_angle, Footprint, LodStrategy, RayDifferential};
 use crate::hit::SurfaceHit;
 use crate::integrator::texturing::{self, environment_lookup, LookupRay};
+use crate::integrator::wave_integrator::{write_geometry_aovs, write_material_aovs};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{GeometryRef, SurfaceDetail};
 use crate::render::stats::RayKind;
@@ -414,7 +415,7 @@ fn continue_by_bsdf(
     };
     worker.counters.count_rays(kind, 1);
     worker.counters.path_bounces += 1;
-    waves.rays.next.push(PathRay {
+    waves.buffers.rays.next.push(PathRay {
         origin: vertex
             .spawn
             .offset_origin(if crosses { -vertex.ng } else { vertex.ng }),
@@ -466,7 +467,10 @@ fn spread_footprint(
     } else {
         vertex.bsdf.dielectric.split(ray.direction).boundary.eta
     };
-    (ray.footprint.refract(ray.direction, surface, eta, wi), false)
+    (
+        ray.footprint.refract(ray.direction, surface, eta, wi),
+        false,
+    )
 }
 
 /// The absorption coefficient of the medium on the far side of `surface` seen from its
@@ -571,37 +575,6 @@ fn found_area_light(
 #[inline]
 fn bsdf_has_smooth_part(bsdf: &MaterialBsdf, wo: Vec3, ns: Vec3) -> bool {
     bsdf.pdf(wo, ns) > 0.0 || bsdf.eval(wo, ns).max_element() > 0.0
-}
-
-/// The depth, shading normal and texture coordinates of the first camera sample's hit, if
-/// the render keeps surface AOVs.
-fn write_geometry_aovs(
-    context: &RenderContext,
-    image: &mut TileImage,
-    pixel: u32,
-    direction: Vec3,
-    surface: &SurfaceHit,
-) {
-    if image.depth.is_empty() {
-        return;
-    }
-    let pixel = pixel as usize;
-    image.depth[pixel] = surface.t * direction.dot(context.camera_forward);
-    image.normal[pixel] = surface.shading_normal.to_array();
-    image.uv[pixel] = surface.st.to_array();
-}
-
-/// The albedo and the (normal-mapped) shading normal of the first camera sample's hit, if
-/// the render keeps them.
-fn write_material_aovs(image: &mut TileImage, pixel: u32, inputs: &SurfaceInputs) {
-    if image.albedo.is_empty() {
-        return;
-    }
-    let pixel = pixel as usize;
-    image.albedo[pixel] = inputs.albedo.to_array();
-    if !image.normal.is_empty() {
-        image.normal[pixel] = inputs.shading_normal.to_array();
-    }
 }
 
 /// The surface AOVs of the first camera sample's hit when fog in front of it scattered the

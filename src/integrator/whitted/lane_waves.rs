@@ -40,7 +40,7 @@ pub(super) fn pick_lanes(
     worker: &mut WorkerState,
     indirect: &dyn IndirectLight,
 ) {
-    let rays = waves.rays.current.len();
+    let rays = waves.buffers.rays.current.len();
     waves.lane_of_ray.clear();
     waves.lane_of_ray.resize(rays, SCALAR);
     waves.lanes.clear();
@@ -53,8 +53,8 @@ pub(super) fn pick_lanes(
     let records_lookups = !image.lookup_done.is_empty();
     let uv_aov = context.options.aovs.surface;
     for index in 0..rays {
-        let ray = &waves.rays.current[index];
-        let hit = &waves.trace_hits[index];
+        let ray = &waves.buffers.rays.current[index];
+        let hit = &waves.buffers.trace_hits[index];
         if !hit.is_hit()
             || (ray.first_sample && records_lookups)
             || (effects.absorption && ray.sigma != Vec3::ZERO)
@@ -126,7 +126,7 @@ pub(super) fn finish_lane(
     lane: usize,
     image: &mut TileImage,
 ) {
-    let ray = &waves.rays.current[index];
+    let ray = &waves.buffers.rays.current[index];
     let lanes = &waves.lanes;
     let lights = &context.scene.lights;
     if context.effects.shadows {
@@ -149,7 +149,7 @@ pub(super) fn finish_lane(
         write_surface_aovs(context, waves, index, lane, image);
     }
     let lanes = &waves.lanes;
-    let ray = &waves.rays.current[index];
+    let ray = &waves.buffers.rays.current[index];
     let material = lanes.materials[lanes.material[lane] as usize];
     let ambient = AmbientEnvironment::radiance(context, material.opaque_weight, lanes.albedo[lane]);
     add_radiance(image, ray.slot, ray.throughput * (Vec3::ZERO + ambient));
@@ -164,7 +164,7 @@ fn write_surface_aovs(
     lane: usize,
     image: &mut TileImage,
 ) {
-    let ray = &waves.rays.current[index];
+    let ray = &waves.buffers.rays.current[index];
     let lanes = &waves.lanes;
     let pixel = ray.slot as usize;
     if !image.depth.is_empty() {

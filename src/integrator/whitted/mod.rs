@@ -2,7 +2,7 @@
 //! waves.
 //!
 //! Instead of recursing ray by ray, a tile is rendered breadth first, up to 16 samples of
-//! every pixel at a time (`integrator::wave_order`): the camera rays form 16-wide packets,
+//! every pixel at a time (`integrator::wave_integrator`, `integrator::wave_order`): the camera rays form 16-wide packets,
 //! each one pixel's samples; every hit is shaded, its shadow rays are batched and traced
 //! (the camera wave's as packets, later ones as one occlusion stream), and the reflection
 //! and refraction rays it spawns form the next wave, traced, one sample at a time, as an
@@ -20,15 +20,15 @@
 //! rounding error (`shading::ray_offset`), so no ray meets the surface it leaves, whatever
 //! the scene's scale or the camera's distance. The geometric normal is also the one rule for
 //! which side of a dielectric a ray is on (`shading::DielectricBoundary`).
-
 //!
-//! The files follow the stages of a wave: `camera_rays` (the first wave), `surface` (shading
-//! a hit), `lights` (the environment and the shadow rays of punctual lights), `spawn` and
-//! `dielectric` (the secondary rays of mirrors and dielectric boundaries) and `shadow_walk`
-//! (tracing the shadow rays, through transmissive occluders too); `fog` attenuates and
-//! blends every segment through the scene's fog volumes.
+//! The tile loop, the camera rays and the tracing of each wave are the wave layer's
+//! (`integrator::wave_integrator`). The files follow the stages of shading a wave:
+//! `surface` (shading a hit), `lane_waves` (the hits shaded together in lanes), `lights`
+//! (the environment and the shadow rays of punctual lights), `spawn` and `dielectric` (the
+//! secondary rays of mirrors and dielectric boundaries) and `shadow_walk` (tracing the
+//! shadow rays, through transmissive occluders too); `fog` attenuates and blends every
+//! segment through the scene's fog volumes.
 
-mod camera_rays;
 mod dielectric;
 mod fog;
 mod lane_waves;
@@ -43,19 +43,16 @@ use glam::Vec3;
 
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
-use crate::integrator::camera_sample::{sample_runs, slot_place, MAX_SAMPLES_IN_FLIGHT};
+use crate::integrator::camera_sample::{CameraRay, MAX_SAMPLES_IN_FLIGHT};
 use crate::integrator::lanes::WaveLanes;
 use crate::integrator::trace_wave::WaveRay;
-use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
+use crate::integrator::wave_integrator::{add_radiance, render_waves, WaveBuffers, WaveIntegrator};
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::integrator::stop_requested;
 use crate::render::stats::RayKind;
-use crate::render::tracer::{TraceHit, TraceRay};
 use crate::render::Integrator;
 
 pub(crate) use surface::{AmbientEnvironment, IndirectLight, IndirectQuery};
 
-use camera_rays::generate_camera_rays;
 use lights::{shade_miss, ShadowRay};
 use shadow_walk::{trace_shadows, ShadowWalk};
 use surface::{shade_hit, surface_detail};
@@ -66,7 +63,7 @@ pub struct Whitted;
 
 /// A ray in flight, with what it carries from the camera.
 #[derive(Clone, Copy, Debug)]
-struct PathRay {
+pub(crate) struct PathRay {
     origin: Vec3,
     direction: Vec3,
     /// Where tracing starts along the ray: just before the scene's bounds for camera rays
@@ -89,22 +86,12 @@ struct PathRay {
 /// worker renders.
 #[derive(Default)]
 pub struct Waves {
-    /// The camera rays of a run of samples and the waves they lead to.
-    rays: WaveQueues<PathRay>,
-    trace_rays: Vec<TraceRay>,
-    trace_hits: Vec<TraceHit>,
+    buffers: WaveBuffers<PathRay>,
     shadows: Vec<ShadowRay>,
-    shadow_rays: Vec<TraceRay>,
-    shadow_blocked: Vec<bool>,
     /// Reordering a camera wave's shadow rays by sample (`wave_order::group_by_place`).
     shadow_scratch: Vec<ShadowRay>,
     shadow_order: Vec<u32>,
     group_ends: Vec<usize>,
-    /// Pixels of the tile being rendered, and samples of each in flight.
-    tile_pixels: u32,
-    in_flight: usize,
-    /// Whether the current wave is a camera wave.
-    camera_wave: bool,
     /// Walks of shadow rays through transmissive occluders.
     walk: ShadowWalk,
     /// The current wave's hits shaded in lanes (`lane_waves`), each ray's lane
@@ -157,68 +144,73 @@ pub(crate) fn render_tile_with(
     indirect: &dyn IndirectLight,
     stop: Option<&AtomicBool>,
 ) -> bool {
-    let options = &context.options;
-    let spp = options.spp.max(1);
-    let image_width = options.width;
-    let samples = image.samples.clone().unwrap_or(0..spp);
-    let sample_count = samples.len() as u32;
-    // Up to 16 samples of every pixel are traced together (`camera_sample`).
-    waves.tile_pixels = tile.area() as u32;
-    for run in sample_runs(samples, spp, MAX_SAMPLES_IN_FLIGHT) {
-        if stop_requested(stop) {
-            return false;
-        }
-        image.begin_samples(run.len());
-        waves.in_flight = run.len();
-        generate_camera_rays(context, tile, &run, image_width, waves);
-        let kept = waves.rays.kept.iter().filter(|&&k| k).count();
-        worker.counters.count_rays(RayKind::Camera, kept as u64);
-        let tile_pixels = waves.tile_pixels;
-        run_waves(
-            waves,
-            |waves| &mut waves.rays,
-            run.len(),
-            |ray| slot_place(ray.slot, tile_pixels) as usize,
-            |waves, wave| {
-                trace_wave(context, waves, &wave, worker);
-                shade_wave(context, waves, image, worker, indirect);
-                trace_shadows(context, waves, image, worker);
-            },
-        );
-        // These samples' radiance joins the exact sums (`film::sample_sum`): any split of
-        // the samples into ranges then adds up to the same bits.
-        image.add_samples_in_flight(run.kept_places(), false, options.sample_clamp);
-    }
-    image.finish_mean(sample_count);
-    // The background is rendered too: a finished pixel is opaque. (Alpha 0 marks pixels
-    // an interrupted render did not reach.)
-    image.alpha.fill(1.0);
-    true
+    let shading = WhittedShading { indirect };
+    render_waves(&shading, context, tile, image, worker, waves, stop)
 }
 
-/// Trace the current wave (`wave_order::trace_current`).
-fn trace_wave(context: &RenderContext, waves: &mut Waves, wave: &Wave, worker: &mut WorkerState) {
-    waves.camera_wave = matches!(wave, Wave::Camera(_));
-    trace_current(
-        context,
-        &mut waves.rays,
-        wave,
-        |ray| WaveRay {
+/// Whitted's waves with the light `indirect` adds to every opaque lobe.
+struct WhittedShading<'a> {
+    indirect: &'a dyn IndirectLight,
+}
+
+impl WaveIntegrator for WhittedShading<'_> {
+    type Ray = PathRay;
+    type State = Waves;
+
+    // A packet's worth of each pixel's samples (`camera_sample`).
+    const SAMPLES_IN_FLIGHT: u32 = MAX_SAMPLES_IN_FLIGHT;
+    const COUNTS_PATHS: bool = false;
+    const DROPS_NONFINITE_SAMPLES: bool = false;
+
+    fn buffers(state: &mut Waves) -> &mut WaveBuffers<PathRay> {
+        &mut state.buffers
+    }
+
+    fn camera_ray(ray: CameraRay) -> PathRay {
+        PathRay {
+            origin: ray.origin,
+            direction: ray.direction,
+            start: ray.start,
+            throughput: Vec3::ONE,
+            footprint: ray.footprint,
+            slot: ray.slot,
+            depth: 0,
+            kind: RayKind::Camera,
+            sigma: Vec3::ZERO,
+            first_sample: ray.sample == 0,
+        }
+    }
+
+    fn wave_ray(ray: &PathRay) -> WaveRay<'_> {
+        WaveRay {
             origin: ray.origin,
             direction: ray.direction,
             start: ray.start,
             footprint: &ray.footprint,
-        },
-        &mut waves.trace_rays,
-        &mut waves.trace_hits,
-        &mut worker.counters,
-    );
+        }
+    }
+
+    fn slot(ray: &PathRay) -> u32 {
+        ray.slot
+    }
+
+    /// Shades the wave's hits, then walks their shadow rays.
+    fn shade_wave(
+        &self,
+        context: &RenderContext,
+        waves: &mut Waves,
+        image: &mut TileImage,
+        worker: &mut WorkerState,
+    ) {
+        shade_hits(context, waves, image, worker, self.indirect);
+        trace_shadows(context, waves, image, worker);
+    }
 }
 
 /// Shade the wave's hits: those the lanes cover together, stage by stage
 /// (`lane_waves`), the others one by one; then, in the wave's order, each ray's light joins
 /// the film and its shadow rays the queue, so the sums are the same whichever path shaded it.
-fn shade_wave(
+fn shade_hits(
     context: &RenderContext,
     waves: &mut Waves,
     image: &mut TileImage,
@@ -228,14 +220,14 @@ fn shade_wave(
     waves.shadows.clear();
     lane_waves::pick_lanes(context, waves, image, worker, indirect);
     lane_waves::shade_lanes(context, waves, worker);
-    for index in 0..waves.rays.current.len() {
+    for index in 0..waves.buffers.rays.current.len() {
         let lane = waves.lane_of_ray[index];
         if lane != lane_waves::SCALAR {
             lane_waves::finish_lane(context, waves, index, lane as usize, image);
             continue;
         }
-        let ray = waves.rays.current[index];
-        let hit = &waves.trace_hits[index];
+        let ray = waves.buffers.rays.current[index];
+        let hit = &waves.buffers.trace_hits[index];
         if !hit.is_hit() {
             shade_miss(context, &ray, image, worker);
             continue;
@@ -246,12 +238,4 @@ fn shade_wave(
             .surface_hit(ray.origin, ray.direction, hit, detail);
         shade_hit(context, ray, &surface, image, waves, worker, indirect);
     }
-}
-
-#[inline]
-fn add_radiance(image: &mut TileImage, slot: u32, radiance: Vec3) {
-    let c = &mut image.color[slot as usize];
-    c[0] += radiance.x;
-    c[1] += radiance.y;
-    c[2] += radiance.z;
 }

@@ -38,7 +38,7 @@ impl Spawner<'_> {
             return;
         }
         worker.counters.count_rays(kind, 1);
-        waves.rays.next.push(PathRay {
+        waves.buffers.rays.next.push(PathRay {
             origin: self.spawn.offset_origin(leave_normal),
             direction,
             start: 0.0,

@@ -13,6 +13,7 @@ use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::hit::SurfaceHit;
 use crate::integrator::texturing::{self, LookupRay};
+use crate::integrator::wave_integrator::{write_geometry_aovs, write_material_aovs};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::SurfaceDetail;
 use crate::render::stats::RayKind;
@@ -122,37 +123,8 @@ pub(super) fn shade_hit(
     let effects = &context.effects;
     let options = &context.options;
     let material: &Material = &context.scene.materials[surface.material as usize];
-    // The AOVs are written by first samples only, whose slot is their pixel.
-    let pixel = ray.slot as usize;
-
-    if ray.kind == RayKind::Camera && ray.first_sample && !image.depth.is_empty() {
-        image.depth[pixel] = surface.t * ray.direction.dot(context.camera_forward);
-        image.normal[pixel] = surface.shading_normal.to_array();
-        image.uv[pixel] = surface.st.to_array();
-    }
-
-    // Fog between the ray's origin and the hit (seed 004, analytic fog density).
-    if effects.fog {
-        super::fog::fog_ray_segment(context, &mut ray, surface.t, image, worker);
-    }
-    // Beer's law over the distance travelled inside the medium (seed 004).
-    if effects.absorption && ray.sigma != Vec3::ZERO {
-        ray.throughput *= shading::transmittance(ray.sigma, surface.t);
-        worker.counters.absorption_evaluations += 1;
-    }
-    if effects.footprints {
-        ray.footprint.transfer(ray.direction, surface);
-        worker.counters.footprint_updates += 1;
-    }
-
-    let inputs = surface_inputs(context, &ray, material, surface, image, worker);
+    let inputs = arrive_at_hit(context, &mut ray, material, surface, image, worker);
     let albedo = inputs.albedo;
-    if ray.kind == RayKind::Camera && ray.first_sample && !image.albedo.is_empty() {
-        image.albedo[pixel] = albedo.to_array();
-        if !image.normal.is_empty() {
-            image.normal[pixel] = inputs.shading_normal.to_array();
-        }
-    }
 
     // Emission leaves the front side, or both sides of a two-sided material, as the path
     // tracer's area lights do (`shading::area_lights`).
@@ -215,6 +187,43 @@ pub(super) fn shade_hit(
     if let Some(boundary) = boundary {
         scatter_dielectric(context, &ray, surface, boundary, &spawner, waves, worker);
     }
+}
+
+/// What `ray` brings to its hit before the hit's own light: the camera hit's AOVs, fog and
+/// absorption on the way, the footprint carried there, and the material's inputs under that
+/// footprint (also the camera hit's albedo AOV).
+fn arrive_at_hit(
+    context: &RenderContext,
+    ray: &mut PathRay,
+    material: &Material,
+    surface: &SurfaceHit,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) -> SurfaceInputs {
+    let effects = &context.effects;
+    // The AOVs are written by first samples only, whose slot is their pixel.
+    let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
+    if camera_first {
+        write_geometry_aovs(context, image, ray.slot, ray.direction, surface);
+    }
+    // Fog between the ray's origin and the hit (its analytic density, `fog`).
+    if effects.fog {
+        super::fog::fog_ray_segment(context, ray, surface.t, image, worker);
+    }
+    // Beer's law over the distance travelled inside the medium.
+    if effects.absorption && ray.sigma != Vec3::ZERO {
+        ray.throughput *= shading::transmittance(ray.sigma, surface.t);
+        worker.counters.absorption_evaluations += 1;
+    }
+    if effects.footprints {
+        ray.footprint.transfer(ray.direction, surface);
+        worker.counters.footprint_updates += 1;
+    }
+    let inputs = surface_inputs(context, ray, material, surface, image, worker);
+    if camera_first {
+        write_material_aovs(image, ray.slot, &inputs);
+    }
+    inputs
 }
 
 /// The material's shading inputs at the hit (`crate::shading::surface_inputs`): albedo,
