@@ -243,6 +243,10 @@ pub enum RenderError {
     /// The film's memory could not be allocated.
     #[error("{scene}: {message}")]
     OutOfMemory { scene: String, message: String },
+    /// A tile of a demand-loaded texture could not be read: lookups that needed it saw
+    /// zeros, so no image is returned. The message names the file, the level and the tile.
+    #[error("{message}")]
+    TextureTile { message: String },
 }
 
 /// Render `context` with `integrator` into a new film; `Err` if any ray traversal failed
@@ -362,6 +366,11 @@ pub fn render<I: Integrator>(
         return Err(RenderError::Traversal {
             scene: context.scene.source.clone(),
             source,
+        });
+    }
+    if let Some(message) = context.textures.iter().find_map(|t| t.tile_failure()) {
+        return Err(RenderError::TextureTile {
+            message: message.to_string(),
         });
     }
 
