@@ -183,6 +183,33 @@ fn a_render_through_demand_loaded_tiles_equals_the_render_of_the_levels_decoded_
 }
 
 #[test]
+fn the_stats_count_the_tiles_a_render_read_of_those_the_file_holds() {
+    let dir = common::temp_dir();
+    maketx(dir.path(), 2048, "big.tx", &[]);
+    scene(dir.path(), "big.tx");
+    let out = common::run_in(
+        dir.path(),
+        &[
+            "render", "s.toml", "-o", "out.exr", "--quiet", "--no-png", "--integrator",
+            "whitted", "--stats", "s.json",
+        ],
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("s.json")).unwrap()).unwrap();
+    let entry = &stats["texture_memory"][0];
+    let read = entry["tiles_read"].as_u64().expect("tiles_read");
+    let in_file = entry["tiles_in_file"].as_u64().expect("tiles_in_file");
+    // 32x32 + 16x16 + 8x8 + 4x4 + 2x2 tiles, then one for each level from 64x64 to 1x1.
+    assert_eq!(in_file, 1024 + 256 + 64 + 16 + 4 + 7);
+    // A 48x32 image of the quad needs a few coarse levels' tiles, not level 0.
+    assert!(read >= 2 && read < 100, "{read} of {in_file} tiles read");
+    let bytes = entry["bytes"].as_u64().unwrap();
+    assert_eq!(bytes % 4, 0);
+    assert!(bytes <= read * 64 * 64 * 4, "{bytes} bytes for {read} tiles");
+}
+
+#[test]
 fn a_damaged_tile_refuses_the_render_naming_file_level_and_tile() {
     let dir = common::temp_dir();
     let tx = maketx(dir.path(), 512, "damaged.tx", &[]);

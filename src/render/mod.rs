@@ -442,6 +442,8 @@ pub fn render<I: Integrator>(
             .map(|(desc, texture)| stats::TextureMemory {
                 texture: desc.source.label(),
                 bytes: texture.memory_bytes() as u64,
+                tiles_read: texture.is_demand_loaded().then(|| texture.tiles_read()),
+                tiles_in_file: texture.is_demand_loaded().then(|| texture.tiles_in_file()),
             })
             .collect(),
         vct: None,
