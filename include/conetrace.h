@@ -557,7 +557,9 @@ enum CtStatus ct_texture_size(struct CtTexture texture, uint32_t *out_width, uin
 
 // Filters `count` lookups: `rgba_out[4*i .. 4*i+4]` receives the linear RGBA of `queries[i]`.
 // `options` may be NULL (defaults). A query whose `s` or `t` is NaN or infinite is refused
-// (`CT_ERROR_INVALID_ARGUMENT`, naming its index). Nothing is written on error.
+// (`CT_ERROR_INVALID_ARGUMENT`, naming its index). A tile of a `.tx` read on demand that
+// cannot be read is `CT_ERROR_TEXTURE`, naming the file, the level and the tile. Nothing
+// is written on error.
 //
 // Thread safety: any thread; any number of threads may sample the same texture at once.
 //

@@ -143,7 +143,9 @@ pub unsafe extern "C" fn ct_texture_size(
 
 /// Filters `count` lookups: `rgba_out[4*i .. 4*i+4]` receives the linear RGBA of `queries[i]`.
 /// `options` may be NULL (defaults). A query whose `s` or `t` is NaN or infinite is refused
-/// (`CT_ERROR_INVALID_ARGUMENT`, naming its index). Nothing is written on error.
+/// (`CT_ERROR_INVALID_ARGUMENT`, naming its index). A tile of a `.tx` read on demand that
+/// cannot be read is `CT_ERROR_TEXTURE`, naming the file, the level and the tile. Nothing
+/// is written on error.
 ///
 /// Thread safety: any thread; any number of threads may sample the same texture at once.
 ///
@@ -194,8 +196,7 @@ pub unsafe extern "C" fn ct_texture_sample(
                 queries[i].s, queries[i].t
             )));
         }
-        let out = unsafe { std::slice::from_raw_parts_mut(rgba_out, 4 * count) };
-        for (q, rgba) in queries.iter().zip(out.chunks_exact_mut(4)) {
+        let sample = |q: &CtTextureQuery| {
             let query = TextureQuery {
                 s: q.s,
                 t: q.t,
@@ -204,7 +205,21 @@ pub unsafe extern "C" fn ct_texture_sample(
                 dsdy: q.dsdy,
                 dtdy: q.dtdy,
             };
-            rgba.copy_from_slice(&texture.sample(&query, &filter).to_array());
+            texture.sample(&query, &filter).to_array()
+        };
+        let out = unsafe { std::slice::from_raw_parts_mut(rgba_out, 4 * count) };
+        if texture.is_demand_loaded() {
+            // A tile that cannot be read gives zeros: filter into a buffer first, so that
+            // nothing is written when one failed.
+            let results: Vec<[f32; 4]> = queries.iter().map(sample).collect();
+            if let Some(failure) = texture.tile_failure() {
+                return Err(CapiError::new(CtStatus::CT_ERROR_TEXTURE, failure));
+            }
+            out.copy_from_slice(results.as_flattened());
+        } else {
+            for (q, rgba) in queries.iter().zip(out.chunks_exact_mut(4)) {
+                rgba.copy_from_slice(&sample(q));
+            }
         }
         Ok(CtStatus::CT_OK)
     })

@@ -97,12 +97,16 @@ pub enum BenchCommand {
     Tiles(bench_tiles::BenchTilesArgs),
 }
 
-/// A render whose ray traversal failed: an internal failure (exit status 1) with the
-/// failure's message, never an image of misses.
+/// A render that failed: a ray traversal failure is internal (exit status 1), memory and
+/// unreadable texture tiles are bad input (2); never an image of misses or black texels.
 pub fn render_failed(error: crate::render::RenderError) -> CommandError {
     match error {
         // Not the program's fault: the input asks for more than the machine has.
         crate::render::RenderError::OutOfMemory { .. } => {
+            CommandError::bad_input(error.to_string())
+        }
+        // A damaged texture file is bad input.
+        crate::render::RenderError::TextureTile { .. } => {
             CommandError::bad_input(error.to_string())
         }
         crate::render::RenderError::Traversal { .. } => CommandError::internal(error.to_string()),

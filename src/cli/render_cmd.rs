@@ -893,8 +893,16 @@ pub(crate) fn decode_textures(
             crate::scene::TextureSource::Encoded { bytes, .. } => bytes,
         };
         digests.push(encoded_texture_digest(bytes));
-        let texture = crate::texture::Texture::from_encoded(bytes, &label, desc.color_space)
-            .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        // A file goes through `from_file`, which reads a tiled `.tx` tile by tile on demand.
+        let texture = match &desc.source {
+            crate::scene::TextureSource::File(path) => {
+                crate::texture::Texture::from_file(path, desc.color_space)
+            }
+            crate::scene::TextureSource::Encoded { .. } => {
+                crate::texture::Texture::from_encoded(bytes, &label, desc.color_space)
+            }
+        }
+        .map_err(|e| CommandError::bad_input(e.to_string()))?;
         textures.push(Arc::new(texture));
         bar.inc(1);
     }

@@ -125,6 +125,10 @@ pub fn run(args: &SampleTextureArgs) -> Result<(), String> {
         // `{}` on f32 prints the shortest string that reads back to the same bits.
         let _ = writeln!(out, "{},{},{},{}", v.x, v.y, v.z, v.w);
     }
+    // A tile that could not be read gave zeros: no result is printed.
+    if let Some(failure) = texture.tile_failure() {
+        return Err(failure.to_string());
+    }
     std::io::stdout()
         .lock()
         .write_all(out.as_bytes())

@@ -243,6 +243,10 @@ pub enum RenderError {
     /// The film's memory could not be allocated.
     #[error("{scene}: {message}")]
     OutOfMemory { scene: String, message: String },
+    /// A tile of a demand-loaded texture could not be read: lookups that needed it saw
+    /// zeros, so no image is returned. The message names the file, the level and the tile.
+    #[error("{message}")]
+    TextureTile { message: String },
 }
 
 /// Render `context` with `integrator` into a new film; `Err` if any ray traversal failed
@@ -364,6 +368,11 @@ pub fn render<I: Integrator>(
             source,
         });
     }
+    if let Some(message) = context.textures.iter().find_map(|t| t.tile_failure()) {
+        return Err(RenderError::TextureTile {
+            message: message.to_string(),
+        });
+    }
 
     if covering != part.region {
         let kept = PixelRect {
@@ -433,6 +442,8 @@ pub fn render<I: Integrator>(
             .map(|(desc, texture)| stats::TextureMemory {
                 texture: desc.source.label(),
                 bytes: texture.memory_bytes() as u64,
+                tiles_read: texture.is_demand_loaded().then(|| texture.tiles_read()),
+                tiles_in_file: texture.is_demand_loaded().then(|| texture.tiles_in_file()),
             })
             .collect(),
         vct: None,

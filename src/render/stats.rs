@@ -157,11 +157,16 @@ pub struct PhaseSeconds {
     pub total: f64,
 }
 
-/// One texture's decoded size.
+/// One texture's decoded size (of a demand-loaded `.tx`: of the tiles read).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct TextureMemory {
     pub texture: String,
     pub bytes: u64,
+    /// Of a demand-loaded `.tx`: tiles read from the file, and tiles it holds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tiles_read: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tiles_in_file: Option<u64>,
 }
 
 #[derive(Clone, Debug, Serialize, PartialEq, Eq)]

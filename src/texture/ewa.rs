@@ -74,6 +74,7 @@ fn ewa_on_level<'a, S: TexelSource<'a>, O: TexelObserver>(
     obs: &mut O,
 ) -> Vec4 {
     let (w, h) = (level.width as f32, level.height as f32);
+    let layout = level.layout();
     // Semi-axes in texels, capped at the level's size (a larger ellipse only
     // revisits the same texels under periodic wrap and costs time).
     let cap = w.max(h).max(2.0);
@@ -124,7 +125,7 @@ fn ewa_on_level<'a, S: TexelSource<'a>, O: TexelObserver>(
                 wsum += weight;
                 if let (Some(ix), Some(iy)) = (wrap_texel(tx, level.width, wrap.0), row) {
                     obs.touch(level_index, ix, iy);
-                    acc += weight * texels.texel(iy * level.width as usize + ix);
+                    acc += weight * texels.texel_at(layout, ix, iy);
                 }
             }
         }
@@ -137,7 +138,7 @@ fn ewa_on_level<'a, S: TexelSource<'a>, O: TexelObserver>(
         let ix = wrap_texel(x.round(), level.width, wrap.0);
         let iy = wrap_texel(y.round(), level.height, wrap.1);
         match (ix, iy) {
-            (Some(ix), Some(iy)) => texels.texel(iy * level.width as usize + ix),
+            (Some(ix), Some(iy)) => texels.texel_at(layout, ix, iy),
             _ => Vec4::ZERO,
         }
     }

@@ -135,19 +135,16 @@ pub(crate) fn bilinear_from<'a, S: TexelSource<'a>, O: TexelObserver>(
     if (i as u32) < level.width - 1 && (j as u32) < level.height - 1 {
         let (fs, ft) = (x - i as f32, y - j as f32);
         let (xi, yi) = (i as usize, j as usize);
-        let row = level.width as usize;
-        let k = yi * row + xi;
         obs.touch(level_index, xi, yi);
         obs.touch(level_index, xi + 1, yi);
         obs.touch(level_index, xi, yi + 1);
         obs.touch(level_index, xi + 1, yi + 1);
-        // One bounds check for the whole 2x2 footprint.
-        let blended = texels.bilinear_quad(k, row, |a, b, c, d| {
+        let blend = |a: Vec4, b: Vec4, c: Vec4, d: Vec4| {
             let top = a * (1.0 - fs) + b * fs;
             let bottom = c * (1.0 - fs) + d * fs;
             top * (1.0 - ft) + bottom * ft
-        });
-        return match blended {
+        };
+        return match texels.bilinear_block(level.layout(), xi, yi, blend) {
             Some(v) => v,
             None => bilinear_wrapped(level, level_index, s, t, wrap, obs),
         };
@@ -306,7 +303,15 @@ mod tests {
 
     #[test]
     fn interior_fast_path_equals_the_wrapped_path() {
-        let (w, h) = (13u32, 7u32);
+        every_storage_fast_path_agrees(13, 7);
+    }
+
+    #[test]
+    fn fast_path_across_tile_edges_equals_the_wrapped_path() {
+        every_storage_fast_path_agrees(150, 70);
+    }
+
+    fn every_storage_fast_path_agrees(w: u32, h: u32) {
         let mut state = 99u32;
         let texels = (0..w * h)
             .map(|_| {

@@ -13,20 +13,21 @@
 //! `maketx`'s levels exactly, and a half texture's levels are rounded to half.
 
 use super::texels::{try_texel_vec, Texels};
+use super::tile_layout::TileLayout;
 use super::TextureError;
 
 /// Largest accepted side, so every texel coordinate is exact in f32.
 const MAX_SIDE: u32 = 1 << 24;
 
-/// One level of the pyramid: RGBA texels, row-major, t = 0 first, in the precision of
-/// the source ([`Texels`]).
+/// One level of the pyramid: RGBA texels in the precision of the source ([`Texels`]),
+/// stored in 64x64-texel tiles (see `tile_layout`); read them by coordinates.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MipLevel {
     /// Width in texels.
     pub width: u32,
     /// Height in texels.
     pub height: u32,
-    /// `width * height` texels.
+    /// `width * height` texels in tile order.
     pub texels: Texels,
 }
 
@@ -36,8 +37,9 @@ impl MipLevel {
         Self::with_texels(width, height, Texels::Float(texels))
     }
 
-    /// A level of any storage; checks the dimensions against the texel count.
-    pub fn with_texels(width: u32, height: u32, texels: Texels) -> Result<MipLevel, String> {
+    /// A level of any storage, from row-major texels (t = 0 first); checks the dimensions
+    /// against the texel count.
+    pub fn with_texels(width: u32, height: u32, mut texels: Texels) -> Result<MipLevel, String> {
         if width == 0 || height == 0 {
             return Err(format!("{width}x{height} has no texels"));
         }
@@ -53,11 +55,18 @@ impl MipLevel {
                 texels.len()
             ));
         }
+        texels.rows_to_tiles(TileLayout::new(width, height))?;
         Ok(MipLevel {
             width,
             height,
             texels,
         })
+    }
+
+    /// Where each texel sits in [`MipLevel::texels`].
+    #[inline(always)]
+    pub(crate) fn layout(&self) -> TileLayout {
+        TileLayout::new(self.width, self.height)
     }
 
     /// The linear RGBA texel at column x, row y (both in range).
@@ -69,7 +78,8 @@ impl MipLevel {
     /// [`MipLevel::texel`] as a vector: the accessor every filter reads through.
     #[inline(always)]
     pub(crate) fn texel_vec4(&self, x: usize, y: usize) -> glam::Vec4 {
-        self.texels.get(y * self.width as usize + x)
+        let layout = self.layout();
+        super::texels::with_texel_source!(&self.texels, |texels| texels.texel_at(layout, x, y))
     }
 
     /// The first texel (row-major) with a channel that `bad` flags, as `(x, y, channel,
@@ -83,24 +93,22 @@ impl MipLevel {
         if matches!(self.texels, Texels::Byte { .. }) {
             return None;
         }
-        let width = self.width.max(1) as usize;
-        (0..self.texels.len()).find_map(|index| {
-            let texel = self.texels.get(index).to_array();
+        self.coordinates().find_map(|(x, y)| {
+            let texel = self.texel(x, y);
             let channel = texel[..channels.min(4)].iter().position(|&v| bad(v))?;
-            Some((
-                (index % width) as u32,
-                (index / width) as u32,
-                channel,
-                texel[channel],
-            ))
+            Some((x as u32, y as u32, channel, texel[channel]))
         })
     }
 
     /// Every texel as linear RGBA f32, row-major (for tools and tests).
     pub fn to_rgba_f32(&self) -> Vec<[f32; 4]> {
-        (0..self.texels.len())
-            .map(|i| self.texels.get(i).to_array())
-            .collect()
+        self.coordinates().map(|(x, y)| self.texel(x, y)).collect()
+    }
+
+    /// Every (x, y) of the level, row-major.
+    pub fn coordinates(&self) -> impl Iterator<Item = (usize, usize)> {
+        let width = self.width as usize;
+        (0..self.height as usize).flat_map(move |y| (0..width).map(move |x| (x, y)))
     }
 
     /// min(width, height) as f32: OIIO's per-level filter-width scale.
@@ -204,11 +212,13 @@ impl MipPyramid {
                 Some((_, _, values)) => halve(sw, sh, |x, y| values[y * sw + x], label)?,
             };
             let texels = levels[0].texels.same_kind_from(&next.2, label)?;
-            levels.push(MipLevel {
-                width: next.0 as u32,
-                height: next.1 as u32,
-                texels,
-            });
+            let level = MipLevel::with_texels(next.0 as u32, next.1 as u32, texels).map_err(
+                |message| TextureError::Dimensions {
+                    label: label.to_string(),
+                    message,
+                },
+            )?;
+            levels.push(level);
             previous = Some(next);
         }
         Ok(MipPyramid { levels })
@@ -327,6 +337,15 @@ mod tests {
             let t = l.texel(0, 0);
             assert!((t[0] - 2.5e38).abs() < 1e32, "{}", t[0]);
         }
+    }
+
+    #[test]
+    fn a_tiled_level_reads_back_its_rows() {
+        let rows: Vec<[f32; 4]> = (0..200 * 130).map(|i| [i as f32, 0.0, 0.0, 1.0]).collect();
+        let level = MipLevel::new(200, 130, rows.clone()).unwrap();
+        assert_eq!(level.to_rgba_f32(), rows);
+        assert_eq!(level.texel(131, 70)[0], (70 * 200 + 131) as f32);
+        assert_ne!(level.texels, Texels::Float(rows), "stored in tiles, not rows");
     }
 
     #[test]

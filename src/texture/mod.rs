@@ -23,6 +23,7 @@
 //! ```
 
 mod aniso;
+mod demand_tiles;
 mod ellipse;
 mod ewa;
 mod filter_closest_bilinear;
@@ -30,6 +31,8 @@ mod image_load;
 mod image_size;
 mod mip_pyramid;
 mod texels;
+mod tiff_tile_reader;
+mod tile_layout;
 mod tiled_tiff;
 mod tiles;
 mod trilinear;
@@ -39,6 +42,7 @@ use std::fmt;
 use std::path::Path;
 use std::str::FromStr;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 use glam::Vec4;
 
@@ -49,6 +53,7 @@ pub use mip_pyramid::{MipLevel, MipPyramid};
 pub use texels::Texels;
 pub use tiles::{TextureTileSet, TEXTURE_TILE_SIZE};
 
+use demand_tiles::DemandFile;
 use tiles::{NoTextureTiles, TexelObserver, TextureTileRecorder};
 
 /// How 8-bit RGB texels are decoded on load (alpha is always linear).
@@ -173,6 +178,19 @@ pub enum TextureError {
         /// Reader message.
         message: String,
     },
+    /// One tile of a tiled file could not be read (when a lookup first touched it).
+    #[error("{label}: level {level}, tile ({tile_x}, {tile_y}): cannot read: {message}")]
+    Tile {
+        /// File path or label.
+        label: String,
+        /// Pyramid level (0 = full resolution).
+        level: usize,
+        /// Column and row of the tile, in tiles.
+        tile_x: usize,
+        tile_y: usize,
+        /// Reader message.
+        message: String,
+    },
     /// The texels (with their mip levels) do not fit in memory.
     #[error("{label}: not enough memory for its texels ({bytes} bytes more were needed)")]
     OutOfMemory {
@@ -214,17 +232,34 @@ pub const CHANNEL_NAMES: [&str; 4] = ["R", "G", "B", "A"];
 
 static NEXT_TEXTURE_ID: AtomicU64 = AtomicU64::new(0);
 
-/// A loaded texture with its mip pyramid; immutable and shareable across threads.
+/// A loaded texture with its mip pyramid; shareable across threads, and immutable but
+/// for the tiles of a demand-loaded texture, read on first use.
 #[derive(Debug)]
 pub struct Texture {
     id: u64,
     label: String,
     pyramid: MipPyramid,
+    /// The file whose tiles the levels read on demand (a tiled, mip-mapped TIFF).
+    demand: Option<Arc<DemandFile>>,
 }
 
 impl Texture {
-    /// Loads PNG, JPEG, OpenEXR or TIFF from a file (format sniffed from the bytes).
+    /// Loads PNG, JPEG, OpenEXR or TIFF from a file (format sniffed from the bytes). A
+    /// tiled, mip-mapped TIFF in 64x64 tiles (`maketx`'s `.tx`) is read tile by tile as
+    /// lookups first touch them; every other file is decoded whole, with every level.
     pub fn from_file(path: &Path, color_space: ColorSpace) -> Result<Texture, TextureError> {
+        let label = path.display().to_string();
+        if let Some((pyramid, file)) = demand_tiles::open(path, &label, color_space)? {
+            let mut texture = Self::with_pyramid(&label, pyramid);
+            texture.demand = Some(file);
+            return Ok(texture);
+        }
+        Self::from_file_whole(path, color_space)
+    }
+
+    /// Loads a file like [`Texture::from_file`], but decodes every level up front even
+    /// for a tiled, mip-mapped TIFF (the resident reference the demand path must match).
+    pub fn from_file_whole(path: &Path, color_space: ColorSpace) -> Result<Texture, TextureError> {
         let label = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| TextureError::Io {
             label: label.clone(),
@@ -302,7 +337,31 @@ impl Texture {
             id: NEXT_TEXTURE_ID.fetch_add(1, Ordering::Relaxed),
             label: label.to_string(),
             pyramid,
+            demand: None,
         }
+    }
+
+    /// True when the texture's tiles are read from its file as lookups touch them.
+    pub fn is_demand_loaded(&self) -> bool {
+        self.demand.is_some()
+    }
+
+    /// Tiles read from the file so far (0 for a texture decoded whole).
+    pub fn tiles_read(&self) -> u64 {
+        self.demand.as_ref().map_or(0, |file| file.tiles_read())
+    }
+
+    /// Tiles the file of a demand-loaded texture holds over all levels (0 for a texture
+    /// decoded whole).
+    pub fn tiles_in_file(&self) -> u64 {
+        self.demand.as_ref().map_or(0, |file| file.tiles_in_file())
+    }
+
+    /// The first tile of a demand-loaded texture that could not be read, as a message
+    /// naming the file, the level and the tile. Lookups that needed it returned zero, so
+    /// a render that made them must be refused.
+    pub fn tile_failure(&self) -> Option<&str> {
+        self.demand.as_ref().and_then(|file| file.failure())
     }
 
     /// Width of level 0 in texels.
@@ -343,8 +402,9 @@ impl Texture {
     /// Average alpha of level 0.
     pub fn mean_alpha(&self) -> f32 {
         let level = &self.pyramid.levels[0];
-        let sum: f64 = (0..level.texels.len())
-            .map(|i| f64::from(level.texels.get(i).w))
+        let sum: f64 = level
+            .coordinates()
+            .map(|(x, y)| f64::from(level.texel(x, y)[3]))
             .sum();
         (sum / level.texels.len() as f64) as f32
     }

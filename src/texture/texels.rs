@@ -12,12 +12,14 @@
 //! Every texel buffer is allocated fallibly ([`try_texel_vec`]): a texture too large for
 //! memory is a [`TextureError::OutOfMemory`] naming it, not an abort.
 
-use std::sync::LazyLock;
+use std::sync::{Arc, LazyLock};
 
 use glam::Vec4;
 use half::f16;
 
+use super::demand_tiles::DemandLevel;
 use super::image_load::srgb_to_linear;
+use super::tile_layout::TileLayout;
 use super::{ColorSpace, TextureError};
 
 /// Decoded value of each byte: byte / 255 (linear data and alpha).
@@ -41,7 +43,9 @@ pub(crate) fn byte_table(color_space: ColorSpace) -> &'static [f32; 256] {
 macro_rules! with_texel_source {
     ($texels:expr, |$source:ident| $body:expr) => {{
         #[allow(unused_imports)]
-        use $crate::texture::texels::{ByteTexels, FloatTexels, HalfTexels, TexelSource, Texels};
+        use $crate::texture::texels::{
+            ByteTexels, FlatTexels, FloatTexels, HalfTexels, TexelSource, Texels,
+        };
         match $texels {
             Texels::Float(t) => {
                 let $source = FloatTexels(t);
@@ -55,13 +59,18 @@ macro_rules! with_texel_source {
                 let $source = ByteTexels::new(texels, *colour);
                 $body
             }
+            Texels::OnDemand(level) => {
+                let $source = $crate::texture::demand_tiles::DemandTexels::new(level);
+                $body
+            }
         }
     }};
 }
 pub(crate) use with_texel_source;
 
-/// A level's texels, row-major with t = 0 first, RGBA, in the source's precision.
-#[derive(Clone, Debug, PartialEq)]
+/// A level's texels, RGBA, in the source's precision. Decoders produce them row-major with
+/// t = 0 first; a [`super::MipLevel`] holds them in the tile order of its `TileLayout`.
+#[derive(Clone, Debug)]
 pub enum Texels {
     /// One byte per channel; colour decoded through `colour` (linear or sRGB), alpha is
     /// byte / 255.
@@ -77,6 +86,9 @@ pub enum Texels {
     Half(Vec<[f16; 4]>),
     /// f32, used as stored.
     Float(Vec<[f32; 4]>),
+    /// Tiles read from the texture's file when a lookup first touches them, each held in
+    /// one of the kinds above.
+    OnDemand(Arc<DemandLevel>),
 }
 
 impl Texels {
@@ -95,6 +107,7 @@ impl Texels {
             Texels::Byte { texels, .. } => texels.len(),
             Texels::Half(t) => t.len(),
             Texels::Float(t) => t.len(),
+            Texels::OnDemand(level) => level.texel_count(),
         }
     }
 
@@ -109,26 +122,57 @@ impl Texels {
             Texels::Byte { .. } => 4,
             Texels::Half(_) => 8,
             Texels::Float(_) => 16,
+            Texels::OnDemand(level) => level.kind().bytes_per_texel(),
         }
     }
 
-    /// Bytes of texel storage.
+    /// Bytes of texel storage (of an on-demand level: of the tiles read so far).
     pub fn memory_bytes(&self) -> usize {
-        self.len() * self.bytes_per_texel()
+        match self {
+            Texels::OnDemand(level) => level.resident_bytes(),
+            _ => self.len() * self.bytes_per_texel(),
+        }
     }
 
-    /// Linear RGBA of texel `index` (in range).
+    /// Reorders row-major texels of a level laid out by `layout` into its tile order.
+    pub(crate) fn rows_to_tiles(&mut self, layout: TileLayout) -> Result<(), String> {
+        match self {
+            Texels::Byte { texels, .. } => layout.rows_to_tiles(texels),
+            Texels::Half(t) => layout.rows_to_tiles(t),
+            Texels::Float(t) => layout.rows_to_tiles(t),
+            // Read in tile order already.
+            Texels::OnDemand(_) => Ok(()),
+        }
+    }
+
+    /// Linear RGBA of texel `index` (in range; in a level, indices follow its tile order).
     #[inline(always)]
     pub fn get(&self, index: usize) -> Vec4 {
-        with_texel_source!(self, |source| source.texel(index))
+        match self {
+            Texels::Float(t) => FloatTexels(t).texel(index),
+            Texels::Half(t) => HalfTexels(t).texel(index),
+            Texels::Byte { texels, colour, .. } => ByteTexels::new(texels, *colour).texel(index),
+            Texels::OnDemand(level) => level.texel_at_index(index),
+        }
     }
 
     /// Texels `k`, `k + 1`, `k + row` and `k + row + 1` (a bilinear footprint), or `None`
     /// when they are not all inside: one storage dispatch and one bounds check for four.
-    #[cfg(test)]
-    pub(crate) fn quad(&self, k: usize, row: usize) -> Option<[Vec4; 4]> {
-        with_texel_source!(self, |source| source
-            .bilinear_quad(k, row, |a, b, c, d| [a, b, c, d]))
+    #[inline(always)]
+    pub(crate) fn quad<R>(
+        &self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        match self {
+            Texels::Float(t) => FloatTexels(t).bilinear_quad(k, row, blend),
+            Texels::Half(t) => HalfTexels(t).bilinear_quad(k, row, blend),
+            Texels::Byte { texels, colour, .. } => {
+                ByteTexels::new(texels, *colour).bilinear_quad(k, row, blend)
+            }
+            Texels::OnDemand(_) => None,
+        }
     }
 
     /// Texels of the same storage kind holding `values` (linear RGBA), each rounded to the
@@ -166,14 +210,45 @@ impl Texels {
                 }));
                 Texels::bytes(out, *color_space)
             }
+            Texels::OnDemand(level) => level.kind().same_kind_from(values, label)?,
         })
     }
 }
 
-/// One storage kind of a level's texels, borrowed. Filters are generic over it and
-/// pick the kind once per lookup (see [`with_texel_source`]), so the loops that fetch
-/// texels are compiled once per kind and a fetch does not branch on the storage.
-pub(crate) trait TexelSource<'a>: Copy {
+impl PartialEq for Texels {
+    /// Equal storage and values; an on-demand level equals whatever holds its values
+    /// (comparing reads every tile).
+    fn eq(&self, other: &Texels) -> bool {
+        match (self, other) {
+            (Texels::Float(a), Texels::Float(b)) => a == b,
+            (Texels::Half(a), Texels::Half(b)) => a == b,
+            (
+                Texels::Byte {
+                    texels: a,
+                    color_space: ca,
+                    ..
+                },
+                Texels::Byte {
+                    texels: b,
+                    color_space: cb,
+                    ..
+                },
+            ) => a == b && ca == cb,
+            (Texels::OnDemand(_), _) | (_, Texels::OnDemand(_)) => {
+                self.len() == other.len()
+                    && self.bytes_per_texel() == other.bytes_per_texel()
+                    && (0..self.len()).all(|i| self.get(i) == other.get(i))
+            }
+            _ => false,
+        }
+    }
+}
+
+/// One storage kind of texels in one buffer, borrowed, addressed by index. Filters are
+/// generic over it and pick the kind once per lookup (see [`with_texel_source`]), so the
+/// loops that fetch texels are compiled once per kind and a fetch does not branch on the
+/// storage.
+pub(crate) trait FlatTexels<'a>: Copy {
     /// The texels of `texels` when they are of this kind.
     fn view(texels: &'a Texels) -> Option<Self>;
 
@@ -189,6 +264,83 @@ pub(crate) trait TexelSource<'a>: Copy {
         blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
     ) -> Option<R>;
 }
+
+/// A level's texels as the filters read them: by coordinates, through the tile that holds
+/// them (a fetch is a tile lookup plus an offset in the tile).
+pub(crate) trait TexelSource<'a>: Copy {
+    /// Where the texels of one tile are.
+    type Tile: FlatTexels<'a>;
+
+    /// The texels of `texels` when they are of this kind.
+    fn view(texels: &'a Texels) -> Option<Self>;
+
+    /// The texels holding tile (`tile_x`, `tile_y`) of a level tiled by `layout`, and the
+    /// index of the tile's first texel in them; `None` when the tile cannot be read (the
+    /// failure is recorded where the texture reports it).
+    fn tile(self, layout: TileLayout, tile_x: usize, tile_y: usize)
+        -> Option<(Self::Tile, usize)>;
+
+    /// Linear RGBA of texel (x, y) (in range); zero when its tile cannot be read.
+    #[inline(always)]
+    fn texel_at(self, layout: TileLayout, x: usize, y: usize) -> Vec4 {
+        let (tile_x, tile_y, offset) = layout.locate(x, y);
+        match self.tile(layout, tile_x, tile_y) {
+            Some((tile, start)) => tile.texel(start + offset),
+            None => Vec4::ZERO,
+        }
+    }
+
+    /// `blend` of texels (x, y), (x + 1, y), (x, y + 1) and (x + 1, y + 1), all inside the
+    /// level: one bounds check for four when they share a tile. `None` when a tile cannot
+    /// be read.
+    #[inline(always)]
+    fn bilinear_block<R>(
+        self,
+        layout: TileLayout,
+        x: usize,
+        y: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        match layout.block_in_one_tile(x, y) {
+            Some((tile_x, tile_y, offset, stride)) => {
+                let (tile, start) = self.tile(layout, tile_x, tile_y)?;
+                tile.bilinear_quad(start + offset, stride, blend)
+            }
+            // Across a tile edge (about 1 block in 32): four fetches.
+            None => Some(blend(
+                self.texel_at(layout, x, y),
+                self.texel_at(layout, x + 1, y),
+                self.texel_at(layout, x, y + 1),
+                self.texel_at(layout, x + 1, y + 1),
+            )),
+        }
+    }
+}
+
+/// A resident kind is its own tile source: every tile lies in the one buffer.
+macro_rules! resident_texel_source {
+    ($($kind:ident),+) => {$(
+        impl<'a> TexelSource<'a> for $kind<'a> {
+            type Tile = Self;
+
+            #[inline(always)]
+            fn view(texels: &'a Texels) -> Option<Self> {
+                <Self as FlatTexels<'a>>::view(texels)
+            }
+
+            #[inline(always)]
+            fn tile(
+                self,
+                layout: TileLayout,
+                tile_x: usize,
+                tile_y: usize,
+            ) -> Option<(Self, usize)> {
+                Some((self, layout.tile_start(tile_x, tile_y)))
+            }
+        }
+    )+};
+}
+resident_texel_source!(FloatTexels, HalfTexels, ByteTexels);
 
 /// f32 texels, used as stored.
 #[derive(Clone, Copy)]
@@ -206,7 +358,7 @@ pub(crate) struct ByteTexels<'a> {
     alpha: &'static [f32; 256],
 }
 
-impl<'a> TexelSource<'a> for FloatTexels<'a> {
+impl<'a> FlatTexels<'a> for FloatTexels<'a> {
     #[inline(always)]
     fn view(texels: &'a Texels) -> Option<Self> {
         match texels {
@@ -237,7 +389,7 @@ impl<'a> TexelSource<'a> for FloatTexels<'a> {
     }
 }
 
-impl<'a> TexelSource<'a> for HalfTexels<'a> {
+impl<'a> FlatTexels<'a> for HalfTexels<'a> {
     #[inline(always)]
     fn view(texels: &'a Texels) -> Option<Self> {
         match texels {
@@ -278,7 +430,7 @@ impl<'a> ByteTexels<'a> {
     }
 }
 
-impl<'a> TexelSource<'a> for ByteTexels<'a> {
+impl<'a> FlatTexels<'a> for ByteTexels<'a> {
     #[inline(always)]
     fn view(texels: &'a Texels) -> Option<Self> {
         match texels {
@@ -431,10 +583,10 @@ mod tests {
             float.same_kind_from(&values, "t").unwrap(),
             Texels::Half(vec![]).same_kind_from(&values, "t").unwrap(),
         ] {
-            let q = texels.quad(1, 3).unwrap();
+            let q = texels.quad(1, 3, |a, b, c, d| [a, b, c, d]).unwrap();
             assert_eq!(q.map(|v| v.x), [1.0 / 8.0, 2.0 / 8.0, 4.0 / 8.0, 5.0 / 8.0]);
-            assert!(texels.quad(2, 3).is_none());
-            assert!(texels.quad(usize::MAX - 1, 3).is_none());
+            assert!(texels.quad(2, 3, |a, _, _, _| a).is_none());
+            assert!(texels.quad(usize::MAX - 1, 3, |a, _, _, _| a).is_none());
         }
     }
 

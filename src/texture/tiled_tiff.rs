@@ -22,7 +22,7 @@
 //!
 //! This module must not filter or resample: it returns the levels exactly as stored.
 
-use std::io::Cursor;
+use std::io::{Cursor, Read, Seek};
 
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
@@ -91,46 +91,79 @@ pub(crate) fn decode(
     Ok(levels)
 }
 
+/// How the samples of one TIFF directory (a level) are stored.
+pub(crate) struct DirectoryFormat {
+    /// Level size in texels.
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    /// Samples per texel.
+    pub(crate) channels: usize,
+    /// Bytes per sample.
+    pub(crate) bytes_per_sample: usize,
+    /// All of channel 0, then all of channel 1, ... instead of interleaved texels.
+    pub(crate) separate_planes: bool,
+}
+
+impl DirectoryFormat {
+    /// The format of the decoder's current directory, or why a texture cannot use it.
+    pub(crate) fn read<R: Read + Seek>(decoder: &mut Decoder<R>) -> Result<Self, String> {
+        let (width, height) = decoder.dimensions().map_err(|e| e.to_string())?;
+        let (channels, bits) = match decoder.colortype().map_err(|e| e.to_string())? {
+            ColorType::Gray(b) => (1, b),
+            ColorType::GrayA(b) => (2, b),
+            ColorType::RGB(b) => (3, b),
+            ColorType::RGBA(b) => (4, b),
+            ColorType::Multiband {
+                num_samples,
+                bit_depth,
+            } => (usize::from(num_samples), bit_depth),
+            other => return Err(format!("unsupported colour type {other:?}")),
+        };
+        if !matches!(bits, 8 | 16 | 32 | 64) {
+            return Err(format!("unsupported {bits}-bit samples"));
+        }
+        // Grey stored as 0 = white would need inverting; maketx never writes it.
+        let photometric = decoder
+            .find_tag_unsigned::<u16>(Tag::PhotometricInterpretation)
+            .map_err(|e| e.to_string())?;
+        if !matches!(photometric, Some(1) | Some(2)) {
+            return Err(format!(
+                "unsupported photometric interpretation {photometric:?} (expected grey or RGB)"
+            ));
+        }
+        let separate_planes = match decoder
+            .find_tag_unsigned::<u16>(Tag::PlanarConfiguration)
+            .map_err(|e| e.to_string())?
+        {
+            None | Some(1) => false,
+            Some(2) => true,
+            Some(other) => return Err(format!("unknown planar configuration {other}")),
+        };
+        Ok(DirectoryFormat {
+            width,
+            height,
+            channels,
+            bytes_per_sample: usize::from(bits / 8),
+            separate_planes,
+        })
+    }
+}
+
 /// Reads the decoder's current directory as one level.
-fn decode_directory(
-    decoder: &mut Decoder<Cursor<&[u8]>>,
+fn decode_directory<R: Read + Seek>(
+    decoder: &mut Decoder<R>,
     color_space: ColorSpace,
 ) -> Result<MipLevel, String> {
-    let (width, height) = decoder.dimensions().map_err(|e| e.to_string())?;
-    let (channels, bits) = match decoder.colortype().map_err(|e| e.to_string())? {
-        ColorType::Gray(b) => (1, b),
-        ColorType::GrayA(b) => (2, b),
-        ColorType::RGB(b) => (3, b),
-        ColorType::RGBA(b) => (4, b),
-        ColorType::Multiband {
-            num_samples,
-            bit_depth,
-        } => (usize::from(num_samples), bit_depth),
-        other => return Err(format!("unsupported colour type {other:?}")),
-    };
-    if !matches!(bits, 8 | 16 | 32 | 64) {
-        return Err(format!("unsupported {bits}-bit samples"));
-    }
-    // Grey stored as 0 = white would need inverting; maketx never writes it.
-    let photometric = decoder
-        .find_tag_unsigned::<u16>(Tag::PhotometricInterpretation)
-        .map_err(|e| e.to_string())?;
-    if !matches!(photometric, Some(1) | Some(2)) {
-        return Err(format!(
-            "unsupported photometric interpretation {photometric:?} (expected grey or RGB)"
-        ));
-    }
-    let separate_planes = match decoder
-        .find_tag_unsigned::<u16>(Tag::PlanarConfiguration)
-        .map_err(|e| e.to_string())?
-    {
-        None | Some(1) => false,
-        Some(2) => true,
-        Some(other) => return Err(format!("unknown planar configuration {other}")),
-    };
-
-    let data = if separate_planes {
-        read_separate_planes(decoder, width, height, channels, usize::from(bits / 8))?
+    let format = DirectoryFormat::read(decoder)?;
+    let (width, height) = (format.width, format.height);
+    let data = if format.separate_planes {
+        read_separate_planes(
+            decoder,
+            width,
+            height,
+            format.channels,
+            format.bytes_per_sample,
+        )?
     } else {
         let mut data = DecodingResult::U8(Vec::new());
         decoder
@@ -138,56 +171,21 @@ fn decode_directory(
             .map_err(|e| e.to_string())?;
         data
     };
-    let layout = Layout {
+    let layout = SampleLayout {
         width,
         height,
-        channels,
-        separate_planes,
+        channels: format.channels,
+        separate_planes: format.separate_planes,
     };
-    let srgb = color_space == ColorSpace::Srgb;
-    let integer = |v: f32, role: Channel| {
-        if srgb && role == Channel::Colour {
-            srgb_to_linear(v)
-        } else {
-            v
-        }
-    };
-    let level = |texels: Texels| MipLevel::with_texels(width, height, texels);
-    match data {
-        // Bytes stay bytes: the colour space's table decodes them at fetch.
-        DecodingResult::U8(v) => level(Texels::bytes(
-            layout.assemble(v.len(), 255, |i, _| v[i])?,
-            color_space,
-        )),
-        DecodingResult::U16(v) => level(Texels::Float(layout.assemble(
-            v.len(),
-            1.0,
-            |i, role| integer((f64::from(v[i]) / 65535.0) as f32, role),
-        )?)),
-        DecodingResult::U32(v) => level(Texels::Float(layout.assemble(
-            v.len(),
-            1.0,
-            |i, role| integer((f64::from(v[i]) / f64::from(u32::MAX)) as f32, role),
-        )?)),
-        DecodingResult::F16(v) => level(Texels::Half(layout.assemble(
-            v.len(),
-            half::f16::ONE,
-            |i, _| v[i],
-        )?)),
-        DecodingResult::F32(v) => level(Texels::Float(layout.assemble(v.len(), 1.0, |i, _| v[i])?)),
-        DecodingResult::F64(v) => level(Texels::Float(
-            layout.assemble(v.len(), 1.0, |i, _| v[i] as f32)?,
-        )),
-        _ => Err(UNSUPPORTED_SAMPLES.to_string()),
-    }
+    MipLevel::with_texels(width, height, layout.texels(data, color_space)?)
 }
 
 /// Reads a level stored as separate planes chunk by chunk (tile or strip), placing each
 /// chunk's rows into one plane-major buffer: all of channel 0, then channel 1, ... The
 /// `tiff` crate's whole-image read does not lay out tiled separate planes correctly, and
 /// a chunk holds a single channel, so the assembly is done here.
-fn read_separate_planes(
-    decoder: &mut Decoder<Cursor<&[u8]>>,
+fn read_separate_planes<R: Read + Seek>(
+    decoder: &mut Decoder<R>,
     width: u32,
     height: u32,
     channels: usize,
@@ -284,16 +282,53 @@ enum Channel {
     Alpha,
 }
 
-/// Where the samples of one decoded level are.
-struct Layout {
-    width: u32,
-    height: u32,
-    channels: usize,
+/// Where the samples of one decoded level (or tile) are.
+pub(crate) struct SampleLayout {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) channels: usize,
     /// All of channel 0, then all of channel 1, ... instead of interleaved texels.
-    separate_planes: bool,
+    pub(crate) separate_planes: bool,
 }
 
-impl Layout {
+impl SampleLayout {
+    /// RGBA texels, row-major, from the decoded samples `data` of a `width` x `height`
+    /// region (a level or one tile).
+    pub(crate) fn texels(
+        &self,
+        data: DecodingResult,
+        color_space: ColorSpace,
+    ) -> Result<Texels, String> {
+        let srgb = color_space == ColorSpace::Srgb;
+        let integer = |v: f32, role: Channel| {
+            if srgb && role == Channel::Colour {
+                srgb_to_linear(v)
+            } else {
+                v
+            }
+        };
+        Ok(match data {
+            // Bytes stay bytes: the colour space's table decodes them at fetch.
+            DecodingResult::U8(v) => {
+                Texels::bytes(self.assemble(v.len(), 255, |i, _| v[i])?, color_space)
+            }
+            DecodingResult::U16(v) => Texels::Float(self.assemble(v.len(), 1.0, |i, role| {
+                integer((f64::from(v[i]) / 65535.0) as f32, role)
+            })?),
+            DecodingResult::U32(v) => Texels::Float(self.assemble(v.len(), 1.0, |i, role| {
+                integer((f64::from(v[i]) / f64::from(u32::MAX)) as f32, role)
+            })?),
+            DecodingResult::F16(v) => {
+                Texels::Half(self.assemble(v.len(), half::f16::ONE, |i, _| v[i])?)
+            }
+            DecodingResult::F32(v) => Texels::Float(self.assemble(v.len(), 1.0, |i, _| v[i])?),
+            DecodingResult::F64(v) => {
+                Texels::Float(self.assemble(v.len(), 1.0, |i, _| v[i] as f32)?)
+            }
+            _ => return Err(UNSUPPORTED_SAMPLES.to_string()),
+        })
+    }
+
     /// The role of channel `c`: the second of two, and the fourth of four or more, are alpha.
     fn role(&self, c: usize) -> Channel {
         match (self.channels, c) {
