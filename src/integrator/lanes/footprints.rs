@@ -45,6 +45,11 @@ pub(crate) fn lane_footprint(footprint: &Footprint, t: f32) -> Option<LaneFootpr
 #[inline(never)]
 pub(crate) fn texture_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_aniso: f32) {
     let len = lanes.len();
+    if cone_width[..len].iter().all(Option::is_none) {
+        // Point samples only (mip0, or no textured lane): no ellipse is projected.
+        super::refill(&mut lanes.gradients, len, [0.0; 4]);
+        return;
+    }
     lanes.gradients.resize(len, [0.0; 4]);
     lanes.degenerate.resize(len, false);
     simd::run_at(
