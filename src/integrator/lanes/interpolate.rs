@@ -56,24 +56,44 @@ fn spawn_points(lanes: &mut WaveLanes, len: usize) {
     }
 }
 
-/// Edges, the unnormalised and unit geometric normal, and the interpolated shading normal on
-/// the geometric normal's side (the geometric normal where the vertex normals give none).
+/// Edges, the unnormalised and unit geometric normal, then the shading normal (two loops,
+/// each with few enough arrays that the compiler vectorises it).
 #[inline(always)]
 fn normals(lanes: &mut WaveLanes, len: usize) {
+    geometric_normals(lanes, len);
+    shading_normals(lanes, len);
+}
+
+/// Edges, `e1 x e2` and the unit geometric normal (+Y for a degenerate triangle).
+#[inline(always)]
+fn geometric_normals(lanes: &mut WaveLanes, len: usize) {
     let p = corner_lanes(&lanes.p, len);
-    let n = corner_lanes(&lanes.n, len);
-    let (u, v) = (&lanes.u[..len], &lanes.v[..len]);
     let mut edge1 = lanes.edge1.lanes_mut(len);
     let mut edge2 = lanes.edge2.lanes_mut(len);
     let mut area_normal = lanes.area_normal.lanes_mut(len);
     let mut geometric_normal = lanes.geometric_normal.lanes_mut(len);
-    let mut shading_normal = lanes.shading_normal.lanes_mut(len);
     for lane in 0..len {
         let p0 = p[0].get(lane);
         let e1 = p[1].get(lane) - p0;
         let e2 = p[2].get(lane) - p0;
         let area = e1.cross(e2);
-        let geometric = normalize_or(area, Vec3::Y);
+        edge1.set(lane, e1);
+        edge2.set(lane, e2);
+        area_normal.set(lane, area);
+        geometric_normal.set(lane, normalize_or(area, Vec3::Y));
+    }
+}
+
+/// The interpolated shading normal on the geometric normal's side (the geometric normal
+/// where the vertex normals give none).
+#[inline(always)]
+fn shading_normals(lanes: &mut WaveLanes, len: usize) {
+    let n = corner_lanes(&lanes.n, len);
+    let (u, v) = (&lanes.u[..len], &lanes.v[..len]);
+    let geometric_normal = lanes.geometric_normal.lanes(len);
+    let mut shading_normal = lanes.shading_normal.lanes_mut(len);
+    for lane in 0..len {
+        let geometric = geometric_normal.get(lane);
         let (u, v) = (u[lane], v[lane]);
         let w = 1.0 - u - v;
         let interpolated = n[0].get(lane) * w + n[1].get(lane) * u + n[2].get(lane) * v;
@@ -81,10 +101,6 @@ fn normals(lanes: &mut WaveLanes, len: usize) {
         // the geometric normal as the scalar path's explicit finiteness test does.
         let shading = normalize_or(interpolated, geometric);
         let facing = select(shading.dot(geometric) < 0.0, -shading, shading);
-        edge1.set(lane, e1);
-        edge2.set(lane, e2);
-        area_normal.set(lane, area);
-        geometric_normal.set(lane, geometric);
         shading_normal.set(lane, facing);
     }
 }
