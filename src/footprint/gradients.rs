@@ -85,7 +85,9 @@ impl TextureGradients {
 ///
 /// `max_aniso` is clamped to [1, 1e6]. A head-on hit (D parallel to N) has no preferred axis
 /// and gets an arbitrary orthonormal pair of the tangent plane.
-#[inline]
+// Always inlined: lane loops (`integrator::lanes::footprints`) vectorise only what is
+// inlined into them.
+#[inline(always)]
 pub fn project_cone_to_ellipse(
     width: f32,
     dir: Vec3,

@@ -16,7 +16,7 @@ pub const MAX_MAGNITUDE: f32 = 1.0e9;
 pub const MIN_COSINE: f32 = 1.0e-7;
 
 /// `x` clamped to `[-MAX_MAGNITUDE, MAX_MAGNITUDE]`, with NaN mapped to 0.
-#[inline]
+#[inline(always)]
 pub fn finite(x: f32) -> f32 {
     if x.is_nan() {
         0.0
@@ -36,25 +36,28 @@ pub fn finite3(v: Vec3) -> Vec3 {
 }
 
 /// `v` normalised, or `fallback` when `v` is zero, tiny or not finite.
-#[inline]
+// Always inlined, and the quotient computed either way, so that a lane loop calling it
+// compiles to selects and vectorises (`integrator::lanes::footprints`).
+#[inline(always)]
 pub fn unit_or(v: Vec3, fallback: Vec3) -> Vec3 {
     let len2 = v.length_squared();
+    let unit = v * len2.sqrt().recip();
     if len2.is_finite() && len2 > 1.0e-30 {
-        v * len2.sqrt().recip()
+        unit
     } else {
         fallback
     }
 }
 
 /// A unit ray direction from whatever the caller passed (NaN or zero becomes -Z).
-#[inline]
+#[inline(always)]
 pub fn unit_direction(dir: Vec3) -> Vec3 {
     unit_or(dir, Vec3::NEG_Z)
 }
 
 /// A unit surface normal from `n`, falling back to facing the ray (`-dir`) when `n` is zero,
 /// tiny or not finite: the footprint is then treated as a head-on hit.
-#[inline]
+#[inline(always)]
 pub fn unit_normal(n: Vec3, dir: Vec3) -> Vec3 {
     unit_or(n, -dir)
 }

@@ -139,9 +139,11 @@ pub fn light_position(light: &Light) -> Option<Vec3> {
     }
 }
 
-/// Inverse-square sample of a point source of radiant intensity `intensity_rgb`.
+/// Inverse-square sample of a point source of radiant intensity `intensity_rgb` at
+/// `position`, seen from `p` ([`sample_li`] of a point light, for callers that take the
+/// light apart once for many points).
 #[inline]
-fn point_sample(position: Vec3, p: Vec3, intensity_rgb: Vec3) -> LightSample {
+pub fn point_sample(position: Vec3, p: Vec3, intensity_rgb: Vec3) -> LightSample {
     let to_light = position - p;
     let distance2 = to_light.length_squared();
     let distance = distance2.sqrt();

@@ -168,7 +168,9 @@ impl SpawnPoint {
     /// geometric normal, flipped by the caller to the side the ray goes to): the point
     /// moved along `leave_normal` past its error box, then each coordinate rounded one float
     /// further away from the surface. Non-finite points are returned unchanged.
-    #[inline]
+    // Always inlined, as lane loops (`integrator::lanes::lights`) vectorise only what is
+    // inlined into them.
+    #[inline(always)]
     pub fn offset_origin(&self, leave_normal: Vec3) -> Vec3 {
         let p = self.position;
         if !p.is_finite() || !leave_normal.is_finite() {
@@ -318,7 +320,7 @@ pub fn entry_distances<const N: usize>(
 }
 
 /// `x` moved to the next float in the direction of `sign` (unchanged when `sign` is zero).
-#[inline]
+#[inline(always)]
 fn away(x: f32, sign: f32) -> f32 {
     if sign > 0.0 {
         x.next_up()

@@ -5,9 +5,11 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{refill, WaveLanes};
+use super::soa::corner_lanes_2;
+use super::WaveLanes;
 use crate::footprint::robust::{unit_direction, unit_normal};
 use crate::footprint::{general_st_offset, project_cone_to_ellipse, Footprint, TextureGradients};
+use crate::simd;
 
 /// A footprint at a hit as the lanes take it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,20 +37,84 @@ pub(crate) fn lane_footprint(footprint: &Footprint, t: f32) -> Option<LaneFootpr
 /// Texture gradients of every lane into `lanes.gradients`: zero (a point sample) for lanes
 /// with no footprint width (`cone_width` `None`), or without texture coordinates; otherwise
 /// the projected cone mapped to st, the stretch clamped to `max_aniso`.
+///
+/// One vector loop ([`barycentric_gradients`]) does every lane on a triangle with usable
+/// barycentric offsets; the few on degenerate triangles are done again, lane by lane,
+/// through dP/ds and dP/dt.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn texture_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_aniso: f32) {
     let len = lanes.len();
-    refill(&mut lanes.gradients, len, [0.0; 4]);
-    for (lane, &width) in cone_width.iter().enumerate().take(len) {
-        let (Some(width), true) = (width, lanes.has_st[lane]) else {
-            continue;
-        };
-        let d = unit_direction(lanes.direction[lane]);
-        let n = unit_normal(lanes.geometric_normal[lane], d);
+    if cone_width[..len].iter().all(Option::is_none) {
+        // Point samples only (mip0, or no textured lane): no ellipse is projected.
+        super::refill(&mut lanes.gradients, len, [0.0; 4]);
+        return;
+    }
+    lanes.gradients.resize(len, [0.0; 4]);
+    lanes.degenerate.resize(len, false);
+    simd::run_at(
+        lanes.level(),
+        #[inline(always)]
+        || barycentric_gradients(lanes, &cone_width[..len], max_aniso),
+    );
+    for lane in 0..len {
+        if lanes.degenerate[lane] {
+            let (dpdx, dpdy) =
+                ellipse_axes(lanes, lane, cone_width[lane].unwrap_or(0.0), max_aniso);
+            let g = triangle_gradients(lanes, lane, dpdx, dpdy);
+            lanes.gradients[lane] = [g.dsdx, g.dtdx, g.dsdy, g.dtdy];
+        }
+    }
+}
+
+/// The world-space axes of lane `lane`'s footprint ellipse.
+#[inline(always)]
+fn ellipse_axes(lanes: &WaveLanes, lane: usize, width: f32, max_aniso: f32) -> (Vec3, Vec3) {
+    let d = unit_direction(lanes.direction.get(lane));
+    let n = unit_normal(lanes.geometric_normal.get(lane), d);
+    project_cone_to_ellipse(width, d, n, max_aniso)
+}
+
+/// The gradients of every lane whose triangle gives barycentric offsets for the ellipse's
+/// first axis (`triangle_gradients`' first case, without branches), and in
+/// `lanes.degenerate` the textured lanes whose triangle does not.
+#[inline(always)]
+fn barycentric_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_aniso: f32) {
+    let len = lanes.len();
+    let direction = lanes.direction.lanes(len);
+    let normal = lanes.geometric_normal.lanes(len);
+    let (e1, e2) = (lanes.edge1.lanes(len), lanes.edge2.lanes(len));
+    let area_normal = lanes.area_normal.lanes(len);
+    let [[s0, t0], [s1, t1], [s2, t2]] = corner_lanes_2(&lanes.st_vertices, len);
+    let has_st = &lanes.has_st[..len];
+    let gradients = &mut lanes.gradients[..len];
+    let degenerate = &mut lanes.degenerate[..len];
+    for lane in 0..len {
+        let textured = cone_width[lane].is_some() && has_st[lane];
+        let d = unit_direction(direction.get(lane));
+        let n = unit_normal(normal.get(lane), d);
+        let width = cone_width[lane].unwrap_or(0.0);
         let (dpdx, dpdy) = project_cone_to_ellipse(width, d, n, max_aniso);
-        let g = triangle_gradients(lanes, lane, dpdx, dpdy);
-        lanes.gradients[lane] = [g.dsdx, g.dtdx, g.dsdy, g.dtdy];
+        let frame = BarycentricFrame {
+            e1: e1.get(lane),
+            e2: e2.get(lane),
+            n: area_normal.get(lane),
+        };
+        let st0 = Vec2::new(s0[lane], t0[lane]);
+        let st1 = Vec2::new(s1[lane], t1[lane]);
+        let st2 = Vec2::new(s2[lane], t2[lane]);
+        let along = |b: Vec2| (st1 - st0) * b.x + (st2 - st0) * b.y;
+        let x_offsets = frame.offsets(dpdx);
+        let ddx = x_offsets.map_or(Vec2::ZERO, along);
+        let ddy = frame.offsets(dpdy).map_or(Vec2::ZERO, along);
+        let g = TextureGradients::from_axes(ddx, ddy);
+        let barycentric = textured && x_offsets.is_some();
+        gradients[lane] = if barycentric {
+            [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
+        } else {
+            [0.0; 4]
+        };
+        degenerate[lane] = textured && x_offsets.is_none();
     }
 }
 
@@ -57,18 +123,18 @@ pub(crate) fn texture_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>
 /// (`footprint::surface_gradients`).
 fn triangle_gradients(lanes: &WaveLanes, lane: usize, dpdx: Vec3, dpdy: Vec3) -> TextureGradients {
     let frame = BarycentricFrame {
-        e1: lanes.edge1[lane],
-        e2: lanes.edge2[lane],
-        n: lanes.area_normal[lane],
+        e1: lanes.edge1.get(lane),
+        e2: lanes.edge2.get(lane),
+        n: lanes.area_normal.get(lane),
     };
-    let st = [0, 1, 2].map(|i| lanes.st_vertices[i][lane]);
+    let st = [0, 1, 2].map(|i| lanes.st_vertices[i].get(lane));
     let (ddx, ddy) = match frame.offsets(dpdx) {
         Some(bx) => {
             let along = |b: Vec2| (st[1] - st[0]) * b.x + (st[2] - st[0]) * b.y;
             (along(bx), frame.offsets(dpdy).map_or(Vec2::ZERO, along))
         }
         None => {
-            let p = [0, 1, 2].map(|i| lanes.p[i][lane]);
+            let p = [0, 1, 2].map(|i| lanes.p[i].get(lane));
             let (dpds, dpdt) = crate::render::prepared::triangle_position_derivatives(p, st);
             (
                 general_st_offset(dpds, dpdt, dpdx),
@@ -91,7 +157,7 @@ struct BarycentricFrame {
 impl BarycentricFrame {
     /// Barycentric offsets (du, dv) of the displacement `d`; `None` for a degenerate
     /// triangle or non-finite offsets.
-    #[inline]
+    #[inline(always)]
     fn offsets(&self, d: Vec3) -> Option<Vec2> {
         let (e1, e2, n) = (self.e1, self.e2, self.n);
         let nn = n.length_squared();

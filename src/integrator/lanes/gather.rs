@@ -1,6 +1,6 @@
-//! Stage 1: the vertex data of each lane's triangle, gathered into lane arrays.
-
-use glam::{Vec2, Vec3};
+//! Stage 1: the vertex data of each lane's triangle, gathered into lane arrays (one array
+//! per coordinate). Indexed loads from the meshes: the one stage that cannot be a straight
+//! vector loop.
 
 use super::{refill, WaveLanes};
 use crate::scene::TriangleMesh;
@@ -12,19 +12,19 @@ use crate::scene::TriangleMesh;
 pub(crate) fn gather_triangles(lanes: &mut WaveLanes, meshes: &[TriangleMesh]) {
     let len = lanes.len();
     for array in lanes.p.iter_mut().chain(lanes.n.iter_mut()) {
-        refill(array, len, Vec3::ZERO);
+        array.refill(len);
     }
     refill(&mut lanes.has_st, len, false);
     for lane in 0..len {
         let mesh = &meshes[lanes.mesh[lane] as usize];
-        let [i0, i1, i2] = mesh.triangles[lanes.triangle[lane] as usize].map(|i| i as usize);
-        lanes.p[0][lane] = mesh.positions[i0];
-        lanes.p[1][lane] = mesh.positions[i1];
-        lanes.p[2][lane] = mesh.positions[i2];
+        let corners = mesh.triangles[lanes.triangle[lane] as usize].map(|i| i as usize);
+        for (corner, &i) in corners.iter().enumerate() {
+            lanes.p[corner].set(lane, mesh.positions[i]);
+        }
         if !mesh.normals.is_empty() {
-            lanes.n[0][lane] = mesh.normals[i0];
-            lanes.n[1][lane] = mesh.normals[i1];
-            lanes.n[2][lane] = mesh.normals[i2];
+            for (corner, &i) in corners.iter().enumerate() {
+                lanes.n[corner].set(lane, mesh.normals[i]);
+            }
         }
         lanes.has_st[lane] = lanes.wants_st[lane] && !mesh.st.is_empty();
     }
@@ -35,16 +35,16 @@ pub(crate) fn gather_triangles(lanes: &mut WaveLanes, meshes: &[TriangleMesh]) {
 fn gather_texture_coordinates(lanes: &mut WaveLanes, meshes: &[TriangleMesh]) {
     let len = lanes.len();
     for array in &mut lanes.st_vertices {
-        refill(array, len, Vec2::ZERO);
+        array.refill(len);
     }
     for lane in 0..len {
         if !lanes.has_st[lane] {
             continue;
         }
         let mesh = &meshes[lanes.mesh[lane] as usize];
-        let [i0, i1, i2] = mesh.triangles[lanes.triangle[lane] as usize].map(|i| i as usize);
-        lanes.st_vertices[0][lane] = mesh.st[i0];
-        lanes.st_vertices[1][lane] = mesh.st[i1];
-        lanes.st_vertices[2][lane] = mesh.st[i2];
+        let corners = mesh.triangles[lanes.triangle[lane] as usize].map(|i| i as usize);
+        for (corner, &i) in corners.iter().enumerate() {
+            lanes.st_vertices[corner].set(lane, mesh.st[i]);
+        }
     }
 }

@@ -1,27 +1,77 @@
 //! Stage 5: the punctual lights seen from the lanes' points, one light at a time over all
 //! lanes (`shading::sample_li`), and the shadow rays towards them
 //! (`shading::shadow_ray_towards`, from the point offset past its error bound).
+//!
+//! The loops read and write one array per coordinate and run at the level
+//! `simd::dispatch` picks, with the scalar functions' operations in their order.
 
 use glam::Vec3;
 
-use super::{refill, WaveLanes};
+use super::soa::Vec3Slices;
+use super::WaveLanes;
 use crate::scene::Light;
 use crate::shading::{self, SpawnPoint};
+use crate::simd;
 
 /// Every light's direction and irradiance scale at every lane's point, light-major
-/// (`lanes.light_direction[light * lanes + lane]`).
+/// (`lanes.light_direction.x[light * lanes + lane]`).
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn sample_lights(lanes: &mut WaveLanes, lights: &[Light]) {
     let len = lanes.len();
-    refill(&mut lanes.light_direction, len * lights.len(), Vec3::ZERO);
-    refill(&mut lanes.light_scale, len * lights.len(), Vec3::ZERO);
-    for (index, light) in lights.iter().enumerate() {
-        let first = index * len;
-        for lane in 0..len {
-            let sample = shading::sample_li(light, lanes.position[lane]);
-            lanes.light_direction[first + lane] = sample.direction_to_light;
-            lanes.light_scale[first + lane] = sample.radiance_scale;
+    lanes.light_direction.resize(len * lights.len());
+    lanes.light_scale.resize(len * lights.len());
+    simd::run_at(
+        lanes.level(),
+        #[inline(always)]
+        || {
+            for (index, light) in lights.iter().enumerate() {
+                sample_light(lanes, light, index * len);
+            }
+        },
+    );
+}
+
+/// One light at every lane, into the per-light arrays starting at `first`. Point lights,
+/// the common case, get a loop of their own, without the match on the light's kind.
+#[inline(always)]
+fn sample_light(lanes: &mut WaveLanes, light: &Light, first: usize) {
+    let len = lanes.len();
+    let position = lanes.position.lanes(len);
+    let range = first..first + len;
+    let [dx, dy, dz] = [
+        &mut lanes.light_direction.x[range.clone()],
+        &mut lanes.light_direction.y[range.clone()],
+        &mut lanes.light_direction.z[range.clone()],
+    ];
+    let [sx, sy, sz] = [
+        &mut lanes.light_scale.x[range.clone()],
+        &mut lanes.light_scale.y[range.clone()],
+        &mut lanes.light_scale.z[range],
+    ];
+    let mut store = |lane: usize, sample: shading::LightSample| {
+        (dx[lane], dy[lane], dz[lane]) = sample.direction_to_light.into();
+        (sx[lane], sy[lane], sz[lane]) = sample.radiance_scale.into();
+    };
+    match light {
+        Light::Point {
+            position: at,
+            color,
+            intensity,
+        } => {
+            let radiant_intensity = *color * *intensity;
+            for lane in 0..len {
+                let p = position.get(lane);
+                store(
+                    lane,
+                    shading::lights::point_sample(*at, p, radiant_intensity),
+                );
+            }
+        }
+        _ => {
+            for lane in 0..len {
+                store(lane, shading::sample_li(light, position.get(lane)));
+            }
         }
     }
 }
@@ -33,32 +83,62 @@ pub(crate) fn sample_lights(lanes: &mut WaveLanes, lights: &[Light]) {
 #[inline(never)]
 pub(crate) fn shadow_rays(lanes: &mut WaveLanes, lights: &[Light]) {
     let len = lanes.len();
-    refill(&mut lanes.shadow_origin, len, Vec3::ZERO);
+    lanes.shadow_origin.resize(len);
+    lanes.shadow_direction.resize(len * lights.len());
+    lanes.shadow_tfar.resize(len * lights.len(), 0.0);
+    simd::run_at(
+        lanes.level(),
+        #[inline(always)]
+        || {
+            shadow_origins(lanes);
+            for (index, light) in lights.iter().enumerate() {
+                shadow_segments(lanes, light, index * len);
+            }
+        },
+    );
+}
+
+/// Each lane's point moved past its error bound to the viewer's side.
+#[inline(always)]
+fn shadow_origins(lanes: &mut WaveLanes) {
+    let len = lanes.len();
+    let position = lanes.position.lanes(len);
+    let error = lanes.error.lanes(len);
+    let normal = lanes.incident_geometric.lanes(len);
+    let mut origin = lanes.shadow_origin.lanes_mut(len);
     for lane in 0..len {
         let spawn = SpawnPoint {
-            position: lanes.position[lane],
-            error: lanes.error[lane],
+            position: position.get(lane),
+            error: error.get(lane),
         };
-        lanes.shadow_origin[lane] = spawn.offset_origin(lanes.incident_geometric[lane]);
+        origin.set(lane, spawn.offset_origin(normal.get(lane)));
     }
-    refill(&mut lanes.shadow_direction, len * lights.len(), Vec3::ZERO);
-    refill(&mut lanes.shadow_tfar, len * lights.len(), 0.0);
-    for (index, light) in lights.iter().enumerate() {
-        let target = shading::light_position(light).map(|p| (p.as_dvec3(), 0.0));
-        let first = index * len;
-        for lane in 0..len {
-            let at = first + lane;
-            if !lanes.lit[at] {
-                continue;
-            }
-            let origin = lanes.shadow_origin[lane];
-            match shading::shadow_ray_towards(origin, target, lanes.light_direction[at]) {
-                Some((direction, tfar)) => {
-                    lanes.shadow_direction[at] = direction;
-                    lanes.shadow_tfar[at] = tfar;
-                }
-                None => lanes.lit[at] = false,
-            }
-        }
+}
+
+/// The segments towards one light of the lanes it lights, per-light arrays from `first`.
+#[inline(always)]
+fn shadow_segments(lanes: &mut WaveLanes, light: &Light, first: usize) {
+    let len = lanes.len();
+    let target = shading::light_position(light).map(|p| (p.as_dvec3(), 0.0));
+    let origin: Vec3Slices = lanes.shadow_origin.lanes(len);
+    let range = first..first + len;
+    let to_light = Vec3Slices {
+        x: &lanes.light_direction.x[range.clone()],
+        y: &lanes.light_direction.y[range.clone()],
+        z: &lanes.light_direction.z[range.clone()],
+    };
+    let [dx, dy, dz] = [
+        &mut lanes.shadow_direction.x[range.clone()],
+        &mut lanes.shadow_direction.y[range.clone()],
+        &mut lanes.shadow_direction.z[range.clone()],
+    ];
+    let tfar = &mut lanes.shadow_tfar[range.clone()];
+    let lit = &mut lanes.lit[range];
+    for lane in 0..len {
+        let segment = shading::shadow_ray_towards(origin.get(lane), target, to_light.get(lane));
+        let (direction, end) = segment.unwrap_or((Vec3::ZERO, 0.0));
+        (dx[lane], dy[lane], dz[lane]) = direction.into();
+        tfar[lane] = end;
+        lit[lane] &= segment.is_some();
     }
 }

@@ -1,41 +1,50 @@
 //! Shading a wave's triangle hits together, stage by stage, over lane arrays (structure of
-//! arrays): each stage is a plain loop over slices that reads the arrays the stages before it
-//! wrote, so no per-ray record (`SurfaceHit` with its `Patch`, `SurfaceInputs`,
-//! `MaterialBsdf`) is built or copied between stages, and the arrays live in the per-thread
-//! state, reused from wave to wave.
+//! arrays, one array per coordinate): each stage is a plain loop over slices that reads the
+//! arrays the stages before it wrote, so no per-ray record (`SurfaceHit` with its `Patch`,
+//! `SurfaceInputs`, `MaterialBsdf`) is built or copied between stages, and the arrays live
+//! in the per-thread state, reused from wave to wave.
 //!
-//! The stages, in order:
+//! The lanes are ordered by material once picked ([`WaveLanes::order_by_material`]), so a
+//! material's lanes are one range of every array. The stages, in order:
 //! 1. [`gather`]: the triangles' vertex positions, normals and texture coordinates;
 //! 2. [`interpolate`]: the point and its rounding-error bound, the geometric and shading
 //!    normals, texture coordinates, and the triangle's barycentric derivatives;
 //! 3. [`footprints`]: each textured lane's footprint width at the hit and its texture
 //!    gradients;
-//! 4. [`textures`]: the lookups, lanes grouped by material so that each texture binding is
-//!    read for all its lanes in one loop;
+//! 4. [`textures`]: the lookups, each texture binding read for its material's range in one
+//!    loop;
 //! 5. [`lights`]: the punctual lights' samples, one light at a time over all lanes;
-//! 6. [`bsdf`]: the opaque lobe evaluated for every lane and light, lanes grouped by
-//!    material, so each group runs one lobe's code.
+//! 6. [`bsdf`]: the opaque lobe evaluated for every lane and light, one loop per material's
+//!    range, so each loop runs one lobe's code.
+//!
+//! Stages 2, 3, 5 and 6 run through `simd::run_at` at [`WaveLanes::level`] (the level
+//! `simd::dispatch` would pick), their loops and everything they call inlined into the
+//! level's function, so they are compiled for AVX2 and AVX-512 as well as the baseline.
 //!
 //! Accumulating into the film (stage 7) is the integrator's: it keeps the order in which
 //! the wave's rays add to their pixels, so the sums are those of the scalar path.
 //!
 //! The arithmetic is the scalar path's (`render::prepared::SurfaceLookup::surface_hit`,
 //! `footprint::Footprint::texture_gradients`, `shading::surface_inputs`, the lobes' `eval`),
-//! operation for operation, so images are bit for bit the same. Which hits and materials
-//! the lanes cover is [`LaneMaterial::covers`] and the integrator's choice of lanes; the
-//! rest takes the scalar path.
+//! operation for operation, so images are bit for bit the same at every level. Which hits
+//! and materials the lanes cover is [`LaneMaterial::covers`] and the integrator's choice of
+//! lanes; the rest takes the scalar path.
 
 pub(crate) mod bsdf;
 pub(crate) mod footprints;
 pub(crate) mod gather;
 pub(crate) mod interpolate;
 pub(crate) mod lights;
+pub(crate) mod soa;
 pub(crate) mod textures;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
+
+use self::soa::{Vec2Lanes, Vec3Lanes};
 
 use crate::render::context::RenderContext;
 use crate::scene::Material;
+use crate::simd;
 
 /// What the lanes need to know of a material, computed once per render.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -73,7 +82,10 @@ impl LaneMaterial {
 }
 
 /// The lane arrays of one wave, reused from wave to wave (nothing is allocated once they
-/// have grown to the largest wave).
+/// have grown to the largest wave). Vectors are stored one array per coordinate
+/// ([`soa::Vec3Lanes`]), and the lanes are ordered by material
+/// ([`WaveLanes::order_by_material`]), so each stage is a straight loop over consecutive
+/// floats and each material's lanes are one range.
 #[derive(Default)]
 pub(crate) struct WaveLanes {
     /// Per material of the scene being rendered.
@@ -81,6 +93,8 @@ pub(crate) struct WaveLanes {
     /// The scene the table was made for (its address), so a state reused for another
     /// scene rebuilds it.
     scene: usize,
+    /// The vector level the stages run at; `None`: `simd::active()` (tests set each level).
+    pub level: Option<simd::Level>,
 
     // Set by the integrator when it picks the lanes.
     /// Index of each lane's ray and hit in the wave.
@@ -94,42 +108,45 @@ pub(crate) struct WaveLanes {
     /// Hit distance along the ray, as the intersector reported it.
     pub t: Vec<f32>,
     /// Unit ray direction.
-    pub direction: Vec<Vec3>,
+    pub direction: Vec3Lanes,
     /// Whether the lane needs texture coordinates (its material reads a texture, or the
     /// uv AOV is written from it).
     pub wants_st: Vec<bool>,
     /// The ray's throughput (what it carries from the camera).
-    pub throughput: Vec<Vec3>,
+    pub throughput: Vec3Lanes,
 
     // Stage 1.
-    pub p: [Vec<Vec3>; 3],
+    pub p: [Vec3Lanes; 3],
     /// Vertex normals as stored (zero for meshes without them, which interpolate to zero
     /// and fall back to the geometric normal as the scalar path's missing normals do).
-    pub n: [Vec<Vec3>; 3],
+    pub n: [Vec3Lanes; 3],
     /// Vertex texture coordinates, read only for textured lanes.
-    pub st_vertices: [Vec<Vec2>; 3],
+    pub st_vertices: [Vec2Lanes; 3],
     /// Whether the lane wants texture coordinates and its mesh has them.
     pub has_st: Vec<bool>,
 
     // Stage 2.
-    pub position: Vec<Vec3>,
+    pub position: Vec3Lanes,
     /// The bound on the rounding error of `position` (`shading::SpawnPoint`).
-    pub error: Vec<Vec3>,
-    pub edge1: Vec<Vec3>,
-    pub edge2: Vec<Vec3>,
+    pub error: Vec3Lanes,
+    pub edge1: Vec3Lanes,
+    pub edge2: Vec3Lanes,
     /// `edge1 x edge2`, the triangle's unnormalised normal.
-    pub area_normal: Vec<Vec3>,
+    pub area_normal: Vec3Lanes,
     /// Unit normals, facing outward (geometric) and to the same side (shading).
-    pub geometric_normal: Vec<Vec3>,
-    pub shading_normal: Vec<Vec3>,
-    pub st: Vec<Vec2>,
+    pub geometric_normal: Vec3Lanes,
+    pub shading_normal: Vec3Lanes,
+    pub st: Vec2Lanes,
 
     // Stage 3.
     /// `[ds/dx, dt/dx, ds/dy, dt/dy]`, zero for a point sample.
     pub gradients: Vec<[f32; 4]>,
+    /// Textured lanes on triangles without barycentric offsets (degenerate), whose
+    /// gradients take the lane-by-lane path.
+    pub degenerate: Vec<bool>,
 
     // Stage 4.
-    pub albedo: Vec<Vec3>,
+    pub albedo: Vec3Lanes,
     pub metallic: Vec<f32>,
     /// Perceptual roughness of metallic-roughness lanes (unused by classic ones).
     pub roughness: Vec<f32>,
@@ -137,28 +154,33 @@ pub(crate) struct WaveLanes {
     // Stage 5.
     /// Per light and lane (light-major): unit direction to the light and its irradiance
     /// scale (`shading::LightSample`).
-    pub light_direction: Vec<Vec3>,
-    pub light_scale: Vec<Vec3>,
+    pub light_direction: Vec3Lanes,
+    pub light_scale: Vec3Lanes,
     /// Per lane: where its shadow rays start; per light and lane: their direction and far
     /// end.
-    pub shadow_origin: Vec<Vec3>,
-    pub shadow_direction: Vec<Vec3>,
+    pub shadow_origin: Vec3Lanes,
+    pub shadow_direction: Vec3Lanes,
     pub shadow_tfar: Vec<f32>,
 
     // Stage 6.
     /// The normals on the viewer's side.
-    pub incident_geometric: Vec<Vec3>,
-    pub incident_shading: Vec<Vec3>,
+    pub incident_geometric: Vec3Lanes,
+    pub incident_shading: Vec3Lanes,
     /// Per light and lane: what the light delivers if unoccluded, and whether it delivers
     /// anything (a shadow ray is traced).
-    pub contribution: Vec<Vec3>,
+    pub contribution: Vec3Lanes,
     pub lit: Vec<bool>,
 
-    /// Lane indices ordered by material, and the runs of one material in that order:
-    /// `(material, end)`.
-    pub by_material: Vec<u32>,
+    /// The runs of one material in lane order: `(material, end)`.
     pub material_runs: Vec<(u32, usize)>,
     material_counts: Vec<usize>,
+    /// The lane order by material (old lane of each new lane), and the buffers permuting
+    /// leaves behind.
+    order: Vec<u32>,
+    scratch_f32: Vec<f32>,
+    scratch_u32: Vec<u32>,
+    scratch_bool: Vec<bool>,
+    scratch_width: Vec<Option<f32>>,
 }
 
 impl WaveLanes {
@@ -177,6 +199,12 @@ impl WaveLanes {
                 .iter()
                 .map(|m| LaneMaterial::of(context, m)),
         );
+    }
+
+    /// The vector level the stages run at.
+    #[inline]
+    pub(crate) fn level(&self) -> simd::Level {
+        self.level.unwrap_or_else(simd::active)
     }
 
     /// Number of lanes.
@@ -228,10 +256,51 @@ impl WaveLanes {
         self.wants_st.push(wants_st);
     }
 
-    /// Order the lanes by material (a counting sort, stable: lanes of one material keep
-    /// the wave's order) into `by_material` and `material_runs`.
-    pub(crate) fn group_by_material(&mut self) {
+    /// Reorder the pushed lanes by material (a counting sort, stable: lanes of one
+    /// material keep the wave's order), `cone_width` (one per lane) with them, and record
+    /// the runs in `material_runs`. Returns whether the order changed (the integrator's
+    /// map from rays to lanes must then be remade from `wave_index`).
+    pub(crate) fn order_by_material(&mut self, cone_width: &mut Vec<Option<f32>>) -> bool {
+        self.count_material_runs();
         let len = self.len();
+        let counts = &mut self.material_counts;
+        self.order.clear();
+        self.order.resize(len, 0);
+        for (lane, &m) in self.material.iter().enumerate() {
+            let next = &mut counts[m as usize];
+            self.order[*next] = lane as u32;
+            *next += 1;
+        }
+        if self
+            .order
+            .iter()
+            .enumerate()
+            .all(|(i, &lane)| i == lane as usize)
+        {
+            return false;
+        }
+        let order = &self.order;
+        for values in [
+            &mut self.wave_index,
+            &mut self.material,
+            &mut self.mesh,
+            &mut self.triangle,
+        ] {
+            soa::permute(values, order, &mut self.scratch_u32);
+        }
+        for values in [&mut self.u, &mut self.v, &mut self.t] {
+            soa::permute(values, order, &mut self.scratch_f32);
+        }
+        self.direction.permute(order, &mut self.scratch_f32);
+        self.throughput.permute(order, &mut self.scratch_f32);
+        soa::permute(&mut self.wants_st, order, &mut self.scratch_bool);
+        soa::permute(cone_width, order, &mut self.scratch_width);
+        true
+    }
+
+    /// `material_runs` of the lanes as they will be once ordered, and in
+    /// `material_counts` where each material's first lane goes.
+    fn count_material_runs(&mut self) {
         let counts = &mut self.material_counts;
         counts.clear();
         counts.resize(self.materials.len(), 0);
@@ -246,19 +315,11 @@ impl WaveLanes {
             if *count > 0 {
                 self.material_runs.push((material as u32, end));
             }
-            // From here on, where the material's next lane goes.
             *count = start;
-        }
-        self.by_material.clear();
-        self.by_material.resize(len, 0);
-        for (lane, &m) in self.material.iter().enumerate() {
-            let next = &mut counts[m as usize];
-            self.by_material[*next] = lane as u32;
-            *next += 1;
         }
     }
 
-    /// Run `run` of `by_material`: its material and its range of `by_material`.
+    /// Run `run` of the ordered lanes: its material and its range of lanes.
     pub(crate) fn material_run(&self, run: usize) -> (u32, std::ops::Range<usize>) {
         let start = match run {
             0 => 0,

@@ -5,14 +5,16 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
+use super::bsdf::{eval_lights, incident_normals};
 use super::footprints::{lane_footprint, texture_gradients, LaneFootprint};
 use super::gather::gather_triangles;
 use super::interpolate::interpolate;
+use super::lights::{sample_lights, shadow_rays};
 use super::{LaneMaterial, WaveLanes};
 use crate::footprint::{ConeEnvelope, Footprint, RayCone};
 use crate::render::prepared::{GeometryRef, SurfaceDetail, SurfaceLookup};
 use crate::render::tracer::TraceHit;
-use crate::scene::{Material, SceneDescription, TriangleMesh};
+use crate::scene::{Light, Material, SceneDescription, TriangleMesh};
 
 /// A small deterministic generator (xorshift), values in [0, 1).
 struct Numbers(u32);
@@ -148,15 +150,21 @@ fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
         let spawn = surface.spawn_point();
         let same =
             |a: Vec3, b: Vec3| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits);
-        assert!(same(lanes.position[lane], surface.position), "lane {lane}");
-        assert!(same(lanes.error[lane], spawn.error), "lane {lane}");
-        assert!(same(lanes.geometric_normal[lane], surface.geometric_normal));
         assert!(
-            same(lanes.shading_normal[lane], surface.shading_normal),
+            same(lanes.position.get(lane), surface.position),
+            "lane {lane}"
+        );
+        assert!(same(lanes.error.get(lane), spawn.error), "lane {lane}");
+        assert!(same(
+            lanes.geometric_normal.get(lane),
+            surface.geometric_normal
+        ));
+        assert!(
+            same(lanes.shading_normal.get(lane), surface.shading_normal),
             "lane {lane}"
         );
         assert_eq!(
-            lanes.st[lane].to_array().map(f32::to_bits),
+            lanes.st.get(lane).to_array().map(f32::to_bits),
             surface.st.to_array().map(f32::to_bits)
         );
         let mut moved = *footprint;
@@ -176,7 +184,7 @@ fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
 }
 
 #[test]
-fn grouping_by_material_is_stable() {
+fn ordering_by_material_is_stable_and_moves_every_lane_array() {
     let mut lanes = WaveLanes {
         materials: vec![LaneMaterial::default(); 4],
         ..WaveLanes::default()
@@ -194,10 +202,195 @@ fn grouping_by_material_is_stable() {
             false,
         );
     }
-    lanes.group_by_material();
-    assert_eq!(lanes.by_material, [3, 1, 4, 0, 2, 5]);
+    let mut cone_width: Vec<_> = (0..6).map(|lane| Some(lane as f32)).collect();
+    assert!(lanes.order_by_material(&mut cone_width));
+    assert_eq!(lanes.wave_index, [3, 1, 4, 0, 2, 5]);
+    assert_eq!(lanes.material, [0, 1, 1, 3, 3, 3]);
+    assert_eq!(cone_width, [3, 1, 4, 0, 2, 5].map(|lane| Some(lane as f32)));
     let runs: Vec<_> = (0..lanes.material_runs.len())
         .map(|run| lanes.material_run(run))
         .collect();
     assert_eq!(runs, [(0, 0..1), (1, 1..3), (3, 3..6)]);
+    // Already in order: nothing moves.
+    assert!(!lanes.order_by_material(&mut cone_width));
+    assert_eq!(lanes.wave_index, [3, 1, 4, 0, 2, 5]);
+}
+
+/// Materials of every lobe the lanes run: classic without and with a highlight, and
+/// metallic-roughness.
+fn lobe_materials() -> Vec<Material> {
+    use crate::scene::{ClassicModel, MaterialModel, MetallicRoughnessModel};
+    vec![
+        Material::default(),
+        Material {
+            model: MaterialModel::Classic(ClassicModel {
+                specular: 0.4,
+                shininess: 20.0,
+            }),
+            ..Material::default()
+        },
+        Material {
+            model: MaterialModel::MetallicRoughness(MetallicRoughnessModel::new(0.5, 0.3)),
+            ..Material::default()
+        },
+    ]
+}
+
+/// A point light, a spot light and a directional light.
+fn punctual_lights() -> Vec<Light> {
+    vec![
+        Light::Point {
+            position: Vec3::new(1.0, 8.0, -2.0),
+            color: Vec3::new(1.0, 0.9, 0.8),
+            intensity: 30.0,
+        },
+        Light::Spot {
+            position: Vec3::new(-3.0, 6.0, 1.0),
+            direction: Vec3::new(0.3, -1.0, 0.1),
+            color: Vec3::ONE,
+            intensity: 50.0,
+            inner_angle: 0.3,
+            outer_angle: 0.9,
+        },
+        Light::Directional {
+            direction: Vec3::new(-0.2, -1.0, 0.4),
+            color: Vec3::new(0.5, 0.6, 0.7),
+            intensity: 2.0,
+        },
+    ]
+}
+
+/// Stages 5 and 6 at every vector level give the bits of the scalar functions they stand
+/// for: `sample_li`, the lobes' `eval`, `SpawnPoint::offset_origin` and
+/// `shadow_ray_towards`, on lanes of three materials pushed out of order.
+#[test]
+fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
+    let mut numbers = Numbers(0x2545_f491);
+    let scene = scene(&mut numbers);
+    let materials = lobe_materials();
+    let lights = punctual_lights();
+    for level in crate::simd::Level::supported() {
+        let mut lanes = WaveLanes {
+            materials: vec![
+                LaneMaterial {
+                    covers: true,
+                    textured: false,
+                    opaque_weight: 0.75,
+                };
+                materials.len()
+            ],
+            level: Some(level),
+            ..WaveLanes::default()
+        };
+        for index in 0..300u32 {
+            let (u, v) = (numbers.next() * 0.5, numbers.next() * 0.5);
+            let direction = numbers.vec3(1.0).normalize();
+            let throughput = Vec3::new(numbers.next(), 1.0, numbers.next());
+            let material = (index * 7 + index / 5) % 3;
+            let (mesh, triangle) = (index % 2, 1 + index % 63);
+            lanes.push(
+                index,
+                material,
+                mesh,
+                triangle,
+                (u, v),
+                1.0,
+                direction,
+                throughput,
+                false,
+            );
+        }
+        assert!(lanes.order_by_material(&mut vec![None; 300]));
+        gather_triangles(&mut lanes, &scene.meshes);
+        interpolate(&mut lanes);
+        let len = lanes.len();
+        lanes.albedo.resize(len);
+        lanes.metallic.resize(len, 0.0);
+        lanes.roughness.resize(len, 0.0);
+        for lane in 0..len {
+            lanes
+                .albedo
+                .set(lane, Vec3::new(numbers.next(), numbers.next(), 0.5));
+            lanes.metallic[lane] = numbers.next();
+            lanes.roughness[lane] = numbers.next();
+        }
+        incident_normals(&mut lanes);
+        sample_lights(&mut lanes, &lights);
+        eval_lights(&mut lanes, &materials, lights.len());
+        shadow_rays(&mut lanes, &lights);
+        let lit = compare_with_scalar(&lanes, &materials, &lights);
+        assert!(lit > 100 && lit < 3 * len - 100, "{level:?}: {lit} lit");
+    }
+}
+
+/// Every lane and light of `lanes` against the scalar path; returns how many were lit.
+fn compare_with_scalar(lanes: &WaveLanes, materials: &[Material], lights: &[Light]) -> usize {
+    use crate::scene::MaterialModel;
+    use crate::shading::{self, Bsdf, MetallicRoughnessBsdf, OpaqueBsdf, SpawnPoint};
+    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+    let len = lanes.len();
+    let mut lit = 0;
+    for lane in 0..len {
+        let direction = lanes.direction.get(lane);
+        let (g, s) = (
+            lanes.geometric_normal.get(lane),
+            lanes.shading_normal.get(lane),
+        );
+        let front = direction.dot(g) < 0.0;
+        let (ng, ns) = if front { (g, s) } else { (-g, -s) };
+        assert_eq!(bits(lanes.incident_geometric.get(lane)), bits(ng));
+        assert_eq!(bits(lanes.incident_shading.get(lane)), bits(ns));
+        let spawn = SpawnPoint {
+            position: lanes.position.get(lane),
+            error: lanes.error.get(lane),
+        };
+        let origin = spawn.offset_origin(ng);
+        assert_eq!(
+            bits(lanes.shadow_origin.get(lane)),
+            bits(origin),
+            "lane {lane}"
+        );
+        let (albedo, material) = (lanes.albedo.get(lane), lanes.material[lane] as usize);
+        let eval = |wi: Vec3| match &materials[material].model {
+            MaterialModel::Classic(c) => OpaqueBsdf {
+                n: ns,
+                albedo,
+                specular: c.specular,
+                shininess: c.shininess,
+            }
+            .eval(-direction, wi),
+            MaterialModel::MetallicRoughness(_) => {
+                MetallicRoughnessBsdf::new(ns, albedo, lanes.roughness[lane], lanes.metallic[lane])
+                    .eval(-direction, wi)
+            }
+        };
+        for (index, light) in lights.iter().enumerate() {
+            let at = index * len + lane;
+            let sample = shading::sample_li(light, spawn.position);
+            let wi = sample.direction_to_light;
+            assert_eq!(bits(lanes.light_direction.get(at)), bits(wi));
+            assert_eq!(bits(lanes.light_scale.get(at)), bits(sample.radiance_scale));
+            let mut expected = (Vec3::ZERO, false);
+            if !(wi.dot(ng) <= 0.0 || wi.dot(ns) <= 0.0) {
+                let f = eval(wi) * ns.dot(wi);
+                let c = lanes.throughput.get(lane) * 0.75 * f * sample.radiance_scale;
+                expected = (c, c.max_element() > 0.0);
+            }
+            let target = shading::light_position(light).map(|p| (p.as_dvec3(), 0.0));
+            let segment = shading::shadow_ray_towards(origin, target, wi);
+            expected.1 &= segment.is_some();
+            assert_eq!(
+                bits(lanes.contribution.get(at)),
+                bits(expected.0),
+                "lane {lane}"
+            );
+            assert_eq!(lanes.lit[at], expected.1, "lane {lane} light {index}");
+            if let (true, Some((direction, tfar))) = (expected.1, segment) {
+                assert_eq!(bits(lanes.shadow_direction.get(at)), bits(direction));
+                assert_eq!(lanes.shadow_tfar[at].to_bits(), tfar.to_bits());
+                lit += 1;
+            }
+        }
+    }
+    lit
 }

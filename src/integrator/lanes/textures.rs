@@ -1,16 +1,17 @@
-//! Stage 4: the materials' textures read at the lanes' hits, lanes grouped by material so
-//! that each texture binding is looked up for all its lanes in one loop, and the texels
-//! combined into albedo, metallic and roughness as `shading::surface_inputs` combines them
-//! (glTF 2.0: the base colour's RGB, the metallic-roughness texture's blue and green).
+//! Stage 4: the materials' textures read at the lanes' hits. The lanes are ordered by
+//! material, so each texture binding is looked up for its material's range of lanes in one
+//! loop, and the texels combined into albedo, metallic and roughness as
+//! `shading::surface_inputs` combines them (glTF 2.0: the base colour's RGB, the
+//! metallic-roughness texture's blue and green).
 
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 
-use super::{refill, WaveLanes};
+use super::WaveLanes;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::surface_textures::sample_binding;
 use crate::scene::{Material, TextureBinding};
 
-/// Albedo, metallic and roughness of every lane (`lanes.by_material` must be grouped).
+/// Albedo, metallic and roughness of every lane (the lanes ordered by material).
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn shading_inputs(
@@ -19,29 +20,24 @@ pub(crate) fn shading_inputs(
     worker: &mut WorkerState,
 ) {
     let len = lanes.len();
-    refill(&mut lanes.albedo, len, Vec3::ZERO);
-    refill(&mut lanes.metallic, len, 0.0);
-    refill(&mut lanes.roughness, len, 0.0);
+    lanes.albedo.resize(len);
+    lanes.metallic.resize(len, 0.0);
+    lanes.roughness.resize(len, 0.0);
     for run in 0..lanes.material_runs.len() {
-        let (material, lane_range) = lanes.material_run(run);
+        let (material, range) = lanes.material_run(run);
         let material = &context.scene.materials[material as usize];
-        for &lane in &lanes.by_material[lane_range.clone()] {
-            let lane = lane as usize;
-            lanes.albedo[lane] = material.base_color;
-            let model = material.model.metallic_roughness();
-            lanes.metallic[lane] = model.map_or(0.0, |model| model.metallic);
-            lanes.roughness[lane] = model.map_or(0.0, |model| model.roughness);
-        }
+        let model = material.model.metallic_roughness();
+        let base = material.base_color;
+        lanes.albedo.x[range.clone()].fill(base.x);
+        lanes.albedo.y[range.clone()].fill(base.y);
+        lanes.albedo.z[range.clone()].fill(base.z);
+        lanes.metallic[range.clone()].fill(model.map_or(0.0, |model| model.metallic));
+        lanes.roughness[range.clone()].fill(model.map_or(0.0, |model| model.roughness));
         for (binding, channel) in texture_reads(material) {
-            for index in lane_range.clone() {
-                let lane = lanes.by_material[index] as usize;
-                let (_, texel) = sample_binding(
-                    context,
-                    binding,
-                    lanes.st[lane],
-                    lanes.gradients[lane],
-                    worker,
-                );
+            for lane in range.clone() {
+                let st = lanes.st.get(lane);
+                let (_, texel) =
+                    sample_binding(context, binding, st, lanes.gradients[lane], worker);
                 apply_texel(lanes, lane, channel, material, texel);
             }
         }
@@ -92,7 +88,9 @@ fn apply_texel(
     texel: Vec4,
 ) {
     match channel {
-        Channel::BaseColor => lanes.albedo[lane] = material.base_color * texel.truncate(),
+        Channel::BaseColor => lanes
+            .albedo
+            .set(lane, material.base_color * texel.truncate()),
         Channel::MetallicRoughness => {
             lanes.metallic[lane] *= texel.z;
             lanes.roughness[lane] *= texel.y;

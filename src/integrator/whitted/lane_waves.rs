@@ -95,6 +95,11 @@ pub(super) fn pick_lanes(
     if effects.footprints {
         worker.counters.footprint_updates += waves.lanes.len() as u64;
     }
+    if waves.lanes.order_by_material(&mut waves.cone_width) {
+        for (lane, &index) in waves.lanes.wave_index.iter().enumerate() {
+            waves.lane_of_ray[index as usize] = lane as u32;
+        }
+    }
 }
 
 /// Stages 1-6 over the picked lanes.
@@ -106,7 +111,6 @@ pub(super) fn shade_lanes(context: &RenderContext, waves: &mut Waves, worker: &m
     let scene = &context.scene;
     gather_triangles(lanes, &context.surfaces.scene.meshes);
     interpolate(lanes);
-    lanes.group_by_material();
     texture_gradients(lanes, &waves.cone_width, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
     if context.effects.shadows {
@@ -136,11 +140,11 @@ pub(super) fn finish_lane(
                 continue;
             }
             waves.shadows.push(ShadowRay {
-                origin: lanes.shadow_origin[lane],
-                direction: lanes.shadow_direction[at],
+                origin: lanes.shadow_origin.get(lane),
+                direction: lanes.shadow_direction.get(at),
                 tfar: lanes.shadow_tfar[at],
                 light: shading::light_position(light),
-                contribution: lanes.contribution[at],
+                contribution: lanes.contribution.get(at),
                 slot: ray.slot,
             });
         }
@@ -151,7 +155,8 @@ pub(super) fn finish_lane(
     let lanes = &waves.lanes;
     let ray = &waves.buffers.rays.current[index];
     let material = lanes.materials[lanes.material[lane] as usize];
-    let ambient = AmbientEnvironment::radiance(context, material.opaque_weight, lanes.albedo[lane]);
+    let ambient =
+        AmbientEnvironment::radiance(context, material.opaque_weight, lanes.albedo.get(lane));
     add_radiance(image, ray.slot, ray.throughput * (Vec3::ZERO + ambient));
 }
 
@@ -169,13 +174,13 @@ fn write_surface_aovs(
     let pixel = ray.slot as usize;
     if !image.depth.is_empty() {
         image.depth[pixel] = lanes.t[lane] * ray.direction.dot(context.camera_forward);
-        image.normal[pixel] = lanes.shading_normal[lane].to_array();
-        image.uv[pixel] = lanes.st[lane].to_array();
+        image.normal[pixel] = lanes.shading_normal.get(lane).to_array();
+        image.uv[pixel] = lanes.st.get(lane).to_array();
     }
     if !image.albedo.is_empty() {
-        image.albedo[pixel] = lanes.albedo[lane].to_array();
+        image.albedo[pixel] = lanes.albedo.get(lane).to_array();
         if !image.normal.is_empty() {
-            image.normal[pixel] = lanes.shading_normal[lane].to_array();
+            image.normal[pixel] = lanes.shading_normal.get(lane).to_array();
         }
     }
 }

@@ -1,0 +1,88 @@
+#!/usr/bin/env python3
+"""Per-stage CPU time of the lane shading from `perf record -e cpu-clock -F FREQ` runs of
+`conetrace render` (docs/benchmarks.md, "One array per coordinate"): every sample's address
+mapped to the binary's function, the function to a stage (the `simd::x86::v3`/`v4` copies by
+the source lines of their code), printed as ns per camera sample.
+Usage: perf_lane_stages.py BINARY FREQ CAMERA_SAMPLES_PER_RUN perf.data..."""
+import bisect, collections, re, subprocess, sys
+
+binary, freq, per_run, files = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), sys.argv[4:]
+syms = []
+for line in subprocess.run(["nm", "-C", "-S", "--defined-only", binary], capture_output=True, text=True).stdout.splitlines():
+    parts = line.split(None, 3)
+    if len(parts) == 4 and parts[2] in "tTwW":
+        syms.append((int(parts[0], 16), int(parts[1], 16), parts[3]))
+syms.sort()
+starts = [s[0] for s in syms]
+
+def kernel_stage(start, size):
+    out = subprocess.run(["objdump", "-d", "-l", "--no-show-raw-insn", f"--start-address={start}",
+                          f"--stop-address={start + size}", binary], capture_output=True, text=True).stdout
+    counts = collections.Counter(re.findall(r"src/(integrator/lanes/[a-z]+|integrator/camera_sample|sampler/[a-z]+)\.rs", out))
+    for name, _ in counts.most_common():
+        if "soa" in name:
+            continue
+        return name
+    return "?"
+
+RULES = [
+    ("picking and ordering lanes", ["lane_waves::pick_lanes", "order_by_material", "soa::permute"]),
+    ("1 gather", ["lanes::gather"]),
+    ("2 interpolate", ["lanes::interpolate", "surface_hit", "spawn_point", "on_triangle", "SurfaceLookup"]),
+    ("3 footprints", ["lanes::footprints", "texture_gradients", "project_cone", "footprint::"]),
+    ("4 textures (lookups and filter)", ["lanes::textures", "texture::", "surface_textures", "sample_binding", "surface_inputs", "mip"]),
+    ("5 lights and shadow rays", ["lanes::lights", "shading::lights", "sample_li", "shadow_ray", "queue_shadow"]),
+    ("6 BSDF", ["lanes::bsdf", "brdf", "OpaqueBsdf", "metallic_roughness", "MaterialBsdf", "Bsdf"]),
+    ("camera rays", ["camera_sample", "sampler::", "CameraBlock", "camera::"]),
+    ("7 film and integrator loop", ["lane_waves", "whitted::", "integrator::", "film::", "render_tile", "trace_wave", "Waves"]),
+]
+KERNEL = {"integrator/lanes/interpolate": "2 interpolate", "integrator/lanes/footprints": "3 footprints",
+          "integrator/lanes/lights": "5 lights and shadow rays", "integrator/lanes/bsdf": "6 BSDF",
+          "integrator/camera_sample": "camera rays", "sampler/scramble": "camera rays", "sampler/mod": "camera rays"}
+kernel_cache = {}
+
+by_name = collections.defaultdict(list)
+for start, size, name in syms:
+    by_name[name].append(start)
+bias = None
+
+def stage(ip, sym, offset, dso):
+    global bias
+    if "embree" in dso:
+        return "Embree"
+    if not dso.endswith(binary.split("/")[-1]):
+        return "other (kernel, libc, loading)"
+    name = sym
+    if bias is None and len(by_name.get(sym, [])) == 1:
+        bias = ip - offset - by_name[sym][0]
+    if "simd::x86::v" in name and bias is not None:
+        start = ip - offset - bias
+        i = bisect.bisect_right(starts, start) - 1
+        start, size, _ = syms[i]
+        if start not in kernel_cache:
+            kernel_cache[start] = KERNEL.get(kernel_stage(start, size), "other kernel")
+        return kernel_cache[start]
+    for label, keys in RULES:
+        if any(k in name for k in keys):
+            return label
+    return "other (loading, BVH build, EXR)"
+
+totals = collections.Counter()
+for f in files:
+    bias = None  # each run is loaded at its own address
+    out = subprocess.run(["perf", "script", "-i", f, "-F", "ip,sym,symoff,dso"], capture_output=True, text=True).stdout
+    for line in out.splitlines():
+        m = re.match(r"\s*([0-9a-f]+)\s+(.*?)(?:\+0x([0-9a-f]+))?\s+\((.*)\)\s*$", line)
+        if not m:
+            continue
+        ip, sym, off, dso = int(m.group(1), 16), m.group(2), int(m.group(3) or "0", 16), m.group(4)
+        totals[stage(ip, sym, off, dso)] += 1
+runs = len(files)
+ns = lambda n: n / freq / runs / per_run * 1e9
+order = ["camera rays", "Embree", "picking and ordering lanes", "1 gather", "2 interpolate", "3 footprints",
+         "4 textures (lookups and filter)", "5 lights and shadow rays", "6 BSDF", "7 film and integrator loop"]
+for label in order + sorted(set(totals) - set(order)):
+    print(f"| {label} | {ns(totals[label]):.1f} |")
+shading = sum(totals[l] for l in order[2:])
+print(f"| shading (picking, stages 1-7) | {ns(shading):.1f} |")
+print(f"| total process | {ns(sum(totals.values())):.1f} |  ({sum(totals.values())} samples, {runs} runs)")
