@@ -127,8 +127,12 @@ fn lighting_report_ranks_path_vct_and_whitted() {
         eprintln!("{name}: {rows:#?}");
         assert_eq!(
             rows.len(),
-            5,
-            "{name}: whitted, path 1 and 16, vct 32 with 1 and 2 bounces"
+            6,
+            "{name}: whitted, path 1 and 16, vct 32 with 1 and 2 bounces, isotropic vct 32"
+        );
+        assert!(
+            rows.iter().any(|r| r["method"] == "vct_isotropic"),
+            "{name}: {rows:?}"
         );
 
         let path_1 = number(find(&rows, "path", &[("spp", "1")]), "rmse");
@@ -144,7 +148,7 @@ fn lighting_report_ranks_path_vct_and_whitted() {
             assert!(number(row, "rays") > 0.0, "{row:?}");
             let flip = number(row, "flip");
             assert!((0.0..=1.0).contains(&flip), "{row:?}");
-            if row["method"] == "vct" {
+            if row["method"].starts_with("vct") {
                 assert!(number(row, "build_seconds") > 0.0, "{row:?}");
             }
         }

@@ -14,7 +14,7 @@
 use conetrace::vct::cone::{gather_diffuse, ConeStart, CONE_START, STEP_FRACTION};
 use conetrace::vct::grid::{GridFrame, VoxelLevel};
 use conetrace::vct::mipmap::build_pyramid;
-use conetrace::vct::VoxelPyramid;
+use conetrace::vct::{VoxelKind, VoxelPyramid};
 use glam::Vec3;
 
 const FLOOR_LAYER: u32 = 2;
@@ -38,7 +38,7 @@ fn scene(n: u32, ny: u32, wall: Option<u32>) -> VoxelPyramid {
             }
         }
     }
-    build_pyramid(frame, level)
+    build_pyramid(frame, level, VoxelKind::Directional)
 }
 
 /// The floor's surface runs through the middle of its layer.

@@ -167,6 +167,11 @@ pub struct RenderArgs {
     /// [default: the scene's, else 1].
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=8))]
     pub vct_bounces: Option<u32>,
+    /// Voxel cone tracing: what a voxel above the finest level holds: `directional` (six
+    /// values, one per axis direction) or `isotropic` (one, thin surfaces diluted)
+    /// [default: directional].
+    #[arg(long, value_name = "KIND", value_parser = vct_voxels_parser())]
+    pub vct_voxels: Option<conetrace::vct::VoxelKind>,
     /// Fog: integrate each segment's optical depth by ray marching with N steps (midpoint
     /// rule) instead of the closed form, for comparison [default: the scene's
     /// `fog_march_steps`, else the closed form].
@@ -212,6 +217,14 @@ pub fn lod_parser() -> impl clap::builder::TypedValueParser<Value = LodStrategy>
         .try_map(|name| name.parse::<LodStrategy>())
 }
 
+/// `--vct-voxels`' values, listed in `--help` and in errors.
+pub fn vct_voxels_parser() -> impl clap::builder::TypedValueParser<Value = conetrace::vct::VoxelKind>
+{
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(["directional", "isotropic"])
+        .try_map(|name| name.parse::<conetrace::vct::VoxelKind>())
+}
+
 /// `--threads`' values, 1 to [`render::MAX_WORKER_THREADS`], the range errors name.
 pub fn thread_count_parser() -> clap::builder::RangedU64ValueParser<usize> {
     clap::builder::RangedU64ValueParser::new().range(1..=render::MAX_WORKER_THREADS as u64)
@@ -224,7 +237,7 @@ pub fn filter_parser() -> impl clap::builder::TypedValueParser<Value = FilterMod
         .try_map(|name| name.parse::<FilterMode>())
 }
 
-/// `--integrator`, `--vct-resolution`, `--vct-bounces` and `--fog-march-steps` over the
+/// `--integrator`, `--vct-resolution`, `--vct-bounces`, `--vct-voxels` and `--fog-march-steps` over the
 /// scene's `[render]` settings (kept there, so a resumed or merged render is checked against
 /// them too: the signature covers the settings).
 pub(crate) fn apply_integrator_options(
@@ -242,6 +255,9 @@ pub(crate) fn apply_integrator_options(
     }
     if let Some(bounces) = args.vct_bounces {
         settings.vct_bounces = bounces;
+    }
+    if let Some(voxels) = args.vct_voxels {
+        settings.vct_voxels = voxels;
     }
     if let Some(steps) = args.fog_march_steps {
         // Read as a signed number, so that a negative count gets this message rather than

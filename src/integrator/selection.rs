@@ -300,6 +300,7 @@ fn vct_settings(settings: &RenderSettings) -> VctSettings {
     VctSettings {
         resolution: settings.vct_resolution,
         bounces: settings.vct_bounces,
+        voxels: settings.vct_voxels,
     }
 }
 

@@ -427,6 +427,8 @@ pub struct RenderSettings {
     pub vct_resolution: Option<u32>,
     /// `[render] vct_bounces`: bounces held by the voxels (1: direct light only).
     pub vct_bounces: u32,
+    /// What the voxels above level 0 hold (`--vct-voxels`; directional by default).
+    pub vct_voxels: crate::vct::VoxelKind,
     /// How fog's optical depth becomes the blend towards its colour (`[render] fog_model`).
     pub fog_model: crate::medium::FogModel,
     /// How fog segments' optical depth is integrated (`[render] fog_march_steps`: ray
@@ -454,6 +456,7 @@ impl Default for RenderSettings {
             diffuse_bounces: None,
             vct_resolution: None,
             vct_bounces: 1,
+            vct_voxels: crate::vct::VoxelKind::Directional,
             fog_model: crate::medium::FogModel::Exact,
             fog_integration: crate::medium::FogIntegration::Exact,
             sample_clamp: None,

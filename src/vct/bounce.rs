@@ -53,5 +53,5 @@ pub fn add_bounce(current: &VoxelPyramid, surfaces: &[SurfaceVoxel]) -> (VoxelPy
         work.cones += 6;
         work.steps += steps;
     }
-    (build_pyramid(current.frame, level0), work)
+    (build_pyramid(current.frame, level0, current.kind), work)
 }

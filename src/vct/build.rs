@@ -9,7 +9,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::bounce::{add_bounce, SurfaceVoxel};
-use super::grid::{default_resolution, GridFrame, VoxelLevel, VoxelPyramid, DEFAULT_MEMORY_BUDGET};
+use super::grid::{
+    default_resolution, GridFrame, VoxelKind, VoxelLevel, VoxelPyramid, DEFAULT_MEMORY_BUDGET,
+};
 use super::inject::{light_fragments, LitFragment};
 use super::mipmap::build_pyramid;
 use super::voxelise::{sphere_fragments, triangle_fragments, Fragment};
@@ -32,6 +34,8 @@ pub struct VctSettings {
     pub resolution: Option<u32>,
     /// Light bounces held by the voxels: 1 = direct light only, 2 = one extra bounce.
     pub bounces: u32,
+    /// What a voxel above level 0 holds (`--vct-voxels`).
+    pub voxels: VoxelKind,
 }
 
 impl Default for VctSettings {
@@ -39,6 +43,7 @@ impl Default for VctSettings {
         VctSettings {
             resolution: None,
             bounces: 1,
+            voxels: VoxelKind::default(),
         }
     }
 }
@@ -60,6 +65,8 @@ pub enum VctError {
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct VctBuildStats {
     pub resolution: u32,
+    /// `directional` or `isotropic` ([`VoxelKind::name`]).
+    pub voxels: &'static str,
     pub dims: [u32; 3],
     pub voxel_size: f32,
     pub levels: usize,
@@ -101,10 +108,10 @@ pub fn resolution_for(
     let resolution = match settings.resolution {
         Some(r) if !(2..=MAX_RESOLUTION).contains(&r) => return Err(VctError::Resolution(r)),
         Some(r) => r,
-        None => default_resolution(lo, hi, DEFAULT_MEMORY_BUDGET),
+        None => default_resolution(lo, hi, DEFAULT_MEMORY_BUDGET, settings.voxels),
     };
     let frame = GridFrame::for_bounds(lo, hi, resolution);
-    let bytes = frame.pyramid_bytes();
+    let bytes = frame.pyramid_bytes(settings.voxels);
     if bytes > MAX_PYRAMID_BYTES {
         return Err(VctError::TooLarge { resolution, bytes });
     }
@@ -117,7 +124,9 @@ pub fn pyramid_bytes_for(
     scene: &SceneDescription,
     settings: &VctSettings,
 ) -> Result<u64, VctError> {
-    Ok(resolution_for(scene, settings)?.0.pyramid_bytes())
+    Ok(resolution_for(scene, settings)?
+        .0
+        .pyramid_bytes(settings.voxels))
 }
 
 /// Voxelise `context`'s scene (triangles and spheres; curved patches are not voxelised),
@@ -188,7 +197,7 @@ pub fn build_voxel_scene(
         let (a, l) = (s.opacity, s.direct);
         level0.voxels[s.index as usize] = [a * l.x, a * l.y, a * l.z, a];
     }
-    let mut pyramid = build_pyramid(frame, level0);
+    let mut pyramid = build_pyramid(frame, level0, settings.voxels);
     let mipmap_seconds = mipmapping.elapsed().as_secs_f64();
 
     let bouncing = Instant::now();
@@ -203,6 +212,7 @@ pub fn build_voxel_scene(
 
     let stats = VctBuildStats {
         resolution,
+        voxels: settings.voxels.name(),
         dims: frame.dims,
         voxel_size: frame.voxel_size,
         levels: pyramid.levels.len(),

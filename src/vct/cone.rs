@@ -5,8 +5,10 @@
 //! (at least one voxel) picks the level `log2(D / voxel)`, the same footprint reasoning as
 //! a texture's level of detail: one lookup whose texel is as wide as the cone there. The
 //! quadrilinear sample is blended front to back, `Lv <- Lv + (1 - Lv.alpha) Lv_step`,
-//! until the accumulated opacity reaches 1, the level passes the pyramid's top or the cone
-//! leaves the grid.
+//! until the accumulated opacity reaches 1, the level passes the pyramid's top or the
+//! cone's footprint leaves the grid (a sample just outside it still reads the voxels on its
+//! edge, where a scene's bounding surfaces lie). Directional voxels are read as seen along
+//! the cone's direction.
 //!
 //! A voxel's opacity is what a path one voxel long loses; a step of length `s` through
 //! voxels of edge `l` (the level's) loses `1 - (1 - alpha)^(s / l)` (Crassin et al. 2011,
@@ -16,7 +18,7 @@
 
 use glam::Vec3;
 
-use super::grid::VoxelPyramid;
+use super::grid::{VoxelKind, VoxelPyramid};
 
 /// Step length as a fraction of the cone's diameter (`docs/vct.md` measures the choice).
 pub const STEP_FRACTION: f32 = 0.5;
@@ -35,8 +37,39 @@ pub struct ConeResult {
     pub steps: u32,
 }
 
+/// Sampled voxels are kept at most this many times smaller than the height of the cone's
+/// axis above the surface it leaves, so that neither level of a lookup (the upper one twice
+/// as coarse, its trilinear reach one voxel) reaches back into that surface's own voxels.
+pub const CLEARANCE_VOXELS: f32 = 3.0;
+
+/// How the cone's axis rises above the tangent plane of the surface it leaves: at distance
+/// `t` along the cone it is `height + slope * t` above it (`slope` the cosine between the
+/// cone's direction and the surface's normal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clearance {
+    pub height: f32,
+    pub slope: f32,
+}
+
+/// One cone to march.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cone {
+    pub origin: Vec3,
+    /// Unit direction of the axis.
+    pub direction: Vec3,
+    /// Half-angle, radians.
+    pub aperture: f32,
+    /// Distance of the first sample from `origin`.
+    pub start: f32,
+    /// Where marching stops (infinite: when the cone leaves the grid).
+    pub max_distance: f32,
+    /// The surface the cone leaves, if any (see [`CLEARANCE_VOXELS`]).
+    pub clearance: Option<Clearance>,
+}
+
 /// A cone from `origin` along the unit `direction` with half-angle `aperture`, marched from
-/// distance `start` to at most `max_distance` (infinite: until it leaves the grid).
+/// distance `start` to at most `max_distance` (infinite: until it leaves the grid), leaving
+/// no surface.
 pub fn trace_cone(
     pyramid: &VoxelPyramid,
     origin: Vec3,
@@ -45,53 +78,73 @@ pub fn trace_cone(
     start: f32,
     max_distance: f32,
 ) -> ConeResult {
-    trace_cone_stepped(
-        pyramid,
+    let cone = Cone {
         origin,
         direction,
         aperture,
         start,
         max_distance,
-        STEP_FRACTION,
-    )
+        clearance: None,
+    };
+    trace_cone_stepped(pyramid, &cone, STEP_FRACTION)
 }
 
-/// [`trace_cone`] with steps of `step_fraction` diameters (for measuring the choice).
-pub fn trace_cone_stepped(
-    pyramid: &VoxelPyramid,
-    origin: Vec3,
-    direction: Vec3,
-    aperture: f32,
-    start: f32,
-    max_distance: f32,
-    step_fraction: f32,
-) -> ConeResult {
+/// The width of the voxels a cone samples at distance `t`, as `a + b t` over the step that
+/// starts there: its footprint `spread t`, at most the clearance's bound, at least one
+/// voxel.
+#[inline]
+fn sampled_width(cone: &Cone, spread: f32, voxel: f32, t: f32) -> (f32, f32) {
+    let mut width = (0.0, spread);
+    if let Some(c) = cone.clearance {
+        let bound = (
+            c.height / CLEARANCE_VOXELS,
+            c.slope.max(0.0) / CLEARANCE_VOXELS,
+        );
+        if bound.0 + bound.1 * t < spread * t {
+            width = bound;
+        }
+    }
+    if width.0 + width.1 * t <= voxel {
+        width = (voxel, 0.0);
+    }
+    width
+}
+
+/// `cone` marched with steps of `step_fraction` sampled voxel widths (for measuring the
+/// choice).
+pub fn trace_cone_stepped(pyramid: &VoxelPyramid, cone: &Cone, step_fraction: f32) -> ConeResult {
     let voxel = pyramid.frame.voxel_size;
-    let spread = 2.0 * aperture.tan();
+    let spread = 2.0 * cone.aperture.tan();
     let max_level = pyramid.max_level();
+    let directional = pyramid.kind == VoxelKind::Directional;
     let mut acc = [0.0f32; 4];
-    let mut distance = start;
+    let mut distance = cone.start;
     let mut steps = 0;
-    while acc[3] < 1.0 && steps < MAX_STEPS && distance < max_distance {
-        let diameter = (spread * distance).max(voxel);
-        let level = (diameter / voxel).log2();
-        let position = origin + direction * distance;
-        if level >= max_level || !pyramid.frame.contains(position) {
+    while acc[3] < 1.0 && steps < MAX_STEPS && distance < cone.max_distance {
+        let (a, b) = sampled_width(cone, spread, voxel, distance);
+        let width = a + b * distance;
+        let level = (width / voxel).log2();
+        let position = cone.origin + cone.direction * distance;
+        // Past one sampled width outside the grid, neither level's trilinear reach (half a
+        // voxel of the lower, one of the upper) touches its edge voxels.
+        if level >= max_level || pyramid.frame.distance_outside(position) >= width {
             break;
         }
-        let step = (diameter * step_fraction).min(max_distance - distance);
-        let sample = pyramid.sample(position, level);
+        let step = (width * step_fraction).min(cone.max_distance - distance);
+        let sample = pyramid.sample(position, level, cone.direction);
         steps += 1;
         let alpha = sample[3].clamp(0.0, 1.0);
         if alpha > 0.0 {
-            // Opacity correction: the step's length in units of the voxels it samples. Where
-            // the footprint grows with distance that is the integral of dt / (spread t) over
-            // the step, ln(1 + step / distance) / spread, exact for a uniform medium; where
-            // it is clamped to one voxel, step / voxel.
-            let depth = if spread * distance > voxel {
-                (step / distance).ln_1p() / spread
+            // Opacity correction (Crassin et al. 2011, sec. 3.2): the step's length in
+            // units of the voxels sampled. A directional voxel's opacity is that of its own
+            // width (composed along it), so the sample's width is the unit. An isotropic
+            // voxel keeps its children's opacity whatever its size, so the unit grows with
+            // the width along the step: the integral of dt / (a + b t), exact for a uniform
+            // medium.
+            let depth = if directional || b == 0.0 {
+                step / width
             } else {
-                step / diameter
+                ((a + b * (distance + step)) / width).ln() / b
             };
             let corrected = 1.0 - (1.0 - alpha).powf(depth);
             let scale = corrected / alpha;
@@ -113,11 +166,13 @@ pub fn trace_cone_stepped(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vct::grid::{GridFrame, VoxelLevel};
+    use crate::vct::grid::{GridFrame, VoxelKind, VoxelLevel};
     use crate::vct::mipmap::build_pyramid;
 
+    const KINDS: [VoxelKind; 2] = [VoxelKind::Directional, VoxelKind::Isotropic];
+
     /// A grid filled with voxels of opacity `alpha` and radiance `radiance`.
-    fn uniform(n: u32, alpha: f32, radiance: f32) -> VoxelPyramid {
+    fn uniform(n: u32, alpha: f32, radiance: f32, kind: VoxelKind) -> VoxelPyramid {
         let frame = GridFrame {
             origin: Vec3::ZERO,
             voxel_size: 0.5,
@@ -127,7 +182,7 @@ mod tests {
         level
             .voxels
             .fill([alpha * radiance, alpha * radiance, alpha * radiance, alpha]);
-        build_pyramid(frame, level)
+        build_pyramid(frame, level, kind)
     }
 
     #[test]
@@ -136,28 +191,30 @@ mod tests {
         // path of length L keeps (1 - a)^(L / voxel), and the radiance gathered is
         // L_voxel times the opacity accumulated.
         let a = 0.2;
-        let p = uniform(32, a, 3.0);
-        let origin = Vec3::new(1.0, 8.0, 8.0);
-        for length in [0.8f32, 2.5, 5.0] {
-            let r = trace_cone(&p, origin, Vec3::X, 1e-4, 0.0, length);
-            let expect = 1.0 - (1.0 - a).powf(length / 0.5);
-            assert!(
-                (r.alpha - expect).abs() < 1e-5,
-                "L={length}: {} vs {expect}",
-                r.alpha
-            );
-            assert!((r.radiance.x - 3.0 * expect).abs() < 1e-4);
+        for kind in KINDS {
+            let p = uniform(32, a, 3.0, kind);
+            let origin = Vec3::new(1.0, 8.0, 8.0);
+            for length in [0.8f32, 2.5, 5.0] {
+                let r = trace_cone(&p, origin, Vec3::X, 1e-4, 0.0, length);
+                let expect = 1.0 - (1.0 - a).powf(length / 0.5);
+                assert!(
+                    (r.alpha - expect).abs() < 1e-5,
+                    "L={length}: {} vs {expect}",
+                    r.alpha
+                );
+                assert!((r.radiance.x - 3.0 * expect).abs() < 1e-4);
+            }
         }
     }
 
     #[test]
-    fn wide_cone_through_a_uniform_region_follows_the_integral_of_its_footprint() {
-        // With the diameter growing as D = 2 d tan(a), the optical depth in units of the
-        // sampled voxel size is the integral of dd / D(d) = ln(d1 / d0) / (2 tan a)
-        // (while D is more than one voxel), so T = (1 - alpha)^that, whatever the steps;
-        // the mip levels of a uniform grid are uniform inside.
+    fn wide_isotropic_cone_follows_the_integral_of_its_footprint() {
+        // Isotropic levels of a uniform grid keep the voxels' opacity a whatever their
+        // size, so with the diameter growing as D = 2 d tan(a) the optical depth in units
+        // of the sampled voxel is the integral of dd / D(d) = ln(d1 / d0) / (2 tan a)
+        // (while D is more than one voxel), and T = (1 - alpha)^that, whatever the steps.
         let a = 0.1;
-        let p = uniform(64, a, 1.0);
+        let p = uniform(64, a, 1.0, VoxelKind::Isotropic);
         let aperture = 0.2f32;
         let (d0, d1) = (4.0f32, 12.0f32);
         let origin = Vec3::new(1.0, 16.0, 16.0);
@@ -172,16 +229,114 @@ mod tests {
     }
 
     #[test]
+    fn wide_directional_cone_through_a_uniform_medium_keeps_the_physical_transmittance() {
+        // Composed front to back, a level-l voxel of a uniform medium is 2^l voxels thick:
+        // opacity 1 - (1 - a)^(2^l). The cone then loses what a ray of the same length
+        // does, (1 - a)^((d1 - d0) / voxel), up to the linear blend between levels.
+        let a = 0.01;
+        let p = uniform(128, a, 1.0, VoxelKind::Directional);
+        let origin = Vec3::new(1.0, 32.0, 32.0);
+        for aperture in [0.05f32, 0.2, 0.5] {
+            let (d0, d1) = (4.0f32, 24.0f32);
+            let r = trace_cone(&p, origin, Vec3::X, aperture, d0, d1);
+            let expect = 1.0 - (1.0 - a).powf((d1 - d0) / 0.5);
+            assert!(
+                (r.alpha - expect).abs() < 0.05 * expect,
+                "aperture {aperture}: {} vs {expect}",
+                r.alpha
+            );
+        }
+    }
+
+    #[test]
     fn opaque_voxels_stop_the_cone_and_empty_ones_let_it_out() {
-        let empty = uniform(16, 0.0, 0.0);
-        let r = trace_cone(&empty, Vec3::splat(4.0), Vec3::Y, 0.5, 0.5, f32::INFINITY);
-        assert_eq!(r.alpha, 0.0);
-        assert!(r.steps > 0);
-        let full = uniform(16, 1.0, 2.0);
-        let r = trace_cone(&full, Vec3::splat(4.0), Vec3::Y, 0.5, 0.5, f32::INFINITY);
-        assert_eq!(r.alpha, 1.0);
-        assert_eq!(r.steps, 1);
-        assert!((r.radiance.y - 2.0).abs() < 1e-6);
+        for kind in KINDS {
+            let empty = uniform(16, 0.0, 0.0, kind);
+            let r = trace_cone(&empty, Vec3::splat(4.0), Vec3::Y, 0.5, 0.5, f32::INFINITY);
+            assert_eq!(r.alpha, 0.0);
+            assert!(r.steps > 0);
+            let full = uniform(16, 1.0, 2.0, kind);
+            let r = trace_cone(&full, Vec3::splat(4.0), Vec3::Y, 0.5, 0.5, f32::INFINITY);
+            assert_eq!(r.alpha, 1.0);
+            assert_eq!(r.steps, 1);
+            assert!((r.radiance.y - 2.0).abs() < 1e-6);
+        }
+    }
+
+    /// A `n x h x n` grid of unit voxels whose top layer is an opaque emitter of radiance
+    /// `radiance` and, when `walls`, whose four sides are too, over a black floor: a point
+    /// on the floor sees nothing but emitters above it.
+    fn emitter_box(n: u32, h: u32, radiance: f32, walls: bool, kind: VoxelKind) -> VoxelPyramid {
+        let frame = GridFrame {
+            origin: Vec3::ZERO,
+            voxel_size: 1.0,
+            dims: [n, h, n],
+        };
+        let mut level = VoxelLevel::empty(frame.dims);
+        let lit = [radiance, radiance, radiance, 1.0];
+        for z in 0..n {
+            for y in 0..h {
+                for x in 0..n {
+                    let side = x == 0 || z == 0 || x == n - 1 || z == n - 1;
+                    if y == h - 1 || (walls && side) {
+                        level.voxels[frame.index(x, y, z)] = lit;
+                    } else if y == 0 {
+                        // The black floor the point stands on.
+                        level.voxels[frame.index(x, y, z)] = [0.0, 0.0, 0.0, 1.0];
+                    }
+                }
+            }
+        }
+        build_pyramid(frame, level, kind)
+    }
+
+    #[test]
+    fn a_cone_looking_at_a_wide_emitter_sees_its_radiance() {
+        // The emitter fills the cone's whole footprint, at the grid's top edge: the cone
+        // must gather its radiance and become opaque, however coarse the level it reads
+        // it at (here about level 5).
+        // Started from the floor, the cone keeps its samples off the floor's voxels.
+        let p = emitter_box(128, 48, 2.0, false, VoxelKind::Directional);
+        let (at, n) = (Vec3::new(64.0, 0.5, 64.0), Vec3::Y);
+        let cone = surface_cone(&p, at, n, n, DIFFUSE_APERTURE, CONE_START);
+        let r = trace_cone_stepped(&p, &cone, STEP_FRACTION);
+        // Linear interpolation of opacity between voxel centres lets part of a one-voxel
+        // opaque layer through (0.84 measured); the light is the emitter's.
+        assert!(r.alpha > 0.8, "opacity {}", r.alpha);
+        assert!(
+            (r.radiance.y - 2.0 * r.alpha).abs() < 1e-3,
+            "radiance {}",
+            r.radiance.y
+        );
+        // Isotropic voxels dilute the one-voxel emitter at the level it is read at.
+        let iso = emitter_box(128, 48, 2.0, false, VoxelKind::Isotropic);
+        let r_iso = trace_cone_stepped(&iso, &cone, STEP_FRACTION);
+        assert!(
+            r_iso.alpha < 0.5 * r.alpha,
+            "isotropic opacity {}",
+            r_iso.alpha
+        );
+    }
+
+    #[test]
+    fn six_cones_under_an_enclosing_emitter_gather_its_radiance() {
+        // Every direction above the floor point ends on an emitter of radiance L, so the
+        // irradiance is pi L and the cones' weighted sum (irradiance over pi) must be L.
+        // What is missing is light seen through the walls: a one-voxel wall read by a cone
+        // 60 degrees from its normal blends an opaque face (weight 3/4) with a diluted one,
+        // and linear interpolation of opacity between voxel centres lets the rest through
+        // (each side cone ends with opacity about 0.75; the black floor is never seen).
+        let p = emitter_box(64, 40, 2.0, true, VoxelKind::Directional);
+        let at = Vec3::new(32.0, 0.5, 32.0);
+        let g = gather_diffuse(&p, at, Vec3::Y, CONE_START, STEP_FRACTION);
+        assert!(g.radiance.y > 0.75 * 2.0, "gathered {}", g.radiance.y);
+        assert!(
+            (g.radiance.y - 2.0 * (1.0 - g.open)).abs() < 1e-3,
+            "the floor was seen"
+        );
+        // Halving the step changes the gathered light by less than 3 % of the emitter's.
+        let half = gather_diffuse(&p, at, Vec3::Y, CONE_START, 0.5 * STEP_FRACTION);
+        assert!((half.radiance.y - g.radiance.y).abs() < 0.03 * 2.0);
     }
 }
 
@@ -223,24 +378,40 @@ pub fn gather_diffuse(
     start: ConeStart,
     step_fraction: f32,
 ) -> DiffuseGather {
-    let voxel = pyramid.frame.voxel_size;
-    let origin = p + n * (start.normal_voxels * voxel);
     let mut out = DiffuseGather::default();
     for (direction, weight) in diffuse_cones(n) {
-        let r = trace_cone_stepped(
-            pyramid,
-            origin,
-            direction,
-            DIFFUSE_APERTURE,
-            start.along_voxels * voxel,
-            f32::INFINITY,
-            step_fraction,
-        );
+        let cone = surface_cone(pyramid, p, n, direction, DIFFUSE_APERTURE, start);
+        let r = trace_cone_stepped(pyramid, &cone, step_fraction);
         out.radiance += weight * r.radiance;
         out.open += weight * (1.0 - r.alpha);
         out.steps += u64::from(r.steps);
     }
     out
+}
+
+/// The cone of half-angle `aperture` along `direction` leaving the surface point `p` of
+/// unit normal `n`, started as `start` says.
+pub fn surface_cone(
+    pyramid: &VoxelPyramid,
+    p: Vec3,
+    n: Vec3,
+    direction: Vec3,
+    aperture: f32,
+    start: ConeStart,
+) -> Cone {
+    let voxel = pyramid.frame.voxel_size;
+    let height = start.normal_voxels * voxel;
+    Cone {
+        origin: p + n * height,
+        direction,
+        aperture,
+        start: start.along_voxels * voxel,
+        max_distance: f32::INFINITY,
+        clearance: Some(Clearance {
+            height,
+            slope: direction.dot(n),
+        }),
+    }
 }
 
 /// Seed 003's six diffuse cones about the unit normal `n`: one along `n` with weight 1/4

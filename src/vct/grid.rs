@@ -9,7 +9,10 @@
 //! Each voxel holds `[r, g, b, a]`: opacity `a` and radiance premultiplied by it
 //! (`rgb = a * L`), so that averaging voxels is the alpha-weighted average of their
 //! radiance (`mipmap`). Level `l` has voxels `2^l` times larger, `ceil(dims / 2)` of them per
-//! axis; texels beyond a level's edge are empty (zero).
+//! axis; texels beyond a level's edge are empty (zero). With [`VoxelKind::Directional`]
+//! every level above 0 holds six such values per voxel, one for each axis direction a cone
+//! may travel along (Crassin et al. 2011, sec. 3.1), and a lookup blends the three a
+//! direction sees.
 
 use glam::Vec3;
 
@@ -17,8 +20,66 @@ use glam::Vec3;
 pub const DEFAULT_RESOLUTION: u32 = 128;
 /// The default resolution is lowered until the whole pyramid fits in this many bytes.
 pub const DEFAULT_MEMORY_BUDGET: u64 = 256 << 20;
-/// Bytes of one voxel of the pyramid (four `f32`).
+/// Bytes of one voxel value (four `f32`).
 pub const VOXEL_BYTES: u64 = 16;
+
+/// How the levels above 0 represent a voxel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum VoxelKind {
+    /// Six values per voxel, one per axis direction of travel (Crassin et al. 2011, sec.
+    /// 3.1): a surface one voxel thick stays opaque at every level seen along its normal.
+    #[default]
+    Directional,
+    /// One value per voxel, the average of its children: thin surfaces are diluted at coarse
+    /// levels (kept to measure the difference).
+    Isotropic,
+}
+
+impl VoxelKind {
+    /// The values stored per voxel at levels above 0.
+    pub fn faces(self) -> usize {
+        match self {
+            VoxelKind::Directional => 6,
+            VoxelKind::Isotropic => 1,
+        }
+    }
+
+    /// The name `--vct-voxels` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            VoxelKind::Directional => "directional",
+            VoxelKind::Isotropic => "isotropic",
+        }
+    }
+}
+
+impl std::str::FromStr for VoxelKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<VoxelKind, String> {
+        match s {
+            "directional" => Ok(VoxelKind::Directional),
+            "isotropic" => Ok(VoxelKind::Isotropic),
+            _ => Err(format!(
+                "unknown voxel kind `{s}` (expected directional or isotropic)"
+            )),
+        }
+    }
+}
+
+/// The face of a directional voxel seen by a cone travelling along `+axis` (`negative`
+/// false) or `-axis`: `2 axis + negative`.
+#[inline]
+pub fn face_index(axis: usize, negative: bool) -> usize {
+    2 * axis + usize::from(negative)
+}
+
+/// The three faces a unit direction sees and their weights, the squares of its components
+/// (they sum to 1).
+#[inline]
+pub fn face_weights(direction: Vec3) -> [(usize, f32); 3] {
+    let d = direction.to_array();
+    std::array::from_fn(|axis| (face_index(axis, d[axis] < 0.0), d[axis] * d[axis]))
+}
 
 /// The placement of a voxel grid in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,20 +143,38 @@ impl GridFrame {
             && v.z <= self.dims[2] as f32
     }
 
-    /// Bytes of the whole pyramid of this frame (all levels).
-    pub fn pyramid_bytes(&self) -> u64 {
+    /// The distance from a world point to the grid's box (0 inside it).
+    #[inline]
+    pub fn distance_outside(&self, p: Vec3) -> f32 {
+        let dims = Vec3::new(
+            self.dims[0] as f32,
+            self.dims[1] as f32,
+            self.dims[2] as f32,
+        );
+        let v = self.to_voxel(p);
+        let outside = (-v).max(v - dims).max(Vec3::ZERO);
+        outside.length() * self.voxel_size
+    }
+
+    /// Bytes of the whole pyramid of this frame (all levels) with voxels of `kind`.
+    pub fn pyramid_bytes(&self, kind: VoxelKind) -> u64 {
         level_dims(self.dims)
             .iter()
-            .map(|d| d.iter().map(|&n| u64::from(n)).product::<u64>() * VOXEL_BYTES)
+            .enumerate()
+            .map(|(l, d)| {
+                let faces = if l == 0 { 1 } else { kind.faces() as u64 };
+                d.iter().map(|&n| u64::from(n)).product::<u64>() * VOXEL_BYTES * faces
+            })
             .sum()
     }
 }
 
 /// The default resolution for a scene with bounds `(lo, hi)`: [`DEFAULT_RESOLUTION`]
-/// voxels across its longest side, halved until the pyramid fits in `budget` bytes.
-pub fn default_resolution(lo: Vec3, hi: Vec3, budget: u64) -> u32 {
+/// voxels across its longest side, halved until the pyramid of `kind` fits in `budget`
+/// bytes.
+pub fn default_resolution(lo: Vec3, hi: Vec3, budget: u64, kind: VoxelKind) -> u32 {
     let mut resolution = DEFAULT_RESOLUTION;
-    while resolution > 8 && GridFrame::for_bounds(lo, hi, resolution).pyramid_bytes() > budget {
+    while resolution > 8 && GridFrame::for_bounds(lo, hi, resolution).pyramid_bytes(kind) > budget {
         resolution /= 2;
     }
     resolution
@@ -112,37 +191,63 @@ pub fn level_dims(dims: [u32; 3]) -> Vec<[u32; 3]> {
     out
 }
 
-/// One level of the pyramid: premultiplied `[r, g, b, a]` per voxel, x fastest.
+/// One level of the pyramid: `faces` premultiplied `[r, g, b, a]` values per voxel (1, or 6
+/// in [`face_index`] order), voxels x fastest.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VoxelLevel {
     pub dims: [u32; 3],
+    pub faces: usize,
     pub voxels: Vec<[f32; 4]>,
 }
 
 impl VoxelLevel {
-    /// An empty (transparent, black) level.
+    /// An empty (transparent, black) level with one value per voxel.
     pub fn empty(dims: [u32; 3]) -> VoxelLevel {
-        let count = dims.iter().map(|&d| d as usize).product();
+        VoxelLevel::empty_with_faces(dims, 1)
+    }
+
+    /// An empty level with `faces` values per voxel.
+    pub fn empty_with_faces(dims: [u32; 3], faces: usize) -> VoxelLevel {
+        let count: usize = dims.iter().map(|&d| d as usize).product();
         VoxelLevel {
             dims,
-            voxels: vec![[0.0; 4]; count],
+            faces,
+            voxels: vec![[0.0; 4]; count * faces],
         }
     }
 
-    /// The voxel at integer coordinates, zero outside the level.
+    /// The linear index of the voxel at integer coordinates, `None` outside the level.
     #[inline]
-    pub fn get(&self, x: i64, y: i64, z: i64) -> [f32; 4] {
+    fn voxel_index(&self, x: i64, y: i64, z: i64) -> Option<usize> {
         let [dx, dy, dz] = self.dims.map(i64::from);
         if x < 0 || y < 0 || z < 0 || x >= dx || y >= dy || z >= dz {
-            return [0.0; 4];
+            return None;
         }
-        self.voxels[(x + dx * (y + dy * z)) as usize]
+        Some((x + dx * (y + dy * z)) as usize)
+    }
+
+    /// The voxel at integer coordinates (its first face), zero outside the level.
+    #[inline]
+    pub fn get(&self, x: i64, y: i64, z: i64) -> [f32; 4] {
+        self.get_face(x, y, z, 0)
+    }
+
+    /// Face `face` of the voxel at integer coordinates (the only value of a one-face
+    /// level, whatever `face`), zero outside the level.
+    #[inline]
+    pub fn get_face(&self, x: i64, y: i64, z: i64, face: usize) -> [f32; 4] {
+        match self.voxel_index(x, y, z) {
+            Some(i) if self.faces == 1 => self.voxels[i],
+            Some(i) => self.voxels[i * self.faces + face],
+            None => [0.0; 4],
+        }
     }
 
     /// Trilinear interpolation between voxel centres at continuous coordinates `v` of this
-    /// level (voxel `i` spans `[i, i+1)`, its centre is at `i + 0.5`).
+    /// level (voxel `i` spans `[i, i+1)`, its centre is at `i + 0.5`), of the faces `faces`
+    /// blended by their weights (one-face levels ignore which).
     #[inline]
-    pub fn trilinear(&self, v: Vec3) -> [f32; 4] {
+    pub fn trilinear(&self, v: Vec3, faces: &[(usize, f32); 3]) -> [f32; 4] {
         let p = v - Vec3::splat(0.5);
         let base = p.floor();
         let f = p - base;
@@ -156,12 +261,25 @@ impl VoxelLevel {
             if w == 0.0 {
                 continue;
             }
-            let t = self.get(x0 + cx, y0 + cy, z0 + cz);
-            for (o, c) in out.iter_mut().zip(t) {
-                *o += w * c;
+            let Some(i) = self.voxel_index(x0 + cx, y0 + cy, z0 + cz) else {
+                continue;
+            };
+            if self.faces == 1 {
+                accumulate(&mut out, w, self.voxels[i]);
+            } else {
+                for &(face, fw) in faces {
+                    accumulate(&mut out, w * fw, self.voxels[i * self.faces + face]);
+                }
             }
         }
         out
+    }
+}
+
+#[inline]
+fn accumulate(out: &mut [f32; 4], w: f32, value: [f32; 4]) {
+    for (o, c) in out.iter_mut().zip(value) {
+        *o += w * c;
     }
 }
 
@@ -169,7 +287,8 @@ impl VoxelLevel {
 #[derive(Clone, Debug, PartialEq)]
 pub struct VoxelPyramid {
     pub frame: GridFrame,
-    /// Level 0 first; the last level has one voxel per axis.
+    pub kind: VoxelKind,
+    /// Level 0 first (one value per voxel); the last level has one voxel per axis.
     pub levels: Vec<VoxelLevel>,
 }
 
@@ -190,11 +309,13 @@ impl VoxelPyramid {
     /// Quadrilinear lookup at world point `p` and fractional level `level` (clamped to the
     /// pyramid): trilinear within the two nearest levels, linear between them, as a
     /// trilinear mip-mapped texture lookup is bilinear within and linear across levels.
-    pub fn sample(&self, p: Vec3, level: f32) -> [f32; 4] {
+    /// Directional levels are seen by a cone travelling along the unit `direction`.
+    pub fn sample(&self, p: Vec3, level: f32, direction: Vec3) -> [f32; 4] {
         let level = level.clamp(0.0, self.max_level());
         let lower = level.floor() as usize;
         let v = self.frame.to_voxel(p);
-        let at = |l: usize| self.levels[l].trilinear(v / (1u32 << l) as f32);
+        let faces = face_weights(direction);
+        let at = |l: usize| self.levels[l].trilinear(v / (1u32 << l) as f32, &faces);
         let a = at(lower);
         let t = level - lower as f32;
         if t == 0.0 || lower + 1 >= self.levels.len() {
@@ -210,6 +331,7 @@ mod tests {
     use super::*;
     use crate::test_rng::{unit_f32, xorshift32};
     use crate::vct::mipmap::build_pyramid;
+    use crate::vct::VoxelKind;
 
     /// A deterministic pseudo-random level 0 (xorshift), half the voxels empty.
     fn random_level(dims: [u32; 3]) -> VoxelLevel {
@@ -249,7 +371,7 @@ mod tests {
             voxel_size: 0.25,
             dims,
         };
-        build_pyramid(frame, random_level(dims))
+        build_pyramid(frame, random_level(dims), VoxelKind::Isotropic)
     }
 
     fn close(a: [f32; 4], b: [f32; 4], tol: f32) -> bool {
@@ -323,7 +445,7 @@ mod tests {
             let t = level - lo as f32;
             let (a, b) = (brute_at(lo), brute_at(lo + 1));
             let expect: [f32; 4] = std::array::from_fn(|i| a[i] + t * (b[i] - a[i]));
-            let got = p.sample(world, level);
+            let got = p.sample(world, level, Vec3::X);
             assert!(
                 close(got, expect, 1e-4),
                 "at {v} level {level}: {got:?} vs {expect:?}"
@@ -343,9 +465,11 @@ mod tests {
     #[test]
     fn default_resolution_fits_the_budget() {
         let (lo, hi) = (Vec3::ZERO, Vec3::ONE);
-        assert_eq!(default_resolution(lo, hi, DEFAULT_MEMORY_BUDGET), 128);
-        let small = default_resolution(lo, hi, 4 << 20);
-        assert!(GridFrame::for_bounds(lo, hi, small).pyramid_bytes() <= 4 << 20);
-        assert!(small < 128);
+        for kind in [VoxelKind::Directional, VoxelKind::Isotropic] {
+            assert_eq!(default_resolution(lo, hi, DEFAULT_MEMORY_BUDGET, kind), 128);
+            let small = default_resolution(lo, hi, 4 << 20, kind);
+            assert!(GridFrame::for_bounds(lo, hi, small).pyramid_bytes(kind) <= 4 << 20);
+            assert!(small < 128);
+        }
     }
 }

@@ -21,4 +21,4 @@ pub mod voxelise;
 
 pub use build::{build_voxel_scene, VctBuildStats, VctError, VctSettings, VoxelScene};
 pub use cone::{trace_cone, ConeResult};
-pub use grid::{GridFrame, VoxelPyramid};
+pub use grid::{GridFrame, VoxelKind, VoxelPyramid};

@@ -41,7 +41,7 @@ use crate::cli::CommandError;
 use crate::film::PixelRect;
 use crate::integrator::{PathTracer, Vct, Whitted};
 use crate::render::{self, Integrator, RenderContext, RenderControl, RenderOptions, RenderResult};
-use conetrace::vct::{build_voxel_scene, VctSettings};
+use conetrace::vct::{build_voxel_scene, VctSettings, VoxelKind};
 
 use super::metrics::{self, DisplayImage, ErrorMetrics};
 use super::plot::{draw_two_panels, pareto_front, PanelText, PlotPoint};
@@ -70,8 +70,12 @@ pub enum LightingMethod {
     /// The path tracer at this many samples per pixel.
     Path { spp: u32 },
     /// The voxel cone tracer on a grid of `resolution` voxels across the scene, the voxels
-    /// holding `bounces` bounces (1: direct light only).
-    Vct { resolution: u32, bounces: u32 },
+    /// holding `bounces` bounces (1: direct light only), of kind `voxels`.
+    Vct {
+        resolution: u32,
+        bounces: u32,
+        voxels: VoxelKind,
+    },
 }
 
 impl LightingMethod {
@@ -81,21 +85,27 @@ impl LightingMethod {
             LightingMethod::Vct {
                 resolution,
                 bounces,
+                ..
             } => (resolution.to_string(), bounces.to_string()),
             _ => (String::new(), String::new()),
         }
     }
 
-    /// `whitted`, `path`, `vct`.
+    /// `whitted`, `path`, `vct` (directional voxels), `vct_isotropic`.
     pub fn name(&self) -> &'static str {
         match self {
             LightingMethod::Whitted => "whitted",
             LightingMethod::Path { .. } => "path",
-            LightingMethod::Vct { .. } => "vct",
+            LightingMethod::Vct {
+                voxels: VoxelKind::Directional,
+                ..
+            } => "vct",
+            LightingMethod::Vct { .. } => "vct_isotropic",
         }
     }
 
-    /// A short label for plots and crops: `whitted+ambient`, `path 16`, `vct 64 b2`.
+    /// A short label for plots and crops: `whitted+ambient`, `path 16`, `vct 64 b2`,
+    /// `vct 64 b1 iso`.
     pub fn label(&self) -> String {
         match self {
             LightingMethod::Whitted => "whitted+ambient".to_string(),
@@ -103,7 +113,13 @@ impl LightingMethod {
             LightingMethod::Vct {
                 resolution,
                 bounces,
+                voxels: VoxelKind::Directional,
             } => format!("vct {resolution} b{bounces}"),
+            LightingMethod::Vct {
+                resolution,
+                bounces,
+                voxels: VoxelKind::Isotropic,
+            } => format!("vct {resolution} b{bounces} iso"),
         }
     }
 }
@@ -161,13 +177,21 @@ pub fn methods(args: &AccuracyArgs) -> Vec<LightingMethod> {
             .iter()
             .map(|&spp| LightingMethod::Path { spp }),
     );
+    // The isotropic voxels are measured with direct light only: the reason for the
+    // directional ones, not a setting to tune.
     for &resolution in &args.lighting_vct_resolutions {
         for bounces in [1, 2] {
             methods.push(LightingMethod::Vct {
                 resolution,
                 bounces,
+                voxels: VoxelKind::Directional,
             });
         }
+        methods.push(LightingMethod::Vct {
+            resolution,
+            bounces: 1,
+            voxels: VoxelKind::Isotropic,
+        });
     }
     methods
 }
@@ -290,6 +314,7 @@ fn measure(
             LightingMethod::Vct {
                 resolution,
                 bounces,
+                voxels,
             } => {
                 let started = Instant::now();
                 let voxels = build_voxel_scene(
@@ -297,6 +322,7 @@ fn measure(
                     &VctSettings {
                         resolution: Some(resolution),
                         bounces,
+                        voxels,
                     },
                 )
                 .map_err(|e| CommandError::bad_input(format!("{}: {e}", setup.scene.source)))?;
@@ -441,11 +467,16 @@ pub fn markdown(report: &LightingReport) -> String {
     text
 }
 
-/// A colour per family of rows: Whitted, path, vct direct only, vct with a bounce.
+/// A colour per family of rows: Whitted, path, isotropic vct, vct direct only, vct with a
+/// bounce.
 fn family_colour(method: &LightingMethod) -> RGBColor {
     match method {
         LightingMethod::Whitted => RGBColor(20, 20, 20),
         LightingMethod::Path { .. } => RGBColor(0, 114, 178),
+        LightingMethod::Vct {
+            voxels: VoxelKind::Isotropic,
+            ..
+        } => RGBColor(204, 121, 167),
         LightingMethod::Vct { bounces: 1, .. } => RGBColor(230, 159, 0),
         LightingMethod::Vct { .. } => RGBColor(0, 158, 115),
     }
@@ -530,7 +561,8 @@ pub fn run(args: &AccuracyArgs) -> Result<(), CommandError> {
         // after the reference has rendered.
         let (lo, hi) = setup.scene.bounds().unwrap_or_default();
         for &resolution in &args.lighting_vct_resolutions {
-            let bytes = conetrace::vct::GridFrame::for_bounds(lo, hi, resolution).pyramid_bytes();
+            let bytes = conetrace::vct::GridFrame::for_bounds(lo, hi, resolution)
+                .pyramid_bytes(VoxelKind::Directional);
             if bytes > conetrace::vct::build::MAX_PYRAMID_BYTES {
                 return Err(CommandError::bad_input(format!(
                     "{}: --lighting-vct-resolutions {resolution} needs a {bytes}-byte voxel \
@@ -597,6 +629,7 @@ mod tests {
                 LightingMethod::Vct {
                     resolution: 64,
                     bounces: 1,
+                    voxels: VoxelKind::Directional,
                 },
                 0.5,
                 0.20,
@@ -609,7 +642,7 @@ mod tests {
     }
 
     #[test]
-    fn methods_cover_every_count_and_both_bounce_settings() {
+    fn methods_cover_every_count_both_bounce_settings_and_isotropic_voxels() {
         use clap::Parser;
         #[derive(Parser)]
         struct Wrapper {
@@ -631,11 +664,18 @@ mod tests {
                 LightingMethod::Path { spp: 16 },
                 LightingMethod::Vct {
                     resolution: 32,
-                    bounces: 1
+                    bounces: 1,
+                    voxels: VoxelKind::Directional,
                 },
                 LightingMethod::Vct {
                     resolution: 32,
-                    bounces: 2
+                    bounces: 2,
+                    voxels: VoxelKind::Directional,
+                },
+                LightingMethod::Vct {
+                    resolution: 32,
+                    bounces: 1,
+                    voxels: VoxelKind::Isotropic,
                 },
             ]
         );

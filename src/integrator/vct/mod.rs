@@ -21,7 +21,9 @@ use crate::integrator::whitted::{render_tile_with, IndirectLight, IndirectQuery,
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::Integrator;
 use crate::shading::OpaqueLobe;
-use crate::vct::cone::{gather_diffuse, trace_cone, CONE_START, STEP_FRACTION};
+use crate::vct::cone::{
+    gather_diffuse, surface_cone, trace_cone_stepped, CONE_START, STEP_FRACTION,
+};
 use crate::vct::VoxelScene;
 
 pub use glossy::specular_cone_aperture;
@@ -68,7 +70,6 @@ impl IndirectLight for Vct {
         worker: &mut WorkerState,
     ) -> Vec3 {
         let pyramid = &self.voxels.pyramid;
-        let voxel = pyramid.frame.voxel_size;
         let environment = if context.effects.environment {
             context.lights.environment.mean_radiance
         } else {
@@ -94,9 +95,8 @@ impl IndirectLight for Vct {
             let reflected = 2.0 * n.dot(wo) * n - wo;
             if reflected.dot(query.geometric_normal) > 0.0 {
                 let aperture = specular_cone_aperture(lobe.shininess);
-                let origin = position + n * (CONE_START.normal_voxels * voxel);
-                let start = CONE_START.along_voxels * voxel;
-                let r = trace_cone(pyramid, origin, reflected, aperture, start, f32::INFINITY);
+                let cone = surface_cone(pyramid, position, n, reflected, aperture, CONE_START);
+                let r = trace_cone_stepped(pyramid, &cone, STEP_FRACTION);
                 counters.vct_cones_traced += 1;
                 counters.vct_cone_steps += u64::from(r.steps);
                 radiance += lobe.specular * (r.radiance + (1.0 - r.alpha) * environment);
