@@ -50,7 +50,11 @@ fn every_filter_reads_the_same_values_on_demand_as_decoded_whole() {
         let demand = Texture::from_file(&tx, ColorSpace::Srgb).unwrap();
         let whole = Texture::from_file_whole(&tx, ColorSpace::Srgb).unwrap();
         assert!(demand.is_demand_loaded() && !whole.is_demand_loaded());
-        assert_eq!(demand.tiles_read(), 1, "only the 1x1 level is read on opening");
+        assert_eq!(
+            demand.tiles_read(),
+            1,
+            "only the 1x1 level is read on opening"
+        );
         let mut rng = common::Rng(7);
         for filter in [
             FilterMode::Closest,
@@ -59,7 +63,12 @@ fn every_filter_reads_the_same_values_on_demand_as_decoded_whole() {
             FilterMode::Aniso,
             FilterMode::Ewa,
         ] {
-            for wrap in [WrapMode::Periodic, WrapMode::Clamp, WrapMode::Black, WrapMode::Mirror] {
+            for wrap in [
+                WrapMode::Periodic,
+                WrapMode::Clamp,
+                WrapMode::Black,
+                WrapMode::Mirror,
+            ] {
                 let opts = FilterOptions {
                     filter,
                     wrap_s: wrap,
@@ -154,7 +163,16 @@ material = "m"
 fn render(dir: &Path, output: &str) -> std::process::Output {
     common::run_in(
         dir,
-        &["render", "s.toml", "-o", output, "--quiet", "--no-png", "--integrator", "whitted"],
+        &[
+            "render",
+            "s.toml",
+            "-o",
+            output,
+            "--quiet",
+            "--no-png",
+            "--integrator",
+            "whitted",
+        ],
     )
 }
 
@@ -164,19 +182,28 @@ fn a_render_through_demand_loaded_tiles_equals_the_render_of_the_levels_decoded_
     maketx(dir.path(), 512, "tiles64.tx", &[]);
     // The same levels in 32x32 tiles: decoded whole.
     let resident = maketx(dir.path(), 512, "tiles32.tx", &["--tile", "32", "32"]);
-    assert!(!Texture::from_file(&resident, ColorSpace::Srgb).unwrap().is_demand_loaded());
+    assert!(!Texture::from_file(&resident, ColorSpace::Srgb)
+        .unwrap()
+        .is_demand_loaded());
     let mut images = Vec::new();
     for file in ["tiles64.tx", "tiles32.tx"] {
         scene(dir.path(), file);
         let out = render(dir.path(), "out.exr");
-        assert!(out.status.success(), "{file}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         images.push(common::read_exr(&dir.path().join("out.exr")));
     }
     // Pixels, bit for bit (the files' headers name the texture files, which differ).
     for (name, pixels) in &images[0].channels {
         let other = images[1].channel(name);
         assert!(
-            pixels.iter().zip(other).all(|(a, b)| a.to_bits() == b.to_bits()),
+            pixels
+                .iter()
+                .zip(other)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
             "channel {name} differs"
         );
     }
@@ -190,11 +217,23 @@ fn the_stats_count_the_tiles_a_render_read_of_those_the_file_holds() {
     let out = common::run_in(
         dir.path(),
         &[
-            "render", "s.toml", "-o", "out.exr", "--quiet", "--no-png", "--integrator",
-            "whitted", "--stats", "s.json",
+            "render",
+            "s.toml",
+            "-o",
+            "out.exr",
+            "--quiet",
+            "--no-png",
+            "--integrator",
+            "whitted",
+            "--stats",
+            "s.json",
         ],
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stats: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("s.json")).unwrap()).unwrap();
     let entry = &stats["texture_memory"][0];
@@ -206,7 +245,10 @@ fn the_stats_count_the_tiles_a_render_read_of_those_the_file_holds() {
     assert!(read >= 2 && read < 100, "{read} of {in_file} tiles read");
     let bytes = entry["bytes"].as_u64().unwrap();
     assert_eq!(bytes % 4, 0);
-    assert!(bytes <= read * 64 * 64 * 4, "{bytes} bytes for {read} tiles");
+    assert!(
+        bytes <= read * 64 * 64 * 4,
+        "{bytes} bytes for {read} tiles"
+    );
 }
 
 #[test]
@@ -220,8 +262,12 @@ fn a_damaged_tile_refuses_the_render_naming_file_level_and_tile() {
     loop {
         let (w, h) = decoder.dimensions().unwrap();
         if (w, h) != (1, 1) {
-            let offsets = decoder.get_tag_u64_vec(tiff::tags::Tag::TileOffsets).unwrap();
-            let counts = decoder.get_tag_u64_vec(tiff::tags::Tag::TileByteCounts).unwrap();
+            let offsets = decoder
+                .get_tag_u64_vec(tiff::tags::Tag::TileOffsets)
+                .unwrap();
+            let counts = decoder
+                .get_tag_u64_vec(tiff::tags::Tag::TileByteCounts)
+                .unwrap();
             chunks.extend(offsets.into_iter().zip(counts));
         }
         if !decoder.more_images() {

@@ -109,8 +109,7 @@ pub(crate) fn open(
         return Ok(None);
     }
     let file = File::open(path).map_err(io_error)?;
-    let Some(mut reader) = TiffTileReader::open(BufReader::new(file), label, color_space)?
-    else {
+    let Some(mut reader) = TiffTileReader::open(BufReader::new(file), label, color_space)? else {
         return Ok(None);
     };
     let sizes = reader.level_sizes();
@@ -309,7 +308,9 @@ impl<'a> TexelSource<'a> for DemandTexels<'a> {
         tile_x: usize,
         tile_y: usize,
     ) -> Option<(TileTexels<'a>, usize)> {
-        self.0.tile(tile_x, tile_y).map(|tile| (TileTexels(tile), 0))
+        self.0
+            .tile(tile_x, tile_y)
+            .map(|tile| (TileTexels(tile), 0))
     }
 }
 

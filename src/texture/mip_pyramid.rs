@@ -212,12 +212,13 @@ impl MipPyramid {
                 Some((_, _, values)) => halve(sw, sh, |x, y| values[y * sw + x], label)?,
             };
             let texels = levels[0].texels.same_kind_from(&next.2, label)?;
-            let level = MipLevel::with_texels(next.0 as u32, next.1 as u32, texels).map_err(
-                |message| TextureError::Dimensions {
-                    label: label.to_string(),
-                    message,
-                },
-            )?;
+            let level =
+                MipLevel::with_texels(next.0 as u32, next.1 as u32, texels).map_err(|message| {
+                    TextureError::Dimensions {
+                        label: label.to_string(),
+                        message,
+                    }
+                })?;
             levels.push(level);
             previous = Some(next);
         }
@@ -345,7 +346,11 @@ mod tests {
         let level = MipLevel::new(200, 130, rows.clone()).unwrap();
         assert_eq!(level.to_rgba_f32(), rows);
         assert_eq!(level.texel(131, 70)[0], (70 * 200 + 131) as f32);
-        assert_ne!(level.texels, Texels::Float(rows), "stored in tiles, not rows");
+        assert_ne!(
+            level.texels,
+            Texels::Float(rows),
+            "stored in tiles, not rows"
+        );
     }
 
     #[test]

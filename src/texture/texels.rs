@@ -277,8 +277,7 @@ pub(crate) trait TexelSource<'a>: Copy {
     /// The texels holding tile (`tile_x`, `tile_y`) of a level tiled by `layout`, and the
     /// index of the tile's first texel in them; `None` when the tile cannot be read (the
     /// failure is recorded where the texture reports it).
-    fn tile(self, layout: TileLayout, tile_x: usize, tile_y: usize)
-        -> Option<(Self::Tile, usize)>;
+    fn tile(self, layout: TileLayout, tile_x: usize, tile_y: usize) -> Option<(Self::Tile, usize)>;
 
     /// Linear RGBA of texel (x, y) (in range); zero when its tile cannot be read.
     #[inline(always)]

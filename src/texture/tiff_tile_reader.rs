@@ -53,9 +53,8 @@ impl<R: Read + Seek> TiffTileReader<R> {
         let mut decoder = Decoder::new(source).map_err(|e| tiff_error(e.to_string()))?;
         let mut levels: Vec<StoredLevel> = Vec::new();
         loop {
-            let format = DirectoryFormat::read(&mut decoder).map_err(|m| {
-                tiff_error(format!("level {}: {m}", levels.len()))
-            })?;
+            let format = DirectoryFormat::read(&mut decoder)
+                .map_err(|m| tiff_error(format!("level {}: {m}", levels.len())))?;
             let tiled = decoder.get_chunk_type() == ChunkType::Tile
                 && decoder.chunk_dimensions() == (TEXTURE_TILE_SIZE, TEXTURE_TILE_SIZE);
             if !tiled || format.separate_planes {
@@ -144,9 +143,7 @@ impl<R: Read + Seek> TiffTileReader<R> {
             channels: stored.channels,
             separate_planes: false,
         };
-        samples
-            .texels(data, self.color_space)
-            .map_err(tile_error)
+        samples.texels(data, self.color_space).map_err(tile_error)
     }
 }
 
@@ -192,8 +189,8 @@ mod tests {
     fn every_tile_holds_the_texels_of_the_whole_level_read() {
         let dir = tempfile::tempdir().unwrap();
         let tx = maketx(dir.path(), 200, 130, &[]);
-        let whole = image_load::decode(&std::fs::read(&tx).unwrap(), "noise.tx", ColorSpace::Srgb)
-            .unwrap();
+        let whole =
+            image_load::decode(&std::fs::read(&tx).unwrap(), "noise.tx", ColorSpace::Srgb).unwrap();
         let mut reader = open(&tx).expect("a default maketx file is read tile by tile");
         let sizes: Vec<(u32, u32)> = whole.iter().map(|l| (l.width, l.height)).collect();
         assert_eq!(reader.level_sizes(), sizes);
@@ -243,7 +240,9 @@ mod tests {
         let mut bytes = std::fs::read(&tx).unwrap();
         let (offset, length) = {
             let mut decoder = Decoder::new(Cursor::new(&bytes)).unwrap();
-            let offsets = decoder.get_tag_u64_vec(tiff::tags::Tag::TileOffsets).unwrap();
+            let offsets = decoder
+                .get_tag_u64_vec(tiff::tags::Tag::TileOffsets)
+                .unwrap();
             let counts = decoder
                 .get_tag_u64_vec(tiff::tags::Tag::TileByteCounts)
                 .unwrap();
