@@ -115,10 +115,16 @@ fn cone_start_and_step_measurements() {
             errors = row.iter().map(|e| e.abs()).collect();
         }
     }
-    // The chosen start keeps the corner within 0.25 of the exact open share at every
-    // height (the error grows with h: a wall one voxel thick is diluted in the wide
-    // footprints a tall wall is seen through, and lets sky through).
-    assert!(errors.iter().all(|&e| e < 0.25), "corner errors {errors:?}");
+    // With optical depth interpolated, a wall one voxel thick stays opaque in the wide
+    // footprints a tall wall is seen through: the chosen start keeps the corner within 0.05
+    // of the exact open share from h = 4 up. At h = 2 the point is half a voxel from the
+    // wall, inside the reach of the wall's lookups, which see it about a voxel thicker than
+    // it is (over-occluded by 0.3).
+    assert!(
+        errors[1..].iter().all(|&e| e < 0.05),
+        "corner errors {errors:?}"
+    );
+    assert!(errors[0] < 0.35, "corner errors {errors:?}");
 
     println!(
         "\nstep length: open share and steps at the open floor and at d = 4 from a wall 16 high"

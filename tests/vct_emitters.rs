@@ -103,10 +103,11 @@ fn vct_mean(dir: &Path, scene: &Path, extra: &[&str]) -> f32 {
 fn a_floor_under_an_emissive_ceiling_gets_light_through_directional_voxels() {
     // An open 10 x 10 room 4 high (F = 0.659), and a ceiling 0.5 above a 10 x 10 floor,
     // which fills 99.2 % of the floor centre's cosine-weighted hemisphere. The issue's
-    // target is 10 % of the exact value; the room misses it (docs/vct.md says why: its side
-    // cones' axes leave the open room under the ceiling's edge, and the clearance that keeps
-    // them off the floor narrows what they sample), so these bounds hold what is reached.
-    let cases = [(5.0f32, 4.0f32, 0.35f32), (5.0, 0.5, 0.75)];
+    // target is 10 % of the exact value: the near ceiling reaches it; the room misses it
+    // (docs/vct.md says why: three of its side cones' axes leave the open room under the
+    // ceiling's edge, and the clearance that keeps them off the floor narrows what they
+    // sample), so its bound holds what is reached.
+    let cases = [(5.0f32, 4.0f32, 0.6f32), (5.0, 0.5, 0.9)];
     for (half, height, least) in cases {
         let dir = temp_dir();
         let scene = room(dir.path(), half, height);

@@ -112,8 +112,10 @@ fn the_corner_error_falls_as_the_grid_gets_finer() {
             }
         }
         errors.push((resolution, sum / n as f32));
-        // Signed error at d = 0.1: the thin wall, diluted in coarse voxels, lets the
-        // cones aimed at it see the sky.
+        // Signed error at d = 0.1: coarse voxels see the thin wall a voxel thick (their
+        // optical depth spreads over the lookup's reach), so the cones leaving the floor
+        // beside it are blocked too early. (With opacity interpolated the wall was diluted
+        // instead and let the sky through: +0.31 at resolution 8.)
         let x = (0.1f32 / 4.0 * 160.0) as usize;
         near_wall.push((
             resolution,
@@ -123,8 +125,8 @@ fn the_corner_error_falls_as_the_grid_gets_finer() {
     println!("corner strip d in [0.02, 0.3]: mean |error| by resolution {errors:?}; signed at d = 0.1: {near_wall:?}");
     assert!(errors[0].1 > 0.08, "{errors:?}");
     assert!(
-        near_wall[0].1 > 0.1,
-        "coarse voxels under-occlude at the wall: {near_wall:?}"
+        near_wall[0].1 < -0.1,
+        "coarse voxels over-occlude at the wall: {near_wall:?}"
     );
     assert!(errors[1].1 < 0.6 * errors[0].1, "{errors:?}");
 }

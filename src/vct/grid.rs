@@ -6,10 +6,12 @@
 //! bounds is inside a voxel, not on the grid's edge. Other axes get as many voxels as their
 //! extent needs (a flat scene gets a flat grid: dense, but not cubic).
 //!
-//! Each voxel holds `[r, g, b, a]`: opacity `a` and radiance premultiplied by it
+//! Voxels are built holding `[r, g, b, a]`: opacity `a` and radiance premultiplied by it
 //! (`rgb = a * L`), so that averaging voxels is the alpha-weighted average of their
 //! radiance (`mipmap`). Level `l` has voxels `2^l` times larger, `ceil(dims / 2)` of them per
-//! axis; texels beyond a level's edge are empty (zero). With [`VoxelKind::Directional`]
+//! axis; texels beyond a level's edge are empty (zero). Once built, every value is stored
+//! as optical depth instead ([`to_optical_depth`]): `[tau L, tau]` with `tau = -ln(1 - a)`,
+//! so that a lookup interpolates optical depth, not opacity. With [`VoxelKind::Directional`]
 //! every level above 0 holds six such values per voxel, one for each axis direction a cone
 //! may travel along (Crassin et al. 2011, sec. 3.1), and a lookup blends the three a
 //! direction sees.
@@ -64,6 +66,30 @@ impl std::str::FromStr for VoxelKind {
             )),
         }
     }
+}
+
+/// The optical depth stored for an opaque voxel: a path one voxel long through it keeps
+/// `e^-OPAQUE_DEPTH` (3.4e-4) of what is behind.
+pub const OPAQUE_DEPTH: f32 = 8.0;
+
+/// A built `[a L, a]` voxel value as the pyramid stores it, `[tau L, tau]` with
+/// `tau = -ln(1 - a)` (at most [`OPAQUE_DEPTH`]).
+///
+/// Why: a lookup between voxel centres is a tent filter. Interpolating opacity, a sample
+/// through a one-voxel opaque layer sees at most its centre's weight, and a cone crossing
+/// it in half-voxel steps keeps `exp(int ln(|x|) dx) = e^-2` of what is behind (0.14
+/// measured, through walls and emitters alike). Optical depth adds along a path, so the
+/// tent's integral over the layer is the layer's own depth and the layer keeps what it
+/// should; premultiplying radiance by it keeps the lookup's radiance a weighted mean.
+#[inline]
+pub fn to_optical_depth(value: [f32; 4]) -> [f32; 4] {
+    let a = value[3];
+    if a <= 0.0 {
+        return [0.0; 4];
+    }
+    let tau = (-(1.0 - a).max((-OPAQUE_DEPTH).exp()).ln()).max(0.0);
+    let scale = tau / a;
+    [value[0] * scale, value[1] * scale, value[2] * scale, tau]
 }
 
 /// The face of a directional voxel seen by a cone travelling along `+axis` (`negative`
@@ -330,7 +356,7 @@ impl VoxelPyramid {
 mod tests {
     use super::*;
     use crate::test_rng::{unit_f32, xorshift32};
-    use crate::vct::mipmap::build_pyramid;
+    use crate::vct::mipmap::{build_pyramid, reduce_levels};
     use crate::vct::VoxelKind;
 
     /// A deterministic pseudo-random level 0 (xorshift), half the voxels empty.
@@ -374,6 +400,16 @@ mod tests {
         build_pyramid(frame, random_level(dims), VoxelKind::Isotropic)
     }
 
+    /// The levels of [`pyramid`] before they are stored as optical depth.
+    fn opacity_levels(dims: [u32; 3]) -> Vec<VoxelLevel> {
+        let frame = GridFrame {
+            origin: Vec3::ZERO,
+            voxel_size: 0.25,
+            dims,
+        };
+        reduce_levels(frame, random_level(dims), VoxelKind::Isotropic)
+    }
+
     fn close(a: [f32; 4], b: [f32; 4], tol: f32) -> bool {
         a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
     }
@@ -381,14 +417,14 @@ mod tests {
     #[test]
     fn every_level_is_the_box_average_of_level_zero() {
         // Odd dimensions: blocks at the far edges reach past the grid and count empty space.
-        let p = pyramid([13, 8, 5]);
-        assert_eq!(p.levels.last().unwrap().dims, [1, 1, 1]);
-        for (l, level) in p.levels.iter().enumerate().skip(1) {
+        let levels = opacity_levels([13, 8, 5]);
+        assert_eq!(levels.last().unwrap().dims, [1, 1, 1]);
+        for (l, level) in levels.iter().enumerate().skip(1) {
             let [dx, dy, dz] = level.dims;
             for z in 0..dz as i64 {
                 for y in 0..dy as i64 {
                     for x in 0..dx as i64 {
-                        let expect = box_average(&p.levels[0], l as u32, x, y, z);
+                        let expect = box_average(&levels[0], l as u32, x, y, z);
                         let got = level.get(x, y, z);
                         assert!(
                             close(got, expect, 1e-5),
@@ -403,6 +439,7 @@ mod tests {
     #[test]
     fn quadrilinear_lookup_matches_weighted_box_averages() {
         let p = pyramid([16, 12, 9]);
+        let level0 = opacity_levels([16, 12, 9]).swap_remove(0);
         let frame = p.frame;
         let mut state = 7u32;
         let mut next = || {
@@ -428,13 +465,13 @@ mod tests {
                         .zip([cx, cy, cz])
                         .map(|(&t, c)| if c == 1 { t } else { 1.0 - t })
                         .product::<f32>();
-                    let avg = box_average(
-                        &p.levels[0],
+                    let avg = to_optical_depth(box_average(
+                        &level0,
                         l,
                         b.x as i64 + cx,
                         b.y as i64 + cy,
                         b.z as i64 + cz,
-                    );
+                    ));
                     for (o, a) in out.iter_mut().zip(avg) {
                         *o += w * a;
                     }

@@ -26,7 +26,9 @@ const BATCH: usize = 4096;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LitFragment {
     pub voxel: u32,
-    /// Outgoing radiance (emission plus direct diffuse light), the same in every direction.
+    /// Emitted radiance, the same in every direction.
+    pub emission: Vec3,
+    /// Reflected direct light, the same in every direction.
     pub radiance: Vec3,
     /// Opacity: the opaque share of the material, `1 - transmission`.
     pub opacity: f32,
@@ -139,7 +141,8 @@ fn light_batch(
         };
         out.push(LitFragment {
             voxel: fragment.voxel,
-            radiance: material.emission,
+            emission: material.emission,
+            radiance: Vec3::ZERO,
             opacity: (1.0 - material.transmission).clamp(0.0, 1.0),
             reflectance,
             normal: toward_center,
