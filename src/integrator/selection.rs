@@ -209,9 +209,9 @@ fn emissive_geometry(scene: &SceneDescription) -> Option<String> {
 }
 
 /// The note for a scene whose emissive geometry `kind` does not use as light (Whitted, which
-/// samples punctual lights and the environment only; the voxel cone tracer, which gathers
-/// emitters only through its voxels): stronger when nothing else lights the scene, whose
-/// image is then black apart from the emitters themselves.
+/// samples punctual lights and the environment only) or uses only approximately (the voxel
+/// cone tracer, which gathers emitters through its voxels): stronger when nothing else
+/// lights the scene.
 fn unlit_emitters_note(kind: IntegratorKind, scene: &SceneDescription) -> Option<String> {
     let emitters = emissive_geometry(scene)?;
     let environment_lights = match &scene.environment {
@@ -225,21 +225,31 @@ fn unlit_emitters_note(kind: IntegratorKind, scene: &SceneDescription) -> Option
              environment only; emitters are seen, and seen in mirrors, but light nothing"
         }
         IntegratorKind::Vct => {
-            "the voxel cone tracer gathers emitters' light only through its voxels, and only a \
-             few percent of it reaches other surfaces (docs/vct.md)"
+            "the voxel cone tracer gathers emitters' light only through its voxels, an \
+             approximation that misses part of it (docs/vct.md)"
         }
         IntegratorKind::Path => return None,
     };
     let name = kind.name();
-    Some(if only_emitters {
+    Some(if only_emitters && kind == IntegratorKind::Vct {
+        format!(
+            "{name}: the scene is lit only by emissive geometry ({emitters}): {how}; \
+             --integrator path renders all of its light"
+        )
+    } else if only_emitters {
         format!(
             "{name}: the scene is lit only by emissive geometry ({emitters}), so it renders \
              nearly black: {how}; --integrator path renders its light"
         )
     } else {
+        let lights = if kind == IntegratorKind::Vct {
+            "lights the scene only approximately"
+        } else {
+            "does not light the scene"
+        };
         format!(
-            "{name}: emissive geometry ({emitters}) does not light the scene: {how}; \
-             --integrator path renders its light"
+            "{name}: emissive geometry ({emitters}) {lights}: {how}; --integrator path \
+             renders its light"
         )
     })
 }
