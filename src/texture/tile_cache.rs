@@ -14,7 +14,7 @@
 //! Resident bytes are the tiles' texel bytes. They stay at or under the cap, except that a
 //! tile larger than the whole cap is still admitted alone. Beyond them, each thread's
 //! micro-cache may keep up to `micro_cache::MICRO_TILES` tiles alive after their eviction
-//! (until the thread replaces them or the render ends), and each slot takes 16 bytes.
+//! (until the thread replaces them or the render ends), and each tile slot takes 24 bytes.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard, PoisonError};
@@ -377,6 +377,11 @@ mod tests {
         cache.admit(&level, 1, tile(1));
         assert!(level.resident(0).is_none() && level.resident(1).is_some());
         assert_eq!(cache.resident_bytes(), TILE_BYTES);
+    }
+
+    #[test]
+    fn a_slot_takes_the_bytes_the_documentation_states() {
+        assert_eq!(std::mem::size_of::<Mutex<TileSlot>>(), 24);
     }
 
     #[test]
