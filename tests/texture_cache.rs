@@ -242,7 +242,7 @@ fn the_stats_count_the_tiles_a_render_read_of_those_the_file_holds() {
     // 32x32 + 16x16 + 8x8 + 4x4 + 2x2 tiles, then one for each level from 64x64 to 1x1.
     assert_eq!(in_file, 1024 + 256 + 64 + 16 + 4 + 7);
     // A 48x32 image of the quad needs a few coarse levels' tiles, not level 0.
-    assert!(read >= 2 && read < 100, "{read} of {in_file} tiles read");
+    assert!((2..100).contains(&read), "{read} of {in_file} tiles read");
     let bytes = entry["bytes"].as_u64().unwrap();
     assert_eq!(bytes % 4, 0);
     assert!(

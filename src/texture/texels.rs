@@ -151,7 +151,7 @@ impl Texels {
         match self {
             Texels::Float(t) => FloatTexels(t).texel(index),
             Texels::Half(t) => HalfTexels(t).texel(index),
-            Texels::Byte { texels, colour, .. } => ByteTexels::new(texels, *colour).texel(index),
+            Texels::Byte { texels, colour, .. } => ByteTexels::new(texels, colour).texel(index),
             Texels::OnDemand(level) => level.texel_at_index(index),
         }
     }
@@ -169,7 +169,7 @@ impl Texels {
             Texels::Float(t) => FloatTexels(t).bilinear_quad(k, row, blend),
             Texels::Half(t) => HalfTexels(t).bilinear_quad(k, row, blend),
             Texels::Byte { texels, colour, .. } => {
-                ByteTexels::new(texels, *colour).bilinear_quad(k, row, blend)
+                ByteTexels::new(texels, colour).bilinear_quad(k, row, blend)
             }
             Texels::OnDemand(_) => None,
         }
