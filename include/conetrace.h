@@ -244,9 +244,16 @@ typedef struct CtRenderOptions {
   // The largest colour component a camera sample keeps: a brighter sample is scaled down
   // to it, its hue kept (`--clamp` on the command line; it removes fireflies and darkens
   // what it clamps). 0 = the scene's `[render] clamp` (none unless the scene sets one);
-  // otherwise a finite number above 0. Appended last: a caller whose `struct_size` ends
-  // before it gets 0. A field appended later starts after it, at an 8-byte boundary.
+  // otherwise a finite number above 0. A caller whose `struct_size` ends before it gets
+  // 0.
   double clamp;
+  // Cap, in bytes, on the memory of texture tiles read on demand from tiled, mip-mapped
+  // `.tx` files (`--texture-cache` on the command line): tiles beyond it are evicted and
+  // read again when touched, the image unchanged. Each render has its own cache. 0 = the
+  // default, 256 MiB. Textures decoded whole, and those read for a texture callback, do
+  // not count against it. Appended last: a caller whose `struct_size` ends before it
+  // gets 0. A field appended later starts after it, at an 8-byte boundary.
+  uint64_t texture_cache;
 } CtRenderOptions;
 
 // A loaded scene. `id == 0` is the null handle.

@@ -1537,3 +1537,85 @@ fn without_surface_aovs_the_image_has_colour_alone_and_the_same_colour() {
     assert_eq!(ct_image_free(without), CtStatus::CT_OK);
     assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
 }
+
+/// A quad textured with a 1024x1024 `.tx` (made by `maketx`, which must be installed:
+/// scripts/setup.sh), seen at a slant.
+fn tx_textured_scene(dir: &Path) -> CtScene {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 56) as u8
+    };
+    let image =
+        ::image::RgbImage::from_fn(1024, 1024, |_, _| ::image::Rgb([next(), next(), next()]));
+    image.save(dir.join("noise.png")).unwrap();
+    let status = Command::new("maketx")
+        .arg(dir.join("noise.png"))
+        .arg("-o")
+        .arg(dir.join("noise.tx"))
+        .status()
+        .expect("maketx must be installed (scripts/setup.sh)");
+    assert!(status.success(), "maketx failed");
+    common::write(dir, "quad.obj", &common::square_obj(1.0, 0.0));
+    let text = CString::new(
+        r#"
+[camera]
+eye = [0.3, 1.5, 0.9]
+target = [0.0, 0.0, 0.0]
+fov = 40.0
+[[light]]
+type = "directional"
+direction = [0.2, -1.0, -0.3]
+[[texture]]
+name = "t"
+file = "noise.tx"
+[[material]]
+name = "m"
+base_color = [1.0, 1.0, 1.0]
+base_color_texture = "t"
+[[mesh]]
+file = "quad.obj"
+material = "m"
+"#,
+    )
+    .unwrap();
+    let base = CString::new(dir.display().to_string()).unwrap();
+    let label = CString::new("tx.toml").unwrap();
+    let mut scene = CtScene::default();
+    let status = unsafe {
+        ct_scene_load_toml_string(text.as_ptr(), base.as_ptr(), label.as_ptr(), &mut scene)
+    };
+    assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
+    scene
+}
+
+/// `CtRenderOptions.texture_cache` caps the tiles of `.tx` textures (0: the default); a cap of
+/// a few tiles gives the image of the default cap, bit for bit, and a caller built against
+/// the header before the field (its `struct_size` ends at it) gets the default.
+#[test]
+fn the_texture_cache_cap_is_set_through_the_options_and_keeps_the_image() {
+    let dir = common::temp_dir();
+    let scene = tx_textured_scene(dir.path());
+    let red = |options: &CtRenderOptions| {
+        let mut image = CtImage::default();
+        let status = unsafe { ct_render(scene, options, &mut image) };
+        assert_eq!(status, CtStatus::CT_OK, "{}", last_error());
+        let red = image_plane(image, "R");
+        assert_eq!(ct_image_free(image), CtStatus::CT_OK);
+        red.iter().map(|v| v.to_bits()).collect::<Vec<u32>>()
+    };
+    let mut options = small_options();
+    options.lod = CT_LOD_MIP0;
+    options.filter = CT_FILTER_BILINEAR;
+    assert_eq!(options.texture_cache, 0);
+    let default_cap = red(&options);
+    options.texture_cache = 64 * 1024;
+    assert_eq!(red(&options), default_cap, "a cap of 4 tiles");
+    let mut earlier = options;
+    earlier.struct_size = std::mem::offset_of!(CtRenderOptions, texture_cache) as u32;
+    earlier.texture_cache = 1; // past its struct_size: ignored
+    assert_eq!(red(&earlier), default_cap);
+    assert_eq!(ct_scene_free(scene), CtStatus::CT_OK);
+}

@@ -242,7 +242,7 @@ fn the_stats_count_the_tiles_a_render_read_of_those_the_file_holds() {
     // 32x32 + 16x16 + 8x8 + 4x4 + 2x2 tiles, then one for each level from 64x64 to 1x1.
     assert_eq!(in_file, 1024 + 256 + 64 + 16 + 4 + 7);
     // A 48x32 image of the quad needs a few coarse levels' tiles, not level 0.
-    assert!(read >= 2 && read < 100, "{read} of {in_file} tiles read");
+    assert!((2..100).contains(&read), "{read} of {in_file} tiles read");
     let bytes = entry["bytes"].as_u64().unwrap();
     assert_eq!(bytes % 4, 0);
     assert!(
@@ -289,4 +289,181 @@ fn a_damaged_tile_refuses_the_render_naming_file_level_and_tile() {
     assert!(line.contains("damaged.tx: level "), "{stderr}");
     assert!(line.contains(", tile ("), "{stderr}");
     assert!(!dir.path().join("out.exr").exists(), "no image is written");
+}
+
+/// Renders `s.toml` in `dir` into `output` with `extra` arguments; fails the test on a
+/// non-zero exit.
+fn render_with(dir: &Path, output: &str, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["render", "s.toml", "-o", output, "--quiet", "--no-png"];
+    args.extend_from_slice(extra);
+    let out = common::run_in(dir, &args);
+    assert!(
+        out.status.success(),
+        "{extra:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// The bits of every pixel of every channel of `path`, channels by name.
+fn pixel_bits(path: &Path) -> Vec<(String, Vec<u32>)> {
+    let image = common::read_exr(path);
+    let mut channels: Vec<(String, Vec<u32>)> = image
+        .channels
+        .iter()
+        .map(|(name, pixels)| (name.clone(), pixels.iter().map(|v| v.to_bits()).collect()))
+        .collect();
+    channels.sort();
+    channels
+}
+
+#[test]
+fn a_cache_of_four_tiles_renders_the_images_of_the_default_cache_and_of_resident_levels() {
+    let dir = common::temp_dir();
+    maketx(dir.path(), 1024, "cached.tx", &[]);
+    // The same levels in 32x32 tiles: decoded whole, fully resident.
+    maketx(dir.path(), 1024, "resident.tx", &["--tile", "32", "32"]);
+    for integrator in ["whitted", "path"] {
+        for (lod, filter) in [("mip0", "bilinear"), ("cone", "aniso"), ("distance", "ewa")] {
+            let common_args = [
+                "--integrator",
+                integrator,
+                "--lod",
+                lod,
+                "--filter",
+                filter,
+                "--spp",
+                "2",
+                "--seed",
+                "11",
+            ];
+            let mut images = Vec::new();
+            for (file, cache) in [
+                ("resident.tx", None),
+                ("cached.tx", None),
+                ("cached.tx", Some("64K")),
+            ] {
+                scene(dir.path(), file);
+                let mut args = common_args.to_vec();
+                if let Some(size) = cache {
+                    args.extend(["--texture-cache", size]);
+                }
+                render_with(dir.path(), "out.exr", &args);
+                images.push(pixel_bits(&dir.path().join("out.exr")));
+            }
+            let case = format!("{integrator} --lod {lod} --filter {filter}");
+            assert_eq!(
+                images[1], images[0],
+                "{case}: default cache against resident"
+            );
+            assert_eq!(images[2], images[0], "{case}: 64K cache against resident");
+        }
+    }
+}
+
+/// The `texture_cache` totals, the distinct tiles touched and the summary line of a
+/// mip-0, bilinear render of `cached.tx` with `extra` arguments.
+fn cache_stats(dir: &Path, extra: &[&str]) -> (serde_json::Value, u64, String) {
+    let mut args = vec![
+        "--integrator",
+        "whitted",
+        "--lod",
+        "mip0",
+        "--filter",
+        "bilinear",
+        "--stats",
+        "s.json",
+    ];
+    args.extend_from_slice(extra);
+    let out = render_with(dir, "out.exr", &args);
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
+    let touched = stats["texture_tiles"]["total"]
+        .as_u64()
+        .expect("tiles touched");
+    let cache = stats["texture_cache"].clone();
+    assert!(cache.is_object(), "{stats}");
+    let per_texture = &stats["texture_memory"][0]["cache"];
+    for counter in ["tiles_loaded", "tiles_evicted", "bytes_read", "cache_hits"] {
+        assert_eq!(
+            per_texture[counter], cache[counter],
+            "{counter}: one texture"
+        );
+    }
+    (
+        cache,
+        touched,
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+    )
+}
+
+#[test]
+fn the_stats_count_loads_evictions_and_hits_of_the_texture_cache() {
+    let dir = common::temp_dir();
+    maketx(dir.path(), 1024, "cached.tx", &[]);
+    scene(dir.path(), "cached.tx");
+    let counter = |cache: &serde_json::Value, name: &str| {
+        cache[name]
+            .as_u64()
+            .unwrap_or_else(|| panic!("{name} in {cache}"))
+    };
+    let rate = |cache: &serde_json::Value, name: &str| cache[name].as_f64().unwrap();
+
+    // Without a cap that binds: every tile touched is read once (and the 1x1 level on
+    // opening, which a mip-0 render never touches), none evicted.
+    let (cache, touched, summary) = cache_stats(dir.path(), &[]);
+    assert!(touched > 16, "{touched} tiles touched");
+    assert_eq!(counter(&cache, "tiles_loaded"), touched + 1, "{cache}");
+    assert_eq!(counter(&cache, "tiles_evicted"), 0, "{cache}");
+    assert_eq!(counter(&cache, "capacity_bytes"), 256 << 20);
+    let loads = counter(&cache, "tiles_loaded");
+    assert_eq!(
+        counter(&cache, "micro_cache_misses") - counter(&cache, "cache_hits"),
+        loads - 1,
+        "every shared-cache miss reads a tile: {cache}"
+    );
+    assert!(counter(&cache, "bytes_read") > 0);
+    // 8-bit RGBA tiles of at most 64x64 texels.
+    assert!(counter(&cache, "peak_resident_bytes") <= loads * 64 * 64 * 4);
+    assert!(rate(&cache, "micro_cache_hit_rate") > 0.5, "{cache}");
+    assert!(summary.contains("texture cache: "), "{summary}");
+    assert!(summary.contains(" 0 evicted"), "{summary}");
+
+    // A cap of 4 tiles: tiles are evicted and read again, the peak stays under the cap.
+    let (cache, touched_capped, summary) = cache_stats(dir.path(), &["--texture-cache", "64K"]);
+    assert_eq!(touched_capped, touched);
+    assert!(counter(&cache, "tiles_evicted") > 0, "{cache}");
+    assert!(counter(&cache, "tiles_loaded") > touched + 1, "{cache}");
+    assert!(
+        counter(&cache, "peak_resident_bytes") <= 64 * 1024,
+        "{cache}"
+    );
+    assert_eq!(counter(&cache, "capacity_bytes"), 64 * 1024);
+    assert!(rate(&cache, "cache_hit_rate") < 1.0, "{cache}");
+    assert!(summary.contains("of 0.1 MiB"), "{summary}");
+}
+
+#[test]
+fn a_bad_texture_cache_size_is_one_line_and_exit_status_2() {
+    let dir = common::temp_dir();
+    maketx(dir.path(), 64, "small.tx", &[]);
+    scene(dir.path(), "small.tx");
+    for bad in ["12Q", "-5M", "0", "lots"] {
+        let out = common::run_in(
+            dir.path(),
+            &[
+                "render",
+                "s.toml",
+                "-o",
+                "out.exr",
+                "--quiet",
+                &format!("--texture-cache={bad}"),
+            ],
+        );
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{bad}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{bad}: {stderr}");
+        assert!(stderr.contains("--texture-cache"), "{bad}: {stderr}");
+        assert!(!dir.path().join("out.exr").exists());
+    }
 }

@@ -120,18 +120,31 @@ pub struct CtRenderOptions {
     /// The largest colour component a camera sample keeps: a brighter sample is scaled down
     /// to it, its hue kept (`--clamp` on the command line; it removes fireflies and darkens
     /// what it clamps). 0 = the scene's `[render] clamp` (none unless the scene sets one);
-    /// otherwise a finite number above 0. Appended last: a caller whose `struct_size` ends
-    /// before it gets 0. A field appended later starts after it, at an 8-byte boundary.
+    /// otherwise a finite number above 0. A caller whose `struct_size` ends before it gets
+    /// 0.
     pub clamp: f64,
+    /// Cap, in bytes, on the memory of texture tiles read on demand from tiled, mip-mapped
+    /// `.tx` files (`--texture-cache` on the command line): tiles beyond it are evicted and
+    /// read again when touched, the image unchanged. Each render has its own cache. 0 = the
+    /// default, 256 MiB. Textures decoded whole, and those read for a texture callback, do
+    /// not count against it. Appended last: a caller whose `struct_size` ends before it
+    /// gets 0. A field appended later starts after it, at an 8-byte boundary.
+    pub texture_cache: u64,
 }
 
 /// `struct_size` of `CtRenderOptions` before `integrator` was appended: still accepted.
 const OPTIONS_SIZE_BEFORE_INTEGRATOR: usize = std::mem::offset_of!(CtRenderOptions, integrator);
 /// `struct_size` of `CtRenderOptions` before `clamp` was appended: still accepted.
 const OPTIONS_SIZE_BEFORE_CLAMP: usize = std::mem::offset_of!(CtRenderOptions, clamp);
+/// `struct_size` of `CtRenderOptions` before `texture_cache` was appended: still accepted.
+const OPTIONS_SIZE_BEFORE_TEXTURE_CACHE: usize =
+    std::mem::offset_of!(CtRenderOptions, texture_cache);
 /// The `struct_size`s of earlier headers' `CtRenderOptions`, oldest first.
-const EARLIER_OPTIONS_SIZES: [usize; 2] =
-    [OPTIONS_SIZE_BEFORE_INTEGRATOR, OPTIONS_SIZE_BEFORE_CLAMP];
+const EARLIER_OPTIONS_SIZES: [usize; 3] = [
+    OPTIONS_SIZE_BEFORE_INTEGRATOR,
+    OPTIONS_SIZE_BEFORE_CLAMP,
+    OPTIONS_SIZE_BEFORE_TEXTURE_CACHE,
+];
 
 impl CtRenderOptions {
     fn defaults() -> CtRenderOptions {
@@ -153,6 +166,7 @@ impl CtRenderOptions {
             texture_user_data: std::ptr::null_mut(),
             integrator: CT_INTEGRATOR_SCENE,
             clamp: 0.0,
+            texture_cache: 0,
         }
     }
 }
@@ -343,6 +357,10 @@ pub unsafe extern "C" fn ct_render(
         let scene = object.scene.clone();
         let render_options = render_options(&c_options, &scene)?;
         let integrator = integrator_from_code(c_options.integrator, &scene.settings)?;
+        let texture_cache_bytes = match c_options.texture_cache {
+            0 => crate::texture::DEFAULT_TEXTURE_CACHE_BYTES,
+            bytes => bytes,
+        };
         // Refused before the film or any texture is allocated. A texture whose header cannot
         // be read is left to the preparation below, which reports it with its role.
         if let Ok(estimate) = memory_estimate(&c_options, integrator, &scene, &render_options) {
@@ -400,7 +418,11 @@ pub unsafe extern "C" fn ct_render(
                         render_options,
                         textures.clone(),
                     ),
-                    None => render::prepare(scene.clone(), render_options),
+                    None => render::prepare_in(
+                        scene.clone(),
+                        render_options,
+                        &Arc::new(crate::texture::TileCache::new(texture_cache_bytes)),
+                    ),
                 }
                 .map_err(|e| CapiError::new(CtStatus::CT_ERROR_RENDER, e.to_string()))?;
                 let publish = |done: usize, total: usize| board.publish(done, total);

@@ -256,7 +256,8 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
     let pool = crate::cli::worker_pool(args.threads)?;
 
     let decoding = Instant::now();
-    let (textures, texture_digests) = render_cmd::decode_textures(&scene, args.quiet)?;
+    let (textures, texture_digests) =
+        render_cmd::decode_textures(&scene, &render_cmd::texture_cache(args), args.quiet)?;
     phases.textures = decoding.elapsed().as_secs_f64();
     let signature =
         RenderSignature::new(&scene, args.scene.as_deref(), &options, &texture_digests)?;

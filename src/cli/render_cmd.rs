@@ -128,6 +128,11 @@ pub struct RenderArgs {
     /// exceeds this size, e.g. 8G or 512M [default: the memory the system reports available].
     #[arg(long, value_parser = crate::render::memory::parse_memory_size)]
     pub max_memory: Option<u64>,
+    /// Cap on the memory of texture tiles read on demand from tiled, mip-mapped `.tx`
+    /// files, e.g. 256M or 1G; tiles beyond it are evicted and read again when touched,
+    /// the image unchanged [default: 256M]. Textures decoded whole do not count.
+    #[arg(long, value_name = "SIZE", value_parser = crate::render::memory::parse_memory_size)]
+    pub texture_cache: Option<u64>,
     /// Do not show a progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -528,7 +533,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let pool = crate::cli::worker_pool(args.threads)?;
 
     let decoding = Instant::now();
-    let (textures, texture_digests) = decode_textures(&scene, args.quiet)?;
+    let (textures, texture_digests) = decode_textures(&scene, &texture_cache(args), args.quiet)?;
     phases.textures = decoding.elapsed().as_secs_f64();
 
     let signature =
@@ -878,6 +883,7 @@ fn requested_split(
 /// texture file is read once.
 pub(crate) fn decode_textures(
     scene: &SceneDescription,
+    cache: &Arc<crate::texture::TileCache>,
     quiet: bool,
 ) -> Result<(Vec<Arc<crate::texture::Texture>>, Vec<String>), CommandError> {
     let bar = if quiet || scene.textures.is_empty() {
@@ -912,7 +918,7 @@ pub(crate) fn decode_textures(
         // A file goes through `from_file`, which reads a tiled `.tx` tile by tile on demand.
         let texture = match &desc.source {
             crate::scene::TextureSource::File(path) => {
-                crate::texture::Texture::from_file(path, desc.color_space)
+                crate::texture::Texture::from_file_in(path, desc.color_space, cache)
             }
             crate::scene::TextureSource::Encoded { .. } => {
                 crate::texture::Texture::from_encoded(bytes, &label, desc.color_space)
@@ -924,6 +930,14 @@ pub(crate) fn decode_textures(
     }
     bar.finish_and_clear();
     Ok((textures, digests))
+}
+
+/// The cache of the render's demand-loaded textures, with the cap of `--texture-cache`.
+pub(crate) fn texture_cache(args: &RenderArgs) -> Arc<crate::texture::TileCache> {
+    let cap = args
+        .texture_cache
+        .unwrap_or(crate::texture::DEFAULT_TEXTURE_CACHE_BYTES);
+    Arc::new(crate::texture::TileCache::new(cap))
 }
 
 /// Stages a text file (the statistics) into `set`.

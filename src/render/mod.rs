@@ -67,6 +67,16 @@ pub fn prepare(
     prepare_with_textures(scene, options, textures)
 }
 
+/// [`prepare`] with the tiles of the scene's `.tx` textures kept in `cache`, under its cap.
+pub fn prepare_in(
+    scene: Arc<SceneDescription>,
+    options: RenderOptions,
+    cache: &Arc<crate::texture::TileCache>,
+) -> Result<RenderContext, PrepareError> {
+    let textures = prepared::decode_textures_in(&scene, cache)?;
+    prepare_with_textures(scene, options, textures)
+}
+
 /// Like [`prepare`], with the scene's textures already decoded (one per
 /// `scene.textures` entry, as [`prepared::decode_textures`] returns them): for callers that
 /// render one scene many times, or with pyramids of their own.
@@ -368,6 +378,9 @@ pub fn render<I: Integrator>(
             source,
         });
     }
+    // Every worker's micro-cache hits reach the textures' counters, and no tile evicted
+    // during the render stays alive in a micro-cache after it.
+    crate::texture::flush_micro_caches();
     if let Some(message) = context.textures.iter().find_map(|t| t.tile_failure()) {
         return Err(RenderError::TextureTile {
             message: message.to_string(),
@@ -444,8 +457,10 @@ pub fn render<I: Integrator>(
                 bytes: texture.memory_bytes() as u64,
                 tiles_read: texture.is_demand_loaded().then(|| texture.tiles_read()),
                 tiles_in_file: texture.is_demand_loaded().then(|| texture.tiles_in_file()),
+                cache: texture.cache_stats().map(Into::into),
             })
             .collect(),
+        texture_cache: stats::texture_cache_totals(&context.textures),
         vct: None,
         integrator: None,
     };

@@ -9,7 +9,7 @@ use crate::hit::{Patch, SurfaceHit};
 use crate::render::tracer::TraceHit;
 use crate::scene::{Environment, Material, SceneDescription, TextureDesc, TextureSource};
 use crate::shading::ray_offset::SpawnPoint;
-use crate::texture::{FilterMode, FilterOptions, Texture, TextureQuery};
+use crate::texture::{FilterMode, FilterOptions, Texture, TextureQuery, TileCache};
 
 /// What an Embree geometry id stands for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,19 +49,36 @@ pub enum PrepareError {
     },
 }
 
-/// Decode every texture of `scene` (sRGB colour textures are decoded to linear on load).
+/// Decode every texture of `scene` (sRGB colour textures are decoded to linear on load),
+/// `.tx` files opened tile by tile through the process-wide texture cache.
 pub fn decode_textures(scene: &SceneDescription) -> Result<Vec<Arc<Texture>>, PrepareError> {
+    decode_textures_in(scene, &TileCache::shared())
+}
+
+/// [`decode_textures`] with the tiles of `.tx` files kept in `cache`, under its cap.
+pub fn decode_textures_in(
+    scene: &SceneDescription,
+    cache: &Arc<TileCache>,
+) -> Result<Vec<Arc<Texture>>, PrepareError> {
     scene
         .textures
         .iter()
-        .map(|desc| Ok(Arc::new(decode_texture(desc)?)))
+        .map(|desc| Ok(Arc::new(decode_texture_in(desc, cache)?)))
         .collect()
 }
 
 /// Decode one texture of a scene from its file or embedded bytes.
 pub fn decode_texture(desc: &TextureDesc) -> Result<Texture, crate::texture::TextureError> {
+    decode_texture_in(desc, &TileCache::shared())
+}
+
+/// [`decode_texture`] with the tiles of a `.tx` file kept in `cache`.
+pub fn decode_texture_in(
+    desc: &TextureDesc,
+    cache: &Arc<TileCache>,
+) -> Result<Texture, crate::texture::TextureError> {
     match &desc.source {
-        TextureSource::File(path) => Texture::from_file(path, desc.color_space),
+        TextureSource::File(path) => Texture::from_file_in(path, desc.color_space, cache),
         TextureSource::Encoded { label, bytes } => {
             Texture::from_encoded(bytes, label, desc.color_space)
         }

@@ -138,6 +138,102 @@ pub struct RenderStats {
     pub integrator: Option<String>,
     /// The vector instructions the lane loops ran with ([`crate::simd::Level::name`]).
     pub simd: String,
+    /// The texture cache over the demand-loaded (`.tx`) textures, all of them together
+    /// (`None` when no texture is demand-loaded).
+    pub texture_cache: Option<TextureCacheTotals>,
+}
+
+/// The texture cache's counters for one demand-loaded texture, or summed over all of them
+/// (`crate::texture::TextureCacheStats`, with its rates).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct TextureCacheReport {
+    /// Tiles read from the file, a tile read again after its eviction counted again.
+    pub tiles_loaded: u64,
+    /// Tiles evicted to stay under the cap.
+    pub tiles_evicted: u64,
+    /// Bytes of those tiles in the file (as stored, compressed).
+    pub bytes_read: u64,
+    /// Most texel bytes resident at once (of the total: the cache's own peak).
+    pub peak_resident_bytes: u64,
+    /// Tile fetches served by the fetching thread's micro-cache.
+    pub micro_cache_hits: u64,
+    /// Tile fetches past the micro-cache, to the shared cache.
+    pub micro_cache_misses: u64,
+    /// Of those, the fetches that found the tile resident.
+    pub cache_hits: u64,
+    /// micro_cache_hits / (micro_cache_hits + micro_cache_misses).
+    pub micro_cache_hit_rate: f64,
+    /// cache_hits / micro_cache_misses.
+    pub cache_hit_rate: f64,
+}
+
+impl From<crate::texture::TextureCacheStats> for TextureCacheReport {
+    fn from(s: crate::texture::TextureCacheStats) -> TextureCacheReport {
+        TextureCacheReport {
+            tiles_loaded: s.tiles_loaded,
+            tiles_evicted: s.tiles_evicted,
+            bytes_read: s.bytes_read,
+            peak_resident_bytes: s.peak_resident_bytes,
+            micro_cache_hits: s.micro_cache_hits,
+            micro_cache_misses: s.micro_cache_misses,
+            cache_hits: s.cache_hits,
+            micro_cache_hit_rate: s.micro_cache_hit_rate(),
+            cache_hit_rate: s.cache_hit_rate(),
+        }
+    }
+}
+
+/// The cache counters summed over the demand-loaded textures among `textures`, the peak
+/// and the cap being those of the caches they live in (each counted once); `None` when
+/// none is demand-loaded.
+pub fn texture_cache_totals(
+    textures: &[std::sync::Arc<crate::texture::Texture>],
+) -> Option<TextureCacheTotals> {
+    let mut sum: Option<crate::texture::TextureCacheStats> = None;
+    let mut caches: Vec<&std::sync::Arc<crate::texture::TileCache>> = Vec::new();
+    for texture in textures {
+        let (Some(stats), Some(cache)) = (texture.cache_stats(), texture.tile_cache()) else {
+            continue;
+        };
+        sum = Some(sum.unwrap_or_default().plus(&stats));
+        if !caches.iter().any(|c| std::sync::Arc::ptr_eq(c, cache)) {
+            caches.push(cache);
+        }
+    }
+    let mut totals = TextureCacheReport::from(sum?);
+    totals.peak_resident_bytes = caches.iter().map(|c| c.peak_resident_bytes()).sum();
+    Some(TextureCacheTotals {
+        capacity_bytes: caches.iter().map(|c| c.capacity()).sum(),
+        totals,
+    })
+}
+
+/// The texture cache over all demand-loaded textures of a render.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct TextureCacheTotals {
+    /// The cap (`--texture-cache`), in bytes.
+    pub capacity_bytes: u64,
+    #[serde(flatten)]
+    pub totals: TextureCacheReport,
+}
+
+impl TextureCacheTotals {
+    /// The summary line's part: loads, evictions, bytes read, peak against the cap, rates.
+    fn summary(&self) -> String {
+        let t = &self.totals;
+        let mib = |bytes: u64| bytes as f64 / (1024.0 * 1024.0);
+        format!(
+            "texture cache: {} tiles loaded, {} evicted, {:.1} MiB read, peak {:.1} of {:.1} MiB, \
+             micro-cache hits {:.1} %, cache hits {:.1} %",
+            t.tiles_loaded,
+            t.tiles_evicted,
+            mib(t.bytes_read),
+            mib(t.peak_resident_bytes),
+            mib(self.capacity_bytes),
+            100.0 * t.micro_cache_hit_rate,
+            100.0 * t.cache_hit_rate
+        )
+    }
 }
 
 /// Seconds spent in each phase of a render, and in all of them.
@@ -157,8 +253,8 @@ pub struct PhaseSeconds {
     pub total: f64,
 }
 
-/// One texture's decoded size (of a demand-loaded `.tx`: of the tiles read).
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+/// One texture's decoded size (of a demand-loaded `.tx`: of the tiles resident at the end).
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TextureMemory {
     pub texture: String,
     pub bytes: u64,
@@ -167,6 +263,9 @@ pub struct TextureMemory {
     pub tiles_read: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tiles_in_file: Option<u64>,
+    /// Of a demand-loaded `.tx`: its texture-cache counters.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cache: Option<TextureCacheReport>,
 }
 
 #[derive(Clone, Debug, Serialize, PartialEq, Eq)]
@@ -227,6 +326,10 @@ impl RenderStats {
         }
         if let Some(tiles) = &self.texture_tiles {
             line.push_str(&format!("; {} texture tiles", tiles.total));
+        }
+        if let Some(cache) = &self.texture_cache {
+            line.push_str("; ");
+            line.push_str(&cache.summary());
         }
         for note in &self.notes {
             line.push_str("; ");

@@ -2,10 +2,11 @@
 //! tile, as OpenImageIO's ImageCache reads `.tx` files: start-up time and memory follow
 //! what the image needs, not the size of the textures.
 //!
-//! A [`DemandFile`] owns the open file and its tile reader; each [`DemandLevel`] keeps one
-//! slot per tile, filled once. A lookup finds a tile already read with one atomic load
-//! and no lock; the reader's lock is taken only to read a missing tile. Tiles stay until
-//! the texture is dropped.
+//! A [`DemandFile`] owns the open file, its tile reader and the [`TileCache`] its tiles
+//! live in; each [`DemandLevel`] keeps one cache slot per tile. A fetch goes through the
+//! thread's micro-cache (`micro_cache`), then the tile's slot, and only then takes the
+//! reader's lock to read the tile, which the cache admits under its cap (evicting others).
+//! A tile evicted and touched again is read again: the same texels.
 //!
 //! A tile that cannot be read never becomes black texels in an image: the first failure
 //! is kept on the file, lookups needing the tile return zero, and the render that made
@@ -22,9 +23,11 @@ use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 use glam::Vec4;
 
 use super::image_load::{sniff_format, ImageFormat};
+use super::micro_cache;
 use super::mip_pyramid::{MipLevel, MipPyramid};
-use super::texels::{FlatTexels, TexelSource, Texels};
+use super::texels::{TexelSource, Texels};
 use super::tiff_tile_reader::TiffTileReader;
+use super::tile_cache::{FileTally, LevelTiles, TextureCacheStats, TileCache};
 use super::tile_layout::TileLayout;
 use super::tiles::TEXTURE_TILE_SIZE;
 use super::{ColorSpace, TextureError, CHANNEL_NAMES};
@@ -35,9 +38,18 @@ pub(crate) struct DemandFile {
     reader: Mutex<TiffTileReader<BufReader<File>>>,
     /// The first tile that could not be read, as its error message.
     failure: OnceLock<String>,
-    tiles_read: AtomicU64,
+    cache: Arc<TileCache>,
+    tally: Arc<FileTally>,
     tiles_in_file: u64,
 }
+
+impl Drop for DemandFile {
+    fn drop(&mut self) {
+        self.cache.forget(&self.tally);
+    }
+}
+
+static NEXT_LEVEL_ID: AtomicU64 = AtomicU64::new(0);
 
 impl fmt::Debug for DemandFile {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -57,9 +69,20 @@ impl DemandFile {
         self.failure.get().map(String::as_str)
     }
 
-    /// Tiles read from the file so far.
+    /// Tiles read from the file so far (a tile read again after its eviction counts
+    /// again).
     pub(crate) fn tiles_read(&self) -> u64 {
-        self.tiles_read.load(Ordering::Relaxed)
+        self.tally.loads.load(Ordering::Relaxed)
+    }
+
+    /// The file's cache counters.
+    pub(crate) fn cache_stats(&self) -> TextureCacheStats {
+        self.tally.snapshot()
+    }
+
+    /// The cache the file's tiles live in.
+    pub(crate) fn cache(&self) -> &Arc<TileCache> {
+        &self.cache
     }
 
     /// Tiles the file holds over all levels.
@@ -71,13 +94,15 @@ impl DemandFile {
 /// One level of a demand-loaded texture.
 pub struct DemandLevel {
     file: Arc<DemandFile>,
+    /// Process-unique: the micro-cache's key.
+    id: u64,
     level: usize,
     layout: TileLayout,
     tiles_x: usize,
     texel_count: usize,
     /// No texels, of the storage kind every tile of the level has.
     kind: Texels,
-    tiles: Box<[OnceLock<Texels>]>,
+    tiles: Arc<LevelTiles>,
 }
 
 impl fmt::Debug for DemandLevel {
@@ -90,13 +115,14 @@ impl fmt::Debug for DemandLevel {
     }
 }
 
-/// The levels of the tiled, mip-mapped TIFF at `path`, each read tile by tile on demand,
-/// and the file they share; `Ok(None)` when the file is not such a TIFF (it is then
-/// decoded whole). `label` names the file in errors.
+/// The levels of the tiled, mip-mapped TIFF at `path`, each read tile by tile on demand
+/// into `cache`, and the file they share; `Ok(None)` when the file is not such a TIFF (it
+/// is then decoded whole). `label` names the file in errors.
 pub(crate) fn open(
     path: &Path,
     label: &str,
     color_space: ColorSpace,
+    cache: &Arc<TileCache>,
 ) -> Result<Option<(MipPyramid, Arc<DemandFile>)>, TextureError> {
     let io_error = |source| TextureError::Io {
         label: label.to_string(),
@@ -116,6 +142,7 @@ pub(crate) fn open(
     // The coarsest level's single tile tells the storage kind the levels share.
     let coarsest = sizes.len() - 1;
     let coarsest_tile = reader.read_tile(coarsest, 0, 0)?;
+    let coarsest_bytes = reader.stored_bytes(coarsest, 0);
     let kind = coarsest_tile.same_kind_from(&[], label)?;
     let tiles_in_file = sizes
         .iter()
@@ -128,7 +155,8 @@ pub(crate) fn open(
         label: label.to_string(),
         reader: Mutex::new(reader),
         failure: OnceLock::new(),
-        tiles_read: AtomicU64::new(0),
+        cache: cache.clone(),
+        tally: Arc::new(FileTally::new()),
         tiles_in_file,
     });
     let levels: Vec<MipLevel> = sizes
@@ -136,17 +164,16 @@ pub(crate) fn open(
         .enumerate()
         .map(|(level, &(width, height))| {
             let layout = TileLayout::new(width, height);
-            let tiles = (0..layout.tiles_x() * layout.tiles_y())
-                .map(|_| OnceLock::new())
-                .collect();
+            let tiles = LevelTiles::new(layout.tiles_x() * layout.tiles_y(), file.tally.clone());
             let demand = DemandLevel {
                 file: file.clone(),
+                id: NEXT_LEVEL_ID.fetch_add(1, Ordering::Relaxed),
                 level,
                 layout,
                 tiles_x: layout.tiles_x(),
                 texel_count: width as usize * height as usize,
                 kind: kind.clone(),
-                tiles,
+                tiles: Arc::new(tiles),
             };
             MipLevel {
                 width,
@@ -157,8 +184,7 @@ pub(crate) fn open(
         .collect();
     if let Some(Texels::OnDemand(last)) = levels.last().map(|l| &l.texels) {
         let tile = last.checked(coarsest_tile, 0, 0)?;
-        let _ = last.tiles[0].set(tile);
-        file.tiles_read.fetch_add(1, Ordering::Relaxed);
+        last.admit(0, Arc::new(tile), coarsest_bytes);
     }
     Ok(Some((MipPyramid::from_levels(levels), file)))
 }
@@ -174,13 +200,9 @@ impl DemandLevel {
         &self.kind
     }
 
-    /// Bytes of the tiles read so far.
+    /// Bytes of the level's tiles resident in the cache.
     pub(crate) fn resident_bytes(&self) -> usize {
-        self.tiles
-            .iter()
-            .filter_map(OnceLock::get)
-            .map(Texels::memory_bytes)
-            .sum()
+        self.tiles.resident_bytes()
     }
 
     /// Linear RGBA of the texel at `index` in tile order (zero when its tile cannot be
@@ -190,26 +212,47 @@ impl DemandLevel {
         DemandTexels(self).texel_at(self.layout, x, y)
     }
 
-    /// Tile (`tile_x`, `tile_y`), read from the file if this is its first use; `None`
-    /// when it cannot be read.
+    /// `read` of the texels of tile (`tile_x`, `tile_y`), fetched through the thread's
+    /// micro-cache and the shared cache, or read from the file; `None` when the tile cannot
+    /// be read.
     #[inline(always)]
-    fn tile(&self, tile_x: usize, tile_y: usize) -> Option<&Texels> {
-        let slot = self.tiles.get(tile_y * self.tiles_x + tile_x)?;
-        match slot.get() {
-            Some(tile) => Some(tile),
-            None => self.read(slot, tile_x, tile_y),
-        }
-    }
-
-    /// Reads a missing tile into `slot` (once, whichever thread gets the reader first).
-    #[cold]
-    #[inline(never)]
-    fn read<'s>(
-        &'s self,
-        slot: &'s OnceLock<Texels>,
+    fn with_tile<R>(
+        &self,
         tile_x: usize,
         tile_y: usize,
-    ) -> Option<&'s Texels> {
+        read: impl FnOnce(&Texels) -> R,
+    ) -> Option<R> {
+        let index = tile_y * self.tiles_x + tile_x;
+        if tile_x >= self.tiles_x || index >= self.tiles.len() {
+            return None;
+        }
+        micro_cache::with_tile(self.id, index, || self.fetch(index, tile_x, tile_y), read)
+    }
+
+    /// A micro-cache miss: the tile from its slot, or else from the file.
+    #[cold]
+    #[inline(never)]
+    fn fetch(
+        &self,
+        index: usize,
+        tile_x: usize,
+        tile_y: usize,
+    ) -> Option<(Arc<Texels>, Arc<FileTally>)> {
+        let tally = &self.file.tally;
+        tally.micro_misses.fetch_add(1, Ordering::Relaxed);
+        let tile = match self.tiles.resident(index) {
+            Some(tile) => {
+                tally.cache_hits.fetch_add(1, Ordering::Relaxed);
+                tile
+            }
+            None => self.read(index, tile_x, tile_y)?,
+        };
+        Some((tile, tally.clone()))
+    }
+
+    /// Reads a tile that is not resident (unless another thread read it meanwhile) and
+    /// admits it to the cache.
+    fn read(&self, index: usize, tile_x: usize, tile_y: usize) -> Option<Arc<Texels>> {
         if self.file.failure.get().is_some() {
             return None;
         }
@@ -218,7 +261,8 @@ impl DemandLevel {
             .reader
             .lock()
             .unwrap_or_else(PoisonError::into_inner);
-        if let Some(tile) = slot.get() {
+        if let Some(tile) = self.tiles.resident(index) {
+            self.file.tally.cache_hits.fetch_add(1, Ordering::Relaxed);
             return Some(tile);
         }
         let read = reader
@@ -226,14 +270,23 @@ impl DemandLevel {
             .and_then(|tile| self.checked(tile, tile_x, tile_y));
         match read {
             Ok(tile) => {
-                self.file.tiles_read.fetch_add(1, Ordering::Relaxed);
-                Some(slot.get_or_init(|| tile))
+                let tile = Arc::new(tile);
+                self.admit(index, tile.clone(), reader.stored_bytes(self.level, index));
+                Some(tile)
             }
             Err(error) => {
                 let _ = self.file.failure.set(error.to_string());
                 None
             }
         }
+    }
+
+    /// Puts a tile just read (`stored_bytes` of the file) in the cache, and counts it.
+    fn admit(&self, index: usize, tile: Arc<Texels>, stored_bytes: u64) {
+        self.file.cache.admit(&self.tiles, index, tile);
+        let tally = &self.file.tally;
+        tally.loads.fetch_add(1, Ordering::Relaxed);
+        tally.bytes_read.fetch_add(stored_bytes, Ordering::Relaxed);
     }
 
     /// `tile` if it has the level's storage kind and size and holds only finite values
@@ -291,8 +344,6 @@ impl<'a> DemandTexels<'a> {
 }
 
 impl<'a> TexelSource<'a> for DemandTexels<'a> {
-    type Tile = TileTexels<'a>;
-
     #[inline(always)]
     fn view(texels: &'a Texels) -> Option<Self> {
         match texels {
@@ -302,40 +353,130 @@ impl<'a> TexelSource<'a> for DemandTexels<'a> {
     }
 
     #[inline(always)]
-    fn tile(
-        self,
-        _layout: TileLayout,
-        tile_x: usize,
-        tile_y: usize,
-    ) -> Option<(TileTexels<'a>, usize)> {
+    fn texel_at(self, layout: TileLayout, x: usize, y: usize) -> Vec4 {
+        let (tile_x, tile_y, offset) = layout.locate(x, y);
         self.0
-            .tile(tile_x, tile_y)
-            .map(|tile| (TileTexels(tile), 0))
+            .with_tile(tile_x, tile_y, |tile| tile.get(offset))
+            .unwrap_or(Vec4::ZERO)
+    }
+
+    #[inline(always)]
+    fn bilinear_block<R>(
+        self,
+        layout: TileLayout,
+        x: usize,
+        y: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        match layout.block_in_one_tile(x, y) {
+            Some((tile_x, tile_y, offset, stride)) => self
+                .0
+                .with_tile(tile_x, tile_y, |tile| tile.quad(offset, stride, blend))
+                .flatten(),
+            None => Some(self.four_texels(layout, x, y, blend)),
+        }
     }
 }
 
-/// The texels of one tile read from a file (a resident kind, picked per fetch).
-#[derive(Clone, Copy)]
-pub(crate) struct TileTexels<'a>(&'a Texels);
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
 
-impl<'a> FlatTexels<'a> for TileTexels<'a> {
-    #[inline(always)]
-    fn view(texels: &'a Texels) -> Option<Self> {
-        Some(TileTexels(texels))
+    use crate::texture::tiff_tile_reader::tests::maketx;
+    use crate::texture::{
+        ColorSpace, FilterMode, FilterOptions, Texture, TextureQuery, TileCache, WrapMode,
+    };
+
+    /// Bytes of a full 64x64 tile of 8-bit RGBA texels.
+    const BYTE_TILE: u64 = 64 * 64 * 4;
+
+    #[test]
+    fn under_a_cap_of_three_tiles_every_texel_is_read_again_with_the_same_value() {
+        let dir = tempfile::tempdir().unwrap();
+        let tx = maketx(dir.path(), 300, 300, &[]);
+        let cap = 3 * BYTE_TILE;
+        let cache = Arc::new(TileCache::new(cap));
+        let demand = Texture::from_file_in(&tx, ColorSpace::Srgb, &cache).unwrap();
+        let whole = Texture::from_file_whole(&tx, ColorSpace::Srgb).unwrap();
+        let (level, reference) = (&demand.pyramid().levels[0], &whole.pyramid().levels[0]);
+        // Two passes over level 0's 5x5 tiles, row by row: a band of 5 tiles fits the
+        // thread's micro-cache, the 25 do not, nor does the cap, so the second pass reads
+        // every tile again.
+        for _ in 0..2 {
+            for (x, y) in level.coordinates() {
+                assert_eq!(level.texel(x, y), reference.texel(x, y), "({x}, {y})");
+            }
+            assert!(cache.resident_bytes() <= cap);
+        }
+        let stats = demand.cache_stats().unwrap();
+        assert_eq!(stats.tiles_loaded, 1 + 2 * 25, "{stats:?}");
+        assert!(stats.tiles_evicted > 40, "{stats:?}");
+        assert!(stats.peak_resident_bytes <= cap, "{stats:?}");
+        assert!(cache.peak_resident_bytes() <= cap);
+        assert!(stats.bytes_read > 0);
+        assert!(demand.tile_failure().is_none());
+        drop(demand);
+        assert_eq!(
+            cache.resident_bytes(),
+            0,
+            "a dropped texture frees its tiles"
+        );
     }
 
-    #[inline(always)]
-    fn texel(self, index: usize) -> Vec4 {
-        self.0.get(index)
-    }
-
-    #[inline(always)]
-    fn bilinear_quad<R>(
-        self,
-        k: usize,
-        row: usize,
-        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
-    ) -> Option<R> {
-        self.0.quad(k, row, blend)
+    #[test]
+    fn threads_sampling_under_a_cap_of_two_tiles_get_the_resident_answers() {
+        let dir = tempfile::tempdir().unwrap();
+        let tx = maketx(dir.path(), 256, 192, &["-d", "half"]);
+        // Half RGBA tiles take 32 KiB.
+        let cache = Arc::new(TileCache::new(2 * 2 * BYTE_TILE));
+        let demand = Texture::from_file_in(&tx, ColorSpace::Linear, &cache).unwrap();
+        let whole = Texture::from_file_whole(&tx, ColorSpace::Linear).unwrap();
+        std::thread::scope(|scope| {
+            for thread in 0..4u64 {
+                let (demand, whole) = (&demand, &whole);
+                scope.spawn(move || {
+                    let mut state = 0x9e37_79b9_7f4a_7c15u64 ^ thread;
+                    let mut next = || {
+                        (crate::test_rng::xorshift64_star(&mut state) >> 40) as f32
+                            / (1u64 << 24) as f32
+                    };
+                    for filter in [
+                        FilterMode::Closest,
+                        FilterMode::Bilinear,
+                        FilterMode::Trilinear,
+                        FilterMode::Aniso,
+                        FilterMode::Ewa,
+                    ] {
+                        let opts = FilterOptions {
+                            filter,
+                            wrap_s: WrapMode::Periodic,
+                            wrap_t: WrapMode::Mirror,
+                            max_aniso: 8.0,
+                        };
+                        for _ in 0..400 {
+                            let scale = 0.1 * next().powi(3);
+                            let q = TextureQuery {
+                                s: 2.0 * next() - 0.5,
+                                t: 2.0 * next() - 0.5,
+                                dsdx: scale * (next() - 0.5),
+                                dtdx: scale * (next() - 0.5),
+                                dsdy: 0.3 * scale * (next() - 0.5),
+                                dtdy: 0.3 * scale * (next() - 0.5),
+                            };
+                            let (a, b) = (demand.sample(&q, &opts), whole.sample(&q, &opts));
+                            assert_eq!(
+                                a.to_array().map(f32::to_bits),
+                                b.to_array().map(f32::to_bits),
+                                "{filter} {q:?}"
+                            );
+                        }
+                    }
+                });
+            }
+        });
+        let stats = demand.cache_stats().unwrap();
+        assert!(stats.tiles_evicted > 0, "{stats:?}");
+        assert!(cache.peak_resident_bytes() <= 4 * BYTE_TILE);
+        assert!(demand.tile_failure().is_none());
     }
 }

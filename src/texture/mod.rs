@@ -29,9 +29,11 @@ mod ewa;
 mod filter_closest_bilinear;
 mod image_load;
 mod image_size;
+mod micro_cache;
 mod mip_pyramid;
 mod texels;
 mod tiff_tile_reader;
+mod tile_cache;
 mod tile_layout;
 mod tiled_tiff;
 mod tiles;
@@ -49,8 +51,10 @@ use glam::Vec4;
 pub use image_size::{
     encoded_image_size, encoded_texture_header, file_image_size, file_texture_header, TextureHeader,
 };
+pub use micro_cache::flush_all_threads as flush_micro_caches;
 pub use mip_pyramid::{MipLevel, MipPyramid};
 pub use texels::Texels;
+pub use tile_cache::{TextureCacheStats, TileCache, DEFAULT_TEXTURE_CACHE_BYTES};
 pub use tiles::{TextureTileSet, TEXTURE_TILE_SIZE};
 
 use demand_tiles::DemandFile;
@@ -246,10 +250,21 @@ pub struct Texture {
 impl Texture {
     /// Loads PNG, JPEG, OpenEXR or TIFF from a file (format sniffed from the bytes). A
     /// tiled, mip-mapped TIFF in 64x64 tiles (`maketx`'s `.tx`) is read tile by tile as
-    /// lookups first touch them; every other file is decoded whole, with every level.
+    /// lookups first touch them, into the process-wide [`TileCache::shared`]; every other
+    /// file is decoded whole, with every level.
     pub fn from_file(path: &Path, color_space: ColorSpace) -> Result<Texture, TextureError> {
+        Self::from_file_in(path, color_space, &TileCache::shared())
+    }
+
+    /// [`Texture::from_file`] with the tiles of a `.tx` kept in `cache`, under its cap
+    /// (a texture decoded whole does not count against it).
+    pub fn from_file_in(
+        path: &Path,
+        color_space: ColorSpace,
+        cache: &Arc<TileCache>,
+    ) -> Result<Texture, TextureError> {
         let label = path.display().to_string();
-        if let Some((pyramid, file)) = demand_tiles::open(path, &label, color_space)? {
+        if let Some((pyramid, file)) = demand_tiles::open(path, &label, color_space, cache)? {
             let mut texture = Self::with_pyramid(&label, pyramid);
             texture.demand = Some(file);
             return Ok(texture);
@@ -346,9 +361,22 @@ impl Texture {
         self.demand.is_some()
     }
 
-    /// Tiles read from the file so far (0 for a texture decoded whole).
+    /// Tiles read from the file so far, a tile read again after its eviction counted
+    /// again (0 for a texture decoded whole).
     pub fn tiles_read(&self) -> u64 {
         self.demand.as_ref().map_or(0, |file| file.tiles_read())
+    }
+
+    /// The cache counters of a demand-loaded texture since it was opened (`None` for a
+    /// texture decoded whole). Micro-cache hits are counted per thread and arrive here
+    /// after [`flush_micro_caches`] (every render calls it at its end).
+    pub fn cache_stats(&self) -> Option<TextureCacheStats> {
+        self.demand.as_ref().map(|file| file.cache_stats())
+    }
+
+    /// The cache a demand-loaded texture's tiles live in.
+    pub fn tile_cache(&self) -> Option<&Arc<TileCache>> {
+        self.demand.as_ref().map(|file| file.cache())
     }
 
     /// Tiles the file of a demand-loaded texture holds over all levels (0 for a texture

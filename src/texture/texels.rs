@@ -86,8 +86,8 @@ pub enum Texels {
     Half(Vec<[f16; 4]>),
     /// f32, used as stored.
     Float(Vec<[f32; 4]>),
-    /// Tiles read from the texture's file when a lookup first touches them, each held in
-    /// one of the kinds above.
+    /// Tiles read from the texture's file when a lookup touches them and kept in its
+    /// texture cache while the cap allows, each held in one of the kinds above.
     OnDemand(Arc<DemandLevel>),
 }
 
@@ -151,7 +151,7 @@ impl Texels {
         match self {
             Texels::Float(t) => FloatTexels(t).texel(index),
             Texels::Half(t) => HalfTexels(t).texel(index),
-            Texels::Byte { texels, colour, .. } => ByteTexels::new(texels, *colour).texel(index),
+            Texels::Byte { texels, colour, .. } => ByteTexels::new(texels, colour).texel(index),
             Texels::OnDemand(level) => level.texel_at_index(index),
         }
     }
@@ -169,7 +169,7 @@ impl Texels {
             Texels::Float(t) => FloatTexels(t).bilinear_quad(k, row, blend),
             Texels::Half(t) => HalfTexels(t).bilinear_quad(k, row, blend),
             Texels::Byte { texels, colour, .. } => {
-                ByteTexels::new(texels, *colour).bilinear_quad(k, row, blend)
+                ByteTexels::new(texels, colour).bilinear_quad(k, row, blend)
             }
             Texels::OnDemand(_) => None,
         }
@@ -266,53 +266,43 @@ pub(crate) trait FlatTexels<'a>: Copy {
 }
 
 /// A level's texels as the filters read them: by coordinates, through the tile that holds
-/// them (a fetch is a tile lookup plus an offset in the tile).
+/// them (a fetch is a tile lookup plus an offset in the tile). Resident kinds find every
+/// tile in their one buffer; a demand-loaded level fetches it through the texture cache.
 pub(crate) trait TexelSource<'a>: Copy {
-    /// Where the texels of one tile are.
-    type Tile: FlatTexels<'a>;
-
     /// The texels of `texels` when they are of this kind.
     fn view(texels: &'a Texels) -> Option<Self>;
 
-    /// The texels holding tile (`tile_x`, `tile_y`) of a level tiled by `layout`, and the
-    /// index of the tile's first texel in them; `None` when the tile cannot be read (the
-    /// failure is recorded where the texture reports it).
-    fn tile(self, layout: TileLayout, tile_x: usize, tile_y: usize) -> Option<(Self::Tile, usize)>;
-
-    /// Linear RGBA of texel (x, y) (in range); zero when its tile cannot be read.
-    #[inline(always)]
-    fn texel_at(self, layout: TileLayout, x: usize, y: usize) -> Vec4 {
-        let (tile_x, tile_y, offset) = layout.locate(x, y);
-        match self.tile(layout, tile_x, tile_y) {
-            Some((tile, start)) => tile.texel(start + offset),
-            None => Vec4::ZERO,
-        }
-    }
+    /// Linear RGBA of texel (x, y) of a level tiled by `layout` (in range); zero when its
+    /// tile cannot be read (the failure is recorded where the texture reports it).
+    fn texel_at(self, layout: TileLayout, x: usize, y: usize) -> Vec4;
 
     /// `blend` of texels (x, y), (x + 1, y), (x, y + 1) and (x + 1, y + 1), all inside the
     /// level: one bounds check for four when they share a tile. `None` when a tile cannot
     /// be read.
-    #[inline(always)]
     fn bilinear_block<R>(
         self,
         layout: TileLayout,
         x: usize,
         y: usize,
         blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
-    ) -> Option<R> {
-        match layout.block_in_one_tile(x, y) {
-            Some((tile_x, tile_y, offset, stride)) => {
-                let (tile, start) = self.tile(layout, tile_x, tile_y)?;
-                tile.bilinear_quad(start + offset, stride, blend)
-            }
-            // Across a tile edge (about 1 block in 32): four fetches.
-            None => Some(blend(
-                self.texel_at(layout, x, y),
-                self.texel_at(layout, x + 1, y),
-                self.texel_at(layout, x, y + 1),
-                self.texel_at(layout, x + 1, y + 1),
-            )),
-        }
+    ) -> Option<R>;
+
+    /// [`TexelSource::bilinear_block`] across a tile edge (about 1 block in 32): four
+    /// fetches.
+    #[inline(always)]
+    fn four_texels<R>(
+        self,
+        layout: TileLayout,
+        x: usize,
+        y: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> R {
+        blend(
+            self.texel_at(layout, x, y),
+            self.texel_at(layout, x + 1, y),
+            self.texel_at(layout, x, y + 1),
+            self.texel_at(layout, x + 1, y + 1),
+        )
     }
 }
 
@@ -320,21 +310,33 @@ pub(crate) trait TexelSource<'a>: Copy {
 macro_rules! resident_texel_source {
     ($($kind:ident),+) => {$(
         impl<'a> TexelSource<'a> for $kind<'a> {
-            type Tile = Self;
-
             #[inline(always)]
             fn view(texels: &'a Texels) -> Option<Self> {
                 <Self as FlatTexels<'a>>::view(texels)
             }
 
             #[inline(always)]
-            fn tile(
+            fn texel_at(self, layout: TileLayout, x: usize, y: usize) -> Vec4 {
+                let (tile_x, tile_y, offset) = layout.locate(x, y);
+                self.texel(layout.tile_start(tile_x, tile_y) + offset)
+            }
+
+            #[inline(always)]
+            fn bilinear_block<R>(
                 self,
                 layout: TileLayout,
-                tile_x: usize,
-                tile_y: usize,
-            ) -> Option<(Self, usize)> {
-                Some((self, layout.tile_start(tile_x, tile_y)))
+                x: usize,
+                y: usize,
+                blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+            ) -> Option<R> {
+                match layout.block_in_one_tile(x, y) {
+                    Some((tile_x, tile_y, offset, stride)) => self.bilinear_quad(
+                        layout.tile_start(tile_x, tile_y) + offset,
+                        stride,
+                        blend,
+                    ),
+                    None => Some(self.four_texels(layout, x, y, blend)),
+                }
             }
         }
     )+};

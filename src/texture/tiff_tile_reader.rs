@@ -33,6 +33,9 @@ pub(crate) struct TiffTileReader<R: Read + Seek> {
     color_space: ColorSpace,
     decoder: Decoder<R>,
     levels: Vec<StoredLevel>,
+    /// Per level, the bytes each tile takes in the file (empty when the file does not
+    /// say).
+    tile_bytes: Vec<Vec<u64>>,
     /// The directory (level) the decoder is positioned at.
     directory: usize,
 }
@@ -52,6 +55,7 @@ impl<R: Read + Seek> TiffTileReader<R> {
         };
         let mut decoder = Decoder::new(source).map_err(|e| tiff_error(e.to_string()))?;
         let mut levels: Vec<StoredLevel> = Vec::new();
+        let mut tile_bytes = Vec::new();
         loop {
             let format = DirectoryFormat::read(&mut decoder)
                 .map_err(|m| tiff_error(format!("level {}: {m}", levels.len())))?;
@@ -72,6 +76,11 @@ impl<R: Read + Seek> TiffTileReader<R> {
                 height: format.height,
                 channels: format.channels,
             });
+            tile_bytes.push(
+                decoder
+                    .get_tag_u64_vec(tiff::tags::Tag::TileByteCounts)
+                    .unwrap_or_default(),
+            );
             if !decoder.more_images() || (format.width, format.height) == (1, 1) {
                 break;
             }
@@ -89,6 +98,7 @@ impl<R: Read + Seek> TiffTileReader<R> {
             color_space,
             decoder,
             levels,
+            tile_bytes,
             directory,
         }))
     }
@@ -96,6 +106,16 @@ impl<R: Read + Seek> TiffTileReader<R> {
     /// (width, height) of every stored level, finest first.
     pub(crate) fn level_sizes(&self) -> Vec<(u32, u32)> {
         self.levels.iter().map(|l| (l.width, l.height)).collect()
+    }
+
+    /// Bytes tile `index` (row-major over the level's tiles) of `level` takes in the file;
+    /// 0 when the file does not say.
+    pub(crate) fn stored_bytes(&self, level: usize, index: usize) -> u64 {
+        self.tile_bytes
+            .get(level)
+            .and_then(|counts| counts.get(index))
+            .copied()
+            .unwrap_or(0)
     }
 
     /// The texels of tile (`tile_x`, `tile_y`) of `level`, in the level's tile order.
@@ -148,7 +168,7 @@ impl<R: Read + Seek> TiffTileReader<R> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use std::fs::File;
     use std::io::{BufReader, Cursor};
     use std::path::{Path, PathBuf};
@@ -159,7 +179,7 @@ mod tests {
 
     /// A `width` x `height` RGB noise PNG turned into a `.tx` by `maketx` (which must be
     /// installed: scripts/setup.sh) with `extra` arguments.
-    fn maketx(dir: &Path, width: u32, height: u32, extra: &[&str]) -> PathBuf {
+    pub(crate) fn maketx(dir: &Path, width: u32, height: u32, extra: &[&str]) -> PathBuf {
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let image = image::RgbImage::from_fn(width, height, |_, _| {
             image::Rgb(std::array::from_fn(|_| {
