@@ -40,7 +40,12 @@
 //! Henyey–Greenstein phase function, phase-sampled continuation, the albedo as weight);
 //! shadow rays pass the exact transmittance (`medium`, docs/fog.md).
 //!
-//! Files: `vertex` (what a hit adds and where the path goes next), `medium` (free flights
+//! The hits the shading lanes cover (`crate::integrator::lanes`) are reconstructed and
+//! textured together, wave by wave, before the wave's vertices are finished in its order
+//! (`lane_waves`); the same bits as the scalar path's.
+//!
+//! Files: `vertex` (what a hit adds and where the path goes next), `lane_waves` (the hits
+//! reconstructed and textured in lanes), `medium` (free flights
 //! through fog and the medium vertex), `next_event` (light sampling and its shadow rays),
 //! `mis` (the power heuristic).
 
