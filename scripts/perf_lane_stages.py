@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Per-stage CPU time of the lane shading from `perf record -e cpu-clock -F FREQ` runs of
-`conetrace render` (docs/benchmarks.md, "One array per coordinate"): every sample's address
+`conetrace render` or `conetrace bench render` (docs/benchmarks.md, "One array per
+coordinate", "The path tracer in lanes"): every sample's address
 mapped to the binary's function, the function to a stage (the `simd::x86::v3`/`v4` copies by
 the source lines of their code), printed as ns per camera sample.
 Usage: perf_lane_stages.py BINARY FREQ CAMERA_SAMPLES_PER_RUN perf.data..."""
@@ -31,10 +32,14 @@ RULES = [
     ("2 interpolate", ["lanes::interpolate", "surface_hit", "spawn_point", "on_triangle", "SurfaceLookup"]),
     ("3 footprints", ["lanes::footprints", "texture_gradients", "project_cone", "footprint::"]),
     ("4 textures (lookups and filter)", ["lanes::textures", "texture::", "surface_textures", "sample_binding", "surface_inputs", "mip"]),
-    ("5 lights and shadow rays", ["lanes::lights", "shading::lights", "sample_li", "shadow_ray", "queue_shadow"]),
-    ("6 BSDF", ["lanes::bsdf", "brdf", "OpaqueBsdf", "metallic_roughness", "MaterialBsdf", "Bsdf"]),
+    ("5 lights and shadow rays", ["lanes::lights", "shading::lights", "sample_li", "shadow_ray", "queue_shadow",
+                                  "next_event", "SceneLights", "area_lights", "environment_light", "light_selection",
+                                  "spherical_triangle", "alias_table", "distribution_2d", "light_interface"]),
+    ("6 BSDF", ["lanes::bsdf", "brdf", "OpaqueBsdf", "metallic_roughness", "MaterialBsdf", "Bsdf",
+                "microfacet", "conductor", "dielectric", "fresnel", "multiple_scattering", "continue_by_bsdf",
+                "bsdf_spread_angle"]),
     ("camera rays", ["camera_sample", "sampler::", "CameraBlock", "camera::"]),
-    ("7 film and integrator loop", ["lane_waves", "whitted::", "integrator::", "film::", "render_tile", "trace_wave", "Waves"]),
+    ("7 film and integrator loop", ["lane_waves", "whitted::", "path::", "integrator::", "film::", "render_tile", "trace_wave", "Waves"]),
 ]
 KERNEL = {"integrator/lanes/interpolate": "2 interpolate", "integrator/lanes/footprints": "3 footprints",
           "integrator/lanes/lights": "5 lights and shadow rays", "integrator/lanes/bsdf": "6 BSDF",

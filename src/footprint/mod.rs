@@ -108,6 +108,20 @@ impl Footprint {
         }
     }
 
+    /// [`Self::transfer`] to a hit at distance `t` for the footprints that read nothing else
+    /// of the hit (every one but ray differentials, which give `None`): what the shading
+    /// lanes carry a path's footprint with, without a hit record.
+    #[inline]
+    pub fn propagated(&self, t: f32) -> Option<Footprint> {
+        match self {
+            Footprint::Mip0 => Some(Footprint::Mip0),
+            Footprint::Distance(f) => Some(Footprint::Distance(f.propagate(t))),
+            Footprint::Cone1(c) => Some(Footprint::Cone1(c.propagate(t))),
+            Footprint::Cone(e) => Some(Footprint::Cone(e.propagate(t))),
+            Footprint::Differential(_) => None,
+        }
+    }
+
     /// After [`Self::transfer`]: the footprint of the mirror-reflected ray `reflected`.
     /// Cones: alpha' = alpha + 2 k |w| with the curvature seen from the arriving side
     /// (seed 000). Differentials: seed 002, eqs. 13-15 with the shading normal's derivative.

@@ -566,3 +566,28 @@ proptest! {
         prop_assert!(diff.dpdx.is_finite() && diff.dpdy.is_finite());
     }
 }
+
+#[test]
+fn propagating_by_distance_is_the_transfer_of_every_footprint_but_differentials() {
+    let dir = Vec3::new(0.3, -0.8, -0.52).normalize();
+    let hit = plane_hit(Vec3::ZERO, dir, Vec3::new(0.0, -4.0, 0.0), Vec3::Y, 2.0);
+    let cone = RayCone::new(0.002, 0.01);
+    let footprints = [
+        Footprint::Mip0,
+        Footprint::Distance(DistanceFootprint::new(0.002, 0.01)),
+        Footprint::Cone1(cone),
+        Footprint::Cone(ConeEnvelope::new(cone, RayCone::new(0.001, 0.02), false)),
+    ];
+    for footprint in footprints {
+        let mut transferred = footprint;
+        transferred.transfer(dir, &hit);
+        assert_eq!(
+            footprint.propagated(hit.t),
+            Some(transferred),
+            "{footprint:?}"
+        );
+    }
+    let differential =
+        Footprint::Differential(RayDifferential::parallel(Vec3::X * 1e-3, Vec3::Z * 1e-3));
+    assert_eq!(differential.propagated(hit.t), None);
+}

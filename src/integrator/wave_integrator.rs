@@ -248,13 +248,29 @@ pub(crate) fn write_geometry_aovs(
     direction: Vec3,
     surface: &SurfaceHit,
 ) {
+    let (t, normal, st) = (surface.t, surface.shading_normal, surface.st);
+    write_geometry_values(context, image, pixel, direction, t, normal, st);
+}
+
+/// [`write_geometry_aovs`] of a hit at distance `t` with shading normal `normal` and texture
+/// coordinates `st`, for shading that keeps no hit record (the lanes).
+#[inline]
+pub(crate) fn write_geometry_values(
+    context: &RenderContext,
+    image: &mut TileImage,
+    pixel: u32,
+    direction: Vec3,
+    t: f32,
+    normal: Vec3,
+    st: glam::Vec2,
+) {
     if image.depth.is_empty() {
         return;
     }
     let pixel = pixel as usize;
-    image.depth[pixel] = surface.t * direction.dot(context.camera_forward);
-    image.normal[pixel] = surface.shading_normal.to_array();
-    image.uv[pixel] = surface.st.to_array();
+    image.depth[pixel] = t * direction.dot(context.camera_forward);
+    image.normal[pixel] = normal.to_array();
+    image.uv[pixel] = st.to_array();
 }
 
 /// The albedo and the (normal-mapped) shading normal of a pixel's first camera hit, if the

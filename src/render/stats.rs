@@ -54,6 +54,9 @@ pub struct WorkCounters {
     pub fog_density_samples: u64,
     /// Path tracing: collisions sampled inside fog (medium vertices).
     pub fog_scatter_events: u64,
+    /// Hits reconstructed and textured in structure-of-arrays lanes (`integrator::lanes`),
+    /// not each by the scalar path (Whitted and the path tracer).
+    pub lane_hits: u64,
 }
 
 impl WorkCounters {
@@ -91,6 +94,7 @@ impl WorkCounters {
         self.fog_volume_crossings += other.fog_volume_crossings;
         self.fog_density_samples += other.fog_density_samples;
         self.fog_scatter_events += other.fog_scatter_events;
+        self.lane_hits += other.lane_hits;
     }
 }
 

@@ -25,11 +25,20 @@ pub(crate) enum LaneFootprint {
 /// for ray differentials, whose transfer needs the whole hit record (the scalar path's).
 #[inline]
 pub(crate) fn lane_footprint(footprint: &Footprint, t: f32) -> Option<LaneFootprint> {
+    footprint
+        .propagated(t)
+        .and_then(|at_hit| footprint_at_hit(&at_hit))
+}
+
+/// A footprint already moved to its hit (`Footprint::propagated`) as the lanes take it;
+/// `None` for ray differentials.
+#[inline]
+pub(crate) fn footprint_at_hit(footprint: &Footprint) -> Option<LaneFootprint> {
     match footprint {
         Footprint::Mip0 => Some(LaneFootprint::Point),
-        Footprint::Distance(f) => Some(LaneFootprint::Cone(f.propagate(t).width())),
-        Footprint::Cone1(c) => Some(LaneFootprint::Cone(c.propagate(t).abs_width())),
-        Footprint::Cone(e) => Some(LaneFootprint::Cone(e.propagate(t).width())),
+        Footprint::Distance(f) => Some(LaneFootprint::Cone(f.width())),
+        Footprint::Cone1(c) => Some(LaneFootprint::Cone(c.abs_width())),
+        Footprint::Cone(e) => Some(LaneFootprint::Cone(e.width())),
         Footprint::Differential(_) => None,
     }
 }

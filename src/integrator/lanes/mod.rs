@@ -52,6 +52,10 @@ pub(crate) struct LaneMaterial {
     /// Whether the lanes shade this material: an opaque lobe that spawns no ray in this
     /// render, emits nothing and bends no normal (see [`LaneMaterial::of`]).
     pub covers: bool,
+    /// Whether the path tracer's lanes reconstruct and texture this material's hits: it
+    /// emits nothing and bends no normal (see [`LaneMaterial::of`]); its BSDF, whichever
+    /// lobes it has, is sampled from the lanes' inputs.
+    pub path_covers: bool,
     /// Whether shading reads a texture (`render::surface_textures::reads_textures`).
     pub textured: bool,
     /// The opaque lobe's weight, `(1 - mirror) (1 - transmission)` as
@@ -60,21 +64,20 @@ pub(crate) struct LaneMaterial {
 }
 
 impl LaneMaterial {
-    /// Emissive materials (the emission test needs the hit's side), normal-mapped ones (their
-    /// tangent frame needs dP/ds, dP/dt), and those whose mirror or dielectric lobe spawns
-    /// rays in this render take the scalar path, as does an opaque weight of zero (nothing to
-    /// light).
+    /// Emissive materials (the emission test needs the hit's side) and normal-mapped ones
+    /// (their tangent frame needs dP/ds, dP/dt) take the scalar path in every integrator.
+    /// Whitted's lanes also leave out those whose mirror or dielectric lobe spawns rays in
+    /// this render, and an opaque weight of zero (nothing to light).
     pub(crate) fn of(context: &RenderContext, material: &Material) -> LaneMaterial {
         let effects = &context.effects;
         let opaque_weight = (1.0 - material.mirror) * (1.0 - material.transmission);
         let spawns = (effects.mirror_reflection && material.mirror > 0.0)
             || (effects.refraction && material.transmission > 0.0);
-        let covers = material.emission == Vec3::ZERO
-            && material.normal_texture.is_none()
-            && !spawns
-            && opaque_weight > 0.0;
+        let path_covers = material.emission == Vec3::ZERO && material.normal_texture.is_none();
+        let covers = path_covers && !spawns && opaque_weight > 0.0;
         LaneMaterial {
             covers,
+            path_covers,
             textured: crate::render::surface_textures::reads_textures(material),
             opaque_weight,
         }

@@ -87,6 +87,7 @@ fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
         materials: vec![
             LaneMaterial {
                 covers: true,
+                path_covers: true,
                 textured: true,
                 opaque_weight: 1.0,
             };
@@ -274,6 +275,7 @@ fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
             materials: vec![
                 LaneMaterial {
                     covers: true,
+                    path_covers: true,
                     textured: false,
                     opaque_weight: 0.75,
                 };

@@ -40,10 +40,16 @@
 //! Henyey–Greenstein phase function, phase-sampled continuation, the albedo as weight);
 //! shadow rays pass the exact transmittance (`medium`, docs/fog.md).
 //!
-//! Files: `vertex` (what a hit adds and where the path goes next), `medium` (free flights
+//! The hits the shading lanes cover (`crate::integrator::lanes`) are reconstructed and
+//! textured together, wave by wave, before the wave's vertices are finished in its order
+//! (`lane_waves`); the same bits as the scalar path's.
+//!
+//! Files: `vertex` (what a hit adds and where the path goes next), `lane_waves` (the hits
+//! reconstructed and textured in lanes), `medium` (free flights
 //! through fog and the medium vertex), `next_event` (light sampling and its shadow rays),
 //! `mis` (the power heuristic).
 
+mod lane_waves;
 mod medium;
 mod mis;
 mod next_event;
@@ -90,6 +96,10 @@ pub struct PathTracer {
     /// Whitted's image in expectation.
     pub diffuse_bounces: u32,
     pub strategy: LightStrategy,
+    /// Whether the hits the lanes cover are reconstructed and textured over a wave's lane
+    /// arrays (`lane_waves`, the default) rather than each by the scalar path. Both give
+    /// the same bits; the choice exists to show it and to time the two.
+    pub shade_in_lanes: bool,
 }
 
 impl Default for PathTracer {
@@ -97,6 +107,7 @@ impl Default for PathTracer {
         PathTracer {
             diffuse_bounces: u32::MAX,
             strategy: LightStrategy::MultipleImportance,
+            shade_in_lanes: true,
         }
     }
 }
@@ -148,6 +159,7 @@ pub(crate) struct PathRay {
 pub struct PathWaves {
     buffers: WaveBuffers<PathRay>,
     shadows: Vec<ShadowRay>,
+    lanes: lane_waves::PathLanes,
 }
 
 impl WaveIntegrator for PathTracer {
@@ -198,7 +210,9 @@ impl WaveIntegrator for PathTracer {
         ray.slot
     }
 
-    /// Shades the wave's hits, then traces their shadow rays.
+    /// Shades the wave's hits (those the lanes cover reconstructed and textured together
+    /// first, `lane_waves`), each path's vertex then finished in wave order, and traces
+    /// their shadow rays.
     fn shade_wave(
         &self,
         context: &RenderContext,
@@ -211,9 +225,25 @@ impl WaveIntegrator for PathTracer {
         // is 152 bytes, and a copy read back in other widths stalls on store forwarding.
         let mut current = std::mem::take(&mut waves.buffers.rays.current);
         let hits = std::mem::take(&mut waves.buffers.trace_hits);
-        for (ray, hit) in current.iter_mut().zip(&hits) {
-            vertex::shade(self, context, ray, hit, image, waves, worker);
+        let mut lanes = std::mem::take(&mut waves.lanes);
+        let wave = (current.as_slice(), hits.as_slice());
+        lane_waves::shade_lanes(
+            context,
+            &mut lanes,
+            wave,
+            image,
+            worker,
+            self.shade_in_lanes,
+        );
+        for (index, (ray, hit)) in current.iter_mut().zip(&hits).enumerate() {
+            match lanes.lane_of(index) {
+                Some(lane) => lane_waves::finish_lane(
+                    self, context, ray, hit, &lanes, lane, image, waves, worker,
+                ),
+                None => vertex::shade(self, context, ray, hit, image, waves, worker),
+            }
         }
+        waves.lanes = lanes;
         waves.buffers.rays.current = current;
         waves.buffers.trace_hits = hits;
         trace_shadow_rays(context, waves, image, worker);

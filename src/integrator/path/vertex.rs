@@ -7,6 +7,8 @@
 //! material's inputs, emission; then the vertex's uniform numbers, next-event estimation and
 //! the BSDF-sampled continuation (footprint spread, medium, Russian roulette).
 
+use std::borrow::Cow;
+
 use glam::{Vec2, Vec3};
 
 use super::medium;
@@ -81,12 +83,86 @@ pub(super) fn shade(
         };
         add_emission(tracer, context, ray, &emitter, image, worker);
     }
+    let site = SurfaceSite::of_record(&surface);
+    scatter_at_surface(
+        tracer, context, ray, &site, material, &inputs, waves, worker,
+    );
+}
+
+/// What a surface vertex reads of its hit once the material's inputs are known: from the
+/// scalar path's hit record, or from the shading lanes' arrays (`lane_waves`), which make
+/// the record only if a delta bounce's footprint needs the surface's curvature.
+pub(super) struct SurfaceSite<'a> {
+    /// Index into `SceneDescription::materials`.
+    pub(super) material: u32,
+    /// The point on the surface (`SurfaceHit::position`), and where rays leaving it start.
+    pub(super) position: Vec3,
+    pub(super) spawn: SpawnPoint,
+    /// Unit geometric normal, facing outward.
+    pub(super) geometric_normal: Vec3,
+    pub(super) record: HitRecord<'a>,
+}
+
+/// The hit record of a [`SurfaceSite`].
+pub(super) enum HitRecord<'a> {
+    /// Made by the scalar path.
+    Made(&'a SurfaceHit),
+    /// Not made: `hit` of the ray from `origin`, the first camera sample's when
+    /// `camera_first` (which wants texture coordinates for its AOVs).
+    Deferred {
+        hit: &'a TraceHit,
+        origin: Vec3,
+        camera_first: bool,
+    },
+}
+
+impl SurfaceSite<'_> {
+    fn of_record(surface: &SurfaceHit) -> SurfaceSite<'_> {
+        SurfaceSite {
+            material: surface.material,
+            position: surface.position,
+            spawn: surface.spawn_point(),
+            geometric_normal: surface.geometric_normal,
+            record: HitRecord::Made(surface),
+        }
+    }
+
+    /// The hit record of a ray along `direction`, made as the scalar path makes it.
+    fn record(&self, context: &RenderContext, direction: Vec3) -> Cow<'_, SurfaceHit> {
+        match self.record {
+            HitRecord::Made(surface) => Cow::Borrowed(surface),
+            HitRecord::Deferred {
+                hit,
+                origin,
+                camera_first,
+            } => {
+                let detail = texturing::surface_detail(context, camera_first, hit);
+                let surface = context.surfaces.surface_hit(origin, direction, hit, detail);
+                Cow::Owned(surface)
+            }
+        }
+    }
+}
+
+/// Where the path goes from a surface vertex whose emission has been added: the vertex's
+/// uniform numbers, next-event estimation and the BSDF-sampled continuation.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn scatter_at_surface(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &mut PathRay,
+    site: &SurfaceSite,
+    material: &Material,
+    inputs: &SurfaceInputs,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) {
     if ray.depth > context.options.max_depth {
-        // Past the last bounce a delta lobe's ray only collects emission (above).
+        // Past the last bounce a delta lobe's ray only collects emission (added before).
         return;
     }
     let u = VertexSamples::draw(ray);
-    let vertex = SurfaceVertex::new(tracer, context, ray, &surface, material, &inputs);
+    let vertex = SurfaceVertex::new(tracer, context, ray, site, material, inputs);
     if vertex.lobes.has_density() && bsdf_has_smooth_part(&vertex.bsdf, vertex.wo, vertex.ns) {
         sample_direct_light(tracer, context, ray, &vertex, &u, waves, worker);
     }
@@ -260,7 +336,7 @@ impl VertexSamples {
 
 /// A surface hit where the path scatters, as the arriving ray sees it.
 struct SurfaceVertex<'a> {
-    surface: &'a SurfaceHit,
+    site: &'a SurfaceSite<'a>,
     bsdf: MaterialBsdf,
     lobes: LobeFlags,
     /// Whether the ray arrived on the front side.
@@ -270,7 +346,6 @@ struct SurfaceVertex<'a> {
     ns: Vec3,
     /// Towards the viewer.
     wo: Vec3,
-    spawn: SpawnPoint,
     /// Whether a ray may continue from here at all (the depth allows a bounce).
     continues: bool,
     /// Whether a non-delta (diffuse or glossy) bounce may continue from here: the depth
@@ -283,33 +358,34 @@ impl<'a> SurfaceVertex<'a> {
         tracer: &PathTracer,
         context: &RenderContext,
         ray: &PathRay,
-        surface: &'a SurfaceHit,
+        site: &'a SurfaceSite<'a>,
         material: &Material,
         inputs: &SurfaceInputs,
     ) -> SurfaceVertex<'a> {
+        let geometric_normal = site.geometric_normal;
         let bsdf = MaterialBsdf::from_surface_inputs(
             material,
             inputs,
             ray.direction,
-            surface.geometric_normal,
+            geometric_normal,
             context.effects.fresnel.then_some(context.options.fresnel),
         );
-        let front = surface.is_front_face(ray.direction);
+        // `SurfaceHit::is_front_face`.
+        let front = ray.direction.dot(geometric_normal) < 0.0;
         let (ng, ns) = if front {
-            (surface.geometric_normal, inputs.shading_normal)
+            (geometric_normal, inputs.shading_normal)
         } else {
-            (-surface.geometric_normal, -inputs.shading_normal)
+            (-geometric_normal, -inputs.shading_normal)
         };
         let continues = ray.depth < context.options.max_depth;
         SurfaceVertex {
-            surface,
+            site,
             lobes: bsdf.flags(),
             bsdf,
             front,
             ng,
             ns,
             wo: -ray.direction,
-            spawn: surface.spawn_point(),
             continues,
             rough_continues: continues && ray.diffuse_depth < tracer.diffuse_bounces,
         }
@@ -327,7 +403,7 @@ fn sample_direct_light(
     worker: &mut WorkerState,
 ) {
     let transmits = vertex.bsdf.transmits_with_density();
-    let spawn = &vertex.spawn;
+    let spawn = &vertex.site.spawn;
     let point = ShadingPoint {
         position: spawn.position,
         origin: spawn.offset_origin(vertex.ng),
@@ -337,7 +413,7 @@ fn sample_direct_light(
             Vec3::ZERO
         },
         sigma: ray.sigma,
-        sigma_through: medium_beyond(context, vertex.surface, vertex.front),
+        sigma_through: medium_beyond(context, vertex.site.material, vertex.front),
         wo: vertex.wo,
         scatterer: Scatterer::Surface {
             ng: vertex.ng,
@@ -400,7 +476,7 @@ fn continue_by_bsdf(
     let (footprint, approximate_footprint) =
         spread_footprint(context, ray, vertex, &sample, crosses, worker);
     let sigma = if crosses {
-        medium_beyond(context, vertex.surface, vertex.front)
+        medium_beyond(context, vertex.site.material, vertex.front)
     } else {
         ray.sigma
     };
@@ -417,6 +493,7 @@ fn continue_by_bsdf(
     worker.counters.path_bounces += 1;
     waves.buffers.rays.next.push(PathRay {
         origin: vertex
+            .site
             .spawn
             .offset_origin(if crosses { -vertex.ng } else { vertex.ng }),
         direction: wi,
@@ -428,7 +505,7 @@ fn continue_by_bsdf(
         depth,
         diffuse_depth: ray.diffuse_depth + u32::from(!delta),
         bsdf_pdf: (!delta).then_some(sample.pdf),
-        from: vertex.surface.position,
+        from: vertex.site.position,
         kind,
         sigma,
         first_sample: ray.first_sample,
@@ -452,11 +529,12 @@ fn spread_footprint(
         return (ray.footprint, false);
     }
     worker.counters.footprint_updates += 1;
-    let (surface, wi) = (vertex.surface, sample.wi);
+    let wi = sample.wi;
     if !sample.is_specular() {
         let f = vertex.bsdf.eval(vertex.wo, wi);
         return (ray.footprint.scatter(bsdf_spread_angle(luminance(f))), true);
     }
+    let surface = &*vertex.site.record(context, ray.direction);
     if !crosses {
         return (ray.footprint.reflect(ray.direction, surface, wi), false);
     }
@@ -473,13 +551,13 @@ fn spread_footprint(
     )
 }
 
-/// The absorption coefficient of the medium on the far side of `surface` seen from its
-/// front (`front`) or back: crossing the surface enters the material's medium from the
-/// front, and leaves it for the outside (no medium) from the back.
+/// The absorption coefficient of the medium on the far side of a surface of `material`
+/// seen from its front (`front`) or back: crossing the surface enters the material's medium
+/// from the front, and leaves it for the outside (no medium) from the back.
 #[inline]
-fn medium_beyond(context: &RenderContext, surface: &SurfaceHit, front: bool) -> Vec3 {
+fn medium_beyond(context: &RenderContext, material: u32, front: bool) -> Vec3 {
     if front {
-        context.materials.sigma[surface.material as usize]
+        context.materials.sigma[material as usize]
     } else {
         Vec3::ZERO
     }

@@ -92,6 +92,7 @@ pub(super) fn pick_lanes(
             lane_material.textured || (camera_first && uv_aov),
         );
     }
+    worker.counters.lane_hits += waves.lanes.len() as u64;
     if effects.footprints {
         worker.counters.footprint_updates += waves.lanes.len() as u64;
     }

@@ -1,0 +1,239 @@
+//! The path tracer's hits reconstructed and textured in lanes (`integrator::lanes`, stages
+//! 1-4), wave by wave, and each lane's vertex then finished in wave order from the lane
+//! arrays, without a `SurfaceHit` record or a per-ray texture lookup.
+//!
+//! A hit takes the lanes when it lies on a triangle mesh whose material emits nothing and
+//! bends no normal (`lanes::LaneMaterial::path_covers`), and its footprint moves to the hit
+//! by its distance alone (not a ray differential). These take the scalar path
+//! (`vertex::shade`), hit by hit: misses; spheres, curved and height patches; emitters and
+//! normal-mapped materials; ray differentials; every hit when fog is on; and, in a render
+//! that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`), the rays of
+//! first samples, which record their pixel's first lookup.
+//!
+//! What a lane adds is computed as `vertex::shade` computes it, operation for operation:
+//! the stages give the bits of `SurfaceLookup::surface_hit` and `shading::surface_inputs`,
+//! and [`finish_lane`] then runs the same steps in the same order (AOVs, absorption, the
+//! footprint at the hit, light sampling, the BSDF's continuation), so images are bit for
+//! bit those of the scalar path.
+
+use crate::film::TileImage;
+use crate::integrator::lanes::footprints::{footprint_at_hit, texture_gradients, LaneFootprint};
+use crate::integrator::lanes::gather::gather_triangles;
+use crate::integrator::lanes::interpolate::interpolate;
+use crate::integrator::lanes::textures::shading_inputs;
+use crate::integrator::lanes::WaveLanes;
+use crate::integrator::wave_integrator::{write_geometry_values, write_material_aovs};
+use crate::render::context::{RenderContext, WorkerState};
+use crate::render::stats::RayKind;
+use crate::render::tracer::TraceHit;
+use crate::scene::Material;
+use crate::shading::surface_inputs::SurfaceInputs;
+use crate::shading::{self, SpawnPoint};
+
+use super::vertex::{scatter_at_surface, HitRecord, SurfaceSite};
+use super::{PathRay, PathTracer, PathWaves};
+
+/// `PathLanes::lane_of_ray` for a ray shaded by the scalar path.
+const SCALAR: u32 = u32::MAX;
+
+/// The lanes of the wave being shaded, reused from wave to wave.
+#[derive(Default)]
+pub(crate) struct PathLanes {
+    lanes: WaveLanes,
+    /// Per ray of the wave: its lane, or [`SCALAR`].
+    lane_of_ray: Vec<u32>,
+    /// Per lane: the width of its footprint at the hit, for textured materials under a
+    /// cone-like footprint (`None`: a point sample).
+    cone_width: Vec<Option<f32>>,
+}
+
+impl PathLanes {
+    /// The lane of the wave's ray `index`, if the lanes shade it.
+    #[inline]
+    pub(super) fn lane_of(&self, index: usize) -> Option<usize> {
+        let lane = self.lane_of_ray[index];
+        (lane != SCALAR).then_some(lane as usize)
+    }
+}
+
+/// Pick the wave's rays the lanes shade (none unless `enabled`), order them by material,
+/// and run stages 1-4 over them: the triangles' vertex data, the interpolated point,
+/// normals and texture coordinates, the footprints' texture gradients, and the texture
+/// lookups (albedo, metallic, roughness).
+pub(super) fn shade_lanes(
+    context: &RenderContext,
+    path: &mut PathLanes,
+    (rays, hits): (&[PathRay], &[TraceHit]),
+    image: &TileImage,
+    worker: &mut WorkerState,
+    enabled: bool,
+) {
+    path.lane_of_ray.clear();
+    path.lane_of_ray.resize(rays.len(), SCALAR);
+    path.lanes.clear();
+    path.cone_width.clear();
+    if !enabled || context.effects.fog {
+        return;
+    }
+    pick_lanes(context, path, rays, hits, image);
+    let lanes = &mut path.lanes;
+    if lanes.len() == 0 {
+        return;
+    }
+    worker.counters.lane_hits += lanes.len() as u64;
+    if lanes.order_by_material(&mut path.cone_width) {
+        for (lane, &index) in lanes.wave_index.iter().enumerate() {
+            path.lane_of_ray[index as usize] = lane as u32;
+        }
+    }
+    gather_triangles(lanes, &context.surfaces.scene.meshes);
+    interpolate(lanes);
+    let max_aniso = context.options.filter.max_aniso;
+    texture_gradients(lanes, &path.cone_width, max_aniso);
+    shading_inputs(context, lanes, worker);
+}
+
+/// The rays whose hits the lanes cover, pushed in wave order, each with its footprint's
+/// width at the hit.
+// Not inlined: one call per wave, and `perf` attributes each stage's time to it.
+#[inline(never)]
+fn pick_lanes(
+    context: &RenderContext,
+    path: &mut PathLanes,
+    rays: &[PathRay],
+    hits: &[TraceHit],
+    image: &TileImage,
+) {
+    let effects = &context.effects;
+    path.lanes.prepare(context);
+    let records_lookups = !image.lookup_done.is_empty();
+    let uv_aov = context.options.aovs.surface;
+    for (index, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+        if !hit.is_hit() || (ray.first_sample && records_lookups) {
+            continue;
+        }
+        let Some((mesh, material)) = context.surfaces.mesh_at(hit) else {
+            continue;
+        };
+        let lane_material = path.lanes.materials[material];
+        if !lane_material.path_covers {
+            continue;
+        }
+        let cone_width = match effects.footprints.then(|| ray.footprint.propagated(hit.t)) {
+            // A differential's transfer needs the hit record.
+            Some(None) => continue,
+            Some(Some(at_hit)) if lane_material.textured => match footprint_at_hit(&at_hit) {
+                Some(LaneFootprint::Cone(width)) => Some(width),
+                _ => None,
+            },
+            _ => None,
+        };
+        let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
+        path.lane_of_ray[index] = path.lanes.len() as u32;
+        path.cone_width.push(cone_width);
+        path.lanes.push(
+            index as u32,
+            material as u32,
+            mesh as u32,
+            hit.primitive,
+            (hit.u, hit.v),
+            hit.t,
+            ray.direction,
+            ray.throughput,
+            lane_material.textured || (camera_first && uv_aov),
+        );
+    }
+}
+
+/// The vertex of the wave's ray `ray` (which hit `hit`) at its lane `lane`, in the steps
+/// and order of `vertex::shade`: the camera hit's AOVs, absorption, the footprint at the
+/// hit, then light sampling and the continuation (`vertex::scatter_at_surface`). The lanes'
+/// materials emit nothing, so no emission is added.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn finish_lane(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &mut PathRay,
+    hit: &TraceHit,
+    path: &PathLanes,
+    lane: usize,
+    image: &mut TileImage,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) {
+    let lanes = &path.lanes;
+    let material_index = lanes.material[lane];
+    let material = &context.scene.materials[material_index as usize];
+    let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
+    let t = lanes.t[lane];
+    let shading_normal = lanes.shading_normal.get(lane);
+    if camera_first {
+        let st = lanes.st.get(lane);
+        write_geometry_values(
+            context,
+            image,
+            ray.slot,
+            ray.direction,
+            t,
+            shading_normal,
+            st,
+        );
+    }
+    arrive_at_hit(context, ray, t, worker);
+    let inputs = lane_inputs(material, lanes, lane);
+    if camera_first {
+        write_material_aovs(image, ray.slot, &inputs);
+    }
+    let site = SurfaceSite {
+        material: material_index,
+        position: lanes.position.get(lane),
+        spawn: SpawnPoint {
+            position: lanes.position.get(lane),
+            error: lanes.error.get(lane),
+        },
+        geometric_normal: lanes.geometric_normal.get(lane),
+        record: HitRecord::Deferred {
+            hit,
+            origin: ray.origin,
+            camera_first,
+        },
+    };
+    scatter_at_surface(
+        tracer, context, ray, &site, material, &inputs, waves, worker,
+    );
+}
+
+/// Beer's law over the distance `t` travelled inside the ray's medium, and the ray's
+/// footprint moved to its hit (`vertex::shade`'s absorption and footprint steps).
+#[inline]
+fn arrive_at_hit(context: &RenderContext, ray: &mut PathRay, t: f32, worker: &mut WorkerState) {
+    let effects = &context.effects;
+    if effects.absorption && ray.sigma != glam::Vec3::ZERO {
+        ray.throughput *= shading::transmittance(ray.sigma, t);
+        worker.counters.absorption_evaluations += 1;
+    }
+    if effects.footprints {
+        worker.counters.footprint_updates += 1;
+        // `pick_lanes` leaves differentials, the one footprint without this, to the
+        // scalar path.
+        if let Some(at_hit) = ray.footprint.propagated(t) {
+            ray.footprint = at_hit;
+        }
+    }
+}
+
+/// The material's shading inputs at lane `lane`, as `shading::surface_inputs` gives them
+/// for a material that emits nothing and bends no normal.
+#[inline]
+fn lane_inputs(material: &Material, lanes: &WaveLanes, lane: usize) -> SurfaceInputs {
+    let model = material.model.metallic_roughness();
+    SurfaceInputs {
+        albedo: lanes.albedo.get(lane),
+        alpha: material.alpha,
+        // Zero for the classic model (`lanes::textures`).
+        metallic: lanes.metallic[lane],
+        roughness: model.map(|_| lanes.roughness[lane]),
+        emission: material.emission,
+        shading_normal: lanes.shading_normal.get(lane),
+    }
+}

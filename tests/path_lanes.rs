@@ -1,0 +1,107 @@
+//! The path tracer's hits shaded in lanes (`PathTracer::shade_in_lanes`) against its scalar
+//! path: shipped scenes give the same image and AOVs, bit for bit, under the default
+//! footprints, with every AOV, and with ray differentials.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use conetrace::film::{AovSelection, Film};
+use conetrace::footprint::LodStrategy;
+use conetrace::integrator::path::PathTracer;
+use conetrace::render::{self, RenderControl, RenderOptions};
+use conetrace::scene::load::load_scene;
+
+/// Scenes with textured, untextured, metallic-roughness, mirror and glass materials, area
+/// lights and an environment: what the lanes cover and what they leave to the scalar path.
+const SCENES: [&str; 6] = [
+    "assets/scenes/path_textured.toml",
+    "assets/scenes/teapot_textured.toml",
+    "assets/scenes/teapot_mirror.toml",
+    "assets/scenes/cornell.toml",
+    "assets/scenes/bench/env_lit_textured.toml",
+    "assets/scenes/bench/untextured_specular.toml",
+];
+
+/// The film of `scene` rendered small by the path tracer, in lanes or not, and how many
+/// hits the lanes shaded.
+fn render_film(scene: &str, in_lanes: bool, options: impl Fn(&mut RenderOptions)) -> (Film, u64) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
+    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut render_options = RenderOptions::from_settings(&scene.settings);
+    render_options.width = 40;
+    render_options.height = 30;
+    render_options.spp = 2;
+    options(&mut render_options);
+    let context = render::prepare(Arc::new(scene), render_options).expect("prepare");
+    let tracer = PathTracer {
+        shade_in_lanes: in_lanes,
+        ..PathTracer::default()
+    };
+    let result = render::render(&context, &tracer, &RenderControl::default()).expect("render");
+    (result.film, result.stats.counters.lane_hits)
+}
+
+/// Every channel of the two films, compared bit for bit; panics naming the first that
+/// differs.
+fn assert_same_bits(scene: &str, variant: &str, lanes: &Film, scalar: &Film) {
+    let names = scalar.channel_names();
+    assert_eq!(lanes.channel_names(), names, "{scene} ({variant})");
+    for name in &names {
+        let a = lanes.channel(name).expect("channel");
+        let b = scalar.channel(name).expect("channel");
+        let differing = a
+            .iter()
+            .zip(b)
+            .filter(|(x, y)| x.to_bits() != y.to_bits())
+            .count();
+        assert_eq!(
+            differing, 0,
+            "{scene} ({variant}): {differing} values of {name} differ"
+        );
+    }
+}
+
+/// Renders every scene both ways and compares them; returns how many hits the lanes shaded
+/// in all.
+fn check_every_scene(variant: &str, options: impl Fn(&mut RenderOptions)) -> u64 {
+    let mut lane_hits = 0;
+    for scene in SCENES {
+        let (lanes, hits) = render_film(scene, true, &options);
+        let (scalar, scalar_hits) = render_film(scene, false, &options);
+        assert_eq!(scalar_hits, 0, "{scene}: the scalar render used the lanes");
+        assert_same_bits(scene, variant, &lanes, &scalar);
+        lane_hits += hits;
+    }
+    lane_hits
+}
+
+#[test]
+fn lanes_give_the_scalar_path_s_image_bit_for_bit() {
+    assert!(
+        check_every_scene("default", |_| {}) > 0,
+        "no hit took the lanes"
+    );
+}
+
+#[test]
+fn lanes_give_the_scalar_path_s_aovs_bit_for_bit() {
+    let lane_hits = check_every_scene("every AOV", |options| options.aovs = AovSelection::ALL);
+    // First samples record their pixel's first texture lookup by the scalar path; the
+    // second samples take the lanes.
+    assert!(lane_hits > 0, "no hit took the lanes");
+}
+
+#[test]
+fn lanes_leave_ray_differentials_their_scalar_image() {
+    // Differentials take the scalar path wherever footprints are on (scenes with textures);
+    // untextured scenes carry no footprint, and their hits take the lanes.
+    check_every_scene("differentials", |options| {
+        options.lod = LodStrategy::Differential
+    });
+}
+
+#[test]
+fn lanes_give_the_scalar_path_s_image_without_footprints() {
+    let lane_hits = check_every_scene("mip0", |options| options.lod = LodStrategy::Mip0);
+    assert!(lane_hits > 0, "no hit took the lanes");
+}
