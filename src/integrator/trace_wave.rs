@@ -58,17 +58,16 @@ pub(crate) fn trace_wave<'a>(
     }
 }
 
-/// A wave's shadow segments `(origin, direction, tfar)` as occlusion rays in `trace_rays` (a
+/// A wave's shadow segments, occlusion rays made by [`shadow_ray`], in `trace_rays` (a
 /// reused buffer), counted as shadow rays; shadow rays carry no cone.
 pub(crate) fn shadow_trace_rays(
-    segments: impl ExactSizeIterator<Item = (Vec3, Vec3, f32)>,
+    segments: impl ExactSizeIterator<Item = TraceRay>,
     trace_rays: &mut Vec<TraceRay>,
     counters: &mut WorkCounters,
 ) {
     counters.count_rays(RayKind::Shadow, segments.len() as u64);
     trace_rays.clear();
-    trace_rays
-        .extend(segments.map(|(origin, direction, tfar)| shadow_ray(origin, direction, tfar)));
+    trace_rays.extend(segments);
 }
 
 /// The occlusion ray of one shadow segment: it carries no cone.

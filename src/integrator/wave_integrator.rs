@@ -26,7 +26,7 @@ use crate::hit::SurfaceHit;
 use crate::integrator::camera_sample::{
     for_each_camera_ray, sample_runs, slot_place, CameraRay, SampleRun,
 };
-use crate::integrator::trace_wave::{shadow_ray, shadow_trace_rays, WaveRay};
+use crate::integrator::trace_wave::{shadow_trace_rays, WaveRay};
 use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::integrator::stop_requested;
@@ -91,14 +91,14 @@ pub(crate) struct WaveBuffers<R> {
 }
 
 impl<R> WaveBuffers<R> {
-    /// Which of the current wave's shadow segments `(origin, direction, tfar)` are blocked,
+    /// Which of the current wave's shadow segments (occlusion rays, `trace_wave::shadow_ray`) are blocked,
     /// into `shadow_blocked`: a camera wave's are coherent and go as 16-wide packets (built
     /// in `shadow_rays`), a later wave's fill one occlusion stream straight from the
     /// segments. Counted as shadow rays.
     pub fn trace_shadow_segments(
         &mut self,
         context: &RenderContext,
-        segments: impl ExactSizeIterator<Item = (Vec3, Vec3, f32)>,
+        segments: impl ExactSizeIterator<Item = TraceRay>,
         counters: &mut WorkCounters,
     ) {
         if self.camera_wave {
@@ -111,11 +111,9 @@ impl<R> WaveBuffers<R> {
             );
         } else {
             counters.count_rays(RayKind::Shadow, segments.len() as u64);
-            context.tracer.occluded_stream(
-                segments.map(|(origin, direction, tfar)| shadow_ray(origin, direction, tfar)),
-                &mut self.shadow_blocked,
-                counters,
-            );
+            context
+                .tracer
+                .occluded_stream(segments, &mut self.shadow_blocked, counters);
         }
     }
 }

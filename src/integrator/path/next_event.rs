@@ -11,6 +11,7 @@ use super::mis::power_heuristic;
 use super::{add_radiance, LightStrategy, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::integrator::texturing::environment_light_lookup;
+use crate::integrator::trace_wave::shadow_ray;
 use crate::medium::{segment_fog, FogModel, HenyeyGreenstein};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::surface_textures::area_light_radiance;
@@ -306,7 +307,7 @@ pub(super) fn trace_shadow_rays(
     let segments = waves
         .shadows
         .iter()
-        .map(|s| (s.origin, s.direction, s.tfar));
+        .map(|s| shadow_ray(s.origin, s.direction, s.tfar));
     waves
         .buffers
         .trace_shadow_segments(context, segments, &mut worker.counters);

@@ -8,7 +8,7 @@ use super::lights::{shadow_tfar, ShadowRay};
 use super::{add_radiance, Waves};
 use crate::film::TileImage;
 use crate::integrator::camera_sample::slot_place;
-use crate::integrator::trace_wave::shadow_trace_rays;
+use crate::integrator::trace_wave::{shadow_ray, shadow_trace_rays};
 use crate::integrator::wave_order::group_by_place;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::SurfaceDetail;
@@ -47,7 +47,7 @@ pub(super) fn trace_shadows(
     let segments = waves
         .shadows
         .iter()
-        .map(|s| (s.origin, s.direction, s.tfar));
+        .map(|s| shadow_ray(s.origin, s.direction, s.tfar));
     if !context.effects.transmissive_shadows {
         // A camera wave's shadow rays are coherent: a packet holds one pixel's samples.
         waves
@@ -102,7 +102,7 @@ fn walk_shadows(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerS
         waves
             .shadows
             .iter()
-            .map(|s| (s.origin, s.direction, s.tfar)),
+            .map(|s| shadow_ray(s.origin, s.direction, s.tfar)),
         &mut waves.buffers.shadow_rays,
         &mut worker.counters,
     );
