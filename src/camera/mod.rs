@@ -299,18 +299,41 @@ impl Camera {
         dir: Vec3,
         samples_per_pixel: u32,
     ) -> Footprint {
+        let dw = self.axis_cosine(dir);
+        self.sample_footprint_at(strategy, px, py, origin, dw, samples_per_pixel)
+    }
+
+    /// |D.W| for the ray direction `dir` (made unit, or the camera's forward axis if it
+    /// cannot be): what the cones of [`Camera::sample_footprint`] need of the direction.
+    #[inline(always)]
+    pub fn axis_cosine(&self, dir: Vec3) -> f32 {
+        unit_or(dir, self.forward).dot(self.w).abs()
+    }
+
+    /// [`Camera::sample_footprint`] with the direction given as its [`Camera::axis_cosine`],
+    /// which the camera block computes for 16 rays at once.
+    #[inline]
+    pub fn sample_footprint_at(
+        &self,
+        strategy: LodStrategy,
+        px: f32,
+        py: f32,
+        origin: Vec3,
+        dw: f32,
+        samples_per_pixel: u32,
+    ) -> Footprint {
         let scale = sample_footprint_scale(samples_per_pixel);
-        let d = unit_or(dir, self.forward);
+        let ww = self.w.length_squared();
         let (hu, hv) = (self.half_width, self.half_height);
         let pinhole = || {
-            let cone = RayCone::pinhole(d, self.w, hu, hv, self.width, self.height);
+            let cone = RayCone::pinhole_at_axis_cosine(dw, ww, hu, hv, self.width, self.height);
             RayCone::new(cone.width, cone.angle * scale)
         };
         let ortho = || {
             let cone = RayCone::orthographic(hu, hv, self.width, self.height);
             RayCone::new(cone.width * scale, cone.angle)
         };
-        let pixel_lens = || RayCone::thin_lens(self.pixel_size() * scale, d, self.w);
+        let pixel_lens = || RayCone::thin_lens_at_axis_cosine(self.pixel_size() * scale, dw, ww);
         match strategy {
             LodStrategy::Mip0 => Footprint::Mip0,
             LodStrategy::Distance => Footprint::Distance(match self.model {
@@ -320,14 +343,14 @@ impl Camera {
             LodStrategy::Cone1 => Footprint::Cone1(match self.model {
                 CameraModel::Pinhole => pinhole(),
                 CameraModel::ThinLens { lens_radius } => {
-                    RayCone::thin_lens(2.0 * lens_radius, d, self.w)
+                    RayCone::thin_lens_at_axis_cosine(2.0 * lens_radius, dw, ww)
                 }
                 CameraModel::Orthographic => ortho(),
             }),
             LodStrategy::Cone => Footprint::Cone(match self.model {
                 CameraModel::Pinhole => ConeEnvelope::new(pinhole(), pixel_lens(), true),
                 CameraModel::ThinLens { lens_radius } => ConeEnvelope::new(
-                    RayCone::thin_lens(2.0 * lens_radius, d, self.w),
+                    RayCone::thin_lens_at_axis_cosine(2.0 * lens_radius, dw, ww),
                     pinhole(),
                     false,
                 ),

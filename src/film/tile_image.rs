@@ -140,6 +140,11 @@ impl TileImage {
         let samples = &self.color[places.start * pixels..places.end * pixels];
         for sample in samples.chunks_exact(pixels) {
             for (sum, color) in self.color_sum.iter_mut().zip(sample) {
+                // Black (a miss towards a black environment, a shadowed point) adds 0 to
+                // the exact sum: skipping it changes no bit.
+                if *color == [0.0; 3] {
+                    continue;
+                }
                 if drop_nonfinite && !color.iter().all(|c| c.is_finite()) {
                     dropped += 1;
                 } else {

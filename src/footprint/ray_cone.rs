@@ -42,8 +42,28 @@ impl RayCone {
         image_width: u32,
         image_height: u32,
     ) -> RayCone {
-        let ww = w_axis.length_squared();
         let dw = dir.dot(w_axis).abs();
+        Self::pinhole_at_axis_cosine(
+            dw,
+            w_axis.length_squared(),
+            half_width,
+            half_height,
+            image_width,
+            image_height,
+        )
+    }
+
+    /// [`RayCone::pinhole`] from `dw` = |D.W| and `ww` = W.W, for callers that compute
+    /// |D.W| for many rays at once.
+    #[inline]
+    pub fn pinhole_at_axis_cosine(
+        dw: f32,
+        ww: f32,
+        half_width: f32,
+        half_height: f32,
+        image_width: u32,
+        image_height: u32,
+    ) -> RayCone {
         let per_pixel =
             (half_width / image_width.max(1) as f32).min(half_height / image_height.max(1) as f32);
         RayCone::new(0.0, 2.0 * per_pixel * dw / ww)
@@ -53,8 +73,13 @@ impl RayCone {
     /// focal plane at the end of `w_axis`: alpha = -w_lens D.W / W.W, w = w_lens.
     #[inline]
     pub fn thin_lens(lens_width: f32, dir: Vec3, w_axis: Vec3) -> RayCone {
-        let ww = w_axis.length_squared();
         let dw = dir.dot(w_axis).abs();
+        Self::thin_lens_at_axis_cosine(lens_width, dw, w_axis.length_squared())
+    }
+
+    /// [`RayCone::thin_lens`] from `dw` = |D.W| and `ww` = W.W.
+    #[inline]
+    pub fn thin_lens_at_axis_cosine(lens_width: f32, dw: f32, ww: f32) -> RayCone {
         RayCone::new(lens_width, -lens_width * dw / ww)
     }
 

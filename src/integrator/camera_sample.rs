@@ -190,6 +190,8 @@ struct BlockLanes {
     fx: [f32; PACKET],
     fy: [f32; PACKET],
     pinhole: Option<([[f32; PACKET]; 3], [f32; PACKET])>,
+    /// `Camera::axis_cosine` of the pinhole's directions, when footprints are traced.
+    axis_cosine: Option<[f32; PACKET]>,
 }
 
 impl CameraBlock {
@@ -212,6 +214,7 @@ impl CameraBlock {
             fx,
             fy,
             pinhole,
+            axis_cosine,
         } = &lanes;
         let bounds = context.surfaces.bounds;
         for lane in 0..self.len {
@@ -232,7 +235,11 @@ impl CameraBlock {
             };
             let footprint = if context.effects.footprints {
                 let lod = context.options.lod;
-                camera.sample_footprint(lod, fx[lane], fy[lane], origin, direction, spp)
+                let dw = match axis_cosine {
+                    Some(dw) => dw[lane],
+                    None => camera.axis_cosine(direction),
+                };
+                camera.sample_footprint_at(lod, fx[lane], fy[lane], origin, dw, spp)
             } else {
                 Footprint::none()
             };
@@ -284,11 +291,18 @@ impl CameraBlock {
             }
             None => None,
         };
+        let axis_cosine = match &pinhole {
+            Some((d, _)) if context.effects.footprints => Some(std::array::from_fn(|lane| {
+                camera.axis_cosine(Vec3::new(d[0][lane], d[1][lane], d[2][lane]))
+            })),
+            _ => None,
+        };
         BlockLanes {
             draws,
             fx,
             fy,
             pinhole,
+            axis_cosine,
         }
     }
 }

@@ -58,17 +58,32 @@ pub(crate) fn trace_wave<'a>(
     }
 }
 
-/// A wave's shadow segments `(origin, direction, tfar)` as occlusion rays in `trace_rays` (a
-/// reused buffer), counted as shadow rays; shadow rays carry no cone.
-pub(crate) fn shadow_trace_rays(
-    segments: impl ExactSizeIterator<Item = (Vec3, Vec3, f32)>,
+/// A shadow ray an integrator queues: the segment an occlusion query tests.
+pub(crate) trait ShadowSegment {
+    fn origin(&self) -> Vec3;
+    fn direction(&self) -> Vec3;
+    /// Where the segment ends along `direction`.
+    fn tfar(&self) -> f32;
+}
+
+/// The occlusion rays of a wave's shadow segments in `trace_rays` (a reused buffer),
+/// counted as shadow rays; shadow rays carry no cone. Each ray is written field by field
+/// into its place: a `TraceRay` built as a value and then copied went through the stack in
+/// pieces the copy's wider loads straddled, which stalls store forwarding on every ray.
+pub(crate) fn shadow_trace_rays<S: ShadowSegment>(
+    shadows: &[S],
     trace_rays: &mut Vec<TraceRay>,
     counters: &mut WorkCounters,
 ) {
-    counters.count_rays(RayKind::Shadow, segments.len() as u64);
-    trace_rays.clear();
-    trace_rays
-        .extend(segments.map(|(origin, direction, tfar)| shadow_ray(origin, direction, tfar)));
+    counters.count_rays(RayKind::Shadow, shadows.len() as u64);
+    trace_rays.resize(shadows.len(), shadow_ray(Vec3::ZERO, Vec3::Z, 0.0));
+    for (ray, shadow) in trace_rays.iter_mut().zip(shadows) {
+        ray.origin = shadow.origin();
+        ray.direction = shadow.direction();
+        ray.tfar = shadow.tfar();
+        ray.cone_width = 0.0;
+        ray.cone_spread = 0.0;
+    }
 }
 
 /// The occlusion ray of one shadow segment: it carries no cone.

@@ -26,7 +26,7 @@ use crate::hit::SurfaceHit;
 use crate::integrator::camera_sample::{
     for_each_camera_ray, sample_runs, slot_place, CameraRay, SampleRun,
 };
-use crate::integrator::trace_wave::{shadow_ray, shadow_trace_rays, WaveRay};
+use crate::integrator::trace_wave::{shadow_trace_rays, ShadowSegment, WaveRay};
 use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::integrator::stop_requested;
@@ -91,18 +91,17 @@ pub(crate) struct WaveBuffers<R> {
 }
 
 impl<R> WaveBuffers<R> {
-    /// Which of the current wave's shadow segments `(origin, direction, tfar)` are blocked,
-    /// into `shadow_blocked`: a camera wave's are coherent and go as 16-wide packets (built
-    /// in `shadow_rays`), a later wave's fill one occlusion stream straight from the
-    /// segments. Counted as shadow rays.
-    pub fn trace_shadow_segments(
+    /// Which of `shadows` (the current wave's) are blocked, into `shadow_blocked`: a camera
+    /// wave's are coherent and go as 16-wide packets, a later wave's as one occlusion
+    /// stream. Counted as shadow rays.
+    pub fn trace_shadow_segments<S: ShadowSegment>(
         &mut self,
         context: &RenderContext,
-        segments: impl ExactSizeIterator<Item = (Vec3, Vec3, f32)>,
+        shadows: &[S],
         counters: &mut WorkCounters,
     ) {
+        shadow_trace_rays(shadows, &mut self.shadow_rays, counters);
         if self.camera_wave {
-            shadow_trace_rays(segments, &mut self.shadow_rays, counters);
             context.tracer.occluded_wave(
                 &self.shadow_rays,
                 &mut self.shadow_blocked,
@@ -110,9 +109,8 @@ impl<R> WaveBuffers<R> {
                 counters,
             );
         } else {
-            counters.count_rays(RayKind::Shadow, segments.len() as u64);
             context.tracer.occluded_stream(
-                segments.map(|(origin, direction, tfar)| shadow_ray(origin, direction, tfar)),
+                self.shadow_rays.iter().copied(),
                 &mut self.shadow_blocked,
                 counters,
             );

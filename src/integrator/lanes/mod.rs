@@ -177,6 +177,8 @@ pub(crate) struct WaveLanes {
     /// The runs of one material in lane order: `(material, end)`.
     pub material_runs: Vec<(u32, usize)>,
     material_counts: Vec<usize>,
+    /// The lane of each picked hit, in the wave's order (`lay_out_by_material`).
+    pub lane_of_pick: Vec<u32>,
     /// The lane order by material (old lane of each new lane), and the buffers permuting
     /// leaves behind.
     order: Vec<u32>,
@@ -259,6 +261,71 @@ impl WaveLanes {
         self.wants_st.push(wants_st);
     }
 
+    /// Lay out one lane for each picked hit, `materials` holding their materials in the
+    /// wave's order: the lanes are ordered by material (stably, as
+    /// [`WaveLanes::order_by_material`] orders pushed lanes), the runs recorded in
+    /// `material_runs`, and `lane_of_pick[k]` set to the lane of the `k`-th picked hit, which
+    /// the integrator then fills with [`WaveLanes::put`]. Placing each hit at its lane as it
+    /// is read costs nothing, where pushing and then permuting copies every array again.
+    pub(crate) fn lay_out_by_material(&mut self, materials: &[u32]) {
+        count_material_runs(
+            &mut self.material_counts,
+            &mut self.material_runs,
+            self.materials.len(),
+            materials,
+        );
+        self.lane_of_pick.clear();
+        self.lane_of_pick.extend(materials.iter().map(|&m| {
+            let next = &mut self.material_counts[m as usize];
+            *next += 1;
+            (*next - 1) as u32
+        }));
+        let len = materials.len();
+        for values in [
+            &mut self.wave_index,
+            &mut self.material,
+            &mut self.mesh,
+            &mut self.triangle,
+        ] {
+            values.resize(len, 0);
+        }
+        for values in [&mut self.u, &mut self.v, &mut self.t] {
+            values.resize(len, 0.0);
+        }
+        self.direction.resize(len);
+        self.throughput.resize(len);
+        self.wants_st.resize(len, false);
+    }
+
+    /// Fill lane `lane` of a layout made by [`WaveLanes::lay_out_by_material`]; the
+    /// arguments as for [`WaveLanes::push`].
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(crate) fn put(
+        &mut self,
+        lane: usize,
+        wave_index: u32,
+        material: u32,
+        mesh: u32,
+        triangle: u32,
+        (u, v): (f32, f32),
+        t: f32,
+        direction: Vec3,
+        throughput: Vec3,
+        wants_st: bool,
+    ) {
+        self.wave_index[lane] = wave_index;
+        self.material[lane] = material;
+        self.mesh[lane] = mesh;
+        self.triangle[lane] = triangle;
+        self.u[lane] = u;
+        self.v[lane] = v;
+        self.t[lane] = t;
+        self.direction.set(lane, direction);
+        self.throughput.set(lane, throughput);
+        self.wants_st[lane] = wants_st;
+    }
+
     /// Reorder the pushed lanes by material (a counting sort, stable: lanes of one
     /// material keep the wave's order), `cone_width` (one per lane) with them, and record
     /// the runs in `material_runs`. Returns whether the order changed (the integrator's
@@ -304,22 +371,12 @@ impl WaveLanes {
     /// `material_runs` of the lanes as they will be once ordered, and in
     /// `material_counts` where each material's first lane goes.
     fn count_material_runs(&mut self) {
-        let counts = &mut self.material_counts;
-        counts.clear();
-        counts.resize(self.materials.len(), 0);
-        for &m in &self.material {
-            counts[m as usize] += 1;
-        }
-        self.material_runs.clear();
-        let mut end = 0;
-        for (material, count) in counts.iter_mut().enumerate() {
-            let start = end;
-            end += *count;
-            if *count > 0 {
-                self.material_runs.push((material as u32, end));
-            }
-            *count = start;
-        }
+        count_material_runs(
+            &mut self.material_counts,
+            &mut self.material_runs,
+            self.materials.len(),
+            &self.material,
+        );
     }
 
     /// Run `run` of the ordered lanes: its material and its range of lanes.
@@ -330,6 +387,32 @@ impl WaveLanes {
         };
         let (material, end) = self.material_runs[run];
         (material, start..end)
+    }
+}
+
+/// The `(material, end)` runs of lanes with `materials` once ordered by material into
+/// `runs`, and in `counts` (one per material of the scene) where each material's first lane
+/// goes.
+fn count_material_runs(
+    counts: &mut Vec<usize>,
+    runs: &mut Vec<(u32, usize)>,
+    scene_materials: usize,
+    materials: &[u32],
+) {
+    counts.clear();
+    counts.resize(scene_materials, 0);
+    for &m in materials {
+        counts[m as usize] += 1;
+    }
+    runs.clear();
+    let mut end = 0;
+    for (material, count) in counts.iter_mut().enumerate() {
+        let start = end;
+        end += *count;
+        if *count > 0 {
+            runs.push((material as u32, end));
+        }
+        *count = start;
     }
 }
 

@@ -11,6 +11,7 @@ use super::mis::power_heuristic;
 use super::{add_radiance, LightStrategy, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::integrator::texturing::environment_light_lookup;
+use crate::integrator::trace_wave::ShadowSegment;
 use crate::medium::{segment_fog, FogModel, HenyeyGreenstein};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::surface_textures::area_light_radiance;
@@ -28,6 +29,18 @@ pub(super) struct ShadowRay {
     pub(super) contribution: Vec3,
     /// The colour-buffer slot the contribution goes to.
     pub(super) slot: u32,
+}
+
+impl ShadowSegment for ShadowRay {
+    fn origin(&self) -> Vec3 {
+        self.origin
+    }
+    fn direction(&self) -> Vec3 {
+        self.direction
+    }
+    fn tfar(&self) -> f32 {
+        self.tfar
+    }
 }
 
 /// What scatters light at a shading point: a surface's BSDF or a fog volume's phase
@@ -303,13 +316,9 @@ pub(super) fn trace_shadow_rays(
     if waves.shadows.is_empty() {
         return;
     }
-    let segments = waves
-        .shadows
-        .iter()
-        .map(|s| (s.origin, s.direction, s.tfar));
     waves
         .buffers
-        .trace_shadow_segments(context, segments, &mut worker.counters);
+        .trace_shadow_segments(context, &waves.shadows, &mut worker.counters);
     for (shadow, blocked) in waves.shadows.iter().zip(&waves.buffers.shadow_blocked) {
         if *blocked {
             continue;

@@ -51,7 +51,12 @@ pub(super) fn pick_lanes(
     }
     waves.lanes.prepare(context);
     let records_lookups = !image.lookup_done.is_empty();
-    let uv_aov = context.options.aovs.surface;
+    // First the hits the lanes take, with their materials and meshes, then each at its lane, so the
+    // lanes come out ordered by material without being copied a second time.
+    waves.picked.clear();
+    waves.picked_material.clear();
+    waves.picked_mesh.clear();
+    waves.picked_cone_width.clear();
     for index in 0..rays {
         let ray = &waves.buffers.rays.current[index];
         let hit = &waves.buffers.trace_hits[index];
@@ -70,6 +75,7 @@ pub(super) fn pick_lanes(
         }
         let cone_width = if effects.footprints && lane_material.textured {
             match lane_footprint(&ray.footprint, hit.t) {
+                // A ray differential: the scalar path shades it.
                 None => continue,
                 Some(LaneFootprint::Point) => None,
                 Some(LaneFootprint::Cone(width)) => Some(width),
@@ -77,13 +83,30 @@ pub(super) fn pick_lanes(
         } else {
             None
         };
+        waves.picked.push(index as u32);
+        waves.picked_material.push(material as u32);
+        waves.picked_mesh.push(mesh as u32);
+        waves.picked_cone_width.push(cone_width);
+    }
+    waves.lanes.lay_out_by_material(&waves.picked_material);
+    let uv_aov = context.options.aovs.surface;
+    waves.cone_width.clear();
+    waves.cone_width.resize(waves.picked.len(), None);
+    for k in 0..waves.picked.len() {
+        let index = waves.picked[k] as usize;
+        let ray = &waves.buffers.rays.current[index];
+        let hit = &waves.buffers.trace_hits[index];
+        let material = waves.picked_material[k] as usize;
+        let lane_material = waves.lanes.materials[material];
         let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
-        waves.lane_of_ray[index] = waves.lanes.len() as u32;
-        waves.cone_width.push(cone_width);
-        waves.lanes.push(
+        let lane = waves.lanes.lane_of_pick[k] as usize;
+        waves.lane_of_ray[index] = lane as u32;
+        waves.cone_width[lane] = waves.picked_cone_width[k];
+        waves.lanes.put(
+            lane,
             index as u32,
             material as u32,
-            mesh as u32,
+            waves.picked_mesh[k],
             hit.primitive,
             (hit.u, hit.v),
             hit.t,
@@ -94,12 +117,7 @@ pub(super) fn pick_lanes(
     }
     worker.counters.lane_hits += waves.lanes.len() as u64;
     if effects.footprints {
-        worker.counters.footprint_updates += waves.lanes.len() as u64;
-    }
-    if waves.lanes.order_by_material(&mut waves.cone_width) {
-        for (lane, &index) in waves.lanes.wave_index.iter().enumerate() {
-            waves.lane_of_ray[index as usize] = lane as u32;
-        }
+        worker.counters.footprint_updates += waves.picked.len() as u64;
     }
 }
 

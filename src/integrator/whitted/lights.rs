@@ -7,6 +7,7 @@ use glam::{Vec2, Vec3};
 use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::integrator::texturing::environment_lookup;
+use crate::integrator::trace_wave::ShadowSegment;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::shading::{self, Bsdf, OpaqueLobe, OwnEmission, SpawnPoint};
 
@@ -23,6 +24,18 @@ pub(super) struct ShadowRay {
     pub(super) contribution: Vec3,
     /// The colour-buffer slot the contribution goes to.
     pub(super) slot: u32,
+}
+
+impl ShadowSegment for ShadowRay {
+    fn origin(&self) -> Vec3 {
+        self.origin
+    }
+    fn direction(&self) -> Vec3 {
+        self.direction
+    }
+    fn tfar(&self) -> f32 {
+        self.tfar
+    }
 }
 
 pub(super) fn shade_miss(

@@ -101,6 +101,12 @@ pub struct Waves {
     lanes: Box<WaveLanes>,
     lane_of_ray: Vec<u32>,
     cone_width: Vec<Option<f32>>,
+    /// The hits the lanes take, in the wave's order: their rays' indices, materials, meshes
+    /// and footprint widths (`lane_waves::pick_lanes`).
+    picked: Vec<u32>,
+    picked_material: Vec<u32>,
+    picked_mesh: Vec<u32>,
+    picked_cone_width: Vec<Option<f32>>,
 }
 
 impl Integrator for Whitted {

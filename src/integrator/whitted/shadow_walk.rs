@@ -44,15 +44,11 @@ pub(super) fn trace_shadows(
     if waves.shadows.is_empty() {
         return;
     }
-    let segments = waves
-        .shadows
-        .iter()
-        .map(|s| (s.origin, s.direction, s.tfar));
     if !context.effects.transmissive_shadows {
         // A camera wave's shadow rays are coherent: a packet holds one pixel's samples.
         waves
             .buffers
-            .trace_shadow_segments(context, segments, &mut worker.counters);
+            .trace_shadow_segments(context, &waves.shadows, &mut worker.counters);
         for (shadow, blocked) in waves.shadows.iter().zip(&waves.buffers.shadow_blocked) {
             if !blocked {
                 add_radiance(image, shadow.slot, delivered(context, shadow, worker));
@@ -99,10 +95,7 @@ fn walk_shadows(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerS
         );
     }
     shadow_trace_rays(
-        waves
-            .shadows
-            .iter()
-            .map(|s| (s.origin, s.direction, s.tfar)),
+        &waves.shadows,
         &mut waves.buffers.shadow_rays,
         &mut worker.counters,
     );
