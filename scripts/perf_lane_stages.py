@@ -27,7 +27,7 @@ def kernel_stage(start, size):
     return "?"
 
 RULES = [
-    ("picking and ordering lanes", ["lane_waves::pick_lanes", "order_by_material", "soa::permute"]),
+    ("picking and ordering lanes", ["lane_waves::pick_lanes", "LanePicks::place", "lay_out_by_material"]),
     ("1 gather", ["lanes::gather"]),
     ("2 interpolate", ["lanes::interpolate", "surface_hit", "spawn_point", "on_triangle", "SurfaceLookup"]),
     ("3 footprints", ["lanes::footprints", "texture_gradients", "project_cone", "footprint::"]),

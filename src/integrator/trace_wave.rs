@@ -58,29 +58,39 @@ pub(crate) fn trace_wave<'a>(
     }
 }
 
-/// A shadow ray an integrator queues: the segment an occlusion query tests.
-pub(crate) trait ShadowSegment {
-    fn origin(&self) -> Vec3;
-    fn direction(&self) -> Vec3;
-    /// Where the segment ends along `direction`.
-    fn tfar(&self) -> f32;
+/// A shadow ray an integrator queues: the segment an occlusion query tests, and what the
+/// light delivers to the pixel if nothing blocks it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ShadowRay {
+    pub origin: Vec3,
+    pub direction: Vec3,
+    /// Where the segment ends along `direction`, short of the light
+    /// (`shading::shadow_ray_end`), or infinity.
+    pub tfar: f32,
+    /// The point light's position, where a shadow ray is continued past transmissive
+    /// occluders (Whitted's), which measure their far end from it; `None` for directional
+    /// lights and where no continuation is traced.
+    pub light: Option<Vec3>,
+    pub contribution: Vec3,
+    /// The colour-buffer slot the contribution goes to.
+    pub slot: u32,
 }
 
 /// The occlusion rays of a wave's shadow segments in `trace_rays` (a reused buffer),
 /// counted as shadow rays; shadow rays carry no cone. Each ray is written field by field
 /// into its place: a `TraceRay` built as a value and then copied went through the stack in
 /// pieces the copy's wider loads straddled, which stalls store forwarding on every ray.
-pub(crate) fn shadow_trace_rays<S: ShadowSegment>(
-    shadows: &[S],
+pub(crate) fn shadow_trace_rays(
+    shadows: &[ShadowRay],
     trace_rays: &mut Vec<TraceRay>,
     counters: &mut WorkCounters,
 ) {
     counters.count_rays(RayKind::Shadow, shadows.len() as u64);
     trace_rays.resize(shadows.len(), shadow_ray(Vec3::ZERO, Vec3::Z, 0.0));
     for (ray, shadow) in trace_rays.iter_mut().zip(shadows) {
-        ray.origin = shadow.origin();
-        ray.direction = shadow.direction();
-        ray.tfar = shadow.tfar();
+        ray.origin = shadow.origin;
+        ray.direction = shadow.direction;
+        ray.tfar = shadow.tfar;
         ray.cone_width = 0.0;
         ray.cone_spread = 0.0;
     }

@@ -26,7 +26,7 @@ use crate::hit::SurfaceHit;
 use crate::integrator::camera_sample::{
     for_each_camera_ray, sample_runs, slot_place, CameraRay, SampleRun,
 };
-use crate::integrator::trace_wave::{shadow_trace_rays, ShadowSegment, WaveRay};
+use crate::integrator::trace_wave::{shadow_trace_rays, ShadowRay, WaveRay};
 use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::integrator::stop_requested;
@@ -94,10 +94,10 @@ impl<R> WaveBuffers<R> {
     /// Which of `shadows` (the current wave's) are blocked, into `shadow_blocked`: a camera
     /// wave's are coherent and go as 16-wide packets, a later wave's as one occlusion
     /// stream. Counted as shadow rays.
-    pub fn trace_shadow_segments<S: ShadowSegment>(
+    pub fn trace_shadow_segments(
         &mut self,
         context: &RenderContext,
-        shadows: &[S],
+        shadows: &[ShadowRay],
         counters: &mut WorkCounters,
     ) {
         shadow_trace_rays(shadows, &mut self.shadow_rays, counters);

@@ -44,7 +44,7 @@ pub(crate) fn footprint_at_hit(footprint: &Footprint) -> Option<LaneFootprint> {
 }
 
 /// Texture gradients of every lane into `lanes.gradients`: zero (a point sample) for lanes
-/// with no footprint width (`cone_width` `None`), or without texture coordinates; otherwise
+/// with no footprint width (`lanes.cone_width` `None`), or without texture coordinates; otherwise
 /// the projected cone mapped to st, the stretch clamped to `max_aniso`.
 ///
 /// One vector loop ([`barycentric_gradients`]) does every lane on a triangle with usable
@@ -52,13 +52,15 @@ pub(crate) fn footprint_at_hit(footprint: &Footprint) -> Option<LaneFootprint> {
 /// through dP/ds and dP/dt.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
-pub(crate) fn texture_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_aniso: f32) {
+pub(crate) fn texture_gradients(lanes: &mut WaveLanes, max_aniso: f32) {
     let len = lanes.len();
-    if cone_width[..len].iter().all(Option::is_none) {
+    if lanes.cone_width[..len].iter().all(Option::is_none) {
         // Point samples only (mip0, or no textured lane): no ellipse is projected.
         super::refill(&mut lanes.gradients, len, [0.0; 4]);
         return;
     }
+    // Out of the lanes while the stage writes them (the allocation goes back at the end).
+    let cone_width = std::mem::take(&mut lanes.cone_width);
     lanes.gradients.resize(len, [0.0; 4]);
     lanes.degenerate.resize(len, false);
     simd::run_at(
@@ -66,14 +68,14 @@ pub(crate) fn texture_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>
         #[inline(always)]
         || barycentric_gradients(lanes, &cone_width[..len], max_aniso),
     );
-    for lane in 0..len {
+    for (lane, width) in cone_width[..len].iter().enumerate() {
         if lanes.degenerate[lane] {
-            let (dpdx, dpdy) =
-                ellipse_axes(lanes, lane, cone_width[lane].unwrap_or(0.0), max_aniso);
+            let (dpdx, dpdy) = ellipse_axes(lanes, lane, width.unwrap_or(0.0), max_aniso);
             let g = triangle_gradients(lanes, lane, dpdx, dpdy);
             lanes.gradients[lane] = [g.dsdx, g.dtdx, g.dsdy, g.dtdy];
         }
     }
+    lanes.cone_width = cone_width;
 }
 
 /// The world-space axes of lane `lane`'s footprint ellipse.

@@ -4,7 +4,7 @@
 //! `SurfaceInputs`, `MaterialBsdf`) is built or copied between stages, and the arrays live
 //! in the per-thread state, reused from wave to wave.
 //!
-//! The lanes are ordered by material once picked ([`WaveLanes::order_by_material`]), so a
+//! The lanes are ordered by material as they are placed ([`picks::LanePicks::place`]), so a
 //! material's lanes are one range of every array. The stages, in order:
 //! 1. [`gather`]: the triangles' vertex positions, normals and texture coordinates;
 //! 2. [`interpolate`]: the point and its rounding-error bound, the geometric and shading
@@ -35,6 +35,7 @@ pub(crate) mod footprints;
 pub(crate) mod gather;
 pub(crate) mod interpolate;
 pub(crate) mod lights;
+pub(crate) mod picks;
 pub(crate) mod soa;
 pub(crate) mod textures;
 
@@ -87,7 +88,7 @@ impl LaneMaterial {
 /// The lane arrays of one wave, reused from wave to wave (nothing is allocated once they
 /// have grown to the largest wave). Vectors are stored one array per coordinate
 /// ([`soa::Vec3Lanes`]), and the lanes are ordered by material
-/// ([`WaveLanes::order_by_material`]), so each stage is a straight loop over consecutive
+/// ([`picks::LanePicks::place`]), so each stage is a straight loop over consecutive
 /// floats and each material's lanes are one range.
 #[derive(Default)]
 pub(crate) struct WaveLanes {
@@ -117,6 +118,9 @@ pub(crate) struct WaveLanes {
     pub wants_st: Vec<bool>,
     /// The ray's throughput (what it carries from the camera).
     pub throughput: Vec3Lanes,
+    /// The footprint's width at the hit, for a textured material under a cone-like
+    /// footprint (`None`: a point sample).
+    pub cone_width: Vec<Option<f32>>,
 
     // Stage 1.
     pub p: [Vec3Lanes; 3],
@@ -178,14 +182,7 @@ pub(crate) struct WaveLanes {
     pub material_runs: Vec<(u32, usize)>,
     material_counts: Vec<usize>,
     /// The lane of each picked hit, in the wave's order (`lay_out_by_material`).
-    pub lane_of_pick: Vec<u32>,
-    /// The lane order by material (old lane of each new lane), and the buffers permuting
-    /// leaves behind.
-    order: Vec<u32>,
-    scratch_f32: Vec<f32>,
-    scratch_u32: Vec<u32>,
-    scratch_bool: Vec<bool>,
-    scratch_width: Vec<Option<f32>>,
+    lane_of_pick: Vec<u32>,
 }
 
 impl WaveLanes {
@@ -230,44 +227,14 @@ impl WaveLanes {
         self.direction.clear();
         self.throughput.clear();
         self.wants_st.clear();
-    }
-
-    /// Add a lane: the ray at `wave_index` (unit `direction`, carrying `throughput`) hit
-    /// triangle `triangle` of mesh `mesh`, of material `material`, at barycentrics `(u, v)`
-    /// and distance `t`; `wants_st`: whether it needs texture coordinates.
-    #[allow(clippy::too_many_arguments)]
-    #[inline]
-    pub(crate) fn push(
-        &mut self,
-        wave_index: u32,
-        material: u32,
-        mesh: u32,
-        triangle: u32,
-        (u, v): (f32, f32),
-        t: f32,
-        direction: Vec3,
-        throughput: Vec3,
-        wants_st: bool,
-    ) {
-        self.wave_index.push(wave_index);
-        self.material.push(material);
-        self.mesh.push(mesh);
-        self.triangle.push(triangle);
-        self.u.push(u);
-        self.v.push(v);
-        self.t.push(t);
-        self.direction.push(direction);
-        self.throughput.push(throughput);
-        self.wants_st.push(wants_st);
+        self.cone_width.clear();
     }
 
     /// Lay out one lane for each picked hit, `materials` holding their materials in the
-    /// wave's order: the lanes are ordered by material (stably, as
-    /// [`WaveLanes::order_by_material`] orders pushed lanes), the runs recorded in
-    /// `material_runs`, and `lane_of_pick[k]` set to the lane of the `k`-th picked hit, which
-    /// the integrator then fills with [`WaveLanes::put`]. Placing each hit at its lane as it
-    /// is read costs nothing, where pushing and then permuting copies every array again.
-    pub(crate) fn lay_out_by_material(&mut self, materials: &[u32]) {
+    /// wave's order: the lanes are ordered by material (stably), the runs recorded in
+    /// `material_runs`, and `lane_of_pick[k]` set to the lane of the `k`-th picked hit, for
+    /// [`picks::LanePicks::place`] to fill.
+    fn lay_out_by_material(&mut self, materials: &[u32]) {
         count_material_runs(
             &mut self.material_counts,
             &mut self.material_runs,
@@ -295,88 +262,7 @@ impl WaveLanes {
         self.direction.resize(len);
         self.throughput.resize(len);
         self.wants_st.resize(len, false);
-    }
-
-    /// Fill lane `lane` of a layout made by [`WaveLanes::lay_out_by_material`]; the
-    /// arguments as for [`WaveLanes::push`].
-    #[allow(clippy::too_many_arguments)]
-    #[inline]
-    pub(crate) fn put(
-        &mut self,
-        lane: usize,
-        wave_index: u32,
-        material: u32,
-        mesh: u32,
-        triangle: u32,
-        (u, v): (f32, f32),
-        t: f32,
-        direction: Vec3,
-        throughput: Vec3,
-        wants_st: bool,
-    ) {
-        self.wave_index[lane] = wave_index;
-        self.material[lane] = material;
-        self.mesh[lane] = mesh;
-        self.triangle[lane] = triangle;
-        self.u[lane] = u;
-        self.v[lane] = v;
-        self.t[lane] = t;
-        self.direction.set(lane, direction);
-        self.throughput.set(lane, throughput);
-        self.wants_st[lane] = wants_st;
-    }
-
-    /// Reorder the pushed lanes by material (a counting sort, stable: lanes of one
-    /// material keep the wave's order), `cone_width` (one per lane) with them, and record
-    /// the runs in `material_runs`. Returns whether the order changed (the integrator's
-    /// map from rays to lanes must then be remade from `wave_index`).
-    pub(crate) fn order_by_material(&mut self, cone_width: &mut Vec<Option<f32>>) -> bool {
-        self.count_material_runs();
-        let len = self.len();
-        let counts = &mut self.material_counts;
-        self.order.clear();
-        self.order.resize(len, 0);
-        for (lane, &m) in self.material.iter().enumerate() {
-            let next = &mut counts[m as usize];
-            self.order[*next] = lane as u32;
-            *next += 1;
-        }
-        if self
-            .order
-            .iter()
-            .enumerate()
-            .all(|(i, &lane)| i == lane as usize)
-        {
-            return false;
-        }
-        let order = &self.order;
-        for values in [
-            &mut self.wave_index,
-            &mut self.material,
-            &mut self.mesh,
-            &mut self.triangle,
-        ] {
-            soa::permute(values, order, &mut self.scratch_u32);
-        }
-        for values in [&mut self.u, &mut self.v, &mut self.t] {
-            soa::permute(values, order, &mut self.scratch_f32);
-        }
-        self.direction.permute(order, &mut self.scratch_f32);
-        self.throughput.permute(order, &mut self.scratch_f32);
-        soa::permute(&mut self.wants_st, order, &mut self.scratch_bool);
-        soa::permute(cone_width, order, &mut self.scratch_width);
-        true
-    }
-
-    /// `material_runs` of the lanes as they will be once ordered, and in
-    /// `material_counts` where each material's first lane goes.
-    fn count_material_runs(&mut self) {
-        count_material_runs(
-            &mut self.material_counts,
-            &mut self.material_runs,
-            self.materials.len(),
-            &self.material,
-        );
+        self.cone_width.resize(len, None);
     }
 
     /// Run `run` of the ordered lanes: its material and its range of lanes.

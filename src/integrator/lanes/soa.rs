@@ -34,13 +34,6 @@ impl Vec3Lanes {
         }
     }
 
-    #[inline]
-    pub(crate) fn push(&mut self, value: Vec3) {
-        self.x.push(value.x);
-        self.y.push(value.y);
-        self.z.push(value.z);
-    }
-
     #[inline(always)]
     pub(crate) fn get(&self, lane: usize) -> Vec3 {
         Vec3::new(self.x[lane], self.y[lane], self.z[lane])
@@ -81,13 +74,6 @@ impl Vec3Lanes {
             x: &mut self.x[..len],
             y: &mut self.y[..len],
             z: &mut self.z[..len],
-        }
-    }
-
-    /// Reorder the lanes: lane `i` becomes the old lane `order[i]`.
-    pub(crate) fn permute(&mut self, order: &[u32], scratch: &mut Vec<f32>) {
-        for coordinate in [&mut self.x, &mut self.y, &mut self.z] {
-            permute(coordinate, order, scratch);
         }
     }
 }
@@ -205,37 +191,5 @@ impl Vec2Lanes {
     pub(crate) fn set(&mut self, lane: usize, value: Vec2) {
         self.x[lane] = value.x;
         self.y[lane] = value.y;
-    }
-}
-
-/// Reorder `values`: element `i` becomes the old element `order[i]`. The old buffer is left
-/// in `scratch`, so a chain of permutations through one scratch allocates nothing once the
-/// buffers have grown.
-pub(crate) fn permute<T: Copy>(values: &mut Vec<T>, order: &[u32], scratch: &mut Vec<T>) {
-    scratch.clear();
-    scratch.extend(order.iter().map(|&from| values[from as usize]));
-    std::mem::swap(values, scratch);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn permuting_reorders_every_coordinate_and_keeps_the_buffers() {
-        let mut lanes = Vec3Lanes::default();
-        for lane in 0..4 {
-            lanes.push(Vec3::new(
-                lane as f32,
-                10.0 + lane as f32,
-                20.0 + lane as f32,
-            ));
-        }
-        let mut scratch = Vec::with_capacity(4);
-        lanes.permute(&[2, 0, 3, 1], &mut scratch);
-        assert_eq!(lanes.x, [2.0, 0.0, 3.0, 1.0]);
-        assert_eq!(lanes.y, [12.0, 10.0, 13.0, 11.0]);
-        assert_eq!(lanes.get(2), Vec3::new(3.0, 13.0, 23.0));
-        assert_eq!(scratch.len(), 4);
     }
 }

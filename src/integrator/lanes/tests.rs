@@ -10,6 +10,7 @@ use super::footprints::{lane_footprint, texture_gradients, LaneFootprint};
 use super::gather::gather_triangles;
 use super::interpolate::interpolate;
 use super::lights::{sample_lights, shadow_rays};
+use super::picks::{LaneHit, LanePicks};
 use super::{LaneMaterial, WaveLanes};
 use crate::footprint::{ConeEnvelope, Footprint, RayCone};
 use crate::render::prepared::{GeometryRef, SurfaceDetail, SurfaceLookup};
@@ -75,6 +76,18 @@ fn scene(numbers: &mut Numbers) -> SceneDescription {
     }
 }
 
+/// The lane of a ray in direction `direction` carrying `throughput`, which hit `hit`.
+fn lane_hit(hit: &TraceHit, direction: Vec3, throughput: Vec3, wants_st: bool) -> LaneHit {
+    LaneHit {
+        triangle: hit.primitive,
+        uv: (hit.u, hit.v),
+        t: hit.t,
+        direction,
+        throughput,
+        wants_st,
+    }
+}
+
 #[test]
 fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
     let mut numbers = Numbers(0x9e37_79b9);
@@ -96,6 +109,7 @@ fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
         ..WaveLanes::default()
     };
     let mut rays = Vec::new();
+    let mut picks = LanePicks::default();
     for index in 0..512u32 {
         let (u, v) = (numbers.next(), numbers.next());
         let (u, v) = if u + v > 1.0 {
@@ -120,32 +134,28 @@ fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
             )),
             _ => Footprint::Mip0,
         };
-        lanes.push(
-            index,
-            hit.geometry,
-            hit.geometry,
-            hit.primitive,
-            (hit.u, hit.v),
-            hit.t,
-            direction,
-            Vec3::ONE,
-            true,
+        let cone_width = match lane_footprint(&footprint, hit.t) {
+            Some(LaneFootprint::Cone(width)) => Some(width),
+            _ => None,
+        };
+        picks.push(
+            index as usize,
+            hit.geometry as usize,
+            hit.geometry as usize,
+            cone_width,
         );
         rays.push((hit, direction, footprint));
     }
-    let cone_width: Vec<Option<f32>> = rays
-        .iter()
-        .map(
-            |(hit, _, footprint)| match lane_footprint(footprint, hit.t) {
-                Some(LaneFootprint::Cone(width)) => Some(width),
-                _ => None,
-            },
-        )
-        .collect();
+    let mut lane_of_ray = vec![u32::MAX; rays.len()];
+    picks.place(&mut lanes, &mut lane_of_ray, |index, _| {
+        let (hit, direction, _) = &rays[index];
+        lane_hit(hit, *direction, Vec3::ONE, true)
+    });
     gather_triangles(&mut lanes, &scene.meshes);
     interpolate(&mut lanes);
-    texture_gradients(&mut lanes, &cone_width, 16.0);
-    for (lane, (hit, direction, footprint)) in rays.iter().enumerate() {
+    texture_gradients(&mut lanes, 16.0);
+    for (index, (hit, direction, footprint)) in rays.iter().enumerate() {
+        let lane = lane_of_ray[index] as usize;
         let origin = Vec3::ZERO;
         let surface = lookup.surface_hit(origin, *direction, hit, SurfaceDetail::Texturing);
         let spawn = surface.spawn_point();
@@ -182,39 +192,6 @@ fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
     let filtered = (0..rays.len()).filter(|&lane| lanes.gradients[lane] != [0.0; 4]);
     assert!(filtered.count() > 100);
     assert!(lanes.has_st.iter().filter(|&&s| !s).count() == 256);
-}
-
-#[test]
-fn ordering_by_material_is_stable_and_moves_every_lane_array() {
-    let mut lanes = WaveLanes {
-        materials: vec![LaneMaterial::default(); 4],
-        ..WaveLanes::default()
-    };
-    for (index, material) in [3u32, 1, 3, 0, 1, 3].into_iter().enumerate() {
-        lanes.push(
-            index as u32,
-            material,
-            0,
-            0,
-            (0.0, 0.0),
-            1.0,
-            Vec3::Z,
-            Vec3::ONE,
-            false,
-        );
-    }
-    let mut cone_width: Vec<_> = (0..6).map(|lane| Some(lane as f32)).collect();
-    assert!(lanes.order_by_material(&mut cone_width));
-    assert_eq!(lanes.wave_index, [3, 1, 4, 0, 2, 5]);
-    assert_eq!(lanes.material, [0, 1, 1, 3, 3, 3]);
-    assert_eq!(cone_width, [3, 1, 4, 0, 2, 5].map(|lane| Some(lane as f32)));
-    let runs: Vec<_> = (0..lanes.material_runs.len())
-        .map(|run| lanes.material_run(run))
-        .collect();
-    assert_eq!(runs, [(0, 0..1), (1, 1..3), (3, 3..6)]);
-    // Already in order: nothing moves.
-    assert!(!lanes.order_by_material(&mut cone_width));
-    assert_eq!(lanes.wave_index, [3, 1, 4, 0, 2, 5]);
 }
 
 /// Materials of every lobe the lanes run: classic without and with a highlight, and
@@ -284,25 +261,31 @@ fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
             level: Some(level),
             ..WaveLanes::default()
         };
+        let mut picks = LanePicks::default();
+        let mut hits = Vec::new();
         for index in 0..300u32 {
             let (u, v) = (numbers.next() * 0.5, numbers.next() * 0.5);
             let direction = numbers.vec3(1.0).normalize();
             let throughput = Vec3::new(numbers.next(), 1.0, numbers.next());
             let material = (index * 7 + index / 5) % 3;
             let (mesh, triangle) = (index % 2, 1 + index % 63);
-            lanes.push(
-                index,
-                material,
-                mesh,
-                triangle,
-                (u, v),
-                1.0,
-                direction,
-                throughput,
-                false,
-            );
+            let hit = TraceHit {
+                u,
+                v,
+                t: 1.0,
+                geometry: mesh,
+                primitive: triangle,
+            };
+            picks.push(index as usize, material as usize, mesh as usize, None);
+            hits.push(lane_hit(&hit, direction, throughput, false));
         }
-        assert!(lanes.order_by_material(&mut vec![None; 300]));
+        let mut lane_of_ray = vec![u32::MAX; hits.len()];
+        picks.place(&mut lanes, &mut lane_of_ray, |index, _| hits[index]);
+        // The materials were picked out of order: placing them reordered the lanes.
+        assert!(lane_of_ray
+            .iter()
+            .enumerate()
+            .any(|(i, &l)| i != l as usize));
         gather_triangles(&mut lanes, &scene.meshes);
         interpolate(&mut lanes);
         let len = lanes.len();

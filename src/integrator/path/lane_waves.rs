@@ -20,6 +20,7 @@ use crate::film::TileImage;
 use crate::integrator::lanes::footprints::{footprint_at_hit, texture_gradients, LaneFootprint};
 use crate::integrator::lanes::gather::gather_triangles;
 use crate::integrator::lanes::interpolate::interpolate;
+use crate::integrator::lanes::picks::{LaneHit, LanePicks};
 use crate::integrator::lanes::textures::shading_inputs;
 use crate::integrator::lanes::WaveLanes;
 use crate::integrator::wave_integrator::{write_geometry_values, write_material_aovs};
@@ -42,9 +43,8 @@ pub(crate) struct PathLanes {
     lanes: WaveLanes,
     /// Per ray of the wave: its lane, or [`SCALAR`].
     lane_of_ray: Vec<u32>,
-    /// Per lane: the width of its footprint at the hit, for textured materials under a
-    /// cone-like footprint (`None`: a point sample).
-    cone_width: Vec<Option<f32>>,
+    /// The hits the lanes take, in the wave's order.
+    picks: LanePicks,
 }
 
 impl PathLanes {
@@ -71,7 +71,7 @@ pub(super) fn shade_lanes(
     path.lane_of_ray.clear();
     path.lane_of_ray.resize(rays.len(), SCALAR);
     path.lanes.clear();
-    path.cone_width.clear();
+    path.picks.clear();
     if !enabled || context.effects.fog {
         return;
     }
@@ -81,20 +81,14 @@ pub(super) fn shade_lanes(
         return;
     }
     worker.counters.lane_hits += lanes.len() as u64;
-    if lanes.order_by_material(&mut path.cone_width) {
-        for (lane, &index) in lanes.wave_index.iter().enumerate() {
-            path.lane_of_ray[index as usize] = lane as u32;
-        }
-    }
     gather_triangles(lanes, &context.surfaces.scene.meshes);
     interpolate(lanes);
-    let max_aniso = context.options.filter.max_aniso;
-    texture_gradients(lanes, &path.cone_width, max_aniso);
+    texture_gradients(lanes, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
 }
 
-/// The rays whose hits the lanes cover, pushed in wave order, each with its footprint's
-/// width at the hit.
+/// The rays whose hits the lanes cover, each with its footprint's width at the hit, placed
+/// in lanes ordered by material.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 fn pick_lanes(
@@ -128,21 +122,21 @@ fn pick_lanes(
             },
             _ => None,
         };
-        let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
-        path.lane_of_ray[index] = path.lanes.len() as u32;
-        path.cone_width.push(cone_width);
-        path.lanes.push(
-            index as u32,
-            material as u32,
-            mesh as u32,
-            hit.primitive,
-            (hit.u, hit.v),
-            hit.t,
-            ray.direction,
-            ray.throughput,
-            lane_material.textured || (camera_first && uv_aov),
-        );
+        path.picks.push(index, material, mesh, cone_width);
     }
+    path.picks
+        .place(&mut path.lanes, &mut path.lane_of_ray, |index, material| {
+            let (ray, hit) = (&rays[index], &hits[index]);
+            let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
+            LaneHit {
+                triangle: hit.primitive,
+                uv: (hit.u, hit.v),
+                t: hit.t,
+                direction: ray.direction,
+                throughput: ray.throughput,
+                wants_st: material.textured || (camera_first && uv_aov),
+            }
+        });
 }
 
 /// The vertex of the wave's ray `ray` (which hit `hit`) at its lane `lane`, in the steps

@@ -69,8 +69,9 @@ use crate::render::stats::RayKind;
 use crate::render::Integrator;
 use crate::sampler::PixelSampler;
 
+use crate::integrator::trace_wave::ShadowRay;
 pub use mis::power_heuristic;
-use next_event::{trace_shadow_rays, ShadowRay};
+use next_event::trace_shadow_rays;
 
 /// How direct light from area lights and the environment is estimated. Only
 /// [`LightStrategy::MultipleImportance`] is a renderer's choice; the other two exist to test

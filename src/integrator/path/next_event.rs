@@ -11,37 +11,13 @@ use super::mis::power_heuristic;
 use super::{add_radiance, LightStrategy, PathTracer, PathWaves};
 use crate::film::TileImage;
 use crate::integrator::texturing::environment_light_lookup;
-use crate::integrator::trace_wave::ShadowSegment;
+use crate::integrator::trace_wave::ShadowRay;
 use crate::medium::{segment_fog, FogModel, HenyeyGreenstein};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::surface_textures::area_light_radiance;
 use crate::shading::{
     self, AreaLight, Bsdf, EmissionLookup, EnvironmentLight, LiSample, LightRef, MaterialBsdf,
 };
-
-/// A shadow ray and the radiance it delivers to its pixel if unoccluded.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct ShadowRay {
-    pub(super) origin: Vec3,
-    pub(super) direction: Vec3,
-    /// Where the ray stops short of the light (`shading::shadow_ray_end`), or infinity.
-    pub(super) tfar: f32,
-    pub(super) contribution: Vec3,
-    /// The colour-buffer slot the contribution goes to.
-    pub(super) slot: u32,
-}
-
-impl ShadowSegment for ShadowRay {
-    fn origin(&self) -> Vec3 {
-        self.origin
-    }
-    fn direction(&self) -> Vec3 {
-        self.direction
-    }
-    fn tfar(&self) -> f32 {
-        self.tfar
-    }
-}
 
 /// What scatters light at a shading point: a surface's BSDF or a fog volume's phase
 /// function.
@@ -229,6 +205,7 @@ fn queue_shadow_ray(
         origin,
         direction,
         tfar,
+        light: None,
         contribution,
         slot: point.slot,
     });

@@ -12,7 +12,6 @@
 
 use glam::Vec3;
 
-use super::lights::ShadowRay;
 use super::surface::{AmbientEnvironment, IndirectLight};
 use super::{add_radiance, Waves};
 use crate::film::TileImage;
@@ -21,7 +20,9 @@ use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, La
 use crate::integrator::lanes::gather::gather_triangles;
 use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::lights::{sample_lights, shadow_rays};
+use crate::integrator::lanes::picks::LaneHit;
 use crate::integrator::lanes::textures::shading_inputs;
+use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::shading;
@@ -44,19 +45,13 @@ pub(super) fn pick_lanes(
     waves.lane_of_ray.clear();
     waves.lane_of_ray.resize(rays, SCALAR);
     waves.lanes.clear();
-    waves.cone_width.clear();
+    waves.picks.clear();
     let effects = &context.effects;
     if effects.fog || !indirect.is_ambient_environment() {
         return;
     }
     waves.lanes.prepare(context);
     let records_lookups = !image.lookup_done.is_empty();
-    // First the hits the lanes take, with their materials and meshes, then each at its lane, so the
-    // lanes come out ordered by material without being copied a second time.
-    waves.picked.clear();
-    waves.picked_material.clear();
-    waves.picked_mesh.clear();
-    waves.picked_cone_width.clear();
     for index in 0..rays {
         let ray = &waves.buffers.rays.current[index];
         let hit = &waves.buffers.trace_hits[index];
@@ -83,41 +78,29 @@ pub(super) fn pick_lanes(
         } else {
             None
         };
-        waves.picked.push(index as u32);
-        waves.picked_material.push(material as u32);
-        waves.picked_mesh.push(mesh as u32);
-        waves.picked_cone_width.push(cone_width);
+        waves.picks.push(index, material, mesh, cone_width);
     }
-    waves.lanes.lay_out_by_material(&waves.picked_material);
     let uv_aov = context.options.aovs.surface;
-    waves.cone_width.clear();
-    waves.cone_width.resize(waves.picked.len(), None);
-    for k in 0..waves.picked.len() {
-        let index = waves.picked[k] as usize;
-        let ray = &waves.buffers.rays.current[index];
-        let hit = &waves.buffers.trace_hits[index];
-        let material = waves.picked_material[k] as usize;
-        let lane_material = waves.lanes.materials[material];
-        let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
-        let lane = waves.lanes.lane_of_pick[k] as usize;
-        waves.lane_of_ray[index] = lane as u32;
-        waves.cone_width[lane] = waves.picked_cone_width[k];
-        waves.lanes.put(
-            lane,
-            index as u32,
-            material as u32,
-            waves.picked_mesh[k],
-            hit.primitive,
-            (hit.u, hit.v),
-            hit.t,
-            ray.direction,
-            ray.throughput,
-            lane_material.textured || (camera_first && uv_aov),
-        );
-    }
+    let (rays, hits) = (&waves.buffers.rays.current, &waves.buffers.trace_hits);
+    waves.picks.place(
+        &mut waves.lanes,
+        &mut waves.lane_of_ray,
+        |index, material| {
+            let (ray, hit) = (&rays[index], &hits[index]);
+            let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
+            LaneHit {
+                triangle: hit.primitive,
+                uv: (hit.u, hit.v),
+                t: hit.t,
+                direction: ray.direction,
+                throughput: ray.throughput,
+                wants_st: material.textured || (camera_first && uv_aov),
+            }
+        },
+    );
     worker.counters.lane_hits += waves.lanes.len() as u64;
     if effects.footprints {
-        worker.counters.footprint_updates += waves.picked.len() as u64;
+        worker.counters.footprint_updates += waves.picks.len() as u64;
     }
 }
 
@@ -130,7 +113,7 @@ pub(super) fn shade_lanes(context: &RenderContext, waves: &mut Waves, worker: &m
     let scene = &context.scene;
     gather_triangles(lanes, &context.surfaces.scene.meshes);
     interpolate(lanes);
-    texture_gradients(lanes, &waves.cone_width, context.options.filter.max_aniso);
+    texture_gradients(lanes, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
     if context.effects.shadows {
         incident_normals(lanes);

@@ -7,36 +7,9 @@ use glam::{Vec2, Vec3};
 use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::integrator::texturing::environment_lookup;
-use crate::integrator::trace_wave::ShadowSegment;
+use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::shading::{self, Bsdf, OpaqueLobe, OwnEmission, SpawnPoint};
-
-/// A shadow ray and the radiance it delivers if unoccluded.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct ShadowRay {
-    pub(super) origin: Vec3,
-    pub(super) direction: Vec3,
-    /// Where the ray stops (`shading::shadow_ray_end`).
-    pub(super) tfar: f32,
-    /// The point light's position (`None` for directional lights): continuations past
-    /// transmissive occluders measure their far end from it.
-    pub(super) light: Option<Vec3>,
-    pub(super) contribution: Vec3,
-    /// The colour-buffer slot the contribution goes to.
-    pub(super) slot: u32,
-}
-
-impl ShadowSegment for ShadowRay {
-    fn origin(&self) -> Vec3 {
-        self.origin
-    }
-    fn direction(&self) -> Vec3 {
-        self.direction
-    }
-    fn tfar(&self) -> f32 {
-        self.tfar
-    }
-}
 
 pub(super) fn shade_miss(
     context: &RenderContext,

@@ -44,6 +44,7 @@ use glam::Vec3;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
 use crate::integrator::camera_sample::{CameraRay, MAX_SAMPLES_IN_FLIGHT};
+use crate::integrator::lanes::picks::LanePicks;
 use crate::integrator::lanes::WaveLanes;
 use crate::integrator::trace_wave::WaveRay;
 use crate::integrator::wave_integrator::{add_radiance, render_waves, WaveBuffers, WaveIntegrator};
@@ -53,7 +54,8 @@ use crate::render::Integrator;
 
 pub(crate) use surface::{AmbientEnvironment, IndirectLight, IndirectQuery};
 
-use lights::{shade_miss, ShadowRay};
+use crate::integrator::trace_wave::ShadowRay;
+use lights::shade_miss;
 use shadow_walk::{trace_shadows, ShadowWalk};
 use surface::{shade_hit, surface_detail};
 
@@ -95,18 +97,12 @@ pub struct Waves {
     /// Walks of shadow rays through transmissive occluders.
     walk: ShadowWalk,
     /// The current wave's hits shaded in lanes (`lane_waves`), each ray's lane
-    /// (`lane_waves::SCALAR` for the scalar path), and each lane's footprint width at its hit
-    /// (`None`: a point sample). Boxed: the lanes' many arrays would make `Waves` the
+    /// (`lane_waves::SCALAR` for the scalar path), and the hits the lanes take in the wave's
+    /// order (`lane_waves::pick_lanes`). Boxed: the lanes' many arrays would make `Waves` the
     /// largest of the integrators' states by far.
     lanes: Box<WaveLanes>,
     lane_of_ray: Vec<u32>,
-    cone_width: Vec<Option<f32>>,
-    /// The hits the lanes take, in the wave's order: their rays' indices, materials, meshes
-    /// and footprint widths (`lane_waves::pick_lanes`).
-    picked: Vec<u32>,
-    picked_material: Vec<u32>,
-    picked_mesh: Vec<u32>,
-    picked_cone_width: Vec<Option<f32>>,
+    picks: LanePicks,
 }
 
 impl Integrator for Whitted {

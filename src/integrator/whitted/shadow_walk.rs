@@ -4,11 +4,12 @@
 
 use glam::Vec3;
 
-use super::lights::{shadow_tfar, ShadowRay};
+use super::lights::shadow_tfar;
 use super::{add_radiance, Waves};
 use crate::film::TileImage;
 use crate::integrator::camera_sample::slot_place;
 use crate::integrator::trace_wave::shadow_trace_rays;
+use crate::integrator::trace_wave::ShadowRay;
 use crate::integrator::wave_order::group_by_place;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::SurfaceDetail;
