@@ -6,6 +6,7 @@
 use glam::Vec3;
 
 use super::{LaneMaterial, WaveLanes};
+use crate::render::tracer::TraceHit;
 
 /// What a lane needs of its ray and hit, besides the pick's material and mesh.
 #[derive(Clone, Copy, Debug)]
@@ -20,6 +21,21 @@ pub(crate) struct LaneHit {
     pub throughput: Vec3,
     /// Whether the lane needs texture coordinates.
     pub wants_st: bool,
+}
+
+impl LaneHit {
+    /// The lane of a ray in direction `direction` carrying `throughput`, which hit `hit`.
+    #[inline(always)]
+    pub(crate) fn new(hit: &TraceHit, direction: Vec3, throughput: Vec3, wants_st: bool) -> Self {
+        LaneHit {
+            triangle: hit.primitive,
+            uv: (hit.u, hit.v),
+            t: hit.t,
+            direction,
+            throughput,
+            wants_st,
+        }
+    }
 }
 
 /// The picked hits, in the wave's order, reused from wave to wave.

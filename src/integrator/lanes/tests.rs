@@ -76,18 +76,6 @@ fn scene(numbers: &mut Numbers) -> SceneDescription {
     }
 }
 
-/// The lane of a ray in direction `direction` carrying `throughput`, which hit `hit`.
-fn lane_hit(hit: &TraceHit, direction: Vec3, throughput: Vec3, wants_st: bool) -> LaneHit {
-    LaneHit {
-        triangle: hit.primitive,
-        uv: (hit.u, hit.v),
-        t: hit.t,
-        direction,
-        throughput,
-        wants_st,
-    }
-}
-
 #[test]
 fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
     let mut numbers = Numbers(0x9e37_79b9);
@@ -149,7 +137,7 @@ fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
     let mut lane_of_ray = vec![u32::MAX; rays.len()];
     picks.place(&mut lanes, &mut lane_of_ray, |index, _| {
         let (hit, direction, _) = &rays[index];
-        lane_hit(hit, *direction, Vec3::ONE, true)
+        LaneHit::new(hit, *direction, Vec3::ONE, true)
     });
     gather_triangles(&mut lanes, &scene.meshes);
     interpolate(&mut lanes);
@@ -277,7 +265,7 @@ fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
                 primitive: triangle,
             };
             picks.push(index as usize, material as usize, mesh as usize, None);
-            hits.push(lane_hit(&hit, direction, throughput, false));
+            hits.push(LaneHit::new(&hit, direction, throughput, false));
         }
         let mut lane_of_ray = vec![u32::MAX; hits.len()];
         picks.place(&mut lanes, &mut lane_of_ray, |index, _| hits[index]);

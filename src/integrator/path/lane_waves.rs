@@ -128,14 +128,8 @@ fn pick_lanes(
         .place(&mut path.lanes, &mut path.lane_of_ray, |index, material| {
             let (ray, hit) = (&rays[index], &hits[index]);
             let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
-            LaneHit {
-                triangle: hit.primitive,
-                uv: (hit.u, hit.v),
-                t: hit.t,
-                direction: ray.direction,
-                throughput: ray.throughput,
-                wants_st: material.textured || (camera_first && uv_aov),
-            }
+            let wants_st = material.textured || (camera_first && uv_aov);
+            LaneHit::new(hit, ray.direction, ray.throughput, wants_st)
         });
 }
 
