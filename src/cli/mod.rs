@@ -10,6 +10,7 @@ pub mod bench_scale_out;
 pub mod bench_scene;
 pub mod bench_textures;
 pub mod bench_tiles;
+pub mod maketx;
 pub mod merge;
 pub mod outputs;
 pub mod patch_mode;
@@ -79,6 +80,9 @@ pub enum Command {
     /// Merge the parts of a split render (--region, --samples, --part) into the image a
     /// single render gives, bit for bit.
     Merge(merge::MergeArgs),
+    /// Convert an untiled image (PNG, JPEG, scanline EXR or TIFF) into a tiled, mip-mapped
+    /// TIFF (.tx) that renders read tile by tile under the texture cache's cap.
+    Maketx(maketx::MaketxArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -182,6 +186,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Bench(BenchCommand::Render(args)) => bench_render::run(&args),
         Command::Accuracy(args) => accuracy::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::Maketx(args) => maketx::run(&args),
         Command::Bench(BenchCommand::Effects(args)) => bench_effects::run(&args),
         Command::Bench(BenchCommand::ScaleOut(args)) => bench_scale_out::run(&args),
         Command::Bench(BenchCommand::Tiles(args)) => bench_tiles::run(&args),

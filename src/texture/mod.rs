@@ -38,6 +38,7 @@ mod tile_layout;
 mod tiled_tiff;
 mod tiles;
 mod trilinear;
+mod tx_writer;
 mod wrap;
 
 use std::fmt;
@@ -56,6 +57,7 @@ pub use mip_pyramid::{MipLevel, MipPyramid};
 pub use texels::Texels;
 pub use tile_cache::{TextureCacheStats, TileCache, DEFAULT_TEXTURE_CACHE_BYTES};
 pub use tiles::{TextureTileSet, TEXTURE_TILE_SIZE};
+pub use tx_writer::{write_tx, TxCompression, TxOptions};
 
 use demand_tiles::DemandFile;
 use tiles::{NoTextureTiles, TexelObserver, TextureTileRecorder};
