@@ -32,6 +32,18 @@ pub const EXIT_BAD_INPUT: i32 = 2;
 /// The render was interrupted (Ctrl-C, SIGTERM, cancellation); the finished part was saved.
 pub const EXIT_INTERRUPTED: i32 = 3;
 
+/// When the program started (the first call; `main` makes it first thing), the origin of
+/// `phases.first_ray` in `--stats`.
+pub fn program_start() -> std::time::Instant {
+    static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+    *START.get_or_init(std::time::Instant::now)
+}
+
+/// Seconds from [`program_start`] to `at` (the first traced ray), 0 when nothing was traced.
+pub fn seconds_since_start(at: Option<std::time::Instant>) -> f64 {
+    at.map_or(0.0, |t| t.duration_since(program_start()).as_secs_f64())
+}
+
 /// A failed command: what to print (one line) and the exit status.
 #[derive(Debug)]
 pub struct CommandError {

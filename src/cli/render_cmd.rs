@@ -23,7 +23,7 @@ use clap::Args;
 use crate::cli::outputs::OutputPlan;
 use crate::cli::progress::RenderProgress;
 use crate::cli::resume::{
-    encoded_texture_digest, partial_stats_record, read_resume_state, RenderSignature, ResumeState,
+    encoded_texture_digest, partial_stats_record, tiled_texture_digest, read_resume_state, RenderSignature, ResumeState,
     PARTIAL_STATS_ATTRIBUTE,
 };
 use crate::cli::{CommandError, EXIT_INTERRUPTED};
@@ -549,7 +549,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         _ => None,
     };
     let scene = Arc::new(scene);
-    let (mut result, camera, part, tiles) = pool.install(|| -> Result<_, CommandError> {
+    let (mut result, camera, part, tiles, first_ray_at) = pool.install(|| -> Result<_, CommandError> {
         loading_done();
         let preparing = Instant::now();
         let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
@@ -587,7 +587,8 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
                 vct.pyramid_bytes as f64 / (1 << 20) as f64
             ));
         }
-        Ok((result, context.camera, part, tiles))
+        let first_ray_at = result.first_ray_at;
+        Ok((result, context.camera, part, tiles, first_ray_at))
     })?;
 
     // Tiles an earlier run finished come from its file, a film of the part's region.
@@ -601,6 +602,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let complete = finished_count == tiles.len();
     result.stats.complete = complete;
     phases.render = result.stats.seconds;
+    phases.first_ray = crate::cli::seconds_since_start(first_ray_at);
     result.stats.phases = Some(phases);
     if !complete && finished_count == 0 {
         return Err(nothing_written("any tile finished", &outputs.partial_exr));
@@ -879,8 +881,8 @@ fn requested_split(
 }
 
 /// Decodes the scene's textures one by one, showing which one while large files load, and
-/// returns each with the digest of its encoded bytes (for the render's signature), so every
-/// texture file is read once.
+/// returns each with its digest (for the render's signature): of its encoded bytes, each
+/// file read once, or for a demand-loaded `.tx`, of its headers alone.
 pub(crate) fn decode_textures(
     scene: &SceneDescription,
     cache: &Arc<crate::texture::TileCache>,
@@ -904,27 +906,35 @@ pub(crate) fn decode_textures(
     for desc in &scene.textures {
         let label = desc.source.label();
         bar.set_message(label.clone());
-        let file_bytes;
-        let bytes: &[u8] = match &desc.source {
-            crate::scene::TextureSource::File(path) => {
-                file_bytes = std::fs::read(path).map_err(|e| {
-                    CommandError::bad_input(format!("{label}: cannot read file: {e}"))
-                })?;
-                &file_bytes
-            }
-            crate::scene::TextureSource::Encoded { bytes, .. } => bytes,
-        };
-        digests.push(encoded_texture_digest(bytes));
-        // A file goes through `from_file`, which reads a tiled `.tx` tile by tile on demand.
+        let bad_texture = |e: crate::texture::TextureError| CommandError::bad_input(e.to_string());
         let texture = match &desc.source {
             crate::scene::TextureSource::File(path) => {
-                crate::texture::Texture::from_file_in(path, desc.color_space, cache)
+                // A tiled `.tx` is read tile by tile on demand and digested from its headers;
+                // any other file is read once, digested and decoded whole.
+                match crate::texture::Texture::from_file_on_demand(path, desc.color_space, cache)
+                    .map_err(bad_texture)?
+                {
+                    Some(texture) => {
+                        let identity = texture.file_identity().unwrap_or_default();
+                        digests.push(tiled_texture_digest(identity));
+                        texture
+                    }
+                    None => {
+                        let bytes = std::fs::read(path).map_err(|e| {
+                            CommandError::bad_input(format!("{label}: cannot read file: {e}"))
+                        })?;
+                        digests.push(encoded_texture_digest(&bytes));
+                        crate::texture::Texture::from_encoded(&bytes, &label, desc.color_space)
+                            .map_err(bad_texture)?
+                    }
+                }
             }
-            crate::scene::TextureSource::Encoded { .. } => {
+            crate::scene::TextureSource::Encoded { bytes, .. } => {
+                digests.push(encoded_texture_digest(bytes));
                 crate::texture::Texture::from_encoded(bytes, &label, desc.color_space)
+                    .map_err(bad_texture)?
             }
-        }
-        .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        };
         textures.push(Arc::new(texture));
         bar.inc(1);
     }
