@@ -23,8 +23,8 @@ use clap::Args;
 use crate::cli::outputs::OutputPlan;
 use crate::cli::progress::RenderProgress;
 use crate::cli::resume::{
-    encoded_texture_digest, partial_stats_record, tiled_texture_digest, read_resume_state, RenderSignature, ResumeState,
-    PARTIAL_STATS_ATTRIBUTE,
+    encoded_texture_digest, partial_stats_record, read_resume_state, tiled_texture_digest,
+    RenderSignature, ResumeState, PARTIAL_STATS_ATTRIBUTE,
 };
 use crate::cli::{CommandError, EXIT_INTERRUPTED};
 use crate::film::AovSelection;
@@ -549,47 +549,48 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         _ => None,
     };
     let scene = Arc::new(scene);
-    let (mut result, camera, part, tiles, first_ray_at) = pool.install(|| -> Result<_, CommandError> {
-        loading_done();
-        let preparing = Instant::now();
-        let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
-            .map_err(|e| CommandError::bad_input(e.to_string()))?;
-        phases.prepare = preparing.elapsed().as_secs_f64();
-        let resolution = selection::resolve(context.scene.settings.integrator, &context.scene);
-        let integrator = select_integrator(&context, resolution.kind)?;
-        let part = split.resolve(&context, &integrator)?;
-        let tiles = part.tiles(options.width, options.height);
-        let already = earlier.as_ref().map_or(0, |state| {
-            state.finished.iter().filter(|&&done| done).count()
-        });
-        let bar = RenderProgress::new(args.quiet, tiles.len(), already, progress_interval);
-        let progress = |done: usize, _total: usize| bar.update(done);
-        let control = RenderControl {
-            progress: Some(&progress),
-            cancel: Some(&INTERRUPTED),
-            skip: earlier.as_ref().map(|state| state.finished.as_slice()),
-            part: Some(&part),
-        };
-        let result = render::render(&context, &integrator, &control);
-        bar.finish();
-        let mut result = result.map_err(crate::cli::render_failed)?;
-        result.stats.integrator = Some(resolution.to_string());
-        let unsupported = selection::unsupported_effects(resolution.kind, &context.scene);
-        result.stats.notes.extend(unsupported);
-        if let Some(vct) = integrator.vct_stats() {
-            result.stats.counters.vct_voxels_built = vct.occupied_voxels;
-            result.stats.vct = Some(vct.clone());
-            let [x, y, z] = vct.dims;
-            result.stats.notes.push(format!(
-                "vct: {x}x{y}x{z} voxels ({} filled), built in {:.3} s, pyramid {:.1} MiB",
-                vct.occupied_voxels,
-                vct.seconds,
-                vct.pyramid_bytes as f64 / (1 << 20) as f64
-            ));
-        }
-        let first_ray_at = result.first_ray_at;
-        Ok((result, context.camera, part, tiles, first_ray_at))
-    })?;
+    let (mut result, camera, part, tiles, first_ray_at) =
+        pool.install(|| -> Result<_, CommandError> {
+            loading_done();
+            let preparing = Instant::now();
+            let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
+                .map_err(|e| CommandError::bad_input(e.to_string()))?;
+            phases.prepare = preparing.elapsed().as_secs_f64();
+            let resolution = selection::resolve(context.scene.settings.integrator, &context.scene);
+            let integrator = select_integrator(&context, resolution.kind)?;
+            let part = split.resolve(&context, &integrator)?;
+            let tiles = part.tiles(options.width, options.height);
+            let already = earlier.as_ref().map_or(0, |state| {
+                state.finished.iter().filter(|&&done| done).count()
+            });
+            let bar = RenderProgress::new(args.quiet, tiles.len(), already, progress_interval);
+            let progress = |done: usize, _total: usize| bar.update(done);
+            let control = RenderControl {
+                progress: Some(&progress),
+                cancel: Some(&INTERRUPTED),
+                skip: earlier.as_ref().map(|state| state.finished.as_slice()),
+                part: Some(&part),
+            };
+            let result = render::render(&context, &integrator, &control);
+            bar.finish();
+            let mut result = result.map_err(crate::cli::render_failed)?;
+            result.stats.integrator = Some(resolution.to_string());
+            let unsupported = selection::unsupported_effects(resolution.kind, &context.scene);
+            result.stats.notes.extend(unsupported);
+            if let Some(vct) = integrator.vct_stats() {
+                result.stats.counters.vct_voxels_built = vct.occupied_voxels;
+                result.stats.vct = Some(vct.clone());
+                let [x, y, z] = vct.dims;
+                result.stats.notes.push(format!(
+                    "vct: {x}x{y}x{z} voxels ({} filled), built in {:.3} s, pyramid {:.1} MiB",
+                    vct.occupied_voxels,
+                    vct.seconds,
+                    vct.pyramid_bytes as f64 / (1 << 20) as f64
+                ));
+            }
+            let first_ray_at = result.first_ray_at;
+            Ok((result, context.camera, part, tiles, first_ray_at))
+        })?;
 
     // Tiles an earlier run finished come from its file, a film of the part's region.
     if let Some(state) = &earlier {
