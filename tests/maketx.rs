@@ -326,10 +326,19 @@ fn a_demand_loaded_file_is_identified_by_its_headers() {
     let identity = texture.file_identity().expect("demand-loaded").to_vec();
     assert_eq!(identity[0], std::fs::metadata(&tx).unwrap().len());
     // 130x70 ... 1x1: 8 levels, each with its size, channels and two tile tables.
-    let tiles: u64 = [(130, 70), (65, 35), (32, 17), (16, 8), (8, 4), (4, 2), (2, 1), (1, 1)]
-        .iter()
-        .map(|&(w, h): &(u64, u64)| w.div_ceil(64) * h.div_ceil(64))
-        .sum();
+    let tiles: u64 = [
+        (130, 70),
+        (65, 35),
+        (32, 17),
+        (16, 8),
+        (8, 4),
+        (4, 2),
+        (2, 1),
+        (1, 1),
+    ]
+    .iter()
+    .map(|&(w, h): &(u64, u64)| w.div_ceil(64) * h.div_ceil(64))
+    .sum();
     assert_eq!(identity.len() as u64, 3 + 8 * 5 + 2 * tiles);
     // Other texels compress to other tile sizes: another identity.
     image::RgbaImage::from_pixel(130, 70, image::Rgba([9, 9, 9, 9]))
@@ -339,8 +348,10 @@ fn a_demand_loaded_file_is_identified_by_its_headers() {
     assert!(out.status.success(), "{}", stderr(&out));
     let again = Texture::from_file(&tx, ColorSpace::Srgb).unwrap();
     assert_ne!(again.file_identity().unwrap(), identity.as_slice());
-    assert!(Texture::from_file(&dir.path().join("a.png"), ColorSpace::Srgb)
-        .unwrap()
-        .file_identity()
-        .is_none());
+    assert!(
+        Texture::from_file(&dir.path().join("a.png"), ColorSpace::Srgb)
+            .unwrap()
+            .file_identity()
+            .is_none()
+    );
 }
