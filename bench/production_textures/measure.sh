@@ -6,13 +6,13 @@
 #   uncapped   the .tx textures, demand-loaded, cache cap 64 GiB (nothing is evicted)
 #   default    the .tx textures under the default cap (256 MiB)
 #   256M       the same with --texture-cache 256M spelled out
-#   small      the same with --texture-cache SMALL (default 8M)
+#   small      the same with --texture-cache SMALL (default 1M, 64 8-bit tiles: below the frame's working set)
 #   whole      the untiled TIFFs: every texture decoded whole with all its levels before
 #              the first ray (the in-memory fallback)
 # Usage: measure.sh DIR [SMALL]      CONETRACE names the binary (default: release build)
 set -euo pipefail
 dir=${1:?usage: measure.sh DIR [SMALL]}
-small=${2:-8M}
+small=${2:-1M}
 here=$(cd "$(dirname "$0")/../.." && pwd)
 conetrace=${CONETRACE:-$here/target/release/conetrace}
 [ -x "$conetrace" ] || { echo "measure.sh: $conetrace: not built (cargo build --release)" >&2; exit 2; }
