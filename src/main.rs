@@ -15,6 +15,7 @@ use conetrace::{embree, film, footprint, integrator, render, scene, shading, tex
 use clap::Parser;
 
 fn main() {
+    cli::program_start();
     let cli = match cli::Cli::try_parse() {
         Ok(cli) => cli,
         Err(error) => std::process::exit(cli::command_line_error(error)),

@@ -10,6 +10,7 @@ pub mod bench_scale_out;
 pub mod bench_scene;
 pub mod bench_textures;
 pub mod bench_tiles;
+pub mod maketx;
 pub mod merge;
 pub mod outputs;
 pub mod patch_mode;
@@ -30,6 +31,18 @@ pub const EXIT_INTERNAL: i32 = 1;
 pub const EXIT_BAD_INPUT: i32 = 2;
 /// The render was interrupted (Ctrl-C, SIGTERM, cancellation); the finished part was saved.
 pub const EXIT_INTERRUPTED: i32 = 3;
+
+/// When the program started (the first call; `main` makes it first thing), the origin of
+/// `phases.first_ray` in `--stats`.
+pub fn program_start() -> std::time::Instant {
+    static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+    *START.get_or_init(std::time::Instant::now)
+}
+
+/// Seconds from [`program_start`] to `at` (the first traced ray), 0 when nothing was traced.
+pub fn seconds_since_start(at: Option<std::time::Instant>) -> f64 {
+    at.map_or(0.0, |t| t.duration_since(program_start()).as_secs_f64())
+}
 
 /// A failed command: what to print (one line) and the exit status.
 #[derive(Debug)]
@@ -79,6 +92,9 @@ pub enum Command {
     /// Merge the parts of a split render (--region, --samples, --part) into the image a
     /// single render gives, bit for bit.
     Merge(merge::MergeArgs),
+    /// Convert an untiled image (PNG, JPEG, scanline EXR or TIFF) into a tiled, mip-mapped
+    /// TIFF (.tx) that renders read tile by tile under the texture cache's cap.
+    Maketx(maketx::MaketxArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -182,6 +198,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Bench(BenchCommand::Render(args)) => bench_render::run(&args),
         Command::Accuracy(args) => accuracy::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::Maketx(args) => maketx::run(&args),
         Command::Bench(BenchCommand::Effects(args)) => bench_effects::run(&args),
         Command::Bench(BenchCommand::ScaleOut(args)) => bench_scale_out::run(&args),
         Command::Bench(BenchCommand::Tiles(args)) => bench_tiles::run(&args),

@@ -326,6 +326,9 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
             result
         });
         let result = result.map_err(crate::cli::render_failed)?;
+        if phases.first_ray == 0.0 {
+            phases.first_ray = crate::cli::seconds_since_start(result.first_ray_at);
+        }
         if !result.finished_tiles.iter().all(|&f| f) {
             abandoned_samples = samples.len() as u32;
             break if INTERRUPTED.load(Ordering::SeqCst) {

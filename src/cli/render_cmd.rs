@@ -23,8 +23,8 @@ use clap::Args;
 use crate::cli::outputs::OutputPlan;
 use crate::cli::progress::RenderProgress;
 use crate::cli::resume::{
-    encoded_texture_digest, partial_stats_record, read_resume_state, RenderSignature, ResumeState,
-    PARTIAL_STATS_ATTRIBUTE,
+    encoded_texture_digest, partial_stats_record, read_resume_state, tiled_texture_digest,
+    RenderSignature, ResumeState, PARTIAL_STATS_ATTRIBUTE,
 };
 use crate::cli::{CommandError, EXIT_INTERRUPTED};
 use crate::film::AovSelection;
@@ -549,46 +549,48 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         _ => None,
     };
     let scene = Arc::new(scene);
-    let (mut result, camera, part, tiles) = pool.install(|| -> Result<_, CommandError> {
-        loading_done();
-        let preparing = Instant::now();
-        let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
-            .map_err(|e| CommandError::bad_input(e.to_string()))?;
-        phases.prepare = preparing.elapsed().as_secs_f64();
-        let resolution = selection::resolve(context.scene.settings.integrator, &context.scene);
-        let integrator = select_integrator(&context, resolution.kind)?;
-        let part = split.resolve(&context, &integrator)?;
-        let tiles = part.tiles(options.width, options.height);
-        let already = earlier.as_ref().map_or(0, |state| {
-            state.finished.iter().filter(|&&done| done).count()
-        });
-        let bar = RenderProgress::new(args.quiet, tiles.len(), already, progress_interval);
-        let progress = |done: usize, _total: usize| bar.update(done);
-        let control = RenderControl {
-            progress: Some(&progress),
-            cancel: Some(&INTERRUPTED),
-            skip: earlier.as_ref().map(|state| state.finished.as_slice()),
-            part: Some(&part),
-        };
-        let result = render::render(&context, &integrator, &control);
-        bar.finish();
-        let mut result = result.map_err(crate::cli::render_failed)?;
-        result.stats.integrator = Some(resolution.to_string());
-        let unsupported = selection::unsupported_effects(resolution.kind, &context.scene);
-        result.stats.notes.extend(unsupported);
-        if let Some(vct) = integrator.vct_stats() {
-            result.stats.counters.vct_voxels_built = vct.occupied_voxels;
-            result.stats.vct = Some(vct.clone());
-            let [x, y, z] = vct.dims;
-            result.stats.notes.push(format!(
-                "vct: {x}x{y}x{z} voxels ({} filled), built in {:.3} s, pyramid {:.1} MiB",
-                vct.occupied_voxels,
-                vct.seconds,
-                vct.pyramid_bytes as f64 / (1 << 20) as f64
-            ));
-        }
-        Ok((result, context.camera, part, tiles))
-    })?;
+    let (mut result, camera, part, tiles, first_ray_at) =
+        pool.install(|| -> Result<_, CommandError> {
+            loading_done();
+            let preparing = Instant::now();
+            let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
+                .map_err(|e| CommandError::bad_input(e.to_string()))?;
+            phases.prepare = preparing.elapsed().as_secs_f64();
+            let resolution = selection::resolve(context.scene.settings.integrator, &context.scene);
+            let integrator = select_integrator(&context, resolution.kind)?;
+            let part = split.resolve(&context, &integrator)?;
+            let tiles = part.tiles(options.width, options.height);
+            let already = earlier.as_ref().map_or(0, |state| {
+                state.finished.iter().filter(|&&done| done).count()
+            });
+            let bar = RenderProgress::new(args.quiet, tiles.len(), already, progress_interval);
+            let progress = |done: usize, _total: usize| bar.update(done);
+            let control = RenderControl {
+                progress: Some(&progress),
+                cancel: Some(&INTERRUPTED),
+                skip: earlier.as_ref().map(|state| state.finished.as_slice()),
+                part: Some(&part),
+            };
+            let result = render::render(&context, &integrator, &control);
+            bar.finish();
+            let mut result = result.map_err(crate::cli::render_failed)?;
+            result.stats.integrator = Some(resolution.to_string());
+            let unsupported = selection::unsupported_effects(resolution.kind, &context.scene);
+            result.stats.notes.extend(unsupported);
+            if let Some(vct) = integrator.vct_stats() {
+                result.stats.counters.vct_voxels_built = vct.occupied_voxels;
+                result.stats.vct = Some(vct.clone());
+                let [x, y, z] = vct.dims;
+                result.stats.notes.push(format!(
+                    "vct: {x}x{y}x{z} voxels ({} filled), built in {:.3} s, pyramid {:.1} MiB",
+                    vct.occupied_voxels,
+                    vct.seconds,
+                    vct.pyramid_bytes as f64 / (1 << 20) as f64
+                ));
+            }
+            let first_ray_at = result.first_ray_at;
+            Ok((result, context.camera, part, tiles, first_ray_at))
+        })?;
 
     // Tiles an earlier run finished come from its file, a film of the part's region.
     if let Some(state) = &earlier {
@@ -601,6 +603,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let complete = finished_count == tiles.len();
     result.stats.complete = complete;
     phases.render = result.stats.seconds;
+    phases.first_ray = crate::cli::seconds_since_start(first_ray_at);
     result.stats.phases = Some(phases);
     if !complete && finished_count == 0 {
         return Err(nothing_written("any tile finished", &outputs.partial_exr));
@@ -879,8 +882,8 @@ fn requested_split(
 }
 
 /// Decodes the scene's textures one by one, showing which one while large files load, and
-/// returns each with the digest of its encoded bytes (for the render's signature), so every
-/// texture file is read once.
+/// returns each with its digest (for the render's signature): of its encoded bytes, each
+/// file read once, or for a demand-loaded `.tx`, of its headers alone.
 pub(crate) fn decode_textures(
     scene: &SceneDescription,
     cache: &Arc<crate::texture::TileCache>,
@@ -904,27 +907,35 @@ pub(crate) fn decode_textures(
     for desc in &scene.textures {
         let label = desc.source.label();
         bar.set_message(label.clone());
-        let file_bytes;
-        let bytes: &[u8] = match &desc.source {
-            crate::scene::TextureSource::File(path) => {
-                file_bytes = std::fs::read(path).map_err(|e| {
-                    CommandError::bad_input(format!("{label}: cannot read file: {e}"))
-                })?;
-                &file_bytes
-            }
-            crate::scene::TextureSource::Encoded { bytes, .. } => bytes,
-        };
-        digests.push(encoded_texture_digest(bytes));
-        // A file goes through `from_file`, which reads a tiled `.tx` tile by tile on demand.
+        let bad_texture = |e: crate::texture::TextureError| CommandError::bad_input(e.to_string());
         let texture = match &desc.source {
             crate::scene::TextureSource::File(path) => {
-                crate::texture::Texture::from_file_in(path, desc.color_space, cache)
+                // A tiled `.tx` is read tile by tile on demand and digested from its headers;
+                // any other file is read once, digested and decoded whole.
+                match crate::texture::Texture::from_file_on_demand(path, desc.color_space, cache)
+                    .map_err(bad_texture)?
+                {
+                    Some(texture) => {
+                        let identity = texture.file_identity().unwrap_or_default();
+                        digests.push(tiled_texture_digest(identity));
+                        texture
+                    }
+                    None => {
+                        let bytes = std::fs::read(path).map_err(|e| {
+                            CommandError::bad_input(format!("{label}: cannot read file: {e}"))
+                        })?;
+                        digests.push(encoded_texture_digest(&bytes));
+                        crate::texture::Texture::from_encoded(&bytes, &label, desc.color_space)
+                            .map_err(bad_texture)?
+                    }
+                }
             }
-            crate::scene::TextureSource::Encoded { .. } => {
+            crate::scene::TextureSource::Encoded { bytes, .. } => {
+                digests.push(encoded_texture_digest(bytes));
                 crate::texture::Texture::from_encoded(bytes, &label, desc.color_space)
+                    .map_err(bad_texture)?
             }
-        }
-        .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        };
         textures.push(Arc::new(texture));
         bar.inc(1);
     }

@@ -137,6 +137,19 @@ pub fn encoded_texture_digest(bytes: &[u8]) -> String {
     ContentDigest::new().bytes(bytes).hex()
 }
 
+/// The digest of a demand-loaded texture file, from what identifies it without reading its
+/// tiles ([`crate::texture::Texture::file_identity`]: length, modification time and every
+/// level's tile offsets and byte counts), so that opening a 1 GB `.tx` reads kilobytes.
+/// Tagged apart from [`encoded_texture_digest`]: the two never coincide.
+pub fn tiled_texture_digest(identity: &[u64]) -> String {
+    let mut digest = ContentDigest::new();
+    digest.bytes(b"tiled texture file: length, mtime, tile tables\0");
+    for word in identity {
+        digest.bytes(&word.to_le_bytes());
+    }
+    digest.hex()
+}
+
 impl RenderSignature {
     /// The signature of rendering `scene` (loaded from `scene_file`, `None` for the built-in
     /// scene) with `options`; `texture_digests` holds [`encoded_texture_digest`] of each of

@@ -56,6 +56,9 @@ pub struct RenderResult {
     pub stats: RenderStats,
     /// Which work tiles finished (all of them unless cancelled).
     pub finished_tiles: Vec<bool>,
+    /// When the first work tile began tracing (its first ray); `None` when no tile was
+    /// traced (all skipped or cancelled).
+    pub first_ray_at: Option<Instant>,
 }
 
 /// Build everything a render needs from a scene description.
@@ -285,6 +288,7 @@ pub fn render<I: Integrator>(
     let finished_count = AtomicUsize::new(0);
     let count_texture_tiles = options.count_texture_tiles;
     let start = Instant::now();
+    let first_ray_at = std::sync::OnceLock::new();
     let texture_count = context.textures.len();
     let new_worker = || WorkerState {
         counters: WorkCounters::default(),
@@ -323,6 +327,7 @@ pub fn render<I: Integrator>(
         if skipped || stopped {
             return;
         }
+        first_ray_at.get_or_init(Instant::now);
         let cell = workers.get_or(|| {
             crate::embree::enable_flush_denormals();
             RefCell::new(TileWorker {
@@ -455,6 +460,7 @@ pub fn render<I: Integrator>(
             .map(|(desc, texture)| stats::TextureMemory {
                 texture: desc.source.label(),
                 bytes: texture.memory_bytes() as u64,
+                demand_loaded: texture.is_demand_loaded(),
                 tiles_read: texture.is_demand_loaded().then(|| texture.tiles_read()),
                 tiles_in_file: texture.is_demand_loaded().then(|| texture.tiles_in_file()),
                 cache: texture.cache_stats().map(Into::into),
@@ -468,6 +474,7 @@ pub fn render<I: Integrator>(
         film,
         stats,
         finished_tiles,
+        first_ray_at: first_ray_at.into_inner(),
     })
 }
 

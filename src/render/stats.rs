@@ -253,6 +253,9 @@ pub struct PhaseSeconds {
     pub render: f64,
     /// Encoding the EXR and PNG (the statistics file cannot time its own writing).
     pub write: f64,
+    /// From the start of the program to the first traced ray (the first work tile's start):
+    /// how long a user waits before anything is traced.
+    pub first_ray: f64,
     /// From the start of loading to the end of writing the images.
     pub total: f64,
 }
@@ -262,6 +265,10 @@ pub struct PhaseSeconds {
 pub struct TextureMemory {
     pub texture: String,
     pub bytes: u64,
+    /// True when the texture's tiles are read from its file on demand (a tiled `.tx`),
+    /// false when it was decoded whole in memory, every level built before the first ray
+    /// (`conetrace maketx` turns such a file into a `.tx`).
+    pub demand_loaded: bool,
     /// Of a demand-loaded `.tx`: tiles read from the file, and tiles it holds.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tiles_read: Option<u64>,
@@ -283,12 +290,33 @@ impl RenderStats {
     fn time_text(&self) -> String {
         match &self.phases {
             Some(p) => format!(
-                "{:.3} s (load {:.3} s, textures {:.3} s, BVH and set-up {:.3} s, render {:.3} s, \
-                 write {:.3} s)",
-                p.total, p.load, p.textures, p.prepare, p.render, p.write
+                "{:.3} s (load {:.3} s, textures {:.3} s, BVH and set-up {:.3} s, first ray at \
+                 {:.3} s, render {:.3} s, write {:.3} s)",
+                p.total, p.load, p.textures, p.prepare, p.first_ray, p.render, p.write
             ),
             None => format!("{:.3} s", self.seconds),
         }
+    }
+
+    /// The summary line's part on textures decoded whole in memory (`None` when there are
+    /// none): how many, their memory, and the way to read them on demand instead.
+    fn decoded_whole_summary(&self) -> Option<String> {
+        let whole: Vec<&TextureMemory> = self
+            .texture_memory
+            .iter()
+            .filter(|t| !t.demand_loaded)
+            .collect();
+        if whole.is_empty() {
+            return None;
+        }
+        let bytes: u64 = whole.iter().map(|t| t.bytes).sum();
+        Some(format!(
+            "{} of {} textures decoded whole in memory ({:.1} MiB; `conetrace maketx` makes \
+             tiled .tx files read on demand)",
+            whole.len(),
+            self.texture_memory.len(),
+            bytes as f64 / (1024.0 * 1024.0)
+        ))
     }
 
     /// The one-line summary printed at the end of a render.
@@ -334,6 +362,10 @@ impl RenderStats {
         if let Some(cache) = &self.texture_cache {
             line.push_str("; ");
             line.push_str(&cache.summary());
+        }
+        if let Some(whole) = self.decoded_whole_summary() {
+            line.push_str("; ");
+            line.push_str(&whole);
         }
         for note in &self.notes {
             line.push_str("; ");

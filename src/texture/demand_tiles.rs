@@ -41,6 +41,9 @@ pub(crate) struct DemandFile {
     cache: Arc<TileCache>,
     tally: Arc<FileTally>,
     tiles_in_file: u64,
+    /// What identifies the file's contents without reading its tiles (see
+    /// [`DemandFile::identity`]).
+    identity: Vec<u64>,
 }
 
 impl Drop for DemandFile {
@@ -83,6 +86,14 @@ impl DemandFile {
     /// The cache the file's tiles live in.
     pub(crate) fn cache(&self) -> &Arc<TileCache> {
         &self.cache
+    }
+
+    /// The file's length, modification time (seconds and nanoseconds since the epoch, 0
+    /// where the file system keeps none) and layout (levels, tile offsets and byte counts):
+    /// what a render's signature records of a demand-loaded file instead of a digest of
+    /// all its bytes, so opening a large `.tx` reads kilobytes.
+    pub(crate) fn identity(&self) -> &[u64] {
+        &self.identity
     }
 
     /// Tiles the file holds over all levels.
@@ -135,10 +146,22 @@ pub(crate) fn open(
         return Ok(None);
     }
     let file = File::open(path).map_err(io_error)?;
+    let metadata = file.metadata().map_err(io_error)?;
+    let modified = metadata
+        .modified()
+        .ok()
+        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+        .unwrap_or_default();
     let Some(mut reader) = TiffTileReader::open(BufReader::new(file), label, color_space)? else {
         return Ok(None);
     };
     let sizes = reader.level_sizes();
+    let mut identity = vec![
+        metadata.len(),
+        modified.as_secs(),
+        u64::from(modified.subsec_nanos()),
+    ];
+    identity.extend(reader.layout_words());
     // The coarsest level's single tile tells the storage kind the levels share.
     let coarsest = sizes.len() - 1;
     let coarsest_tile = reader.read_tile(coarsest, 0, 0)?;
@@ -158,6 +181,7 @@ pub(crate) fn open(
         cache: cache.clone(),
         tally: Arc::new(FileTally::new()),
         tiles_in_file,
+        identity,
     });
     let levels: Vec<MipLevel> = sizes
         .iter()

@@ -38,6 +38,7 @@ mod tile_layout;
 mod tiled_tiff;
 mod tiles;
 mod trilinear;
+mod tx_writer;
 mod wrap;
 
 use std::fmt;
@@ -56,6 +57,7 @@ pub use mip_pyramid::{MipLevel, MipPyramid};
 pub use texels::Texels;
 pub use tile_cache::{TextureCacheStats, TileCache, DEFAULT_TEXTURE_CACHE_BYTES};
 pub use tiles::{TextureTileSet, TEXTURE_TILE_SIZE};
+pub use tx_writer::{write_tx, TxCompression, TxOptions};
 
 use demand_tiles::DemandFile;
 use tiles::{NoTextureTiles, TexelObserver, TextureTileRecorder};
@@ -263,13 +265,28 @@ impl Texture {
         color_space: ColorSpace,
         cache: &Arc<TileCache>,
     ) -> Result<Texture, TextureError> {
-        let label = path.display().to_string();
-        if let Some((pyramid, file)) = demand_tiles::open(path, &label, color_space, cache)? {
-            let mut texture = Self::with_pyramid(&label, pyramid);
-            texture.demand = Some(file);
-            return Ok(texture);
+        match Self::from_file_on_demand(path, color_space, cache)? {
+            Some(texture) => Ok(texture),
+            None => Self::from_file_whole(path, color_space),
         }
-        Self::from_file_whole(path, color_space)
+    }
+
+    /// The texture of a tiled, mip-mapped TIFF in 64x64 tiles, read tile by tile into
+    /// `cache` as lookups touch them; `Ok(None)` for any other file (which only
+    /// [`Texture::from_file_whole`] reads). Reads the file's headers and its coarsest tile.
+    pub fn from_file_on_demand(
+        path: &Path,
+        color_space: ColorSpace,
+        cache: &Arc<TileCache>,
+    ) -> Result<Option<Texture>, TextureError> {
+        let label = path.display().to_string();
+        Ok(
+            demand_tiles::open(path, &label, color_space, cache)?.map(|(pyramid, file)| {
+                let mut texture = Self::with_pyramid(&label, pyramid);
+                texture.demand = Some(file);
+                texture
+            }),
+        )
     }
 
     /// Loads a file like [`Texture::from_file`], but decodes every level up front even
@@ -377,6 +394,13 @@ impl Texture {
     /// The cache a demand-loaded texture's tiles live in.
     pub fn tile_cache(&self) -> Option<&Arc<TileCache>> {
         self.demand.as_ref().map(|file| file.cache())
+    }
+
+    /// Of a demand-loaded texture, what identifies its file without reading its tiles:
+    /// length, modification time and the tile layout of every level (offsets and byte
+    /// counts). `None` for a texture decoded whole.
+    pub fn file_identity(&self) -> Option<&[u64]> {
+        self.demand.as_ref().map(|file| file.identity())
     }
 
     /// Tiles the file of a demand-loaded texture holds over all levels (0 for a texture

@@ -36,6 +36,8 @@ pub(crate) struct TiffTileReader<R: Read + Seek> {
     /// Per level, the bytes each tile takes in the file (empty when the file does not
     /// say).
     tile_bytes: Vec<Vec<u64>>,
+    /// Per level, where each tile starts in the file.
+    tile_offsets: Vec<Vec<u64>>,
     /// The directory (level) the decoder is positioned at.
     directory: usize,
 }
@@ -56,6 +58,7 @@ impl<R: Read + Seek> TiffTileReader<R> {
         let mut decoder = Decoder::new(source).map_err(|e| tiff_error(e.to_string()))?;
         let mut levels: Vec<StoredLevel> = Vec::new();
         let mut tile_bytes = Vec::new();
+        let mut tile_offsets = Vec::new();
         loop {
             let format = DirectoryFormat::read(&mut decoder)
                 .map_err(|m| tiff_error(format!("level {}: {m}", levels.len())))?;
@@ -81,6 +84,11 @@ impl<R: Read + Seek> TiffTileReader<R> {
                     .get_tag_u64_vec(tiff::tags::Tag::TileByteCounts)
                     .unwrap_or_default(),
             );
+            tile_offsets.push(
+                decoder
+                    .get_tag_u64_vec(tiff::tags::Tag::TileOffsets)
+                    .unwrap_or_default(),
+            );
             if !decoder.more_images() || (format.width, format.height) == (1, 1) {
                 break;
             }
@@ -99,6 +107,7 @@ impl<R: Read + Seek> TiffTileReader<R> {
             decoder,
             levels,
             tile_bytes,
+            tile_offsets,
             directory,
         }))
     }
@@ -106,6 +115,25 @@ impl<R: Read + Seek> TiffTileReader<R> {
     /// (width, height) of every stored level, finest first.
     pub(crate) fn level_sizes(&self) -> Vec<(u32, u32)> {
         self.levels.iter().map(|l| (l.width, l.height)).collect()
+    }
+
+    /// The file's layout as numbers: per level its size and channels, then every tile's
+    /// offset and byte count. Any change to a level's stored tiles that moves or resizes
+    /// one changes it; read from the headers alone.
+    pub(crate) fn layout_words(&self) -> Vec<u64> {
+        let mut words = Vec::new();
+        for (level, stored) in self.levels.iter().enumerate() {
+            words.extend([
+                u64::from(stored.width),
+                u64::from(stored.height),
+                stored.channels as u64,
+            ]);
+            for table in [&self.tile_offsets[level], &self.tile_bytes[level]] {
+                words.push(table.len() as u64);
+                words.extend_from_slice(table);
+            }
+        }
+        words
     }
 
     /// Bytes tile `index` (row-major over the level's tiles) of `level` takes in the file;
