@@ -521,7 +521,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     // Refused before anything large is allocated: an image or texture set that cannot fit
     // gets the estimate, not an allocation failure halfway.
-    let mut estimate = memory_estimate(&scene, &options, texture_cache(&args).capacity())?;
+    let mut estimate = memory_estimate(&scene, &options, texture_cache(args).capacity())?;
     if split.samples_partial(&options) {
         // A part holding a sample range also carries its exact sums.
         let pixels = u64::from(options.width) * u64::from(options.height);

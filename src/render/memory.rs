@@ -360,11 +360,13 @@ mod tests {
     #[test]
     fn demand_loaded_textures_count_at_most_the_cap_plus_the_overhead() {
         let dir = tempfile::tempdir().unwrap();
-        let mut scene = SceneDescription::default();
-        scene.textures = vec![
-            texture("a", &noise_tx(dir.path(), "a", 512)),
-            texture("b", &noise_tx(dir.path(), "b", 300)),
-        ];
+        let mut scene = SceneDescription {
+            textures: vec![
+                texture("a", &noise_tx(dir.path(), "a", 512)),
+                texture("b", &noise_tx(dir.path(), "b", 300)),
+            ],
+            ..SceneDescription::default()
+        };
         let options = RenderOptions::from_settings(&crate::scene::RenderSettings::default());
         let workers = 3u64;
         let pool = rayon::ThreadPoolBuilder::new()
