@@ -2,7 +2,9 @@
 """Time OpenImageIO TextureSystem.texture() per filter, single thread (for bench-textures).
 
 usage: oiio_texture_bench.py TEXTURE.tx QUERIES.csv --filters trilinear,aniso [--max-aniso 16]
-Prints "empty <ns>" (the same loop calling an empty Python function with the same
+                             [--cache-mb 256]
+Sets the ImageCache's max_memory_MB to --cache-mb (the cap of the cached side) and prints
+"cache_mb <MB>" (the value OIIO reports back), "empty <ns>" (the same loop calling an empty Python function with the same
 arguments), "binding <ns>" (texture() on a 1x1 texture with NoMIP/Closest: the
 pybind11 call and argument conversion plus a trivial lookup, an upper bound of the
 binding overhead) and "<filter> <ns>" (nanoseconds per lookup, overhead included).
@@ -49,11 +51,14 @@ def main():
     ap.add_argument("--filters", default="trilinear,aniso")
     ap.add_argument("--max-aniso", type=float, default=16)
     ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--cache-mb", type=float, default=256.0)
     a = ap.parse_args()
     with open(a.queries) as f:
         rows = list(csv.reader(f))[1:]
     queries = [tuple(float(v) for v in r) for r in rows if r]
     ts = oiio.TextureSystem(shared=False)
+    ts.attribute("max_memory_MB", a.cache_mb)
+    print(f"cache_mb {ts.getattribute('max_memory_MB', oiio.FLOAT)}")
     opt = oiio.TextureOpt()
     print(f"empty {timed(empty, a.texture, opt, queries, a.reps):.1f}")
     with tempfile.TemporaryDirectory() as tmp:

@@ -99,7 +99,7 @@ fn cone_footprints_touch_fewer_fine_tiles_than_mip0_under_path() {
     println!("{text}");
     assert!(text.contains("integrator path"), "{text}");
     let rows = table_rows(&text);
-    assert_eq!(rows.len(), 6, "{text}");
+    assert_eq!(rows.len(), 7, "{text}");
     for row in &rows {
         assert!(
             row.lookups > 0 && row.unique > 0,

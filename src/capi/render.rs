@@ -357,10 +357,7 @@ pub unsafe extern "C" fn ct_render(
         let scene = object.scene.clone();
         let render_options = render_options(&c_options, &scene)?;
         let integrator = integrator_from_code(c_options.integrator, &scene.settings)?;
-        let texture_cache_bytes = match c_options.texture_cache {
-            0 => crate::texture::DEFAULT_TEXTURE_CACHE_BYTES,
-            bytes => bytes,
-        };
+        let texture_cache_bytes = texture_cache_cap(&c_options);
         // Refused before the film or any texture is allocated. A texture whose header cannot
         // be read is left to the preparation below, which reports it with its role.
         if let Ok(estimate) = memory_estimate(&c_options, integrator, &scene, &render_options) {
@@ -555,6 +552,14 @@ pub unsafe extern "C" fn ct_render_memory_estimate(
     })
 }
 
+/// The cap of a render's texture cache: `texture_cache`, 0 meaning the default.
+fn texture_cache_cap(c: &CtRenderOptions) -> u64 {
+    match c.texture_cache {
+        0 => crate::texture::DEFAULT_TEXTURE_CACHE_BYTES,
+        bytes => bytes,
+    }
+}
+
 /// The memory estimate of a render: with a texture callback, only the textures the library
 /// still decodes (alpha cut-out masks; all of them for the `lod` AOV) are counted; the
 /// voxel pyramid when `integrator` resolves to vct.
@@ -573,8 +578,10 @@ fn memory_estimate(
         }
     }
     let mut estimate =
-        render::memory::estimate_decoding(scene, options, |i| decoded.get(i) == Some(&true))
-            .map_err(|e| CapiError::new(CtStatus::CT_ERROR_TEXTURE, e.to_string()))?;
+        render::memory::estimate_decoding(scene, options, texture_cache_cap(c), |i| {
+            decoded.get(i) == Some(&true)
+        })
+        .map_err(|e| CapiError::new(CtStatus::CT_ERROR_TEXTURE, e.to_string()))?;
     estimate.voxels = crate::integrator::selection::integrator_memory(integrator, scene)
         .map_err(|e| CapiError::invalid(format!("{}: {e}", scene.source)))?;
     Ok(estimate)

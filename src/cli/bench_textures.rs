@@ -1,7 +1,16 @@
-//! `conetrace bench textures`: single-thread lookups per second for every filter,
-//! ours and OpenImageIO's TextureSystem (through /usr/bin/python3 and
-//! bench/oiio_texture_bench.py, whose text is built into the program so that it runs from
-//! any directory) on the same queries, printed as a markdown table.
+//! `conetrace bench textures`: single-thread lookups per second for every filter, printed
+//! as a markdown table, on one tiled, mip-mapped `.tx` (made by `maketx`) read three ways:
+//! decoded whole (resident), tile by tile through the texture cache under a cap (cached),
+//! and by OpenImageIO's TextureSystem with its ImageCache under the same cap (through
+//! /usr/bin/python3 and bench/oiio_texture_bench.py, whose text is built into the program
+//! so that it runs from any directory), all on the same queries.
+//!
+//! Query sets decide the cache's hit rate: lookups laid out as a render makes them
+//! (neighbouring lookups read the same tiles, so nearly every tile fetch hits the thread's
+//! micro-cache) and lookups at random places (nearly every fetch misses it); a second,
+//! small cap adds evictions and reads from the file. Each row reports the micro-cache hit
+//! rate and tiles loaded that the cached run measured, so the rate is read beside the hit
+//! rate that produced it.
 //!
 //! OIIO is timed from Python, so the script also times the same loop calling an
 //! empty Python function; the table shows OIIO's rate both raw and with that
@@ -17,12 +26,17 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use crate::texture::{ColorSpace, FilterMode, FilterOptions, Texture, TextureQuery, WrapMode};
+use std::sync::Arc;
+
+use crate::texture::{
+    ColorSpace, FilterMode, FilterOptions, Texture, TextureQuery, TileCache, WrapMode,
+};
 
 /// Arguments of `bench-textures`.
 #[derive(clap::Args, Debug)]
 pub struct BenchTexturesArgs {
-    /// Texture to benchmark; default: a generated 1024x1024 float noise texture.
+    /// Texture to benchmark (made into a 64x64-tiled `.tx` by `maketx --filter box`);
+    /// default: a generated 1024x1024 float noise texture.
     pub texture: Option<PathBuf>,
     /// Number of distinct queries per query set.
     #[arg(long, default_value_t = 100_000)]
@@ -36,6 +50,15 @@ pub struct BenchTexturesArgs {
     /// Only these filters (comma-separated); default: all.
     #[arg(long, value_delimiter = ',')]
     pub filters: Vec<FilterMode>,
+    /// Cap of the texture cache, ours and OIIO's ImageCache (`max_memory_MB`), e.g. 256M.
+    #[arg(long, value_name = "SIZE", default_value = "256M",
+          value_parser = crate::render::memory::parse_memory_size)]
+    pub cache: u64,
+    /// A second, small cap whose rows add evictions (tiles read again from the file); the
+    /// default holds 16 float tiles. Equal to `--cache` to skip those rows.
+    #[arg(long, value_name = "SIZE", default_value = "1M",
+          value_parser = crate::render::memory::parse_memory_size)]
+    pub small_cache: Option<u64>,
     /// Skip the OpenImageIO side.
     #[arg(long)]
     pub no_oiio: bool,
@@ -130,22 +153,58 @@ fn oiio_script(args: &BenchTexturesArgs, work: &Path) -> Result<PathBuf, String>
     }
 }
 
-/// One row of the table: a filter on a query set.
+/// Queries of one set: how they are laid out, hence how often a lookup finds its tiles in
+/// the thread's micro-cache.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum QuerySet {
+    /// A rendered image's lookups in the order a render makes them: 16x16-pixel work
+    /// tiles in raster order, each band of 16 pixel rows one plane with its own
+    /// derivatives (random levels, anisotropy 1-4, random angles). Neighbouring lookups
+    /// read the same texture tiles: the high hit rate.
+    Coherent,
+    /// The same derivatives, but every lookup at its own random place and scale: nearly
+    /// every lookup misses the micro-cache, the low hit rate.
+    Random,
+    /// [`QuerySet::Coherent`] with anisotropy 20, clamped to the limit 16: 31 probes per
+    /// level.
+    Aniso16,
+}
+
+impl QuerySet {
+    fn name(self) -> &'static str {
+        match self {
+            QuerySet::Coherent => "coherent",
+            QuerySet::Random => "random",
+            QuerySet::Aniso16 => "aniso16",
+        }
+    }
+}
+
+/// One row of the table: a filter on a query set under a cache cap.
 struct Row {
     filter: FilterMode,
-    set: &'static str,
-    ours_per_sec: f64,
+    set: QuerySet,
+    cap: u64,
+    resident_per_sec: f64,
+    cached: CachedRun,
     oiio_raw_ns: Option<f64>,
 }
 
-/// Deterministic query sets laid out like a rendered image (raster order, 256-pixel
-/// rows, each band of 8 rows one plane with its own derivatives), so lookups are as
-/// coherent as a renderer's: "mixed" (random levels, anisotropy 1-4, random angles)
-/// and "aniso16" (anisotropy 20 clamped to the limit 16: 31 probes per level).
-fn query_set(name: &str, n: usize, size: u32) -> Vec<TextureQuery> {
+/// The demand-loaded side of a row: its rate and what the cache did while it was timed.
+struct CachedRun {
+    per_sec: f64,
+    micro_hit_rate: f64,
+    tiles_loaded: u64,
+}
+
+/// Deterministic queries of `set` over a texture whose smaller side is `size` texels. With
+/// `level0` (for the filters that read level 0 alone, closest and bilinear) the minor axis
+/// spans 0.5-2 texels of level 0 per pixel, as a render of a texture seen near its
+/// resolution; otherwise 0.5-512, so the mip-mapped filters read every level.
+fn query_set(set: QuerySet, level0: bool, n: usize, size: u32) -> Vec<TextureQuery> {
     const ROW: usize = 256;
-    const BAND: usize = 8;
-    let mut state = 0x9e37_79b9_7f4a_7c15u64 ^ name.len() as u64;
+    const WORK_TILE: usize = 16;
+    let mut state = 0x9e37_79b9_7f4a_7c15u64 ^ set.name().len() as u64;
     let mut rnd = move || {
         state = state
             .wrapping_mul(6364136223846793005)
@@ -153,29 +212,45 @@ fn query_set(name: &str, n: usize, size: u32) -> Vec<TextureQuery> {
         (state >> 40) as f32 / (1u64 << 24) as f32
     };
     let texel = 1.0 / size as f32;
+    let plane_at = |rnd: &mut dyn FnMut() -> f32| {
+        let angle = rnd() * std::f32::consts::PI;
+        let (minor, ratio) = if set == QuerySet::Aniso16 {
+            (texel * 2f32.powf(rnd() * 4.0), 20.0)
+        } else {
+            let octaves = if level0 { 2.0 } else { 10.0 };
+            (texel * 2f32.powf(rnd() * octaves - 1.0), 1.0 + 3.0 * rnd())
+        };
+        let major = minor * ratio;
+        let (sn, cs) = angle.sin_cos();
+        TextureQuery {
+            s: rnd(),
+            t: rnd(),
+            dsdx: major * cs,
+            dtdx: major * sn,
+            dsdy: -minor * sn,
+            dtdy: minor * cs,
+        }
+    };
     let mut out = Vec::with_capacity(n);
     let mut plane = TextureQuery::default();
+    let band = ROW * WORK_TILE;
     for k in 0..n {
-        let (px, py) = (k % ROW, k / ROW);
-        if k % (ROW * BAND) == 0 {
-            let angle = rnd() * std::f32::consts::PI;
-            let (minor, ratio) = if name == "aniso16" {
-                (texel * 2f32.powf(rnd() * 4.0), 20.0)
-            } else {
-                (texel * 2f32.powf(rnd() * 10.0 - 1.0), 1.0 + 3.0 * rnd())
-            };
-            let major = minor * ratio;
-            let (sn, cs) = angle.sin_cos();
-            plane = TextureQuery {
-                s: rnd(),
-                t: rnd(),
-                dsdx: major * cs,
-                dtdx: major * sn,
-                dsdy: -minor * sn,
-                dtdy: minor * cs,
-            };
+        if set == QuerySet::Random {
+            out.push(plane_at(&mut rnd));
+            continue;
         }
-        let (fx, fy) = (px as f32, (py % BAND) as f32);
+        if k % band == 0 {
+            plane = plane_at(&mut rnd);
+        }
+        // Pixel (px, py) of the band: work tile after work tile, each in raster order.
+        let in_band = k % band;
+        let (tile, in_tile) = (
+            in_band / (WORK_TILE * WORK_TILE),
+            in_band % (WORK_TILE * WORK_TILE),
+        );
+        let px = tile * WORK_TILE + in_tile % WORK_TILE;
+        let py = in_tile / WORK_TILE;
+        let (fx, fy) = (px as f32, py as f32);
         out.push(TextureQuery {
             s: plane.s + fx * plane.dsdx + fy * plane.dsdy,
             t: plane.t + fx * plane.dtdx + fy * plane.dtdy,
@@ -199,7 +274,8 @@ fn noise_texture(size: u32) -> Vec<[f32; 4]> {
         .collect()
 }
 
-/// Lookups per second on one thread, repeating the query set for `min_time`.
+/// Lookups per second on one thread, repeating the query set for `min_time`, after one
+/// untimed pass (which opens the files and fills the caches, as OIIO's side does).
 fn measure(
     tex: &Texture,
     queries: &[TextureQuery],
@@ -207,9 +283,12 @@ fn measure(
     min_time: Duration,
     wall: bool,
 ) -> f64 {
+    let mut acc = glam::Vec4::ZERO;
+    for q in queries {
+        acc += tex.sample(black_box(q), opts);
+    }
     let mut done = 0usize;
     let start = Clock::start(wall);
-    let mut acc = glam::Vec4::ZERO;
     loop {
         for q in queries {
             acc += tex.sample(black_box(q), opts);
@@ -221,6 +300,37 @@ fn measure(
     }
     black_box(acc);
     done as f64 / start.elapsed().as_secs_f64()
+}
+
+/// [`measure`] of `tx` demand-loaded into a fresh cache of `cap` bytes, with the
+/// micro-cache hit rate and the tiles read over the whole run.
+fn measure_cached(
+    tx: &Path,
+    cap: u64,
+    queries: &[TextureQuery],
+    opts: &FilterOptions,
+    min_time: Duration,
+    wall: bool,
+) -> Result<CachedRun, String> {
+    let cache = Arc::new(TileCache::new(cap));
+    let tex = Texture::from_file_in(tx, ColorSpace::Linear, &cache).map_err(|e| e.to_string())?;
+    if !tex.is_demand_loaded() {
+        return Err(format!(
+            "{}: not read tile by tile (a tiled, mip-mapped TIFF is needed)",
+            tx.display()
+        ));
+    }
+    let per_sec = measure(&tex, queries, opts, min_time, wall);
+    crate::texture::flush_micro_caches();
+    if let Some(failure) = tex.tile_failure() {
+        return Err(failure.to_string());
+    }
+    let stats = tex.cache_stats().unwrap_or_default();
+    Ok(CachedRun {
+        per_sec,
+        micro_hit_rate: stats.micro_cache_hit_rate(),
+        tiles_loaded: stats.tiles_loaded,
+    })
 }
 
 fn write_queries(path: &Path, queries: &[TextureQuery]) -> Result<(), String> {
@@ -240,6 +350,8 @@ struct OiioTimes {
     empty: f64,
     /// texture() on a 1x1 texture (binding overhead plus a trivial lookup).
     binding: f64,
+    /// The ImageCache's `max_memory_MB` as OIIO reports it after the script set it.
+    cache_mb: Option<f64>,
     /// Per filter.
     filters: Vec<(String, f64)>,
 }
@@ -250,6 +362,7 @@ fn run_oiio(
     tx: &Path,
     queries: &Path,
     filters: &[FilterMode],
+    cap: u64,
 ) -> Result<OiioTimes, String> {
     let names: Vec<String> = filters.iter().map(|f| f.to_string()).collect();
     let mut command = Command::new(&args.python);
@@ -262,6 +375,7 @@ fn run_oiio(
         .arg(queries)
         .args(["--filters", &names.join(",")])
         .args(["--max-aniso", &args.max_aniso.to_string()])
+        .args(["--cache-mb", &(cap as f64 / MIB).to_string()])
         .output()
         .map_err(|e| format!("{}: cannot run: {e}", args.python.display()))?;
     if !out.status.success() {
@@ -272,10 +386,14 @@ fn run_oiio(
             python_failure_line(&String::from_utf8_lossy(&out.stderr))
         ));
     }
-    // Lines "empty <ns>", "binding <ns>" and "<filter> <ns>".
-    let text = String::from_utf8_lossy(&out.stdout);
+    parse_oiio_output(&String::from_utf8_lossy(&out.stdout), script)
+}
+
+/// Lines "empty <ns>", "binding <ns>", "cache_mb <MB>" and "<filter> <ns>".
+fn parse_oiio_output(text: &str, script: &Path) -> Result<OiioTimes, String> {
     let mut empty = None;
     let mut binding = None;
+    let mut cache_mb = None;
     let mut rates = Vec::new();
     for line in text.lines() {
         let mut parts = line.split_whitespace();
@@ -283,12 +401,11 @@ fn run_oiio(
             let v: f64 = v
                 .parse()
                 .map_err(|_| format!("{}: bad output line '{line}'", script.display()))?;
-            if k == "empty" {
-                empty = Some(v);
-            } else if k == "binding" {
-                binding = Some(v);
-            } else {
-                rates.push((k.to_string(), v));
+            match k {
+                "empty" => empty = Some(v),
+                "binding" => binding = Some(v),
+                "cache_mb" => cache_mb = Some(v),
+                _ => rates.push((k.to_string(), v)),
             }
         }
     }
@@ -296,9 +413,12 @@ fn run_oiio(
     Ok(OiioTimes {
         empty: empty.ok_or_else(|| missing("empty-call"))?,
         binding: binding.ok_or_else(|| missing("binding"))?,
+        cache_mb,
         filters: rates,
     })
 }
+
+const MIB: f64 = 1024.0 * 1024.0;
 
 /// Runs the benchmark and prints the markdown table.
 pub fn run(args: &BenchTexturesArgs) -> Result<(), String> {
@@ -309,6 +429,40 @@ pub fn run(args: &BenchTexturesArgs) -> Result<(), String> {
     result
 }
 
+/// The texture to benchmark: `--texture`, or a generated 1024x1024 float noise EXR.
+fn source_texture(args: &BenchTexturesArgs, work: &Path) -> Result<PathBuf, String> {
+    if let Some(p) = &args.texture {
+        return Ok(p.clone());
+    }
+    let size = 1024;
+    let texels = noise_texture(size);
+    let path = work.join("noise.exr");
+    exr::prelude::write_rgba_file(&path, size as usize, size as usize, |x, y| {
+        let t = texels[y * size as usize + x];
+        (t[0], t[1], t[2], t[3])
+    })
+    .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+    Ok(path)
+}
+
+/// `source` made into the tiled, mip-mapped `tx` (64x64 tiles) that both sides read.
+fn make_tx(source: &Path, tx: &Path) -> Result<(), String> {
+    let out = Command::new("maketx")
+        .arg(source)
+        .arg("-o")
+        .arg(tx)
+        .args(["--filter", "box", "--tile", "64", "64"])
+        .output()
+        .map_err(|e| format!("maketx: cannot run ({e}); run `bash scripts/setup.sh`"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "maketx: {}",
+            String::from_utf8_lossy(&out.stderr).trim()
+        ));
+    }
+    Ok(())
+}
+
 fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
     // Found before anything is measured: a missing script costs no benchmark time.
     let script = if args.no_oiio {
@@ -316,58 +470,27 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
     } else {
         Some(oiio_script(args, work)?)
     };
-    let source = match &args.texture {
-        Some(p) => p.clone(),
-        None => {
-            let size = 1024;
-            let texels = noise_texture(size);
-            let path = work.join("noise.exr");
-            exr::prelude::write_rgba_file(&path, size as usize, size as usize, |x, y| {
-                let t = texels[y * size as usize + x];
-                (t[0], t[1], t[2], t[3])
-            })
-            .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
-            path
-        }
-    };
-    let tex = Texture::from_file(&source, ColorSpace::Linear).map_err(|e| e.to_string())?;
-    let size = tex.width().min(tex.height());
-    let min_time = Duration::from_secs_f64(args.seconds.max(0.01));
-    let sets: [(&'static str, Vec<FilterMode>); 2] = [
-        (
-            "mixed",
-            vec![
-                FilterMode::Closest,
-                FilterMode::Bilinear,
-                FilterMode::Trilinear,
-                FilterMode::Aniso,
-                FilterMode::Ewa,
-            ],
-        ),
-        ("aniso16", vec![FilterMode::Aniso, FilterMode::Ewa]),
-    ];
+    let source = source_texture(args, work)?;
     let tx = work.join("bench.tx");
-    let mut oiio_note = String::new();
+    make_tx(&source, &tx)?;
+    let resident = Texture::from_file_whole(&tx, ColorSpace::Linear).map_err(|e| e.to_string())?;
+    let size = resident.width().min(resident.height());
+    let min_time = Duration::from_secs_f64(args.seconds.max(0.01));
+    use FilterMode::{Aniso, Bilinear, Closest, Ewa, Trilinear};
+    // (query set, level 0 alone, filters).
+    let sets = [
+        (QuerySet::Coherent, true, vec![Closest, Bilinear]),
+        (QuerySet::Coherent, false, vec![Trilinear, Aniso, Ewa]),
+        (QuerySet::Random, true, vec![Closest, Bilinear]),
+        (QuerySet::Random, false, vec![Trilinear, Aniso, Ewa]),
+        (QuerySet::Aniso16, false, vec![Aniso, Ewa]),
+    ];
+    let mut caps = vec![args.cache];
+    caps.extend(args.small_cache.filter(|&small| small != args.cache));
     let mut overhead: Option<(f64, f64)> = None;
-    if !args.no_oiio {
-        let out = Command::new("maketx")
-            .arg(&source)
-            .arg("-o")
-            .arg(&tx)
-            .args(["--filter", "box"])
-            .output()
-            .map_err(|e| {
-                format!("maketx: cannot run ({e}); run `bash scripts/setup.sh` or pass --no-oiio")
-            })?;
-        if !out.status.success() {
-            return Err(format!(
-                "maketx: {}",
-                String::from_utf8_lossy(&out.stderr).trim()
-            ));
-        }
-    }
+    let mut oiio_caps = Vec::new();
     let mut rows = Vec::new();
-    for (set, filters) in &sets {
+    for (set, level0, filters) in &sets {
         let filters: Vec<FilterMode> = filters
             .iter()
             .copied()
@@ -376,90 +499,153 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
         if filters.is_empty() {
             continue;
         }
-        let queries = query_set(set, args.queries.max(1), size);
-        let mut oiio = Vec::new();
-        if let Some(script) = &script {
-            let qpath = work.join(format!("{set}.csv"));
-            write_queries(
-                &qpath,
-                &queries[..args.oiio_queries.clamp(1, queries.len())],
-            )?;
-            let oiio_filters: Vec<FilterMode> = filters
-                .iter()
-                .copied()
-                .filter(|f| *f != FilterMode::Ewa)
-                .collect();
-            let times = run_oiio(args, script, &tx, &qpath, &oiio_filters)?;
-            overhead = Some((times.empty, times.binding));
-            oiio = times.filters;
-        }
-        for &filter in &filters {
-            let opts = FilterOptions {
-                filter,
-                wrap_s: WrapMode::Periodic,
-                wrap_t: WrapMode::Periodic,
-                max_aniso: args.max_aniso,
-            };
-            let ours = measure(&tex, &queries, &opts, min_time, args.wall_clock);
-            let oiio_raw_ns = oiio
-                .iter()
-                .find(|(name, _)| *name == filter.to_string())
-                .map(|(_, ns)| *ns);
-            rows.push(Row {
-                filter,
-                set,
-                ours_per_sec: ours,
-                oiio_raw_ns,
-            });
+        let queries = query_set(*set, *level0, args.queries.max(1), size);
+        let resident_rates: Vec<f64> = filters
+            .iter()
+            .map(|&filter| {
+                measure(
+                    &resident,
+                    &queries,
+                    &options(args, filter),
+                    min_time,
+                    args.wall_clock,
+                )
+            })
+            .collect();
+        for &cap in &caps {
+            let mut oiio = Vec::new();
+            if let Some(script) = &script {
+                let qpath = work.join(format!("{}-{level0}.csv", set.name()));
+                write_queries(
+                    &qpath,
+                    &queries[..args.oiio_queries.clamp(1, queries.len())],
+                )?;
+                let oiio_filters: Vec<FilterMode> = filters
+                    .iter()
+                    .copied()
+                    .filter(|f| *f != FilterMode::Ewa)
+                    .collect();
+                let times = run_oiio(args, script, &tx, &qpath, &oiio_filters, cap)?;
+                overhead = Some((times.empty, times.binding));
+                oiio_caps.push((cap, times.cache_mb));
+                oiio = times.filters;
+            }
+            for (&filter, &resident_per_sec) in filters.iter().zip(&resident_rates) {
+                let opts = options(args, filter);
+                let cached = measure_cached(&tx, cap, &queries, &opts, min_time, args.wall_clock)?;
+                let oiio_raw_ns = oiio
+                    .iter()
+                    .find(|(name, _)| *name == filter.to_string())
+                    .map(|(_, ns)| *ns);
+                rows.push(Row {
+                    filter,
+                    set: *set,
+                    cap,
+                    resident_per_sec,
+                    cached,
+                    oiio_raw_ns,
+                });
+            }
         }
     }
-    if let Some((e, b)) = overhead {
-        oiio_note = format!(
-            "OIIO via Python: an empty Python call with the same arguments costs {e:.0} ns (subtracted in \"OIIO net\"); \
-             texture() on a 1x1 texture (binding overhead + trivial lookup) costs {b:.0} ns (subtracted in \"OIIO C++ est.\").\n"
-        );
+    print_header(args, &source, &resident, overhead, &oiio_caps);
+    print_table(&rows, overhead);
+    Ok(())
+}
+
+fn options(args: &BenchTexturesArgs, filter: FilterMode) -> FilterOptions {
+    FilterOptions {
+        filter,
+        wrap_s: WrapMode::Periodic,
+        wrap_t: WrapMode::Periodic,
+        max_aniso: args.max_aniso,
     }
+}
+
+fn print_header(
+    args: &BenchTexturesArgs,
+    source: &Path,
+    tex: &Texture,
+    overhead: Option<(f64, f64)>,
+    oiio_caps: &[(u64, Option<f64>)],
+) {
     let clock = match Clock::start(args.wall_clock) {
         Clock::Wall(_) => "wall-clock time",
         Clock::ThreadCpu(_) => "thread CPU time",
     };
     println!(
-        "Texture {} ({}x{}, {} levels), one thread, {} queries per set, max aniso {}, rates per second of {clock}.\n{}",
+        "Texture {} made into a 64x64-tiled .tx by maketx ({}x{}, {} levels), one thread, {} queries per set, \
+         max aniso {}, rates per second of {clock}. \"resident\": the .tx decoded whole; \"cached\": the same \
+         .tx read tile by tile into a fresh cache of the row's cap (micro-cache hits and tiles loaded over the \
+         whole timed run).",
         source.display(),
         tex.width(),
         tex.height(),
         tex.level_count(),
         args.queries,
         args.max_aniso,
-        oiio_note
     );
-    println!("| filter | queries | conetrace (M lookups/s) | OIIO raw (M/s) | OIIO net (M/s) | conetrace / OIIO net | OIIO C++ est. (M/s) | conetrace / C++ est. |");
-    println!("|---|---|---:|---:|---:|---:|---:|---:|");
-    for r in &rows {
-        let cols = match (r.oiio_raw_ns, overhead) {
+    if let Some((e, b)) = overhead {
+        let mut seen: Vec<String> = Vec::new();
+        for (cap, mb) in oiio_caps {
+            let line = match mb {
+                Some(mb) => format!(
+                    "{:.2} MiB asked, max_memory_MB = {mb} reported",
+                    *cap as f64 / MIB
+                ),
+                None => format!(
+                    "{:.2} MiB asked, max_memory_MB not reported",
+                    *cap as f64 / MIB
+                ),
+            };
+            if !seen.contains(&line) {
+                seen.push(line);
+            }
+        }
+        println!(
+            "OIIO (TextureSystem over the same .tx, ImageCache {}) via Python: an empty Python call with the same \
+             arguments costs {e:.0} ns (subtracted in \"OIIO net\"); texture() on a 1x1 texture (binding overhead \
+             + trivial lookup) costs {b:.0} ns (subtracted in \"OIIO C++ est.\").",
+            seen.join("; ")
+        );
+    }
+    println!();
+}
+
+fn print_table(rows: &[Row], overhead: Option<(f64, f64)>) {
+    println!(
+        "| filter | queries | cap | resident (M/s) | cached (M/s) | cached / resident | micro-cache hits | tiles loaded \
+         | OIIO raw (M/s) | OIIO net (M/s) | OIIO C++ est. (M/s) | cached / C++ est. |"
+    );
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for r in rows {
+        let oiio = match (r.oiio_raw_ns, overhead) {
             (Some(ns), Some((e, b))) => {
                 let net_ns = (ns - e).max(1e-3);
                 let cpp_ns = (ns - b).max(1e-3);
                 format!(
-                    "{:.3} | {:.3} | {:.1}x | {:.3} | {:.1}x",
+                    "{:.3} | {:.3} | {:.3} | {:.1}x",
                     1e3 / ns,
                     1e3 / net_ns,
-                    r.ours_per_sec * net_ns * 1e-9,
                     1e3 / cpp_ns,
-                    r.ours_per_sec * cpp_ns * 1e-9
+                    r.cached.per_sec * cpp_ns * 1e-9
                 )
             }
-            _ => "- | - | - | - | -".to_string(),
+            _ => "- | - | - | -".to_string(),
         };
         println!(
-            "| {} | {} | {:.2} | {} |",
+            "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.1} % | {} | {} |",
             r.filter,
-            r.set,
-            r.ours_per_sec / 1e6,
-            cols
+            r.set.name(),
+            crate::render::memory::Bytes(r.cap),
+            r.resident_per_sec / 1e6,
+            r.cached.per_sec / 1e6,
+            r.cached.per_sec / r.resident_per_sec,
+            100.0 * r.cached.micro_hit_rate,
+            r.cached.tiles_loaded,
+            oiio
         );
     }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -250,7 +250,8 @@ pub fn run(args: &RenderArgs, time_limit: f64) -> Result<(), CommandError> {
     let bound = options.spp;
     let tonemap = render_cmd::tonemap(args, &scene)?;
     let exposure = scene.settings.exposure;
-    let estimate = render_cmd::memory_estimate(&scene, &options)?;
+    let estimate =
+        render_cmd::memory_estimate(&scene, &options, render_cmd::texture_cache(args).capacity())?;
     render::memory::check(&estimate, args.max_memory, &scene.source)
         .map_err(CommandError::bad_input)?;
     let pool = crate::cli::worker_pool(args.threads)?;

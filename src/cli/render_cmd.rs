@@ -295,8 +295,9 @@ pub(crate) fn select_integrator(
 pub(crate) fn memory_estimate(
     scene: &SceneDescription,
     options: &render::RenderOptions,
+    texture_cache: u64,
 ) -> Result<render::memory::MemoryEstimate, CommandError> {
-    let mut estimate = render::memory::estimate(scene, options)
+    let mut estimate = render::memory::estimate(scene, options, texture_cache)
         .map_err(|e| CommandError::bad_input(e.to_string()))?;
     estimate.voxels = selection::integrator_memory(scene.settings.integrator, scene)
         .map_err(|e| CommandError::bad_input(format!("{}: {e}", scene.source)))?;
@@ -520,7 +521,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     // Refused before anything large is allocated: an image or texture set that cannot fit
     // gets the estimate, not an allocation failure halfway.
-    let mut estimate = memory_estimate(&scene, &options)?;
+    let mut estimate = memory_estimate(&scene, &options, texture_cache(args).capacity())?;
     if split.samples_partial(&options) {
         // A part holding a sample range also carries its exact sums.
         let pixels = u64::from(options.width) * u64::from(options.height);

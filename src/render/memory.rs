@@ -8,8 +8,13 @@
 //! - the work tiles in flight: per worker thread, one tile's pixels and the slices of the
 //!   film band it writes into (finished tiles go straight into the film, so this is small);
 //! - the outputs: the EXR encoder's copy of every plane and the PNG's 8-bit pixels;
-//! - every texture with its mip levels, in the precision it is stored in (4 bytes a texel
-//!   for 8-bit sources, 8 for half, 16 otherwise), from the file headers, nothing decoded.
+//! - every texture decoded whole with its mip levels, in the precision it is stored in (4
+//!   bytes a texel for 8-bit sources, 8 for half, 16 otherwise), from the file headers,
+//!   nothing decoded;
+//! - the texture cache of the demand-loaded textures (tiled, mip-mapped `.tx` files read
+//!   tile by tile): their texel bytes, but at most the cache's cap, plus what comes on top
+//!   of the cap (see `texture::tile_cache`): the tiles each worker's micro-cache may keep
+//!   alive after their eviction, and one slot per tile of every level.
 //!
 //! The limit is `--max-memory` when given, else the memory the system reports available
 //! (`MemAvailable` in `/proc/meminfo`); where neither is known, nothing is refused.
@@ -18,7 +23,7 @@ use std::fmt;
 
 use crate::render::context::RenderOptions;
 use crate::scene::{SceneDescription, TextureSource};
-use crate::texture::{encoded_texture_header, file_texture_header};
+use crate::texture::{demand_level_sizes, encoded_texture_header, file_texture_header};
 
 /// What a render is estimated to need, in bytes.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -26,8 +31,11 @@ pub struct MemoryEstimate {
     pub film: u64,
     pub tiles: u64,
     pub outputs: u64,
-    /// Per texture: its label and decoded size.
+    /// Per texture decoded whole: its label and decoded size.
     pub textures: Vec<(String, u64)>,
+    /// The demand-loaded textures' cache: their texel bytes up to the cap, plus the
+    /// micro-caches' tiles and the tile slots.
+    pub texture_cache: u64,
     /// The voxel pyramid of the voxel cone tracer (0 for the other integrators); the caller
     /// that knows the integrator sets it.
     pub voxels: u64,
@@ -49,6 +57,7 @@ impl MemoryEstimate {
             + self.tiles
             + self.outputs
             + self.voxels
+            + self.texture_cache
             + self.textures.iter().map(|t| t.1).sum::<u64>()
     }
 }
@@ -72,13 +81,15 @@ impl fmt::Display for Bytes {
     }
 }
 
-/// Estimates the memory of rendering `scene` with `options`. A texture whose header cannot
-/// be read is an error naming it (the render would fail on it anyway).
+/// Estimates the memory of rendering `scene` with `options`, demand-loaded textures in a
+/// cache capped at `texture_cache` bytes. A texture whose header cannot be read is an
+/// error naming it (the render would fail on it anyway).
 pub fn estimate(
     scene: &SceneDescription,
     options: &RenderOptions,
+    texture_cache: u64,
 ) -> Result<MemoryEstimate, crate::texture::TextureError> {
-    estimate_decoding(scene, options, |_| true)
+    estimate_decoding(scene, options, texture_cache, |_| true)
 }
 
 /// [`estimate`] counting only the textures `decoded(index)` says the render decodes (with a
@@ -86,6 +97,7 @@ pub fn estimate(
 pub fn estimate_decoding(
     scene: &SceneDescription,
     options: &RenderOptions,
+    texture_cache: u64,
     decoded: impl Fn(usize) -> bool,
 ) -> Result<MemoryEstimate, crate::texture::TextureError> {
     let pixels = u64::from(options.width) * u64::from(options.height);
@@ -94,19 +106,28 @@ pub fn estimate_decoding(
         .map(|layer| layer.channel_count() as u64)
         .sum();
     let film = pixels * channels * 4;
-    let textures = scene
+    let workers = rayon::current_num_threads() as u64;
+    let mut textures = Vec::new();
+    let mut cache = DemandTextures::default();
+    for (_, texture) in scene
         .textures
         .iter()
         .enumerate()
-        .filter(|(index, _)| decoded(*index))
-        .map(|(_, texture)| {
-            let header = match &texture.source {
-                TextureSource::File(path) => file_texture_header(path)?,
-                TextureSource::Encoded { label, bytes } => encoded_texture_header(bytes, label)?,
-            };
-            Ok((texture.source.label(), header.decoded_bytes()))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+        .filter(|(i, _)| decoded(*i))
+    {
+        let header = match &texture.source {
+            TextureSource::File(path) => {
+                let header = file_texture_header(path)?;
+                if let Some(levels) = demand_level_sizes(path)? {
+                    cache.add(&header, &levels);
+                    continue;
+                }
+                header
+            }
+            TextureSource::Encoded { label, bytes } => encoded_texture_header(bytes, label)?,
+        };
+        textures.push((texture.source.label(), header.decoded_bytes()));
+    }
     // Per worker: a tile's pixels (at most every channel of every pixel, plus a flag) and
     // the film band it writes into cut into per-tile row slices (one slice per channel, row
     // and tile column; see `film::regions`).
@@ -116,14 +137,49 @@ pub fn estimate_decoding(
         * tile
         * u64::from(options.width.div_ceil(crate::render::WORK_TILE_SIZE))
         * std::mem::size_of::<&mut [f32]>() as u64;
-    let workers = rayon::current_num_threads() as u64;
     Ok(MemoryEstimate {
         film,
         tiles: workers * (tile_pixels + band_slices),
         outputs: film + pixels * 4,
         textures,
+        texture_cache: cache.bytes(texture_cache, workers),
         voxels: 0,
     })
+}
+
+/// The demand-loaded textures of a scene, as the texture cache holds them.
+#[derive(Default)]
+struct DemandTextures {
+    /// Texel bytes of every level of every one of them.
+    texels: u64,
+    /// Tiles over every level of every one of them (each has a slot).
+    tiles: u64,
+    /// Bytes of the largest full tile among them.
+    largest_tile: u64,
+}
+
+impl DemandTextures {
+    /// Adds a texture whose header is `header` and whose stored levels are `levels`.
+    fn add(&mut self, header: &crate::texture::TextureHeader, levels: &[(u32, u32)]) {
+        let tile = u64::from(crate::texture::TEXTURE_TILE_SIZE);
+        for &(w, h) in levels {
+            let (w, h) = (u64::from(w), u64::from(h));
+            self.texels += w * h * header.bytes_per_texel;
+            self.tiles += w.div_ceil(tile) * h.div_ceil(tile);
+        }
+        self.largest_tile = self.largest_tile.max(tile * tile * header.bytes_per_texel);
+    }
+
+    /// Bytes under a cache capped at `cap` rendered by `workers` threads: the texels up to
+    /// the cap, each worker's micro-cache full of the largest tiles, and the slots.
+    fn bytes(&self, cap: u64, workers: u64) -> u64 {
+        if self.tiles == 0 {
+            return 0;
+        }
+        self.texels.min(cap)
+            + workers * crate::texture::MICRO_TILES as u64 * self.largest_tile
+            + self.tiles * crate::texture::SLOT_BYTES
+    }
 }
 
 /// `MemAvailable` from `/proc/meminfo`, in bytes, where the system reports it.
@@ -198,8 +254,13 @@ pub fn check_against(
     } else {
         String::new()
     };
+    let cache = if estimate.texture_cache > 0 {
+        format!(", texture cache {}", Bytes(estimate.texture_cache))
+    } else {
+        String::new()
+    };
     Err(format!(
-        "{label}: the render needs about {} (film {}, tiles {}, outputs {}, textures {}{}{}), \
+        "{label}: the render needs about {} (film {}, tiles {}, outputs {}, textures {}{}{cache}{}), \
          more than the {} of {source}",
         Bytes(total),
         Bytes(estimate.film),
@@ -251,7 +312,7 @@ mod tests {
             .build()
             .unwrap();
         let estimate = pool
-            .install(|| estimate(&SceneDescription::default(), &options))
+            .install(|| estimate(&SceneDescription::default(), &options, 256 << 20))
             .unwrap();
         assert!(
             estimate.tiles * 10 < estimate.film,
@@ -262,6 +323,89 @@ mod tests {
         assert!(estimate.tiles > 0);
     }
 
+    /// A noise PNG of `size`x`size` made into a 64x64-tiled `.tx` (8-bit) in `dir`.
+    fn noise_tx(dir: &std::path::Path, name: &str, size: u32) -> std::path::PathBuf {
+        let mut state = 0x2545_f491_4f6c_dd1du64 ^ u64::from(size);
+        let image = image::RgbImage::from_fn(size, size, |_, _| {
+            image::Rgb(std::array::from_fn(|_| {
+                (crate::test_rng::xorshift64_star(&mut state) >> 56) as u8
+            }))
+        });
+        let png = dir.join(format!("{name}.png"));
+        image.save(&png).unwrap();
+        let tx = dir.join(format!("{name}.tx"));
+        let status = std::process::Command::new("maketx")
+            .arg(&png)
+            .arg("-o")
+            .arg(&tx)
+            .status()
+            .expect("maketx must be installed (scripts/setup.sh)");
+        assert!(status.success(), "maketx failed");
+        tx
+    }
+
+    fn texture(name: &str, path: &std::path::Path) -> crate::scene::TextureDesc {
+        crate::scene::TextureDesc {
+            name: name.into(),
+            source: TextureSource::File(path.to_path_buf()),
+            color_space: crate::texture::ColorSpace::Srgb,
+            wrap_s: crate::texture::WrapMode::Periodic,
+            wrap_t: crate::texture::WrapMode::Periodic,
+        }
+    }
+
+    /// Demand-loaded textures larger than the cache's cap are estimated at the cap plus
+    /// the micro-caches and slots, not at their decoded size; textures decoded whole still
+    /// count whole.
+    #[test]
+    fn demand_loaded_textures_count_at_most_the_cap_plus_the_overhead() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut scene = SceneDescription {
+            textures: vec![
+                texture("a", &noise_tx(dir.path(), "a", 512)),
+                texture("b", &noise_tx(dir.path(), "b", 300)),
+            ],
+            ..SceneDescription::default()
+        };
+        let options = RenderOptions::from_settings(&crate::scene::RenderSettings::default());
+        let workers = 3u64;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(workers as usize)
+            .build()
+            .unwrap();
+        let decoded: u64 = scene
+            .textures
+            .iter()
+            .map(|t| match &t.source {
+                TextureSource::File(path) => file_texture_header(path).unwrap().decoded_bytes(),
+                TextureSource::Encoded { .. } => unreachable!(),
+            })
+            .sum();
+        let cap = 64 << 10;
+        assert!(decoded > 10 * cap, "{decoded}");
+        let capped = pool.install(|| estimate(&scene, &options, cap)).unwrap();
+        assert!(capped.textures.is_empty(), "{:?}", capped.textures);
+        // Per worker, 8 tiles of 16 KiB (8-bit RGBA); a slot per tile: 91 + 44 over the
+        // levels of the two textures.
+        let micro = workers * crate::texture::MICRO_TILES as u64 * 64 * 64 * 4;
+        let slots = 135 * crate::texture::SLOT_BYTES;
+        assert_eq!(capped.texture_cache, cap + micro + slots);
+        // Under a cap larger than both, their texels count once, as decoded.
+        let roomy = pool
+            .install(|| estimate(&scene, &options, 1 << 30))
+            .unwrap();
+        assert_eq!(roomy.texture_cache, decoded + micro + slots);
+        assert_eq!(
+            capped.total() - capped.texture_cache,
+            roomy.total() - roomy.texture_cache
+        );
+        // A texture decoded whole (a PNG) counts whole, beside the cache.
+        scene.textures.push(texture("c", &dir.path().join("a.png")));
+        let mixed = pool.install(|| estimate(&scene, &options, cap)).unwrap();
+        assert_eq!(mixed.textures.len(), 1);
+        assert_eq!(mixed.texture_cache, capped.texture_cache);
+    }
+
     #[test]
     fn a_large_image_is_refused_with_its_estimate() {
         let estimate = MemoryEstimate {
@@ -269,6 +413,7 @@ mod tests {
             tiles: 200 << 30,
             outputs: 216 << 30,
             textures: vec![("sky.png".into(), 1 << 20)],
+            texture_cache: 0,
             voxels: 0,
         };
         let message = check(&estimate, Some(8 << 30), "scene.toml").unwrap_err();

@@ -126,6 +126,26 @@ impl fmt::Debug for DemandLevel {
     }
 }
 
+/// What opening the file at `path` through a cache would hold on demand: the (width,
+/// height) of every stored level when it is a tiled, mip-mapped TIFF read tile by tile,
+/// `Ok(None)` when it is decoded whole. Reads the file's directories, no tile.
+pub fn demand_level_sizes(path: &Path) -> Result<Option<Vec<(u32, u32)>>, TextureError> {
+    let label = path.display().to_string();
+    let io_error = |source| TextureError::Io {
+        label: label.clone(),
+        source,
+    };
+    let mut file = File::open(path).map_err(io_error)?;
+    let mut signature = [0u8; 8];
+    let read = file.read(&mut signature).map_err(io_error)?;
+    if sniff_format(&signature[..read]) != Some(ImageFormat::Tiff) {
+        return Ok(None);
+    }
+    let file = File::open(path).map_err(io_error)?;
+    let reader = TiffTileReader::open(BufReader::new(file), &label, ColorSpace::Linear)?;
+    Ok(reader.map(|reader| reader.level_sizes()))
+}
+
 /// The levels of the tiled, mip-mapped TIFF at `path`, each read tile by tile on demand
 /// into `cache`, and the file they share; `Ok(None)` when the file is not such a TIFF (it
 /// is then decoded whole). `label` names the file in errors.

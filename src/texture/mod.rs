@@ -49,12 +49,15 @@ use std::sync::Arc;
 
 use glam::Vec4;
 
+pub use demand_tiles::demand_level_sizes;
 pub use image_size::{
     encoded_image_size, encoded_texture_header, file_image_size, file_texture_header, TextureHeader,
 };
 pub use micro_cache::flush_all_threads as flush_micro_caches;
+pub(crate) use micro_cache::MICRO_TILES;
 pub use mip_pyramid::{MipLevel, MipPyramid};
 pub use texels::Texels;
+pub(crate) use tile_cache::SLOT_BYTES;
 pub use tile_cache::{TextureCacheStats, TileCache, DEFAULT_TEXTURE_CACHE_BYTES};
 pub use tiles::{TextureTileSet, TEXTURE_TILE_SIZE};
 pub use tx_writer::{write_tx, TxCompression, TxOptions};

@@ -26,6 +26,10 @@ use super::texels::Texels;
 /// 16,384 8-bit ones: many times the tiles a frame of cone-filtered lookups touches.
 pub const DEFAULT_TEXTURE_CACHE_BYTES: u64 = 256 << 20;
 
+/// Bytes of one tile slot (every tile of every demand-loaded level has one, resident or
+/// not).
+pub(crate) const SLOT_BYTES: u64 = std::mem::size_of::<Mutex<TileSlot>>() as u64;
+
 static NEXT_FILE_ID: AtomicU64 = AtomicU64::new(0);
 
 /// A texture tile cache with a memory cap, shared by the textures opened through it.
