@@ -418,7 +418,7 @@ fn bench_textures_runs_outside_the_repository() {
     let table = String::from_utf8_lossy(&out.stdout);
     let row = table
         .lines()
-        .find(|line| line.starts_with("| bilinear | mixed |"))
+        .find(|line| line.starts_with("| bilinear | coherent |"))
         .unwrap_or_else(|| panic!("no bilinear row:\n{table}"));
     // Every column filled: OIIO's rates came back.
     assert!(!row.contains(" - "), "{row}");
