@@ -116,12 +116,14 @@ fn cone_start_and_step_measurements() {
         }
     }
     // With optical depth interpolated, a wall one voxel thick stays opaque in the wide
-    // footprints a tall wall is seen through: the chosen start keeps the corner within 0.05
-    // of the exact open share from h = 4 up. At h = 2 the point is half a voxel from the
-    // wall, inside the reach of the wall's lookups, which see it about a voxel thicker than
-    // it is (over-occluded by 0.3).
+    // footprints a tall wall is seen through. With the diffuse bands' narrower cones near
+    // the horizon (which see more of the wall's foot than seed 003's five 30-degree ones)
+    // the chosen start over-occludes the corner by 0.05-0.09 from h = 4 up (by less than
+    // 0.05 with the six cones). At h = 2 the point is half a voxel from the wall, inside the
+    // reach of the wall's lookups, which see it about a voxel thicker than it is
+    // (over-occluded by 0.25).
     assert!(
-        errors[1..].iter().all(|&e| e < 0.05),
+        errors[1..].iter().all(|&e| e < 0.1),
         "corner errors {errors:?}"
     );
     assert!(errors[0] < 0.35, "corner errors {errors:?}");

@@ -25,9 +25,9 @@ fn form_factor(a: f64, b: f64, c: f64) -> f64 {
 }
 
 /// A `2 half` square floor of albedo [`ALBEDO`] under a same-sized ceiling of emission
-/// [`RADIANCE`] facing down at `height`, seen from straight above its centre through a
-/// narrow pinhole.
-fn room(dir: &Path, half: f32, height: f32) -> std::path::PathBuf {
+/// [`RADIANCE`] facing down at `height`, both turned `yaw` degrees about the vertical, seen
+/// from straight above its centre through a narrow pinhole.
+fn room(dir: &Path, half: f32, height: f32, yaw: f32) -> std::path::PathBuf {
     let obj = write(dir, "quad.obj", &square_obj(1.0, 0.0));
     let text = format!(
         r#"
@@ -57,12 +57,13 @@ emission = [{RADIANCE}, {RADIANCE}, {RADIANCE}]
 file = "{obj}"
 material = "floor"
 scale = [{half}, 1, {half}]
+rotate = [0.0, {yaw}, 0.0]
 
 [[mesh]]
 file = "{obj}"
 material = "lamp"
 scale = [{half}, 1, {half}]
-rotate = [180.0, 0.0, 0.0]
+rotate = [180.0, {yaw}, 0.0]
 translate = [0.0, {height}, 0.0]
 "#,
         eye = 0.5 * height,
@@ -101,30 +102,35 @@ fn vct_mean(dir: &Path, scene: &Path, extra: &[&str]) -> f32 {
 
 #[test]
 fn a_floor_under_an_emissive_ceiling_gets_light_through_directional_voxels() {
-    // An open 10 x 10 room 4 high (F = 0.659), and a ceiling 0.5 above a 10 x 10 floor,
-    // which fills 99.2 % of the floor centre's cosine-weighted hemisphere. The issue's
-    // target is 10 % of the exact value: the near ceiling reaches it; the room misses it
-    // (docs/vct.md says why: three of its side cones' axes leave the open room under the
-    // ceiling's edge, and the clearance that keeps them off the floor narrows what they
-    // sample), so its bound holds what is reached.
-    let cases = [(5.0f32, 4.0f32, 0.6f32), (5.0, 0.5, 0.9)];
-    for (half, height, least) in cases {
+    // An open 10 x 10 room 4 high (F = 0.659), the same room turned 20 degrees (the cones'
+    // azimuths then meet the ceiling's edges elsewhere), a room 2 high (F = 0.883), and a
+    // ceiling 0.5 above a 10 x 10 floor, which fills 99.2 % of the floor centre's
+    // cosine-weighted hemisphere: all within the issue's 10 % of the exact value. With seed
+    // 003's six cones the 4-high room got 63.9 % (docs/vct.md).
+    let cases = [
+        (5.0f32, 4.0f32, 0.0f32),
+        (5.0, 4.0, 20.0),
+        (5.0, 2.0, 0.0),
+        (5.0, 0.5, 0.0),
+    ];
+    for (half, height, yaw) in cases {
         let dir = temp_dir();
-        let scene = room(dir.path(), half, height);
+        let scene = room(dir.path(), half, height, yaw);
         let f = form_factor(f64::from(half), f64::from(half), f64::from(height)) as f32;
         let exact = ALBEDO * RADIANCE * f;
         let directional = vct_mean(dir.path(), &scene, &[]);
         let isotropic = vct_mean(dir.path(), &scene, &["--vct-voxels", "isotropic"]);
         let side = 2.0 * half;
         println!(
-            "ceiling {height} above a {side}x{side} floor: exact {exact:.4} (F {f:.4}), \
-             directional {directional:.4} ({:.1} %), isotropic {isotropic:.4} ({:.1} %)",
+            "ceiling {height} above a {side}x{side} floor turned {yaw}: exact {exact:.4} \
+             (F {f:.4}), directional {directional:.4} ({:.1} %), isotropic {isotropic:.4} \
+             ({:.1} %)",
             100.0 * directional / exact,
             100.0 * isotropic / exact
         );
         assert!(
-            directional > least * exact && directional < 1.1 * exact,
-            "height {height}: {directional} vs {exact}"
+            (directional - exact).abs() < 0.1 * exact,
+            "height {height}, yaw {yaw}: {directional} vs {exact}"
         );
         assert!(
             directional > isotropic.max(0.1 * directional) * 1.3,

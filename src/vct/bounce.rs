@@ -1,7 +1,7 @@
 //! Extra bounces accumulated inside the voxels (seed 003: "the diffuse illumination from
 //! additional bounces can be accumulated inside the voxels").
 //!
-//! Each occupied voxel gathers what its six diffuse cones see from the current pyramid,
+//! Each occupied voxel gathers what its diffuse cones see from the current pyramid,
 //! about the normal its surfaces were lit from (`inject`), and adds its diffuse reflectance
 //! times that to the direct light it sends out; the pyramid is then rebuilt. One pass adds
 //! one bounce (a Jacobi step: every voxel gathers from the previous pass).
@@ -9,7 +9,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::cone::{gather_diffuse, CONE_START, STEP_FRACTION};
+use super::cone::{gather_diffuse, CONE_START, DIFFUSE_CONE_COUNT, STEP_FRACTION};
 use super::grid::{VoxelLevel, VoxelPyramid};
 use super::mipmap::build_pyramid;
 
@@ -50,7 +50,7 @@ pub fn add_bounce(current: &VoxelPyramid, surfaces: &[SurfaceVoxel]) -> (VoxelPy
         let radiance = s.direct + s.reflectance * gather;
         let a = s.opacity;
         level0.voxels[s.index as usize] = [a * radiance.x, a * radiance.y, a * radiance.z, a];
-        work.cones += 6;
+        work.cones += DIFFUSE_CONE_COUNT as u64;
         work.steps += steps;
     }
     (build_pyramid(current.frame, level0, current.kind), work)

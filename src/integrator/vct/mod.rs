@@ -3,8 +3,9 @@
 //! cones marched through the voxelised scene (`crate::vct`).
 //!
 //! At every hit the punctual lights' direct light is Whitted's (shadow rays); emission is
-//! the surface's own. The opaque lobe then adds seed 003's six diffuse cones,
-//! `k_d sum_j W_j L_v(x, w_j, pi/6)`, and, when it has a highlight, one specular cone about
+//! the surface's own. The opaque lobe then adds the diffuse cones (seed 003's sum with more
+//! cones towards the horizon, `vct::cone::diffuse_cones`), `k_d sum_j W_j L_v(x, w_j, a_j)`,
+//! and, when it has a highlight, one specular cone about
 //! the mirror direction whose aperture follows the shininess (`glossy`). What a cone does
 //! not see blocked (`1 - alpha`) sees the environment's mean radiance: cones replace
 //! Whitted's constant ambient term with an occluded one.
@@ -84,7 +85,7 @@ impl IndirectLight for Vct {
         let mut radiance = Vec3::ZERO;
         if lobe.diffuse.max_element() > 0.0 {
             let g = gather_diffuse(pyramid, position, n, CONE_START, STEP_FRACTION);
-            counters.vct_cones_traced += 6;
+            counters.vct_cones_traced += crate::vct::cone::DIFFUSE_CONE_COUNT as u64;
             counters.vct_cone_steps += g.steps;
             radiance += lobe.diffuse * (g.radiance + g.open * environment);
         }
