@@ -210,7 +210,7 @@ mod tests {
             texture: 0,
             intensity: 1.0,
         };
-        let builtin = prepared::environment_mean(&environment, &[texture.clone()]);
+        let builtin = prepared::environment_mean(&environment, std::slice::from_ref(&texture));
         let wrap = FilterOptions {
             wrap_t: WrapMode::Clamp,
             ..FilterOptions::default()

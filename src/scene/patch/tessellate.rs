@@ -213,8 +213,8 @@ mod tests {
             }
         };
         for epsilon in [1e-1f32, 1e-2, 1e-3] {
-            let (nu, nv) = cells_for(&patch, epsilon);
-            let mesh = tessellate(&patch, epsilon);
+            let (nu, nv) = cells_for(patch, epsilon);
+            let mesh = tessellate(patch, epsilon);
             let (mut worst, mut worst_slide): (f64, f64) = (0.0, 0.0);
             for a in 0..=97 {
                 for b in 0..=89 {
