@@ -119,13 +119,16 @@ pub(crate) fn with_tile<R>(
         return fetch().map(|(tile, _)| read(&tile));
     };
     let mut read = Some(read);
-    let hit = MICRO.try_with(|cell| {
-        let mut micro = cell.try_borrow_mut().ok()?;
-        let at = micro.find(key)?;
-        micro.hits[at] += 1;
-        let tile = micro.tiles[at].as_deref()?;
-        read.take().map(|read| read(tile))
-    });
+    let hit = MICRO.try_with(
+        #[inline(always)]
+        |cell| {
+            let mut micro = cell.try_borrow_mut().ok()?;
+            let at = micro.find(key)?;
+            micro.hits[at] += 1;
+            let tile = micro.tiles[at].as_deref()?;
+            read.take().map(|read| read(tile))
+        },
+    );
     match (hit, read) {
         (Ok(Some(result)), _) => Some(result),
         (_, Some(read)) => miss(key, fetch, read),
