@@ -126,13 +126,11 @@ impl fmt::Debug for DemandLevel {
     }
 }
 
-/// What opening the file at `path` through a cache would hold on demand: the (width,
-/// height) of every stored level when it is a tiled, mip-mapped TIFF read tile by tile,
-/// `Ok(None)` when it is decoded whole. Reads the file's directories, no tile.
-pub fn demand_level_sizes(path: &Path) -> Result<Option<Vec<(u32, u32)>>, TextureError> {
-    let label = path.display().to_string();
+/// The file at `path`, opened afresh, when its first bytes say TIFF; `None` for any other
+/// format (decoded whole). `label` names the file in errors.
+fn open_tiff(path: &Path, label: &str) -> Result<Option<File>, TextureError> {
     let io_error = |source| TextureError::Io {
-        label: label.clone(),
+        label: label.to_string(),
         source,
     };
     let mut file = File::open(path).map_err(io_error)?;
@@ -141,7 +139,17 @@ pub fn demand_level_sizes(path: &Path) -> Result<Option<Vec<(u32, u32)>>, Textur
     if sniff_format(&signature[..read]) != Some(ImageFormat::Tiff) {
         return Ok(None);
     }
-    let file = File::open(path).map_err(io_error)?;
+    File::open(path).map(Some).map_err(io_error)
+}
+
+/// What opening the file at `path` through a cache would hold on demand: the (width,
+/// height) of every stored level when it is a tiled, mip-mapped TIFF read tile by tile,
+/// `Ok(None)` when it is decoded whole. Reads the file's directories, no tile.
+pub fn demand_level_sizes(path: &Path) -> Result<Option<Vec<(u32, u32)>>, TextureError> {
+    let label = path.display().to_string();
+    let Some(file) = open_tiff(path, &label)? else {
+        return Ok(None);
+    };
     let reader = TiffTileReader::open(BufReader::new(file), &label, ColorSpace::Linear)?;
     Ok(reader.map(|reader| reader.level_sizes()))
 }
@@ -159,13 +167,9 @@ pub(crate) fn open(
         label: label.to_string(),
         source,
     };
-    let mut file = File::open(path).map_err(io_error)?;
-    let mut signature = [0u8; 8];
-    let read = file.read(&mut signature).map_err(io_error)?;
-    if sniff_format(&signature[..read]) != Some(ImageFormat::Tiff) {
+    let Some(file) = open_tiff(path, label)? else {
         return Ok(None);
-    }
-    let file = File::open(path).map_err(io_error)?;
+    };
     let metadata = file.metadata().map_err(io_error)?;
     let modified = metadata
         .modified()
