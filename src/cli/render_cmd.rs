@@ -521,7 +521,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
 
     // Refused before anything large is allocated: an image or texture set that cannot fit
     // gets the estimate, not an allocation failure halfway.
-    let mut estimate = memory_estimate(&scene, &options, texture_cache(args).capacity())?;
+    let mut estimate = memory_estimate(&scene, &options, texture_cache_cap(args))?;
     if split.samples_partial(&options) {
         // A part holding a sample range also carries its exact sums.
         let pixels = u64::from(options.width) * u64::from(options.height);
@@ -550,48 +550,46 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
         _ => None,
     };
     let scene = Arc::new(scene);
-    let (mut result, camera, part, tiles, first_ray_at) =
-        pool.install(|| -> Result<_, CommandError> {
-            loading_done();
-            let preparing = Instant::now();
-            let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
-                .map_err(|e| CommandError::bad_input(e.to_string()))?;
-            phases.prepare = preparing.elapsed().as_secs_f64();
-            let resolution = selection::resolve(context.scene.settings.integrator, &context.scene);
-            let integrator = select_integrator(&context, resolution.kind)?;
-            let part = split.resolve(&context, &integrator)?;
-            let tiles = part.tiles(options.width, options.height);
-            let already = earlier.as_ref().map_or(0, |state| {
-                state.finished.iter().filter(|&&done| done).count()
-            });
-            let bar = RenderProgress::new(args.quiet, tiles.len(), already, progress_interval);
-            let progress = |done: usize, _total: usize| bar.update(done);
-            let control = RenderControl {
-                progress: Some(&progress),
-                cancel: Some(&INTERRUPTED),
-                skip: earlier.as_ref().map(|state| state.finished.as_slice()),
-                part: Some(&part),
-            };
-            let result = render::render(&context, &integrator, &control);
-            bar.finish();
-            let mut result = result.map_err(crate::cli::render_failed)?;
-            result.stats.integrator = Some(resolution.to_string());
-            let unsupported = selection::unsupported_effects(resolution.kind, &context.scene);
-            result.stats.notes.extend(unsupported);
-            if let Some(vct) = integrator.vct_stats() {
-                result.stats.counters.vct_voxels_built = vct.occupied_voxels;
-                result.stats.vct = Some(vct.clone());
-                let [x, y, z] = vct.dims;
-                result.stats.notes.push(format!(
-                    "vct: {x}x{y}x{z} voxels ({} filled), built in {:.3} s, pyramid {:.1} MiB",
-                    vct.occupied_voxels,
-                    vct.seconds,
-                    vct.pyramid_bytes as f64 / (1 << 20) as f64
-                ));
-            }
-            let first_ray_at = result.first_ray_at;
-            Ok((result, context.camera, part, tiles, first_ray_at))
-        })?;
+    let (mut result, camera, part, tiles) = pool.install(|| -> Result<_, CommandError> {
+        loading_done();
+        let preparing = Instant::now();
+        let context = render::prepare_with_textures(scene.clone(), options.clone(), textures)
+            .map_err(|e| CommandError::bad_input(e.to_string()))?;
+        phases.prepare = preparing.elapsed().as_secs_f64();
+        let resolution = selection::resolve(context.scene.settings.integrator, &context.scene);
+        let integrator = select_integrator(&context, resolution.kind)?;
+        let part = split.resolve(&context, &integrator)?;
+        let tiles = part.tiles(options.width, options.height);
+        let already = earlier.as_ref().map_or(0, |state| {
+            state.finished.iter().filter(|&&done| done).count()
+        });
+        let bar = RenderProgress::new(args.quiet, tiles.len(), already, progress_interval);
+        let progress = |done: usize, _total: usize| bar.update(done);
+        let control = RenderControl {
+            progress: Some(&progress),
+            cancel: Some(&INTERRUPTED),
+            skip: earlier.as_ref().map(|state| state.finished.as_slice()),
+            part: Some(&part),
+        };
+        let result = render::render(&context, &integrator, &control);
+        bar.finish();
+        let mut result = result.map_err(crate::cli::render_failed)?;
+        result.stats.integrator = Some(resolution.to_string());
+        let unsupported = selection::unsupported_effects(resolution.kind, &context.scene);
+        result.stats.notes.extend(unsupported);
+        if let Some(vct) = integrator.vct_stats() {
+            result.stats.counters.vct_voxels_built = vct.occupied_voxels;
+            result.stats.vct = Some(vct.clone());
+            let [x, y, z] = vct.dims;
+            result.stats.notes.push(format!(
+                "vct: {x}x{y}x{z} voxels ({} filled), built in {:.3} s, pyramid {:.1} MiB",
+                vct.occupied_voxels,
+                vct.seconds,
+                vct.pyramid_bytes as f64 / (1 << 20) as f64
+            ));
+        }
+        Ok((result, context.camera, part, tiles))
+    })?;
 
     // Tiles an earlier run finished come from its file, a film of the part's region.
     if let Some(state) = &earlier {
@@ -604,7 +602,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CommandError> {
     let complete = finished_count == tiles.len();
     result.stats.complete = complete;
     phases.render = result.stats.seconds;
-    phases.first_ray = crate::cli::seconds_since_start(first_ray_at);
+    phases.first_ray = crate::cli::seconds_since_start(result.first_ray_at);
     result.stats.phases = Some(phases);
     if !complete && finished_count == 0 {
         return Err(nothing_written("any tile finished", &outputs.partial_exr));
@@ -946,10 +944,13 @@ pub(crate) fn decode_textures(
 
 /// The cache of the render's demand-loaded textures, with the cap of `--texture-cache`.
 pub(crate) fn texture_cache(args: &RenderArgs) -> Arc<crate::texture::TileCache> {
-    let cap = args
-        .texture_cache
-        .unwrap_or(crate::texture::DEFAULT_TEXTURE_CACHE_BYTES);
-    Arc::new(crate::texture::TileCache::new(cap))
+    Arc::new(crate::texture::TileCache::new(texture_cache_cap(args)))
+}
+
+/// The cap of `--texture-cache`, in bytes (the default when not given).
+fn texture_cache_cap(args: &RenderArgs) -> u64 {
+    args.texture_cache
+        .unwrap_or(crate::texture::DEFAULT_TEXTURE_CACHE_BYTES)
 }
 
 /// Stages a text file (the statistics) into `set`.

@@ -5,8 +5,8 @@
 //!
 //! A hit compares the packed key (level id, tile index) with the thread's 8 keys, adds one
 //! to a plain per-entry counter and reads the tile through the entry's `Arc` without
-//! cloning it. An entry owns an `Arc` of its tile, so a tile stays valid while the thread reads it
-//! even if the shared cache evicts it meanwhile. Entries are keyed by the level's
+//! cloning it. An entry owns an `Arc` of its tile, so a tile stays valid while the thread
+//! reads it even if the shared cache evicts it meanwhile. Entries are keyed by the level's
 //! process-unique id and the tile's index, and tiles never change once read, so an entry
 //! is never stale. Hits are counted in the entry, on the thread, and added to the file's
 //! counters when the entry is replaced or the thread's micro-cache is flushed
