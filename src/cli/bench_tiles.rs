@@ -13,7 +13,7 @@
 //! samples and integrator.
 //!
 //! Real loads: the scene's texture files are first made into 64x64-tiled, mip-mapped `.tx`
-//! files by `maketx` (in a temporary directory), and every row runs on them. The counting
+//! files as `conetrace maketx` writes them (in a temporary directory), and every row runs on them. The counting
 //! pass and the timed rounds read them decoded whole; one more render per row opens them
 //! tile by tile through a fresh texture cache of `--cache` bytes, and reports the tiles it
 //! read from disk, the bytes read, the cache's peak resident bytes and its render time (cold
@@ -25,7 +25,6 @@
 use std::ffi::OsString;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::Arc;
 
 use clap::Args;
@@ -36,7 +35,7 @@ use crate::footprint::LodStrategy;
 use crate::integrator::selection::{self, IntegratorChoice};
 use crate::render::{self, RenderControl, RenderOptions, RenderResult};
 use crate::scene::{SceneDescription, TextureSource};
-use crate::texture::{FilterMode, Texture, TileCache};
+use crate::texture::{write_tx, FilterMode, Texture, TileCache, TxCompression, TxOptions};
 
 /// Arguments of `bench tiles`.
 #[derive(Args, Debug)]
@@ -149,9 +148,10 @@ fn render_once(
     })
 }
 
-/// The scene's textures made into 64x64-tiled, mip-mapped `.tx` files in `dir` by `maketx
-/// --filter box`: the scene with its texture files replaced by them. Embedded textures stay
-/// as they are (decoded whole).
+/// The scene's textures made into 64x64-tiled, mip-mapped `.tx` files in `dir` by
+/// [`crate::texture::write_tx`] (as `conetrace maketx` makes them, every level built as a
+/// render builds it): the scene with its texture files replaced by them. Embedded textures
+/// stay as they are (decoded whole).
 pub fn with_tx_textures(
     scene: &SceneDescription,
     dir: &Path,
@@ -161,25 +161,21 @@ pub fn with_tx_textures(
         let TextureSource::File(path) = &texture.source else {
             continue;
         };
+        let bad = |message: String| CommandError::bad_input(message);
+        let whole =
+            Texture::from_file_whole(path, texture.color_space).map_err(|e| bad(e.to_string()))?;
         let tx = dir.join(format!("{index}.tx"));
-        let out = Command::new("maketx")
-            .arg(path)
-            .arg("-o")
-            .arg(&tx)
-            .args(["--filter", "box", "--tile", "64", "64"])
-            .output()
-            .map_err(|e| {
-                CommandError::bad_input(format!(
-                    "maketx: cannot run ({e}); run `bash scripts/setup.sh`"
-                ))
-            })?;
-        if !out.status.success() {
-            return Err(CommandError::bad_input(format!(
-                "{}: maketx: {}",
-                path.display(),
-                String::from_utf8_lossy(&out.stderr).trim()
-            )));
-        }
+        let options = TxOptions {
+            compression: TxCompression::Deflate,
+            color_space: texture.color_space,
+            software: format!("conetrace bench tiles {}", path.display()),
+        };
+        let file = std::fs::File::create(&tx)
+            .map_err(|e| bad(format!("{}: cannot create: {e}", tx.display())))?;
+        let mut writer = std::io::BufWriter::new(file);
+        write_tx(whole.pyramid(), &mut writer, &options)
+            .and_then(|()| std::io::Write::flush(&mut writer).map_err(|e| e.to_string()))
+            .map_err(|e| bad(format!("{}: {e}", tx.display())))?;
         texture.source = TextureSource::File(tx);
     }
     Ok(converted)
@@ -384,7 +380,7 @@ fn measure_and_print(
             .join(" ");
         let mut text = format!(
             "`{command}`: {} at {width}x{height}, {spp} spp, integrator {integrator}, {} threads, \
-             median of {} timed rounds; textures made into 64x64-tiled .tx files by maketx; real \
+             median of {} timed rounds; textures made into 64x64-tiled .tx files as conetrace maketx makes them; real \
              loads through a fresh {} cache per row\n\n",
             args.scene.display(),
             rayon::current_num_threads(),
