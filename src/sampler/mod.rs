@@ -183,6 +183,67 @@ fn next_2d_lanes<const N: usize>(
     out
 }
 
+/// Draws of many paths' samplers at once, each lane at its own sampler's dimension plus
+/// `offset`, without moving the samplers on: lane by lane the values [`PixelSampler::next_1d`]
+/// and [`PixelSampler::next_2d`] give at that dimension, bit for bit. Every lane's keys and
+/// scrambles are hashed without a branch, so a caller compiled inside a [`simd::dispatch`]
+/// kernel runs them as vector instructions.
+#[derive(Clone, Copy, Debug)]
+pub struct SamplerLanes<const N: usize> {
+    states: [u32; N],
+    indices: [u32; N],
+    dimensions: [u32; N],
+}
+
+impl<const N: usize> SamplerLanes<N> {
+    /// The lanes of `samplers`.
+    #[inline(always)]
+    pub fn new(samplers: &[PixelSampler; N]) -> SamplerLanes<N> {
+        SamplerLanes {
+            states: samplers.map(|s| s.pixel_state),
+            indices: samplers.map(|s| s.index),
+            dimensions: samplers.map(|s| s.dimension),
+        }
+    }
+
+    /// Each lane's draw keys at its dimension plus `offset` ([`draw_key`]).
+    #[inline(always)]
+    fn keys(&self, offset: u32) -> [u32; N] {
+        std::array::from_fn(|lane| {
+            draw_key(
+                self.states[lane],
+                self.dimensions[lane].wrapping_add(offset),
+            )
+        })
+    }
+
+    /// [`PixelSampler::next_1d`] of every lane at its dimension plus `offset`.
+    #[inline(always)]
+    pub fn draw_1d(&self, offset: u32) -> [f32; N] {
+        let keys = self.keys(offset);
+        std::array::from_fn(|lane| {
+            let shuffled = nested_uniform_scramble(self.indices[lane], keys[lane]);
+            unit_float(scramble_mirrored(
+                shuffled,
+                hash_u32(keys[lane] ^ X_SCRAMBLE_SALT),
+            ))
+        })
+    }
+
+    /// [`PixelSampler::next_2d`] of every lane at its dimension plus `offset`: x, then y.
+    #[inline(always)]
+    pub fn draw_2d(&self, offset: u32) -> [[f32; N]; 2] {
+        let keys = self.keys(offset);
+        let mut out = [[0.0f32; N]; 2];
+        for lane in 0..N {
+            let point = DrawKeys::new(keys[lane]).draw_2d(self.indices[lane]);
+            out[0][lane] = point.x;
+            out[1][lane] = point.y;
+        }
+        out
+    }
+}
+
 /// The key of the draw at `dimension`: `hash_words(&[pixel_key, dimension])`, its first
 /// step (`pixel_state`) done once per pixel.
 #[inline]

@@ -321,3 +321,46 @@ fn camera_lanes_are_the_one_pixel_draws_bit_for_bit() {
         }
     }
 }
+
+#[test]
+fn sampler_lanes_draw_what_each_sampler_draws_bit_for_bit() {
+    // Paths at different pixels, samples and depths: every lane's 1D and 2D draws at its own
+    // dimension plus an offset are the draws of its sampler, compiled for every vector
+    // level this processor has, and the samplers are not moved on.
+    let mut state = 0x2545_f491u32;
+    let mut next = move || crate::test_rng::xorshift32(&mut state);
+    for seed in [0u32, 11, u32::MAX] {
+        let sampler = Sampler::new(seed);
+        for _ in 0..40 {
+            let samplers: [PixelSampler; 16] = std::array::from_fn(|_| {
+                let mut one = sampler.pixel(next() % 4_000_000, next() % 4096);
+                one.skip_dimensions(next() % 200);
+                one
+            });
+            let offset = next() % 8;
+            for level in simd::Level::supported() {
+                let (one_d, two_d) = simd::run_at(
+                    level,
+                    #[inline(always)]
+                    || {
+                        let lanes = SamplerLanes::new(&samplers);
+                        (lanes.draw_1d(offset), lanes.draw_2d(offset))
+                    },
+                );
+                for (lane, one) in samplers.iter().enumerate() {
+                    let mut ahead = *one;
+                    ahead.skip_dimensions(offset);
+                    let mut ahead_2d = ahead;
+                    assert_eq!(
+                        one_d[lane].to_bits(),
+                        ahead.next_1d().to_bits(),
+                        "{level:?}"
+                    );
+                    let point = ahead_2d.next_2d();
+                    assert_eq!(two_d[0][lane].to_bits(), point.x.to_bits(), "{level:?}");
+                    assert_eq!(two_d[1][lane].to_bits(), point.y.to_bits(), "{level:?}");
+                }
+            }
+        }
+    }
+}

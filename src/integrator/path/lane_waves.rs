@@ -27,11 +27,13 @@ use crate::integrator::wave_integrator::{write_geometry_values, write_material_a
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
+use crate::sampler::PixelSampler;
 use crate::scene::Material;
 use crate::shading::surface_inputs::SurfaceInputs;
 use crate::shading::{self, SpawnPoint};
+use crate::simd;
 
-use super::vertex::{scatter_at_surface, HitRecord, SurfaceSite};
+use super::vertex::{scatter_at_surface, HitRecord, SurfaceSite, VertexSamples};
 use super::{PathRay, PathTracer, PathWaves};
 
 /// `PathLanes::lane_of_ray` for a ray shaded by the scalar path.
@@ -45,6 +47,8 @@ pub(crate) struct PathLanes {
     lane_of_ray: Vec<u32>,
     /// The hits the lanes take, in the wave's order.
     picks: LanePicks,
+    /// Per lane: the uniform numbers of its vertex, drawn for all lanes together.
+    vertex_samples: Vec<VertexSamples>,
 }
 
 impl PathLanes {
@@ -85,6 +89,38 @@ pub(super) fn shade_lanes(
     interpolate(lanes);
     texture_gradients(lanes, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
+    draw_vertex_samples(path, rays);
+}
+
+/// Lanes whose samplers are hashed side by side: one AVX-512 register of 32-bit lanes.
+const DRAW_WIDTH: usize = 16;
+
+/// Every lane's vertex numbers (light choice and point, BSDF lobe and direction, roulette),
+/// [`DRAW_WIDTH`] lanes at a time at the lanes' vector level. The samplers are moved on as
+/// each vertex takes its numbers (`vertex::scatter_at_surface`); a path that ends before
+/// then leaves its numbers unread.
+// Not inlined: one call per wave, and `perf` attributes each stage's time to it.
+#[inline(never)]
+fn draw_vertex_samples(path: &mut PathLanes, rays: &[PathRay]) {
+    let PathLanes {
+        lanes,
+        vertex_samples,
+        ..
+    } = path;
+    vertex_samples.clear();
+    simd::run_at(
+        lanes.level(),
+        #[inline(always)]
+        || {
+            for chunk in lanes.wave_index.chunks(DRAW_WIDTH) {
+                // A short last chunk repeats its last lane; the copies are dropped.
+                let samplers: [PixelSampler; DRAW_WIDTH] =
+                    std::array::from_fn(|k| rays[chunk[k.min(chunk.len() - 1)] as usize].sampler);
+                let drawn = VertexSamples::draw_lanes(&samplers);
+                vertex_samples.extend_from_slice(&drawn[..chunk.len()]);
+            }
+        },
+    );
 }
 
 /// The rays whose hits the lanes cover, each with its footprint's width at the hit, placed
@@ -186,8 +222,16 @@ pub(super) fn finish_lane(
             camera_first,
         },
     };
+    let drawn = &path.vertex_samples[lane];
     scatter_at_surface(
-        tracer, context, ray, &site, material, &inputs, waves, worker,
+        tracer,
+        context,
+        ray,
+        &site,
+        material,
+        (&inputs, Some(drawn)),
+        waves,
+        worker,
     );
 }
 

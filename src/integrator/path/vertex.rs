@@ -24,6 +24,7 @@ use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{GeometryRef, SurfaceDetail};
 use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
+use crate::sampler::{PixelSampler, SamplerLanes};
 use crate::scene::Material;
 use crate::shading::surface_inputs::SurfaceInputs;
 use crate::shading::{
@@ -85,7 +86,14 @@ pub(super) fn shade(
     }
     let site = SurfaceSite::of_record(&surface);
     scatter_at_surface(
-        tracer, context, ray, &site, material, &inputs, waves, worker,
+        tracer,
+        context,
+        ray,
+        &site,
+        material,
+        (&inputs, None),
+        waves,
+        worker,
     );
 }
 
@@ -153,7 +161,7 @@ pub(super) fn scatter_at_surface(
     ray: &mut PathRay,
     site: &SurfaceSite,
     material: &Material,
-    inputs: &SurfaceInputs,
+    (inputs, drawn): (&SurfaceInputs, Option<&VertexSamples>),
     waves: &mut PathWaves,
     worker: &mut WorkerState,
 ) {
@@ -161,7 +169,7 @@ pub(super) fn scatter_at_surface(
         // Past the last bounce a delta lobe's ray only collects emission (added before).
         return;
     }
-    let u = VertexSamples::draw(ray);
+    let u = VertexSamples::take(ray, drawn);
     let vertex = SurfaceVertex::new(tracer, context, ray, site, material, inputs);
     if vertex.lobes.has_density() && bsdf_has_smooth_part(&vertex.bsdf, vertex.wo, vertex.ns) {
         sample_direct_light(tracer, context, ray, &vertex, &u, waves, worker);
@@ -314,7 +322,8 @@ fn add_emission(
 
 /// The uniform numbers of one vertex: the same seven dimensions at every vertex, drawn in
 /// this order whichever are used, so an image is a pure function of the seed.
-struct VertexSamples {
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct VertexSamples {
     light: f32,
     light_point: Vec2,
     lobe: f32,
@@ -323,6 +332,9 @@ struct VertexSamples {
 }
 
 impl VertexSamples {
+    /// The dimensions a surface vertex takes.
+    const DIMENSIONS: u32 = 7;
+
     fn draw(ray: &mut PathRay) -> VertexSamples {
         VertexSamples {
             light: ray.sampler.next_1d(),
@@ -330,6 +342,39 @@ impl VertexSamples {
             lobe: ray.sampler.next_1d(),
             direction: ray.sampler.next_2d(),
             roulette: ray.sampler.next_1d(),
+        }
+    }
+
+    /// [`VertexSamples::draw`] of every sampler of `samplers` at once, without moving them
+    /// on: the same values, the hashing of all lanes done side by side
+    /// ([`SamplerLanes`]).
+    #[inline(always)]
+    pub(super) fn draw_lanes<const N: usize>(samplers: &[PixelSampler; N]) -> [VertexSamples; N] {
+        let lanes = SamplerLanes::new(samplers);
+        let light = lanes.draw_1d(0);
+        let light_point = lanes.draw_2d(1);
+        let lobe = lanes.draw_1d(3);
+        let direction = lanes.draw_2d(4);
+        let roulette = lanes.draw_1d(6);
+        std::array::from_fn(|lane| VertexSamples {
+            light: light[lane],
+            light_point: Vec2::new(light_point[0][lane], light_point[1][lane]),
+            lobe: lobe[lane],
+            direction: Vec2::new(direction[0][lane], direction[1][lane]),
+            roulette: roulette[lane],
+        })
+    }
+
+    /// The vertex's numbers: `drawn` when the lanes drew them (the ray's sampler then moves
+    /// past them), else drawn from the ray's sampler now.
+    #[inline]
+    fn take(ray: &mut PathRay, drawn: Option<&VertexSamples>) -> VertexSamples {
+        match drawn {
+            Some(drawn) => {
+                ray.sampler.skip_dimensions(VertexSamples::DIMENSIONS);
+                *drawn
+            }
+            None => VertexSamples::draw(ray),
         }
     }
 }
