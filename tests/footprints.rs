@@ -217,8 +217,8 @@ fn concave_mirror_lowers_the_lod_of_what_it_magnifies() {
     // Control: the ball seen directly has the same footprint under both strategies.
     let albedo = cone.channel("albedo.R");
     let mut direct = 0usize;
-    for i in 0..cone.width * cone.height {
-        if albedo[i] > 0.0 {
+    for (i, &a) in albedo.iter().enumerate().take(cone.width * cone.height) {
+        if a > 0.0 {
             let (Some(c), Some(d)) = (
                 unclamped_lod(&cone, i, MIPLEVELS_SIZE),
                 unclamped_lod(&distance, i, MIPLEVELS_SIZE),

@@ -328,6 +328,8 @@ pub fn integrator_memory(
 }
 
 /// The per-thread state of the chosen integrator.
+// One per worker thread for a whole render: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum SelectedState {
     /// Whitted's waves, also the voxel cone tracer's (it shades through Whitted's).
     Whitted(Waves),

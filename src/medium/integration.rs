@@ -61,6 +61,8 @@ impl FogIntegration {
 
 /// The composite midpoint rule on `density` over the finite `[t0, t1]` with `steps` equal
 /// steps (at least one): `h * sum rho(t0 + (i + 1/2) h)`.
+// `!(t1 > t0)` also returns for a NaN end, which `t1 <= t0` would let through.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn marched_optical_depth(density: &Density, line: &Line, t0: f64, t1: f64, steps: u32) -> f64 {
     if !(t1 > t0) {
         return 0.0;

@@ -95,6 +95,8 @@ impl Axes {
     /// larger by a root, the other as sin(2 phi) / (2 * larger)), so the result
     /// agrees with `theta().sin_cos()` to about 1e-7.
     #[inline]
+    // `!(r > 0.0)` also catches a NaN length, which `r <= 0.0` would not.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     pub fn direction(&self) -> (f32, f32) {
         let (y, x) = (self.doubled_angle.0 as f64, self.doubled_angle.1 as f64);
         let r = (x * x + y * y).sqrt();

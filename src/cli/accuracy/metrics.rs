@@ -38,8 +38,8 @@ impl DisplayImage {
         let n = film.width() as usize * film.height() as usize;
         let mut pixels = Vec::with_capacity(n);
         let mut srgb8 = Vec::with_capacity(n * 3);
-        for i in 0..n {
-            let linear = [planes[0][i], planes[1][i], planes[2][i]];
+        for ((&r, &g), &b) in planes[0].iter().zip(planes[1]).zip(planes[2]).take(n) {
+            let linear = [r, g, b];
             pixels.push(linear.map(|v| display_value(v, tonemap, scale)));
             srgb8.extend(linear.map(|v| tonemap_to_srgb8(v, tonemap, scale)));
         }

@@ -173,6 +173,8 @@ impl HeightPatch {
 
     /// As [`HeightPatch::march`], counting only crossings `(t, u, v)` that `accept` keeps
     /// (an alpha cut-out): the march goes on behind a rejected one.
+    // `!(start <= end)` also stops at a NaN bound, which `start > end` would let through.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     pub fn march_accepting(
         &self,
         ray: &PatchRay,
