@@ -121,14 +121,14 @@ fn lighting_report_ranks_path_vct_and_whitted() {
             assert!(size > 0, "{} is empty", path.display());
         }
         let markdown = std::fs::read_to_string(report.join(format!("{name}.md"))).unwrap();
-        assert!(markdown.contains("| vct 32 b2 |"), "{markdown}");
+        assert!(markdown.contains("| vct 32 b3 |"), "{markdown}");
 
         let rows = rows(&report.join(format!("{name}.csv")));
         eprintln!("{name}: {rows:#?}");
         assert_eq!(
             rows.len(),
             6,
-            "{name}: whitted, path 1 and 16, vct 32 with 1 and 2 bounces, isotropic vct 32"
+            "{name}: whitted, path 1 and 16, vct 32 with 1 and 3 bounces, isotropic vct 32"
         );
         assert!(
             rows.iter().any(|r| r["method"] == "vct_isotropic"),
@@ -174,7 +174,7 @@ fn lighting_report_ranks_path_vct_and_whitted() {
     // rest; the voxels carry the emissive panel's light and the first bounce.
     let rows = rows(&report.join("vct_cornell.csv"));
     let whitted = number(find(&rows, "whitted", &[]), "rmse");
-    for bounces in ["1", "2"] {
+    for bounces in ["1", "3"] {
         let vct = number(
             find(
                 &rows,

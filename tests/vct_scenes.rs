@@ -72,18 +72,26 @@ fn light_leaks_through_a_thin_wall_but_the_dark_room_stays_dark() {
     );
     assert_eq!(mean_red(&whitted, right.0, right.1), 0.0);
     let left = ((0.075, 0.425), (0.15, 0.85));
-    let mut leaked = Vec::new();
-    for resolution in ["8", "32", "128"] {
-        let args = [&size[..], &["--vct-resolution", resolution]].concat();
-        let (image, _) = render(dir.path(), &leak, &format!("vct{resolution}"), &args);
-        let lit = mean_red(&image, left.0, left.1);
-        leaked.push((resolution, mean_red(&image, right.0, right.1) / lit));
+    // With the voxels holding direct light only, and with the default three bounces, which
+    // carry the leaked light on around the dark room.
+    for (bounces, bound) in [("1", 0.1), ("3", 0.25)] {
+        let mut leaked = Vec::new();
+        for resolution in ["8", "32", "128"] {
+            let args = [
+                &size[..],
+                &["--vct-resolution", resolution, "--vct-bounces", bounces],
+            ]
+            .concat();
+            let (image, _) = render(dir.path(), &leak, &format!("vct{resolution}"), &args);
+            let lit = mean_red(&image, left.0, left.1);
+            leaked.push((resolution, mean_red(&image, right.0, right.1) / lit));
+        }
+        println!("{bounces} bounces: right floor over left floor by resolution: {leaked:?}");
+        // Voxels straddling the wall show the lit side's light on the dark side.
+        assert!(leaked[0].1 > 1e-3, "no leak at resolution 8: {leaked:?}");
+        // The dark room stays below the bound at every resolution.
+        assert!(leaked.iter().all(|l| l.1 < bound), "{bounces}: {leaked:?}");
     }
-    println!("right floor over left floor by resolution: {leaked:?}");
-    // Voxels straddling the wall show the lit side's light on the dark side.
-    assert!(leaked[0].1 > 1e-3, "no leak at resolution 8: {leaked:?}");
-    // The dark room stays below a tenth of the lit one at every resolution.
-    assert!(leaked.iter().all(|l| l.1 < 0.1), "{leaked:?}");
 }
 
 #[test]
@@ -168,7 +176,12 @@ fn the_extra_bounce_brightens_what_only_indirect_light_reaches() {
     let dir = temp_dir();
     let cornell = scene("vct_cornell.toml");
     let args = ["--width", "64", "--height", "64", "--vct-resolution", "32"];
-    let (one, _) = render(dir.path(), &cornell, "b1", &args);
+    let (one, _) = render(
+        dir.path(),
+        &cornell,
+        "b1",
+        &[&args[..], &["--vct-bounces", "1"]].concat(),
+    );
     let (two, stats) = render(
         dir.path(),
         &cornell,
@@ -243,15 +256,15 @@ fn mean_and_rmse(image: &ExrImage, reference: &ExrImage) -> (f64, f64) {
 }
 
 #[test]
-fn the_cornell_boxes_get_most_of_the_path_tracers_light_at_a_lower_rmse_than_4_spp() {
-    // 64x64; the reference is the path tracer at 64 spp (itself noisy), vct and the path
-    // tracer at 4 spp. With seed 003's six diffuse cones vct got 72.5 % and 77.6 % of the
-    // reference's mean at RMSE 0.194 and 0.162 (the path tracer's at 4 spp: 0.160, 0.201);
-    // the 18-cone set gets 76.5 % and 78.8 % at 0.157 and 0.148. The issue's target, 85 %,
-    // is not reached: the bounds hold what is.
+fn the_cornell_boxes_get_the_path_tracers_light_within_15_percent_at_a_lower_rmse_than_4_spp() {
+    // 64x64; the reference is the path tracer at 64 spp (itself noisy), vct (default
+    // settings: three bounces in the voxels) and the path tracer at 4 spp. With the voxels
+    // holding direct light only, vct got 76.5 % and 78.8 % of the reference's mean at RMSE
+    // 0.157 and 0.148 (the path tracer's at 4 spp: 0.160, 0.201); with three bounces 94.4 %
+    // and 97.2 % at 0.145 and 0.083 (docs/vct.md).
     let dir = temp_dir();
     let size = ["--width", "64", "--height", "64"];
-    for (name, least_share) in [("cornell.toml", 0.75), ("vct_cornell.toml", 0.78)] {
+    for name in ["cornell.toml", "vct_cornell.toml"] {
         let path = scene(name);
         let with = |integrator: &'static str, spp: &'static str| -> Vec<&'static str> {
             [&size[..], &["--integrator", integrator, "--spp", spp]].concat()
@@ -274,7 +287,7 @@ fn the_cornell_boxes_get_most_of_the_path_tracers_light_at_a_lower_rmse_than_4_s
              {vct_rmse:.4}, path 4 spp {path_rmse:.4}",
             100.0 * share
         );
-        assert!(share > least_share && share < 1.0, "{name}: share {share}");
+        assert!((share - 1.0).abs() < 0.15, "{name}: share {share}");
         assert!(
             vct_rmse < path_rmse,
             "{name}: RMSE {vct_rmse} vs {path_rmse}"

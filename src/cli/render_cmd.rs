@@ -169,7 +169,7 @@ pub struct RenderArgs {
           value_parser = clap::value_parser!(u32).range(2..=i64::from(conetrace::vct::build::MAX_RESOLUTION)))]
     pub vct_resolution: Option<u32>,
     /// Voxel cone tracing: light bounces held by the voxels, 1 (direct light) to 8
-    /// [default: the scene's, else 1].
+    /// [default: the scene's, else 3].
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=8))]
     pub vct_bounces: Option<u32>,
     /// Voxel cone tracing: what a voxel above the finest level holds: `directional` (six

@@ -425,7 +425,8 @@ pub struct RenderSettings {
     /// `[render] vct_resolution`: voxels across the scene's longest side (`None`: the
     /// default rule of `crate::vct::grid::default_resolution`).
     pub vct_resolution: Option<u32>,
-    /// `[render] vct_bounces`: bounces held by the voxels (1: direct light only).
+    /// `[render] vct_bounces`: bounces held by the voxels (1: direct light only; default
+    /// [`crate::vct::build::DEFAULT_BOUNCES`]).
     pub vct_bounces: u32,
     /// What the voxels above level 0 hold (`--vct-voxels`; directional by default).
     pub vct_voxels: crate::vct::VoxelKind,
@@ -455,7 +456,7 @@ impl Default for RenderSettings {
             gi: false,
             diffuse_bounces: None,
             vct_resolution: None,
-            vct_bounces: 1,
+            vct_bounces: crate::vct::build::DEFAULT_BOUNCES,
             vct_voxels: crate::vct::VoxelKind::Directional,
             fog_model: crate::medium::FogModel::Exact,
             fog_integration: crate::medium::FogIntegration::Exact,

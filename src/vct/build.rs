@@ -8,7 +8,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::bounce::{add_bounce, SurfaceVoxel};
+use super::bounce::{add_bounce, gather_groups, GatherGroups, SurfaceVoxel, GATHER_LEVEL};
 use super::grid::{
     default_resolution, GridFrame, VoxelKind, VoxelLevel, VoxelPyramid, DEFAULT_MEMORY_BUDGET,
 };
@@ -26,13 +26,21 @@ pub const MAX_RESOLUTION: u32 = 1024;
 /// The largest pyramid an explicit resolution may ask for.
 pub const MAX_PYRAMID_BYTES: u64 = 4 << 30;
 
+/// Light bounces the voxels hold unless told otherwise: direct light and two extra bounces.
+/// On the Cornell boxes (64x64, against the path tracer at 64 spp) vct's mean is 76.5 / 78.8 %
+/// of the path tracer's with 1, 88.6 / 91.0 % with 2, 94.4 / 97.2 % with 3 and 97.3 / 100.3 %
+/// with 4 (`docs/vct.md`); each extra bounce costs one shared gather per block
+/// ([`super::bounce::GATHER_LEVEL`]).
+pub const DEFAULT_BOUNCES: u32 = 3;
+
 /// What the user chose for the voxelisation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct VctSettings {
     /// Voxels across the longest side of the scene; `None`: the default rule
     /// ([`default_resolution`]).
     pub resolution: Option<u32>,
-    /// Light bounces held by the voxels: 1 = direct light only, 2 = one extra bounce.
+    /// Light bounces held by the voxels: 1 = direct light only, 2 = one extra bounce
+    /// ([`DEFAULT_BOUNCES`] by default).
     pub bounces: u32,
     /// What a voxel above level 0 holds (`--vct-voxels`).
     pub voxels: VoxelKind,
@@ -42,7 +50,7 @@ impl Default for VctSettings {
     fn default() -> Self {
         VctSettings {
             resolution: None,
-            bounces: 1,
+            bounces: DEFAULT_BOUNCES,
             voxels: VoxelKind::default(),
         }
     }
@@ -202,8 +210,13 @@ pub fn build_voxel_scene(
 
     let bouncing = Instant::now();
     let (mut bounce_cones, mut bounce_cone_steps) = (0, 0);
+    let groups = if settings.bounces > 1 {
+        gather_groups(&frame, &surfaces, GATHER_LEVEL)
+    } else {
+        GatherGroups::default()
+    };
     for _ in 1..settings.bounces {
-        let (next, work) = add_bounce(&pyramid, &surfaces);
+        let (next, work) = add_bounce(&pyramid, &surfaces, &groups);
         pyramid = next;
         bounce_cones += work.cones;
         bounce_cone_steps += work.steps;

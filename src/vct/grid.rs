@@ -278,27 +278,48 @@ impl VoxelLevel {
         let base = p.floor();
         let f = p - base;
         let (x0, y0, z0) = (base.x as i64, base.y as i64, base.z as i64);
+        let [dx, dy, dz] = self.dims.map(i64::from);
+        let weights = [[1.0 - f.x, f.x], [1.0 - f.y, f.y], [1.0 - f.z, f.z]];
         let mut out = [0.0f32; 4];
+        // Most lookups have all eight corners inside the level: one index and fixed
+        // strides, no per-corner bounds test.
+        if x0 >= 0 && y0 >= 0 && z0 >= 0 && x0 + 1 < dx && y0 + 1 < dy && z0 + 1 < dz {
+            let first = (x0 + dx * (y0 + dy * z0)) as usize;
+            let (row, slice) = (dx as usize, (dx * dy) as usize);
+            for corner in 0..8 {
+                let (cx, cy, cz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+                let w = weights[0][cx] * weights[1][cy] * weights[2][cz];
+                if w != 0.0 {
+                    self.accumulate_voxel(&mut out, w, first + cx + row * cy + slice * cz, faces);
+                }
+            }
+            return out;
+        }
         for corner in 0..8 {
             let (cx, cy, cz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-            let w = if cx == 1 { f.x } else { 1.0 - f.x }
-                * if cy == 1 { f.y } else { 1.0 - f.y }
-                * if cz == 1 { f.z } else { 1.0 - f.z };
+            let w = weights[0][cx] * weights[1][cy] * weights[2][cz];
             if w == 0.0 {
                 continue;
             }
-            let Some(i) = self.voxel_index(x0 + cx, y0 + cy, z0 + cz) else {
+            let Some(i) = self.voxel_index(x0 + cx as i64, y0 + cy as i64, z0 + cz as i64) else {
                 continue;
             };
-            if self.faces == 1 {
-                accumulate(&mut out, w, self.voxels[i]);
-            } else {
-                for &(face, fw) in faces {
-                    accumulate(&mut out, w * fw, self.voxels[i * self.faces + face]);
-                }
-            }
+            self.accumulate_voxel(&mut out, w, i, faces);
         }
         out
+    }
+
+    /// Adds `w` times voxel `i`, its `faces` blended by their weights, to `out`.
+    #[inline]
+    fn accumulate_voxel(&self, out: &mut [f32; 4], w: f32, i: usize, faces: &[(usize, f32); 3]) {
+        if self.faces == 1 {
+            accumulate(out, w, self.voxels[i]);
+        } else {
+            let voxel = &self.voxels[i * self.faces..(i + 1) * self.faces];
+            for &(face, fw) in faces {
+                accumulate(out, w * fw, voxel[face]);
+            }
+        }
     }
 }
 
@@ -342,12 +363,18 @@ impl VoxelPyramid {
         let v = self.frame.to_voxel(p);
         let faces = face_weights(direction);
         let at = |l: usize| self.levels[l].trilinear(v / (1u32 << l) as f32, &faces);
-        let a = at(lower);
         let t = level - lower as f32;
         if t == 0.0 || lower + 1 >= self.levels.len() {
-            return a;
+            return at(lower);
         }
+        // The upper level's corners hold the lower's parents, and a parent is empty only
+        // when all its children are: an empty upper sample means an empty lower one, and
+        // most of a scene is empty space.
         let b = at(lower + 1);
+        if b[3] == 0.0 {
+            return [0.0; 4];
+        }
+        let a = at(lower);
         std::array::from_fn(|i| a[i] + t * (b[i] - a[i]))
     }
 }

@@ -6,8 +6,8 @@
 //! - Whitted plus its constant ambient term, as Whitted renders these scenes;
 //! - the path tracer at every `--lighting-path-spp` count (1, 4, 16, 64, 256);
 //! - the voxel cone tracer at every `--lighting-vct-resolutions` grid (32, 64, 128, 256),
-//!   once with the voxels holding direct light only (`--vct-bounces 1`) and once with one
-//!   extra bounce (`--vct-bounces 2`);
+//!   once with the voxels holding direct light only (`--vct-bounces 1`) and once with the
+//!   default bounces (`vct::build::DEFAULT_BOUNCES`, 3);
 //!
 //! and compared with the path tracer at `--lighting-reference-spp` samples (1024) drawn with
 //! another seed ([`super::methods::ground_truth_seed`]): as its samples grow it converges to
@@ -41,6 +41,7 @@ use crate::cli::CommandError;
 use crate::film::PixelRect;
 use crate::integrator::{PathTracer, Vct, Whitted};
 use crate::render::{self, Integrator, RenderContext, RenderControl, RenderOptions, RenderResult};
+use conetrace::vct::build::DEFAULT_BOUNCES;
 use conetrace::vct::{build_voxel_scene, VctSettings, VoxelKind};
 
 use super::metrics::{self, DisplayImage, ErrorMetrics};
@@ -180,7 +181,7 @@ pub fn methods(args: &AccuracyArgs) -> Vec<LightingMethod> {
     // The isotropic voxels are measured with direct light only: the reason for the
     // directional ones, not a setting to tune.
     for &resolution in &args.lighting_vct_resolutions {
-        for bounces in [1, 2] {
+        for bounces in [1, DEFAULT_BOUNCES] {
             methods.push(LightingMethod::Vct {
                 resolution,
                 bounces,
@@ -669,7 +670,7 @@ mod tests {
                 },
                 LightingMethod::Vct {
                     resolution: 32,
-                    bounces: 2,
+                    bounces: DEFAULT_BOUNCES,
                     voxels: VoxelKind::Directional,
                 },
                 LightingMethod::Vct {
