@@ -524,7 +524,8 @@ enum CtStatus ct_scene_texture_name(struct CtScene scene, uint32_t index, const 
 enum CtStatus ct_scene_texture_path(struct CtScene scene, uint32_t index, const char **out_path);
 
 // How texture `index`'s 8-bit colour is decoded: `CT_COLOR_SPACE_SRGB` (to linear) or
-// `CT_COLOR_SPACE_LINEAR`.
+// `CT_COLOR_SPACE_LINEAR`: as the scene states it, else as a `.tx` written by `conetrace
+// maketx` records it, else sRGB.
 //
 // Thread safety: any thread, concurrently with any other call.
 //

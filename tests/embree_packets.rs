@@ -853,7 +853,7 @@ fn quad_scene(cutout_st: Option<Vec<glam::Vec2>>) -> conetrace::scene::SceneDesc
                 label: "mask".to_string(),
                 bytes: Arc::new(Vec::new()),
             },
-            color_space: ColorSpace::Linear,
+            color_space: Some(ColorSpace::Linear),
             wrap_s: WrapMode::Clamp,
             wrap_t: WrapMode::Clamp,
         });

@@ -45,6 +45,11 @@ fn stderr(out: &Output) -> String {
 
 /// A textured quad seen at a slant (so lookups span several levels) with `texture`.
 fn scene(dir: &Path, texture: &str) {
+    scene_stating(dir, texture, "");
+}
+
+/// [`scene`] with `color_space` (a line of the `[[texture]]` table, or nothing).
+fn scene_stating(dir: &Path, texture: &str, color_space: &str) {
     common::write(dir, "quad.obj", &common::square_obj(1.0, 0.0));
     common::write(
         dir,
@@ -66,6 +71,7 @@ direction = [0.2, -1.0, -0.3]
 [[texture]]
 name = "t"
 file = "{texture}"
+{color_space}
 [[material]]
 name = "m"
 base_color = [1.0, 1.0, 1.0]
@@ -354,4 +360,96 @@ fn a_demand_loaded_file_is_identified_by_its_headers() {
             .file_identity()
             .is_none()
     );
+}
+
+#[test]
+fn a_tx_whose_scene_states_no_colour_space_is_decoded_in_the_one_it_records() {
+    let dir = common::temp_dir();
+    noise_png(dir.path(), "data.png", 150, 90, false);
+    let out = maketx(
+        dir.path(),
+        &["--colorspace", "linear", "data.png", "data.tx"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let render_stating = |color_space: &str, output: &str| {
+        scene_stating(dir.path(), "data.tx", color_space);
+        render(dir.path(), output, "s.json", "aniso");
+        dir.path().join(output)
+    };
+    let unstated = render_stating("", "unstated.exr");
+    let linear = render_stating("color_space = \"linear\"", "linear.exr");
+    // The file records Linear: unstated is linear, bit for bit.
+    assert_same_pixels(&unstated, &linear);
+    // A colour space the scene states wins over the recorded one.
+    let srgb = render_stating("color_space = \"srgb\"", "srgb.exr");
+    let (a, b) = (common::read_exr(&srgb), common::read_exr(&linear));
+    assert_ne!(a.channel("R"), b.channel("R"));
+    // A .tx that records sRGB (the default of `conetrace maketx`) stays sRGB.
+    let out = maketx(dir.path(), &["data.png", "colour.tx"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let colour = dir.path().join("colour.tx");
+    assert_eq!(
+        conetrace::texture::file_color_space(&colour),
+        Some(ColorSpace::Srgb)
+    );
+    let tx = dir.path().join("data.tx");
+    assert_eq!(
+        conetrace::texture::file_color_space(&tx),
+        Some(ColorSpace::Linear)
+    );
+    for whole in [false, true] {
+        let load = |path: &Path, space: Option<ColorSpace>| match whole {
+            true => Texture::from_file_whole(path, space).unwrap(),
+            false => Texture::from_file(path, space).unwrap(),
+        };
+        assert_eq!(load(&tx, None).color_space(), Some(ColorSpace::Linear));
+        assert_eq!(load(&colour, None).color_space(), Some(ColorSpace::Srgb));
+        assert_eq!(
+            load(&tx, Some(ColorSpace::Srgb)).color_space(),
+            Some(ColorSpace::Srgb)
+        );
+    }
+}
+
+#[test]
+fn a_demand_loaded_file_is_digested_from_its_headers_not_its_tiles() {
+    // The render signature (`--resume`) of a .tx covers its length, modification time
+    // and tile tables, never its tile bytes: texels rewritten in place, with the same
+    // length and time, leave it as it was; a new time changes it.
+    let dir = common::temp_dir();
+    noise_png(dir.path(), "a.png", 300, 200, false);
+    let out = maketx(dir.path(), &["--compression", "none", "a.png", "a.tx"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let tx = dir.path().join("a.tx");
+    // What `resume::tiled_texture_digest` digests.
+    let digest = || {
+        let texture = Texture::from_file(&tx, ColorSpace::Srgb).unwrap();
+        texture.file_identity().expect("demand-loaded").to_vec()
+    };
+    let before = digest();
+    let modified = std::fs::metadata(&tx).unwrap().modified().unwrap();
+    // Uncompressed, level 0's tiles come first and fill about three quarters of the file:
+    // rewrite texels among them.
+    let mut bytes = std::fs::read(&tx).unwrap();
+    let middle = bytes.len() / 3;
+    for byte in &mut bytes[middle..middle + 4096] {
+        *byte = !*byte;
+    }
+    std::fs::write(&tx, &bytes).unwrap();
+    let file = std::fs::File::options().write(true).open(&tx).unwrap();
+    file.set_modified(modified).unwrap();
+    drop(file);
+    let whole = Texture::from_file_whole(&tx, ColorSpace::Srgb).unwrap();
+    let original = Texture::from_file_whole(&dir.path().join("a.png"), ColorSpace::Srgb).unwrap();
+    assert_ne!(
+        whole.pyramid().levels[0],
+        original.pyramid().levels[0],
+        "the texels changed"
+    );
+    assert_eq!(digest(), before, "tile bytes are not digested");
+    let file = std::fs::File::options().write(true).open(&tx).unwrap();
+    file.set_modified(modified + std::time::Duration::from_secs(1))
+        .unwrap();
+    drop(file);
+    assert_ne!(digest(), before, "the modification time is digested");
 }

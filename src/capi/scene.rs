@@ -217,7 +217,8 @@ pub unsafe extern "C" fn ct_scene_texture_path(
 }
 
 /// How texture `index`'s 8-bit colour is decoded: `CT_COLOR_SPACE_SRGB` (to linear) or
-/// `CT_COLOR_SPACE_LINEAR`.
+/// `CT_COLOR_SPACE_LINEAR`: as the scene states it, else as a `.tx` written by `conetrace
+/// maketx` records it, else sRGB.
 ///
 /// Thread safety: any thread, concurrently with any other call.
 ///
@@ -233,7 +234,13 @@ pub unsafe extern "C" fn ct_scene_texture_color_space(
         require_out(out_color_space, "out_color_space")?;
         let object = handles::scene(scene)?;
         let i = texture_index(&object, index)?;
-        let space = match object.scene.textures[i].color_space {
+        let desc = &object.scene.textures[i];
+        let recorded = || match &desc.source {
+            crate::scene::TextureSource::File(path) => crate::texture::file_color_space(path),
+            crate::scene::TextureSource::Encoded { .. } => None,
+        };
+        let stated = desc.color_space.or_else(recorded);
+        let space = match stated.unwrap_or(ColorSpace::Srgb) {
             ColorSpace::Srgb => CT_COLOR_SPACE_SRGB,
             ColorSpace::Linear => CT_COLOR_SPACE_LINEAR,
         };

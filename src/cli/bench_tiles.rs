@@ -35,7 +35,9 @@ use crate::footprint::LodStrategy;
 use crate::integrator::selection::{self, IntegratorChoice};
 use crate::render::{self, RenderControl, RenderOptions, RenderResult};
 use crate::scene::{SceneDescription, TextureSource};
-use crate::texture::{write_tx, FilterMode, Texture, TileCache, TxCompression, TxOptions};
+use crate::texture::{
+    write_tx, ColorSpace, FilterMode, Texture, TileCache, TxCompression, TxOptions,
+};
 
 /// Arguments of `bench tiles`.
 #[derive(Args, Debug)]
@@ -167,7 +169,7 @@ pub fn with_tx_textures(
         let tx = dir.join(format!("{index}.tx"));
         let options = TxOptions {
             compression: TxCompression::Deflate,
-            color_space: texture.color_space,
+            color_space: whole.color_space().unwrap_or(ColorSpace::Linear),
             software: format!("conetrace bench tiles {}", path.display()),
         };
         let file = std::fs::File::create(&tx)

@@ -348,7 +348,7 @@ mod tests {
         crate::scene::TextureDesc {
             name: name.into(),
             source: TextureSource::File(path.to_path_buf()),
-            color_space: crate::texture::ColorSpace::Srgb,
+            color_space: Some(crate::texture::ColorSpace::Srgb),
             wrap_s: crate::texture::WrapMode::Periodic,
             wrap_t: crate::texture::WrapMode::Periodic,
         }

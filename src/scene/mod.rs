@@ -143,8 +143,10 @@ impl TextureSource {
 pub struct TextureDesc {
     pub name: String,
     pub source: TextureSource,
-    /// `Srgb` for colour (decoded to linear on load), `Linear` for data such as alpha.
-    pub color_space: ColorSpace,
+    /// `Srgb` for colour (decoded to linear on load), `Linear` for data such as alpha;
+    /// `None` when the scene does not state it: the colour space a `.tx` written by
+    /// `conetrace maketx` records, else sRGB (see `crate::texture::Texture::from_file`).
+    pub color_space: Option<ColorSpace>,
     pub wrap_s: WrapMode,
     pub wrap_t: WrapMode,
 }

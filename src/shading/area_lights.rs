@@ -998,7 +998,7 @@ mod tests {
             textures: vec![TextureDesc {
                 name: "half".to_string(),
                 source: TextureSource::File("half.png".into()),
-                color_space: crate::texture::ColorSpace::Linear,
+                color_space: Some(crate::texture::ColorSpace::Linear),
                 wrap_s: crate::texture::WrapMode::Clamp,
                 wrap_t: crate::texture::WrapMode::Clamp,
             }],

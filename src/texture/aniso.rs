@@ -59,10 +59,10 @@ pub(crate) fn sample<O: TexelObserver>(
 }
 
 /// The probes along the major axis on each level, for levels of the storage kind of
-/// `_kind`; a level of another kind goes through [`probes_other_kind`].
+/// `kind`; a level of another kind goes through [`probes_other_kind`].
 #[inline(always)]
 fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
-    _kind: S,
+    kind: S,
     pyramid: &'a MipPyramid,
     q: &TextureQuery,
     max_aniso: f32,
@@ -105,7 +105,7 @@ fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
         }
         let m = f.levels.levels[k];
         let level = &pyramid.levels[m];
-        let level_sum = match S::view(&level.texels) {
+        let level_sum = match kind.view(&level.texels) {
             Some(texels) => probes(level, texels, m, q, &line, weights, wrap, obs),
             None => probes_other_kind(level, m, q, &line, weights, wrap, obs),
         };

@@ -23,7 +23,7 @@ use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 use glam::Vec4;
 
 use super::image_load::{sniff_format, ImageFormat};
-use super::micro_cache;
+use super::micro_cache::{self, ThreadTiles};
 use super::mip_pyramid::{MipLevel, MipPyramid};
 use super::texels::{TexelSource, Texels};
 use super::tiff_tile_reader::TiffTileReader;
@@ -156,11 +156,12 @@ pub fn demand_level_sizes(path: &Path) -> Result<Option<Vec<(u32, u32)>>, Textur
 
 /// The levels of the tiled, mip-mapped TIFF at `path`, each read tile by tile on demand
 /// into `cache`, and the file they share; `Ok(None)` when the file is not such a TIFF (it
-/// is then decoded whole). `label` names the file in errors.
+/// is then decoded whole). `label` names the file in errors; `color_space` is the one
+/// stated, `None` for the one the file records.
 pub(crate) fn open(
     path: &Path,
     label: &str,
-    color_space: ColorSpace,
+    color_space: Option<ColorSpace>,
     cache: &Arc<TileCache>,
 ) -> Result<Option<(MipPyramid, Arc<DemandFile>)>, TextureError> {
     let io_error = |source| TextureError::Io {
@@ -257,24 +258,27 @@ impl DemandLevel {
     /// read).
     pub(crate) fn texel_at_index(&self, index: usize) -> Vec4 {
         let (x, y) = self.layout.coordinates_of(index);
-        DemandTexels(self).texel_at(self.layout, x, y)
+        micro_cache::with_thread_tiles(|tiles| {
+            DemandTexels::new(self, tiles).texel_at(self.layout, x, y)
+        })
     }
 
     /// `read` of the texels of tile (`tile_x`, `tile_y`), fetched through the thread's
-    /// micro-cache and the shared cache, or read from the file; `None` when the tile cannot
-    /// be read.
+    /// micro-cache `tiles` and the shared cache, or read from the file; `None` when the tile
+    /// cannot be read or `read` gives none.
     #[inline(always)]
     fn with_tile<R>(
         &self,
+        tiles: ThreadTiles<'_>,
         tile_x: usize,
         tile_y: usize,
-        read: impl FnOnce(&Texels) -> R,
+        read: impl FnOnce(&Texels) -> Option<R>,
     ) -> Option<R> {
         let index = tile_y * self.tiles_x + tile_x;
         if tile_x >= self.tiles_x || index >= self.tiles.len() {
             return None;
         }
-        micro_cache::with_tile(self.id, index, || self.fetch(index, tile_x, tile_y), read)
+        tiles.with_tile(self.id, index, || self.fetch(index, tile_x, tile_y), read)
     }
 
     /// A micro-cache miss: the tile from its slot, or else from the file.
@@ -380,22 +384,26 @@ impl DemandLevel {
     }
 }
 
-/// The filters' view of a demand-loaded level.
+/// The filters' view of a demand-loaded level during one lookup: the level and the
+/// thread's micro-cache, found once for the lookup.
 #[derive(Clone, Copy)]
-pub(crate) struct DemandTexels<'a>(&'a DemandLevel);
+pub(crate) struct DemandTexels<'a> {
+    level: &'a DemandLevel,
+    tiles: ThreadTiles<'a>,
+}
 
 impl<'a> DemandTexels<'a> {
     #[inline(always)]
-    pub(crate) fn new(level: &'a DemandLevel) -> Self {
-        DemandTexels(level)
+    pub(crate) fn new(level: &'a DemandLevel, tiles: ThreadTiles<'a>) -> Self {
+        DemandTexels { level, tiles }
     }
 }
 
 impl<'a> TexelSource<'a> for DemandTexels<'a> {
     #[inline(always)]
-    fn view(texels: &'a Texels) -> Option<Self> {
+    fn view(self, texels: &'a Texels) -> Option<Self> {
         match texels {
-            Texels::OnDemand(level) => Some(DemandTexels(level)),
+            Texels::OnDemand(level) => Some(DemandTexels::new(level, self.tiles)),
             _ => None,
         }
     }
@@ -403,8 +411,14 @@ impl<'a> TexelSource<'a> for DemandTexels<'a> {
     #[inline(always)]
     fn texel_at(self, layout: TileLayout, x: usize, y: usize) -> Vec4 {
         let (tile_x, tile_y, offset) = layout.locate(x, y);
-        self.0
-            .with_tile(tile_x, tile_y, |tile| tile.get(offset))
+        self.level
+            .with_tile(
+                self.tiles,
+                tile_x,
+                tile_y,
+                #[inline(always)]
+                |tile| Some(tile.resident_texel(offset)),
+            )
             .unwrap_or(Vec4::ZERO)
     }
 
@@ -417,17 +431,15 @@ impl<'a> TexelSource<'a> for DemandTexels<'a> {
         blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
     ) -> Option<R> {
         match layout.block_in_one_tile(x, y) {
-            Some((tile_x, tile_y, offset, stride)) => self
-                .0
-                .with_tile(
-                    tile_x,
-                    tile_y,
-                    // Inline: out of line, every fetch paid a call and a result returned
-                    // through memory (a quarter of `bench textures`' cached bilinear time).
-                    #[inline(always)]
-                    |tile| tile.quad(offset, stride, blend),
-                )
-                .flatten(),
+            Some((tile_x, tile_y, offset, stride)) => self.level.with_tile(
+                self.tiles,
+                tile_x,
+                tile_y,
+                // Inline: out of line, every fetch paid a call and a result returned
+                // through memory (a quarter of `bench textures`' cached bilinear time).
+                #[inline(always)]
+                |tile| tile.quad(offset, stride, blend),
+            ),
             None => Some(self.four_texels(layout, x, y, blend)),
         }
     }

@@ -44,14 +44,19 @@ pub(crate) fn sniff_format(bytes: &[u8]) -> Option<ImageFormat> {
 }
 
 /// Decodes `bytes` (PNG, JPEG, OpenEXR or TIFF) into one or more levels, finest first.
+/// `color_space` is the one stated for the texture; `None` takes the one a TIFF records
+/// (a `.tx` written by `conetrace maketx`), else sRGB.
 pub(crate) fn decode(
     bytes: &[u8],
     label: &str,
-    color_space: ColorSpace,
+    color_space: impl Into<Option<ColorSpace>>,
 ) -> Result<Vec<MipLevel>, TextureError> {
+    let color_space = color_space.into();
     match sniff_format(bytes) {
         Some(ImageFormat::OpenExr) => decode_exr(bytes, label),
-        Some(ImageFormat::PngOrJpeg) => decode_png_jpeg(bytes, label, color_space).map(|l| vec![l]),
+        Some(ImageFormat::PngOrJpeg) => {
+            decode_png_jpeg(bytes, label, color_space.unwrap_or(ColorSpace::Srgb)).map(|l| vec![l])
+        }
         Some(ImageFormat::Tiff) => tiled_tiff::decode(bytes, label, color_space),
         None => Err(TextureError::UnknownFormat {
             label: label.to_string(),

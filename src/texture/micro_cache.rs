@@ -3,9 +3,11 @@
 //! a tile the thread used lately touches only the thread's own memory (no lock, no shared
 //! write, no reference count), so lookups scale with the cores.
 //!
-//! A hit compares the packed key (level id, tile index) with the thread's 8 keys, adds one
-//! to a plain per-entry counter and reads the tile through the entry's `Arc` without
-//! cloning it. An entry owns an `Arc` of its tile, so a tile stays valid while the thread
+//! A lookup finds the thread's micro-cache once ([`with_thread_tiles`]) and every fetch
+//! of its footprint goes to it directly. A hit compares the packed key (level id, tile
+//! index) with the keys of the entries that served the last two fetches (a footprint's
+//! fetches nearly always share its tile), else with all 8, adds one to a plain per-entry
+//! counter and reads the tile through the entry's `Arc` without cloning it. An entry owns an `Arc` of its tile, so a tile stays valid while the thread
 //! reads it even if the shared cache evicts it meanwhile. Entries are keyed by the level's
 //! process-unique id and the tile's index, and tiles never change once read, so an entry
 //! is never stale. Hits are counted in the entry, on the thread, and added to the file's
@@ -43,6 +45,10 @@ struct MicroCache {
     tallies: [Option<Arc<FileTally>>; MICRO_TILES],
     /// Fetches each entry served since it was made, not yet added to its tally.
     hits: [u64; MICRO_TILES],
+    /// The entries that served the last two fetches, looked at before the others: the
+    /// fetches of one footprint (the probes of an anisotropic lookup, the texels of an EWA
+    /// one) and of neighbouring lookups nearly always read the tile the last fetch read.
+    recent: [usize; 2],
     /// The entry a miss replaces next (round robin).
     victim: usize,
 }
@@ -54,13 +60,26 @@ impl MicroCache {
             tiles: [const { None }; MICRO_TILES],
             tallies: [const { None }; MICRO_TILES],
             hits: [0; MICRO_TILES],
+            recent: [0, 1],
             victim: 0,
         }
     }
 
+    /// The entry holding `key`: one of the last two fetches' entries, or else any.
     #[inline(always)]
-    fn find(&self, key: u64) -> Option<usize> {
-        self.keys.iter().position(|&k| k == key)
+    fn find(&mut self, key: u64) -> Option<usize> {
+        // The modulo keeps the indices provably in range: no bounds checks.
+        let [last, before] = self.recent.map(|at| at % MICRO_TILES);
+        if self.keys[last] == key {
+            return Some(last);
+        }
+        if self.keys[before] == key {
+            self.recent = [before, last];
+            return Some(before);
+        }
+        let at = self.keys.iter().position(|&k| k == key)?;
+        self.recent = [at, last];
+        Some(at)
     }
 
     /// Adds entry `at`'s hits to its file's counters.
@@ -81,6 +100,7 @@ impl MicroCache {
         self.keys[at] = key;
         self.tiles[at] = Some(tile);
         self.tallies[at] = Some(tally);
+        self.recent = [at, self.recent[0]];
         at
     }
 
@@ -105,55 +125,77 @@ thread_local! {
     static MICRO: RefCell<MicroCache> = const { RefCell::new(MicroCache::new()) };
 }
 
-/// `read` of tile `index` of the level with id `level`: from this thread's micro-cache,
-/// or else from `fetch` (the shared cache or the file), kept for the next fetches. `None`
-/// when `fetch` finds no tile (it cannot be read).
+/// This thread's micro-cache, found once for a whole lookup: the filters' fetches then
+/// reach it without a thread-local access each (one lookup makes one fetch per bilinear
+/// block, per probe, per EWA texel). `None` while the thread is being torn down: fetches
+/// then go to the shared cache every time.
+#[derive(Clone, Copy)]
+pub(crate) struct ThreadTiles<'t>(Option<&'t RefCell<MicroCache>>);
+
+/// `body` given this thread's micro-cache: the scope of one lookup.
 #[inline(always)]
-pub(crate) fn with_tile<R>(
-    level: u64,
-    index: usize,
-    fetch: impl FnOnce() -> Option<(Arc<Texels>, Arc<FileTally>)>,
-    read: impl FnOnce(&Texels) -> R,
-) -> Option<R> {
-    let Some(key) = key_of(level, index) else {
-        return fetch().map(|(tile, _)| read(&tile));
-    };
-    let mut read = Some(read);
-    let hit = MICRO.try_with(
+pub(crate) fn with_thread_tiles<R>(body: impl FnOnce(ThreadTiles<'_>) -> R) -> R {
+    let mut body = Some(body);
+    let mut result = None;
+    let _ = MICRO.try_with(
         #[inline(always)]
         |cell| {
-            let mut micro = cell.try_borrow_mut().ok()?;
-            let at = micro.find(key)?;
-            micro.hits[at] += 1;
-            let tile = micro.tiles[at].as_deref()?;
-            read.take().map(|read| read(tile))
+            result = body.take().map(|body| body(ThreadTiles(Some(cell))));
         },
     );
-    match (hit, read) {
-        (Ok(Some(result)), _) => Some(result),
-        (_, Some(read)) => miss(key, fetch, read),
-        // `read` ran: it returned its result above.
-        (_, None) => None,
+    match (result, body) {
+        (Some(result), _) => result,
+        (None, Some(body)) => body(ThreadTiles(None)),
+        (None, None) => unreachable!("the lookup ran inside the thread-local access"),
     }
 }
 
-/// A fetch the micro-cache did not serve: the tile from `fetch`, kept in the micro-cache
-/// (unless the thread has none usable: being torn down, or in use further up the stack).
-#[cold]
-#[inline(never)]
-fn miss<R>(
-    key: u64,
-    fetch: impl FnOnce() -> Option<(Arc<Texels>, Arc<FileTally>)>,
-    read: impl FnOnce(&Texels) -> R,
-) -> Option<R> {
-    let (tile, tally) = fetch()?;
-    let result = read(&tile);
-    let _ = MICRO.try_with(|cell| {
-        if let Ok(mut micro) = cell.try_borrow_mut() {
+impl ThreadTiles<'_> {
+    /// `read` of tile `index` of the level with id `level`: from the micro-cache (the
+    /// tiles of the last fetches first), or else from `fetch` (the shared cache or the
+    /// file), kept for the next fetches. `None` when `fetch` finds no tile (it cannot be
+    /// read) or `read` gives none. (`read` returns an `Option` itself: an
+    /// `Option<Option<_>>` to flatten went through memory on every fetch.)
+    #[inline(always)]
+    pub(crate) fn with_tile<R>(
+        self,
+        level: u64,
+        index: usize,
+        fetch: impl FnOnce() -> Option<(Arc<Texels>, Arc<FileTally>)>,
+        read: impl FnOnce(&Texels) -> Option<R>,
+    ) -> Option<R> {
+        let Some(key) = key_of(level, index) else {
+            return fetch().and_then(|(tile, _)| read(&tile));
+        };
+        if let Some(mut micro) = self.0.and_then(|cell| cell.try_borrow_mut().ok()) {
+            if let Some(at) = micro.find(key) {
+                micro.hits[at] += 1;
+                if let Some(tile) = micro.tiles[at].as_deref() {
+                    return read(tile);
+                }
+            }
+        }
+        self.miss(key, fetch, read)
+    }
+
+    /// A fetch the micro-cache did not serve: the tile from `fetch`, kept in the
+    /// micro-cache (unless the thread has none usable: being torn down, or in use further
+    /// up the stack).
+    #[cold]
+    #[inline(never)]
+    fn miss<R>(
+        self,
+        key: u64,
+        fetch: impl FnOnce() -> Option<(Arc<Texels>, Arc<FileTally>)>,
+        read: impl FnOnce(&Texels) -> Option<R>,
+    ) -> Option<R> {
+        let (tile, tally) = fetch()?;
+        let result = read(&tile);
+        if let Some(mut micro) = self.0.and_then(|cell| cell.try_borrow_mut().ok()) {
             micro.insert(key, tile, tally);
         }
-    });
-    Some(result)
+        result
+    }
 }
 
 /// Adds the hits counted in this thread's micro-cache to the files' counters and empties
@@ -182,6 +224,16 @@ mod tests {
         Arc::new(Texels::bytes(vec![[value; 4]; 4], ColorSpace::Linear))
     }
 
+    /// One fetch in a lookup of its own.
+    fn fetch_tile<R>(
+        level: u64,
+        index: usize,
+        fetch: impl FnOnce() -> Option<(Arc<Texels>, Arc<FileTally>)>,
+        read: impl FnOnce(&Texels) -> R,
+    ) -> Option<R> {
+        with_thread_tiles(|tiles| tiles.with_tile(level, index, fetch, |tile| Some(read(tile))))
+    }
+
     #[test]
     fn repeated_fetches_hit_and_the_hits_reach_the_file_when_flushed() {
         let tally = Arc::new(FileTally::new());
@@ -200,15 +252,15 @@ mod tests {
             scope
                 .spawn(|| {
                     for _ in 0..5 {
-                        let v = with_tile(level, 3, fetch(9), |t| t.get(0).x);
+                        let v = fetch_tile(level, 3, fetch(9), |t| t.get(0).x);
                         assert_eq!(v, Some(9.0 / 255.0));
                     }
                     // More tiles than the micro-cache holds: tile 3 goes and comes back.
                     for index in 10..10 + MICRO_TILES {
-                        with_tile(level, index, fetch(1), |_| ());
+                        fetch_tile(level, index, fetch(1), |_| ());
                     }
-                    with_tile(level, 3, fetch(9), |_| ());
-                    assert_eq!(with_tile(level, 99, || None, |_| ()), None);
+                    fetch_tile(level, 3, fetch(9), |_| ());
+                    assert_eq!(fetch_tile(level, 99, || None, |_| ()), None);
                     flush_this_thread();
                 })
                 .join()
@@ -216,6 +268,32 @@ mod tests {
         });
         assert_eq!(fetches.load(Ordering::Relaxed), 1 + MICRO_TILES + 1);
         assert_eq!(tally.snapshot().micro_cache_hits, 4);
+    }
+
+    #[test]
+    fn fetches_of_one_lookup_get_their_own_tile_after_the_recent_ones_are_replaced() {
+        let tally = Arc::new(FileTally::new());
+        let level = (1 << 31) - 9;
+        let value = |index: usize| (index % 200) as u8;
+        std::thread::scope(|scope| {
+            scope
+                .spawn(|| {
+                    with_thread_tiles(|tiles| {
+                        // Tile 0, then more tiles than the micro-cache holds (replacing
+                        // the entries the last fetches used), then tile 0 again, twice.
+                        for index in [0, 0].into_iter().chain(1..=MICRO_TILES).chain([0, 0]) {
+                            let fetch = || Some((tile(value(index)), tally.clone()));
+                            let v = tiles.with_tile(level, index, fetch, |t| Some(t.get(0).x));
+                            assert_eq!(v, Some(f32::from(value(index)) / 255.0), "{index}");
+                        }
+                    });
+                    flush_this_thread();
+                })
+                .join()
+                .unwrap();
+        });
+        // Tile 0's second and fourth fetches were hits; the others read a tile.
+        assert_eq!(tally.snapshot().micro_cache_hits, 2);
     }
 
     #[test]
@@ -233,7 +311,7 @@ mod tests {
             scope
                 .spawn(|| {
                     for _ in 0..3 {
-                        let v = with_tile(1 << 31, 0, fetch, |t| t.get(0).x);
+                        let v = fetch_tile(1 << 31, 0, fetch, |t| t.get(0).x);
                         assert_eq!(v, Some(5.0 / 255.0));
                     }
                     flush_this_thread();

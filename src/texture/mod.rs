@@ -252,12 +252,26 @@ pub struct Texture {
     demand: Option<Arc<DemandFile>>,
 }
 
+/// The colour space the TIFF at `path` records (`conetrace:ColorSpace=` in its
+/// ImageDescription, as `conetrace maketx` writes it): what a texture loaded from it with
+/// no stated colour space is decoded in. `None` when it records none (sRGB then applies),
+/// is not a TIFF or cannot be read.
+pub fn file_color_space(path: &Path) -> Option<ColorSpace> {
+    tiled_tiff::file_color_space(path)
+}
+
 impl Texture {
     /// Loads PNG, JPEG, OpenEXR or TIFF from a file (format sniffed from the bytes). A
     /// tiled, mip-mapped TIFF in 64x64 tiles (`maketx`'s `.tx`) is read tile by tile as
     /// lookups first touch them, into the process-wide [`TileCache::shared`]; every other
     /// file is decoded whole, with every level.
-    pub fn from_file(path: &Path, color_space: ColorSpace) -> Result<Texture, TextureError> {
+    ///
+    /// `color_space` is the one stated for the texture (a `ColorSpace`, or `Some` of one);
+    /// `None` takes the one a `.tx` written by `conetrace maketx` records, else sRGB.
+    pub fn from_file(
+        path: &Path,
+        color_space: impl Into<Option<ColorSpace>>,
+    ) -> Result<Texture, TextureError> {
         Self::from_file_in(path, color_space, &TileCache::shared())
     }
 
@@ -265,9 +279,10 @@ impl Texture {
     /// (a texture decoded whole does not count against it).
     pub fn from_file_in(
         path: &Path,
-        color_space: ColorSpace,
+        color_space: impl Into<Option<ColorSpace>>,
         cache: &Arc<TileCache>,
     ) -> Result<Texture, TextureError> {
+        let color_space = color_space.into();
         match Self::from_file_on_demand(path, color_space, cache)? {
             Some(texture) => Ok(texture),
             None => Self::from_file_whole(path, color_space),
@@ -279,12 +294,12 @@ impl Texture {
     /// [`Texture::from_file_whole`] reads). Reads the file's headers and its coarsest tile.
     pub fn from_file_on_demand(
         path: &Path,
-        color_space: ColorSpace,
+        color_space: impl Into<Option<ColorSpace>>,
         cache: &Arc<TileCache>,
     ) -> Result<Option<Texture>, TextureError> {
         let label = path.display().to_string();
         Ok(
-            demand_tiles::open(path, &label, color_space, cache)?.map(|(pyramid, file)| {
+            demand_tiles::open(path, &label, color_space.into(), cache)?.map(|(pyramid, file)| {
                 let mut texture = Self::with_pyramid(&label, pyramid);
                 texture.demand = Some(file);
                 texture
@@ -294,7 +309,10 @@ impl Texture {
 
     /// Loads a file like [`Texture::from_file`], but decodes every level up front even
     /// for a tiled, mip-mapped TIFF (the resident reference the demand path must match).
-    pub fn from_file_whole(path: &Path, color_space: ColorSpace) -> Result<Texture, TextureError> {
+    pub fn from_file_whole(
+        path: &Path,
+        color_space: impl Into<Option<ColorSpace>>,
+    ) -> Result<Texture, TextureError> {
         let label = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| TextureError::Io {
             label: label.clone(),
@@ -308,7 +326,7 @@ impl Texture {
     pub fn from_encoded(
         bytes: &[u8],
         label: &str,
-        color_space: ColorSpace,
+        color_space: impl Into<Option<ColorSpace>>,
     ) -> Result<Texture, TextureError> {
         let levels = image_load::decode(bytes, label, color_space)?;
         let pyramid = if levels.len() > 1 && MipPyramid::chain_is_valid(&levels) {
@@ -417,6 +435,12 @@ impl Texture {
     /// a render that made them must be refused.
     pub fn tile_failure(&self) -> Option<&str> {
         self.demand.as_ref().and_then(|file| file.failure())
+    }
+
+    /// The colour space the texture's 8-bit colour is decoded in (stated, or recorded by
+    /// its `.tx`); `None` when its texels are not 8-bit (used as stored).
+    pub fn color_space(&self) -> Option<ColorSpace> {
+        self.pyramid.levels[0].texels.color_space()
     }
 
     /// Width of level 0 in texels.

@@ -39,7 +39,8 @@ pub(crate) fn byte_table(color_space: ColorSpace) -> &'static [f32; 256] {
 }
 
 /// Evaluates `$body` with `$source` bound to the [`TexelSource`] of `$texels`'s storage
-/// kind: one match, and `$body` compiled once per kind.
+/// kind: one match, and `$body` compiled once per kind. For a demand-loaded level `$body`
+/// runs inside the thread's micro-cache access, found once for all its fetches.
 macro_rules! with_texel_source {
     ($texels:expr, |$source:ident| $body:expr) => {{
         #[allow(unused_imports)]
@@ -59,10 +60,13 @@ macro_rules! with_texel_source {
                 let $source = ByteTexels::new(texels, *colour);
                 $body
             }
-            Texels::OnDemand(level) => {
-                let $source = $crate::texture::demand_tiles::DemandTexels::new(level);
-                $body
-            }
+            Texels::OnDemand(level) => $crate::texture::micro_cache::with_thread_tiles(
+                #[inline(always)]
+                |tiles| {
+                    let $source = $crate::texture::demand_tiles::DemandTexels::new(level, tiles);
+                    $body
+                },
+            ),
         }
     }};
 }
@@ -116,6 +120,16 @@ impl Texels {
         self.len() == 0
     }
 
+    /// The colour space 8-bit colour is decoded in; `None` for other kinds (linear as
+    /// stored).
+    pub fn color_space(&self) -> Option<ColorSpace> {
+        match self {
+            Texels::Byte { color_space, .. } => Some(*color_space),
+            Texels::Half(_) | Texels::Float(_) => None,
+            Texels::OnDemand(level) => level.kind().color_space(),
+        }
+    }
+
     /// Bytes one texel takes (4, 8 or 16).
     pub fn bytes_per_texel(&self) -> usize {
         match self {
@@ -153,6 +167,19 @@ impl Texels {
             Texels::Half(t) => HalfTexels(t).texel(index),
             Texels::Byte { texels, colour, .. } => ByteTexels::new(texels, colour).texel(index),
             Texels::OnDemand(level) => level.texel_at_index(index),
+        }
+    }
+
+    /// Linear RGBA of texel `index` of a resident buffer (a tile; in range); zero for an
+    /// on-demand level, which no tile is. Small enough to inline into every fetch, unlike
+    /// [`Texels::get`].
+    #[inline(always)]
+    pub(crate) fn resident_texel(&self, index: usize) -> Vec4 {
+        match self {
+            Texels::Float(t) => FloatTexels(t).texel(index),
+            Texels::Half(t) => HalfTexels(t).texel(index),
+            Texels::Byte { texels, colour, .. } => ByteTexels::new(texels, colour).texel(index),
+            Texels::OnDemand(_) => Vec4::ZERO,
         }
     }
 
@@ -269,8 +296,9 @@ pub(crate) trait FlatTexels<'a>: Copy {
 /// them (a fetch is a tile lookup plus an offset in the tile). Resident kinds find every
 /// tile in their one buffer; a demand-loaded level fetches it through the texture cache.
 pub(crate) trait TexelSource<'a>: Copy {
-    /// The texels of `texels` when they are of this kind.
-    fn view(texels: &'a Texels) -> Option<Self>;
+    /// The texels of `texels` (another level of the same lookup) when they are of this
+    /// kind, read in the same way as `self`'s.
+    fn view(self, texels: &'a Texels) -> Option<Self>;
 
     /// Linear RGBA of texel (x, y) of a level tiled by `layout` (in range); zero when its
     /// tile cannot be read (the failure is recorded where the texture reports it).
@@ -311,7 +339,7 @@ macro_rules! resident_texel_source {
     ($($kind:ident),+) => {$(
         impl<'a> TexelSource<'a> for $kind<'a> {
             #[inline(always)]
-            fn view(texels: &'a Texels) -> Option<Self> {
+            fn view(self, texels: &'a Texels) -> Option<Self> {
                 <Self as FlatTexels<'a>>::view(texels)
             }
 

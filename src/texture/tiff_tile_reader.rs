@@ -15,7 +15,7 @@ use tiff::decoder::{ChunkType, Decoder};
 
 use super::texels::Texels;
 use super::tile_layout::TileLayout;
-use super::tiled_tiff::{DirectoryFormat, SampleLayout};
+use super::tiled_tiff::{color_space_of, DirectoryFormat, SampleLayout};
 use super::tiles::TEXTURE_TILE_SIZE;
 use super::{ColorSpace, TextureError};
 
@@ -45,17 +45,19 @@ pub(crate) struct TiffTileReader<R: Read + Seek> {
 impl<R: Read + Seek> TiffTileReader<R> {
     /// Reads the headers of every level of `source` (a TIFF); `Ok(None)` when the file
     /// does not qualify for tile-by-tile reading (see the module documentation).
-    /// `label` names the file in errors.
+    /// `label` names the file in errors; tiles are decoded in `color_space`, or when `None`
+    /// in the one the file records (`tiled_tiff::color_space_of`).
     pub(crate) fn open(
         source: R,
         label: &str,
-        color_space: ColorSpace,
+        color_space: impl Into<Option<ColorSpace>>,
     ) -> Result<Option<Self>, TextureError> {
         let tiff_error = |message: String| TextureError::Tiff {
             label: label.to_string(),
             message,
         };
         let mut decoder = Decoder::new(source).map_err(|e| tiff_error(e.to_string()))?;
+        let color_space = color_space_of(color_space.into(), &mut decoder);
         let mut levels: Vec<StoredLevel> = Vec::new();
         let mut tile_bytes = Vec::new();
         let mut tile_offsets = Vec::new();

@@ -46,11 +46,50 @@ pub(crate) fn is_tiff(bytes: &[u8]) -> bool {
     )
 }
 
-/// Decodes every level of a TIFF texture, finest first.
+/// What a `.tx` written by `conetrace maketx` holds in its ImageDescription before the
+/// colour space its 8-bit colour is encoded in (`sRGB` or `Linear`).
+pub(crate) const COLOR_SPACE_PREFIX: &str = "conetrace:ColorSpace=";
+
+/// The colour space the current directory's ImageDescription records
+/// (`conetrace:ColorSpace=sRGB` or `=Linear`, among other words); `None` when it records
+/// none. OpenImageIO's `maketx` records only sRGB, in the Exif ColorSpace tag, which needs
+/// no reading: sRGB is what an unrecorded file gets anyway.
+pub(crate) fn recorded_color_space<R: Read + Seek>(decoder: &mut Decoder<R>) -> Option<ColorSpace> {
+    let description = decoder.get_tag_ascii_string(Tag::ImageDescription).ok()?;
+    description
+        .split_whitespace()
+        .find_map(|word| match word.strip_prefix(COLOR_SPACE_PREFIX)? {
+            "sRGB" => Some(ColorSpace::Srgb),
+            "Linear" => Some(ColorSpace::Linear),
+            _ => None,
+        })
+}
+
+/// The colour space the TIFF at `path` records ([`recorded_color_space`]); `None` for a
+/// file that records none, is not a TIFF or cannot be read (its loading reports that).
+pub(crate) fn file_color_space(path: &std::path::Path) -> Option<ColorSpace> {
+    let file = std::fs::File::open(path).ok()?;
+    let mut decoder = Decoder::new(std::io::BufReader::new(file)).ok()?;
+    recorded_color_space(&mut decoder)
+}
+
+/// The colour space a TIFF is decoded in: the one `stated` (by the scene), else the one
+/// the file records ([`recorded_color_space`], read from its first directory), else sRGB.
+pub(crate) fn color_space_of<R: Read + Seek>(
+    stated: Option<ColorSpace>,
+    decoder: &mut Decoder<R>,
+) -> ColorSpace {
+    stated
+        .or_else(|| recorded_color_space(decoder))
+        .unwrap_or(ColorSpace::Srgb)
+}
+
+/// Decodes every level of a TIFF texture, finest first, in the colour space stated or
+/// else recorded ([`color_space_of`]).
 pub(crate) fn decode(
     bytes: &[u8],
     label: &str,
-    color_space: ColorSpace,
+    color_space: impl Into<Option<ColorSpace>>,
 ) -> Result<Vec<MipLevel>, TextureError> {
     let tiff_error = |message: String| TextureError::Tiff {
         label: label.to_string(),
@@ -61,6 +100,7 @@ pub(crate) fn decode(
     let mut decoder = Decoder::new(Cursor::new(bytes))
         .map_err(|e| tiff_error(e.to_string()))?
         .with_limits(limits);
+    let color_space = color_space_of(color_space.into(), &mut decoder);
 
     let mut levels: Vec<MipLevel> = Vec::new();
     loop {

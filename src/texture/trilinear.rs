@@ -37,11 +37,11 @@ pub(crate) fn sample<O: TexelObserver>(
     ))
 }
 
-/// [`sample`] reading levels of the storage kind of `_kind`; a level of another kind
+/// [`sample`] reading levels of the storage kind of `kind`; a level of another kind
 /// goes through [`bilinear_other_kind`], which picks its kind itself.
 #[inline(always)]
 fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
-    _kind: S,
+    kind: S,
     pyramid: &'a MipPyramid,
     q: &TextureQuery,
     wrap: (WrapMode, WrapMode),
@@ -56,7 +56,7 @@ fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
         }
         let m = choice.levels[k];
         let level = &pyramid.levels[m];
-        sum += w * match S::view(&level.texels) {
+        sum += w * match kind.view(&level.texels) {
             Some(texels) => bilinear_from(level, texels, m, q.s, q.t, wrap, obs),
             None => bilinear_other_kind(level, m, q.s, q.t, wrap, obs),
         };

@@ -24,8 +24,9 @@
 //! ImageDescription carries `conetrace:ColorSpace=sRGB` (or `Linear`): the colour space
 //! 8-bit colour was decoded in when the levels were averaged. An sRGB file also carries
 //! the Exif ColorSpace tag `maketx` writes, which OpenImageIO reports as
-//! `oiio:ColorSpace` "sRGB". A scene must declare the same colour space for the file as for its
-//! source for the levels to match.
+//! `oiio:ColorSpace` "sRGB". A texture whose scene states no colour space is decoded in
+//! the recorded one; one the scene states wins, and must be the source's for the levels to
+//! match.
 
 use std::io::{Seek, Write};
 
@@ -190,7 +191,7 @@ fn write_levels<W: Write + Seek, K: TiffKind>(
         ColorSpace::Srgb if format.kind == SampleKind::Byte => "sRGB",
         _ => "Linear",
     };
-    let description = format!("conetrace:ColorSpace={description}");
+    let description = format!("{}{description}", super::tiled_tiff::COLOR_SPACE_PREFIX);
     // sRGB is also said the way maketx says it, which OpenImageIO reads as its
     // `oiio:ColorSpace`: an Exif directory with ColorSpace (tag 40961) = 1, sRGB.
     let exif = if description.ends_with("sRGB") {

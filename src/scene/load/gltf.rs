@@ -804,7 +804,8 @@ impl Loader<'_> {
                 .or(image.name())
                 .map_or_else(|| format!("texture{}", texture.index()), str::to_owned),
             source,
-            color_space,
+            // glTF states it by the texture's role.
+            color_space: Some(color_space),
             wrap_s: wrap_mode(sampler.wrap_s()),
             wrap_t: wrap_mode(sampler.wrap_t()),
         });
@@ -1462,7 +1463,7 @@ mod tests {
         let (ct, at) = (&part.textures[color.texture], &part.textures[alpha.texture]);
         assert_eq!(
             (ct.color_space, at.color_space),
-            (ColorSpace::Srgb, ColorSpace::Linear)
+            (Some(ColorSpace::Srgb), Some(ColorSpace::Linear))
         );
         assert_eq!((ct.wrap_s, ct.wrap_t), (WrapMode::Clamp, WrapMode::Mirror));
         let TextureSource::Encoded { bytes, .. } = &ct.source else {
@@ -1571,9 +1572,12 @@ mod tests {
             .model
             .metallic_roughness()
             .expect("the metallic-roughness model");
-        assert_eq!(space(&model.metallic_roughness_texture), ColorSpace::Linear);
-        assert_eq!(space(&m.normal_texture), ColorSpace::Linear);
-        assert_eq!(space(&m.emission_texture), ColorSpace::Srgb);
+        assert_eq!(
+            space(&model.metallic_roughness_texture),
+            Some(ColorSpace::Linear)
+        );
+        assert_eq!(space(&m.normal_texture), Some(ColorSpace::Linear));
+        assert_eq!(space(&m.emission_texture), Some(ColorSpace::Srgb));
         // The same image as data (metallic-roughness, normal) is one texture.
         assert_eq!(
             model.metallic_roughness_texture.as_ref().unwrap().texture,

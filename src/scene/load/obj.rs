@@ -826,7 +826,7 @@ fn add_texture(
     };
     if let Some(i) = textures
         .iter()
-        .position(|t| t.name == map.file && t.color_space == color_space && t.wrap_s == wrap)
+        .position(|t| t.name == map.file && t.color_space == Some(color_space) && t.wrap_s == wrap)
     {
         return Ok(Some(binding(i)));
     }
@@ -841,7 +841,8 @@ fn add_texture(
     textures.push(TextureDesc {
         name: map.file.clone(),
         source,
-        color_space,
+        // The map's keyword states it.
+        color_space: Some(color_space),
         wrap_s: wrap,
         wrap_t: wrap,
     });
@@ -890,7 +891,10 @@ mod tests {
             })
         );
         let binding = m.base_color_texture.as_ref().unwrap();
-        assert_eq!(part.textures[binding.texture].color_space, ColorSpace::Srgb);
+        assert_eq!(
+            part.textures[binding.texture].color_space,
+            Some(ColorSpace::Srgb)
+        );
     }
 
     #[test]
@@ -954,17 +958,17 @@ mod tests {
         let orm = texture(&model.metallic_roughness_texture);
         assert_eq!(
             (orm.name.as_str(), orm.color_space),
-            ("orm.png", ColorSpace::Linear)
+            ("orm.png", Some(ColorSpace::Linear))
         );
         let glow = texture(&m.emission_texture);
         assert_eq!(
             (glow.name.as_str(), glow.color_space),
-            ("glow.png", ColorSpace::Srgb)
+            ("glow.png", Some(ColorSpace::Srgb))
         );
         let normals = texture(&m.normal_texture);
         assert_eq!(
             (normals.name.as_str(), normals.color_space),
-            ("normals.png", ColorSpace::Linear)
+            ("normals.png", Some(ColorSpace::Linear))
         );
 
         // `norm`, separate greyscale maps, and map_Ke without Ke.
@@ -988,7 +992,7 @@ mod tests {
         let metal = texture(&model.metallic_texture);
         assert_eq!(
             (metal.name.as_str(), metal.color_space),
-            ("glow.png", ColorSpace::Linear)
+            ("glow.png", Some(ColorSpace::Linear))
         );
         assert_eq!(m.emission, Vec3::ONE);
         assert_eq!(m.normal_scale, 1.0);

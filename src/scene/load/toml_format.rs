@@ -470,10 +470,10 @@ fn declare_textures(
         scene.textures.push(TextureDesc {
             name: name.clone(),
             source,
-            color_space: match t.color_space {
-                Some(RawColorSpace::Linear) => ColorSpace::Linear,
-                Some(RawColorSpace::Srgb) | None => ColorSpace::Srgb,
-            },
+            color_space: t.color_space.map(|space| match space {
+                RawColorSpace::Linear => ColorSpace::Linear,
+                RawColorSpace::Srgb => ColorSpace::Srgb,
+            }),
             wrap_s: t.wrap_s.map_or(wrap, RawWrap::mode),
             wrap_t: t.wrap_t.map_or(wrap, RawWrap::mode),
         });
@@ -602,7 +602,7 @@ fn build(raw: RawScene, files: &Files, loc: &Located) -> Result<SceneDescription
         }
         if let Some(t) = &m.alpha_texture {
             let index = texture(t)?;
-            if scene.textures[index].color_space != ColorSpace::Linear {
+            if scene.textures[index].color_space != Some(ColorSpace::Linear) {
                 return Err(loc.at(
                     t,
                     format!(
@@ -735,7 +735,7 @@ fn textured_inputs(
 ) -> Result<(), SceneError> {
     let linear = |t: &Spanned<String>, key: &str| {
         let index = texture(t)?;
-        if textures[index].color_space != ColorSpace::Linear {
+        if textures[index].color_space != Some(ColorSpace::Linear) {
             return Err(loc.at(
                 t,
                 format!(
@@ -1328,7 +1328,7 @@ material = "glass"
         let t = &s.textures[0];
         assert_eq!(
             (t.wrap_s, t.wrap_t, t.color_space),
-            (WrapMode::Clamp, WrapMode::Mirror, ColorSpace::Srgb)
+            (WrapMode::Clamp, WrapMode::Mirror, None)
         );
         assert!(
             matches!(&t.source, crate::scene::TextureSource::File(p) if *p == dir.path().join("c.png"))
