@@ -19,7 +19,7 @@ starts = [s[0] for s in syms]
 def kernel_stage(start, size):
     out = subprocess.run(["objdump", "-d", "-l", "--no-show-raw-insn", f"--start-address={start}",
                           f"--stop-address={start + size}", binary], capture_output=True, text=True).stdout
-    counts = collections.Counter(re.findall(r"src/(integrator/lanes/[a-z]+|integrator/camera_sample|sampler/[a-z]+)\.rs", out))
+    counts = collections.Counter(re.findall(r"src/(integrator/lanes/[a-z]+|integrator/camera_sample|sampler/[a-z]+|texture/[a-z_]+)\.rs", out))
     for name, _ in counts.most_common():
         if "soa" in name:
             continue
@@ -44,6 +44,8 @@ RULES = [
 KERNEL = {"integrator/lanes/interpolate": "2 interpolate", "integrator/lanes/footprints": "3 footprints",
           "integrator/lanes/lights": "5 lights and shadow rays", "integrator/lanes/bsdf": "6 BSDF",
           "integrator/camera_sample": "camera rays", "sampler/scramble": "camera rays", "sampler/mod": "camera rays"}
+# The texture filters run inside `simd::dispatch` too (aniso::sample): any texture/ source is stage 4.
+TEXTURE_STAGE = "4 textures (lookups and filter)"
 kernel_cache = {}
 
 by_name = collections.defaultdict(list)
@@ -65,7 +67,8 @@ def stage(ip, sym, offset, dso):
         i = bisect.bisect_right(starts, start) - 1
         start, size, _ = syms[i]
         if start not in kernel_cache:
-            kernel_cache[start] = KERNEL.get(kernel_stage(start, size), "other kernel")
+            name = kernel_stage(start, size)
+            kernel_cache[start] = TEXTURE_STAGE if name.startswith("texture/") else KERNEL.get(name, "other kernel")
         return kernel_cache[start]
     for label, keys in RULES:
         if any(k in name for k in keys):
