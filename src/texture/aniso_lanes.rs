@@ -21,7 +21,8 @@ use super::tiles::TEXTURE_TILE_SIZE;
 /// Probes computed per step: one AVX2 register of f32, half an AVX-512 one.
 pub(crate) const PROBE_LANES: usize = 8;
 
-const TILE_SHIFT: u32 = TEXTURE_TILE_SIZE.trailing_zeros();
+/// Widths and heights up to this take the lane path (see [`floor_i32`]).
+const MAX_EXTENT: u32 = 1 << 22;
 const TILE_MASK: u32 = TEXTURE_TILE_SIZE - 1;
 
 type Lanes<T> = [T; PROBE_LANES];
@@ -70,10 +71,13 @@ impl ProbeValues {
     }
 }
 
-/// Whether [`byte_probes`] can address `level`: its texel indices fit in u32.
+/// Whether [`byte_probes`] can address `level`: its texel indices fit in u32 and its
+/// sides in [`MAX_EXTENT`].
 #[inline(always)]
 pub(crate) fn addressable(level: &MipLevel) -> bool {
-    u32::try_from(level.width as u64 * level.height as u64).is_ok()
+    level.width <= MAX_EXTENT
+        && level.height <= MAX_EXTENT
+        && u32::try_from(level.width as u64 * level.height as u64).is_ok()
 }
 
 /// The step's probes on `level` (its texels `texels`; [`addressable`]).
@@ -103,12 +107,17 @@ fn texel_positions(level: &MipLevel, step: &ProbeStep) -> (Lanes<f32>, Lanes<f32
     (x, y)
 }
 
-/// floor(x) as `filter_closest_bilinear::floor_i32` computes it: truncate, then step down
-/// when truncation went up.
+/// floor(x) for x in [0, 2^22), the probes that can be served, as
+/// `filter_closest_bilinear::floor_i32` gives it there; anything else (NaN included) gives
+/// -1 or at least 2^22, which no served block has. Written without a float-to-integer
+/// cast, whose saturation Rust defines and LLVM left scalar: adding 1.5 * 2^23 rounds x to
+/// an integer held in the low mantissa bits, and a rounding upward is stepped back.
 #[inline(always)]
 fn floor_i32(x: f32) -> i32 {
-    let t = x as i32;
-    t - ((t as f32 > x) as i32)
+    const MAGIC: f32 = 12_582_912.0; // 1.5 * 2^23
+    let clamped = x.max(-1.0).min(MAX_EXTENT as f32);
+    let rounded = (clamped + MAGIC).to_bits() as i32 - MAGIC.to_bits() as i32;
+    rounded - ((rounded as f32 > clamped) as i32)
 }
 
 /// Index of each block's upper-left texel and its tile's row stride (as
@@ -141,7 +150,6 @@ fn block_addresses(
             & (local_x[l] + 1 < stride[l])
             & (local_y[l] + 1 < tile_h[l])
     });
-    let _ = TILE_SHIFT;
     (index, stride, served)
 }
 
@@ -190,4 +198,34 @@ fn blend(corners: &[[Lanes<f32>; 4]; 4], c: usize, fs: &Lanes<f32>, ft: &Lanes<f
         let bottom = cc[l] * (1.0 - fs[l]) + d[l] * fs[l];
         top * (1.0 - ft[l]) + bottom * ft[l]
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floor_matches_the_scalar_floor_where_blocks_can_be_served() {
+        let mut x = 0.0f32;
+        while x < MAX_EXTENT as f32 {
+            for v in [
+                x,
+                x.next_up(),
+                x.next_down().max(0.0),
+                x + 0.5,
+                x + 0.999_999,
+            ] {
+                if v < MAX_EXTENT as f32 {
+                    assert_eq!(floor_i32(v), v.floor() as i32, "{v}");
+                }
+            }
+            x = if x < 4.0 { x + 0.25 } else { x * 1.37 };
+        }
+        for outside in [-0.0001f32, -1.0, -1e9, f32::NAN, f32::NEG_INFINITY] {
+            assert_eq!(floor_i32(outside), -1, "{outside}");
+        }
+        for beyond in [MAX_EXTENT as f32, 1e9, f32::INFINITY] {
+            assert!(floor_i32(beyond) >= MAX_EXTENT as i32, "{beyond}");
+        }
+    }
 }
