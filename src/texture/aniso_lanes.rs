@@ -27,9 +27,16 @@ const TILE_MASK: u32 = TEXTURE_TILE_SIZE - 1;
 
 type Lanes<T> = [T; PROBE_LANES];
 
+/// The lanes `f(0)`, `f(1)`, ... A plain loop rather than `array::from_fn` or `map`,
+/// which the release build left out of line (`core::array::try_from_fn`), so compiled at
+/// the baseline level and called per step.
 #[inline(always)]
-fn lanes<T>(f: impl FnMut(usize) -> T) -> Lanes<T> {
-    std::array::from_fn(f)
+fn lanes<T: Copy + Default>(mut f: impl FnMut(usize) -> T) -> Lanes<T> {
+    let mut out = [T::default(); PROBE_LANES];
+    for (lane, value) in out.iter_mut().enumerate() {
+        *value = f(lane);
+    }
+    out
 }
 
 /// Probes `first..first + PROBE_LANES` of a line of `count` probes at
@@ -90,8 +97,13 @@ pub(crate) fn byte_probes(level: &MipLevel, texels: ByteTexels, step: &ProbeStep
     let fs = lanes(|l| x[l] - i[l] as f32);
     let ft = lanes(|l| y[l] - j[l] as f32);
     ProbeValues {
-        rgba: std::array::from_fn(|c| blend(&corners, c, &fs, &ft)),
-        block: [i.map(|v| v as u32), j.map(|v| v as u32)],
+        rgba: [
+            blend(&corners, 0, &fs, &ft),
+            blend(&corners, 1, &fs, &ft),
+            blend(&corners, 2, &fs, &ft),
+            blend(&corners, 3, &fs, &ft),
+        ],
+        block: [lanes(|l| i[l] as u32), lanes(|l| j[l] as u32)],
         served,
     }
 }
@@ -132,10 +144,10 @@ fn block_addresses(
 ) -> (Lanes<u32>, Lanes<u32>, Lanes<bool>) {
     let (w, h) = (level.width, level.height);
     let tile_extent = |start: u32, size: u32| size.wrapping_sub(start).min(TEXTURE_TILE_SIZE);
-    let (x, y) = (i.map(|v| v as u32), j.map(|v| v as u32));
+    let (x, y) = (lanes(|l| i[l] as u32), lanes(|l| j[l] as u32));
     let stride = lanes(|l| tile_extent(x[l] & !TILE_MASK, w));
     let tile_h = lanes(|l| tile_extent(y[l] & !TILE_MASK, h));
-    let (local_x, local_y) = (x.map(|v| v & TILE_MASK), y.map(|v| v & TILE_MASK));
+    let (local_x, local_y) = (lanes(|l| x[l] & TILE_MASK), lanes(|l| y[l] & TILE_MASK));
     let index = lanes(|l| {
         let tile_start = (y[l] & !TILE_MASK)
             .wrapping_mul(w)
