@@ -414,7 +414,7 @@ mod tests {
     /// part of them across the level's edges.
     fn query_with_probes(n: usize, minor: f32, random: &mut impl FnMut() -> f32) -> TextureQuery {
         let aspect = (n as f32 + 1.0) / 2.0 + 0.25;
-        let (major, angle) = (minor * aspect, random() * 6.283);
+        let (major, angle) = (minor * aspect, random() * std::f32::consts::TAU);
         TextureQuery {
             s: -0.2 + 1.4 * random(),
             t: -0.2 + 1.4 * random(),
