@@ -23,7 +23,7 @@ def kernel_stage(start, size):
     # lanes' own kernel: named by the caller, not by the sampler's lines.
     if "integrator/path/lane_waves" in out:
         return "integrator/path/lane_waves"
-    counts = collections.Counter(re.findall(r"src/(integrator/lanes/[a-z]+|integrator/camera_sample|sampler/[a-z]+)\.rs", out))
+    counts = collections.Counter(re.findall(r"src/(integrator/lanes/[a-z]+|integrator/camera_sample|sampler/[a-z]+|texture/[a-z_]+)\.rs", out))
     for name, _ in counts.most_common():
         if "soa" in name:
             continue
@@ -49,6 +49,8 @@ KERNEL = {"integrator/lanes/interpolate": "2 interpolate", "integrator/lanes/foo
           "integrator/lanes/lights": "5 lights and shadow rays", "integrator/lanes/bsdf": "6 BSDF",
           "integrator/camera_sample": "camera rays",
           "integrator/path/lane_waves": "vertex samples (path lanes)", "sampler/scramble": "camera rays", "sampler/mod": "camera rays"}
+# The texture filters run inside `simd::dispatch` too (aniso::sample): any texture/ source is stage 4.
+TEXTURE_STAGE = "4 textures (lookups and filter)"
 kernel_cache = {}
 
 by_name = collections.defaultdict(list)
@@ -70,7 +72,8 @@ def stage(ip, sym, offset, dso):
         i = bisect.bisect_right(starts, start) - 1
         start, size, _ = syms[i]
         if start not in kernel_cache:
-            kernel_cache[start] = KERNEL.get(kernel_stage(start, size), "other kernel")
+            name = kernel_stage(start, size)
+            kernel_cache[start] = TEXTURE_STAGE if name.startswith("texture/") else KERNEL.get(name, "other kernel")
         return kernel_cache[start]
     for label, keys in RULES:
         if any(k in name for k in keys):

@@ -7,6 +7,9 @@
 
 use glam::Vec4;
 
+use crate::simd;
+
+use super::aniso_lanes::{self, ProbeStep, PROBE_LANES};
 use super::ellipse;
 pub(crate) use super::ellipse::footprint;
 use super::filter_closest_bilinear::bilinear_from;
@@ -44,9 +47,27 @@ fn symmetric_weights(weights: &mut [f32], inv_n: f32, gauss_scale: f32) -> f32 {
 
 /// The anisotropic lookup (out of line for the same reason as `ewa::sample`), compiled
 /// once per storage kind (that of level 0, which every level of a pyramid normally
-/// shares).
+/// shares) and, through [`simd::dispatch`], for the vector level the processor has: the
+/// probe steps of [`aniso_lanes`] compile to vector instructions only there. Every level
+/// gives the same bits (the lanes do the scalar probe's operations; Rust never contracts
+/// to FMA).
 #[inline(never)]
 pub(crate) fn sample<O: TexelObserver>(
+    pyramid: &MipPyramid,
+    q: &TextureQuery,
+    max_aniso: f32,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+) -> Vec4 {
+    simd::dispatch(
+        #[inline(always)]
+        || sample_at_level(pyramid, q, max_aniso, wrap, obs),
+    )
+}
+
+/// [`sample`]'s body, inlined into the function of each vector level.
+#[inline(always)]
+fn sample_at_level<O: TexelObserver>(
     pyramid: &MipPyramid,
     q: &TextureQuery,
     max_aniso: f32,
@@ -156,24 +177,84 @@ fn probes<'a, S: TexelSource<'a>, O: TexelObserver>(
         }
         _ if n <= MAX_STACK_PROBES => {
             let mut acc = Vec4::ZERO;
-            for (i, w) in weights[..n].iter().enumerate() {
-                let p = 2.0 * (i as f32 + 0.5) * inv_n - 1.0;
-                acc += *w * bilinear_from(level, texels, m, q.s + p * ds, q.t + p * dt, wrap, obs);
-            }
+            each_probe(level, texels, m, q, line, wrap, obs, |i, v| {
+                acc += weights[i] * v
+            });
             acc / wsum
         }
         _ => {
             // Very high anisotropy limits: weights computed on the fly.
             let mut acc = Vec4::ZERO;
             let mut wsum = 0.0f32;
-            for i in 0..n {
+            each_probe(level, texels, m, q, line, wrap, obs, |i, v| {
                 let p = 2.0 * (i as f32 + 0.5) * inv_n - 1.0;
                 let x = p * gauss_scale;
                 let w = (-2.0 * x * x).exp();
                 wsum += w;
-                acc += w * bilinear_from(level, texels, m, q.s + p * ds, q.t + p * dt, wrap, obs);
-            }
+                acc += w * v;
+            });
             acc / wsum
+        }
+    }
+}
+
+/// Calls `visit(i, value)` with the bilinear value of each probe i of `line` on one
+/// level, in probe order (the order the weighted sum must keep to give the same bits).
+/// On 8-bit levels the probes are computed [`PROBE_LANES`] at a time by
+/// [`aniso_lanes::byte_probes`]; a probe it leaves (a block across an edge) and every
+/// probe of another kind go through [`bilinear_from`]. Observers are told of the same
+/// texels in the same order either way.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn each_probe<'a, S: TexelSource<'a>, O: TexelObserver>(
+    level: &'a MipLevel,
+    texels: S,
+    m: usize,
+    q: &TextureQuery,
+    line: &ProbeLine,
+    wrap: (WrapMode, WrapMode),
+    obs: &mut O,
+    mut visit: impl FnMut(usize, Vec4),
+) {
+    let scalar = |i: usize, obs: &mut O| {
+        let p = 2.0 * (i as f32 + 0.5) * line.inv_n - 1.0;
+        bilinear_from(
+            level,
+            texels,
+            m,
+            q.s + p * line.ds,
+            q.t + p * line.dt,
+            wrap,
+            obs,
+        )
+    };
+    let bytes = match texels.as_byte_texels() {
+        Some(bytes) if aniso_lanes::addressable(level) => bytes,
+        _ => return (0..line.n).for_each(|i| visit(i, scalar(i, obs))),
+    };
+    for first in (0..line.n).step_by(PROBE_LANES) {
+        let step = ProbeStep {
+            first,
+            count: line.n,
+            s: q.s,
+            t: q.t,
+            ds: line.ds,
+            dt: line.dt,
+            inv_n: line.inv_n,
+        };
+        let values = aniso_lanes::byte_probes(level, bytes, &step);
+        for i in first..line.n.min(first + PROBE_LANES) {
+            let value = match values.get(i - first) {
+                Some((value, x, y)) => {
+                    obs.touch(m, x, y);
+                    obs.touch(m, x + 1, y);
+                    obs.touch(m, x, y + 1);
+                    obs.touch(m, x + 1, y + 1);
+                    value
+                }
+                None => scalar(i, obs),
+            };
+            visit(i, value);
         }
     }
 }
@@ -296,5 +377,99 @@ mod tests {
         let b = sample(&p, &along_t, 16.0, wrap, &mut NoTextureTiles).x;
         assert!((a - 0.5).abs() < 0.1, "{a}");
         assert!(b > 0.9, "{b}");
+    }
+
+    /// Records every texel a lookup reads, in order.
+    #[derive(Default)]
+    struct TouchLog(Vec<(usize, usize, usize)>);
+
+    impl TexelObserver for TouchLog {
+        fn touch(&mut self, level: usize, x: usize, y: usize) {
+            self.0.push((level, x, y));
+        }
+    }
+
+    /// An sRGB 8-bit pyramid of random texels and the same pyramid stored as f32 (the
+    /// decoded values, exact): the f32 one always takes the scalar probe path.
+    fn byte_and_float_pyramids(w: u32, h: u32, seed: u32) -> (MipPyramid, MipPyramid) {
+        let mut state = seed;
+        let bytes = (0..w * h)
+            .map(|_| {
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                state.to_le_bytes()
+            })
+            .collect();
+        let texels = super::super::texels::Texels::bytes(bytes, crate::texture::ColorSpace::Srgb);
+        let base = MipLevel::with_texels(w, h, texels).unwrap();
+        let bytes = MipPyramid::build(base, "t").unwrap();
+        let levels = bytes
+            .levels
+            .iter()
+            .map(|l| MipLevel::new(l.width, l.height, l.to_rgba_f32()).unwrap())
+            .collect();
+        (bytes, MipPyramid { levels })
+    }
+
+    /// A query of `n` probes (with `max_aniso` >= its aspect) at a random place and angle,
+    /// part of them across the level's edges.
+    fn query_with_probes(n: usize, minor: f32, random: &mut impl FnMut() -> f32) -> TextureQuery {
+        let aspect = (n as f32 + 1.0) / 2.0 + 0.25;
+        let (major, angle) = (minor * aspect, random() * std::f32::consts::TAU);
+        TextureQuery {
+            s: -0.2 + 1.4 * random(),
+            t: -0.2 + 1.4 * random(),
+            dsdx: major * angle.cos(),
+            dtdx: major * angle.sin(),
+            dsdy: -minor * angle.sin(),
+            dtdy: minor * angle.cos(),
+        }
+    }
+
+    /// The vector probe steps on 8-bit levels give the bits and the texel reads of the
+    /// scalar probes at every vector level, for every probe count from 1 to past
+    /// MAX_STACK_PROBES, inside the level and across its edges and tile edges.
+    #[test]
+    fn every_supported_level_gives_the_scalar_probe_bits() {
+        let mut state = 7u32;
+        let mut random = move || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let mut counts = std::collections::BTreeSet::new();
+        for (w, h) in [(150, 70), (13, 7), (256, 256)] {
+            let (bytes, float) = byte_and_float_pyramids(w, h, w * h);
+            for n in (1..=140).chain([200, 257]) {
+                for (minor, wrap) in [
+                    (0.4 / w as f32, (WrapMode::Periodic, WrapMode::Periodic)),
+                    (3.0 / w as f32, (WrapMode::Black, WrapMode::Clamp)),
+                    (0.02, (WrapMode::Mirror, WrapMode::Periodic)),
+                ] {
+                    let q = query_with_probes(n, minor, &mut random);
+                    counts.insert(probe_count(footprint(&bytes, &q, 1024.0).aspect));
+                    let mut scalar_log = TouchLog::default();
+                    let scalar = sample(&float, &q, 1024.0, wrap, &mut scalar_log);
+                    for level in crate::simd::Level::supported() {
+                        let mut log = TouchLog::default();
+                        let lanes = crate::simd::run_at(
+                            level,
+                            #[inline(always)]
+                            || sample_at_level(&bytes, &q, 1024.0, wrap, &mut log),
+                        );
+                        assert_eq!(
+                            lanes.to_array().map(f32::to_bits),
+                            scalar.to_array().map(f32::to_bits),
+                            "{level:?} {w}x{h} n {n} {q:?}"
+                        );
+                        assert!(
+                            log.0 == scalar_log.0,
+                            "{level:?} {w}x{h} n {n}: reads differ"
+                        );
+                    }
+                }
+            }
+        }
+        for n in (1..=130).chain([200]) {
+            assert!(counts.contains(&n), "no query of {n} probes");
+        }
     }
 }

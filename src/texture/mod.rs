@@ -23,6 +23,7 @@
 //! ```
 
 mod aniso;
+mod aniso_lanes;
 mod demand_tiles;
 mod ellipse;
 mod ewa;

@@ -282,6 +282,12 @@ pub(crate) trait FlatTexels<'a>: Copy {
     /// Linear RGBA of texel `index` (in range).
     fn texel(self, index: usize) -> Vec4;
 
+    /// These texels as 8-bit texels, when they are.
+    #[inline(always)]
+    fn as_byte_texels(self) -> Option<ByteTexels<'a>> {
+        None
+    }
+
     /// `blend` of texels `k`, `k + 1`, `k + row` and `k + row + 1` (a bilinear
     /// footprint), or `None` when they are not all inside: one bounds check for four.
     fn bilinear_quad<R>(
@@ -315,6 +321,13 @@ pub(crate) trait TexelSource<'a>: Copy {
         blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
     ) -> Option<R>;
 
+    /// These texels as resident 8-bit texels, when they are: the kind whose anisotropic
+    /// probes run in vector lanes (`aniso_lanes`).
+    #[inline(always)]
+    fn as_byte_texels(self) -> Option<ByteTexels<'a>> {
+        None
+    }
+
     /// [`TexelSource::bilinear_block`] across a tile edge (about 1 block in 32): four
     /// fetches.
     #[inline(always)]
@@ -341,6 +354,11 @@ macro_rules! resident_texel_source {
             #[inline(always)]
             fn view(self, texels: &'a Texels) -> Option<Self> {
                 <Self as FlatTexels<'a>>::view(texels)
+            }
+
+            #[inline(always)]
+            fn as_byte_texels(self) -> Option<ByteTexels<'a>> {
+                <Self as FlatTexels<'a>>::as_byte_texels(self)
             }
 
             #[inline(always)]
@@ -471,6 +489,11 @@ impl<'a> FlatTexels<'a> for ByteTexels<'a> {
     #[inline(always)]
     fn texel(self, index: usize) -> Vec4 {
         byte_texel(self.texels[index], self.colour, self.alpha)
+    }
+
+    #[inline(always)]
+    fn as_byte_texels(self) -> Option<ByteTexels<'a>> {
+        Some(self)
     }
 
     #[inline(always)]
