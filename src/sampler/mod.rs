@@ -174,6 +174,13 @@ fn next_2d_lanes<const N: usize>(
         };
         last = Some((state, *lane_keys));
     }
+    draw_2d_lanes(&keys, indices)
+}
+
+/// Sample `indices[lane]` of each lane's scrambled first two Sobol dimensions, keyed by
+/// `keys[lane]`: x, then y, in a loop without branches.
+#[inline(always)]
+fn draw_2d_lanes<const N: usize>(keys: &[DrawKeys; N], indices: &[u32; N]) -> [[f32; N]; 2] {
     let mut out = [[0.0f32; N]; 2];
     for lane in 0..N {
         let point = keys[lane].draw_2d(indices[lane]);
@@ -221,26 +228,15 @@ impl<const N: usize> SamplerLanes<N> {
     #[inline(always)]
     pub fn draw_1d(&self, offset: u32) -> [f32; N] {
         let keys = self.keys(offset);
-        std::array::from_fn(|lane| {
-            let shuffled = nested_uniform_scramble(self.indices[lane], keys[lane]);
-            unit_float(scramble_mirrored(
-                shuffled,
-                hash_u32(keys[lane] ^ X_SCRAMBLE_SALT),
-            ))
-        })
+        std::array::from_fn(|lane| draw_1d(keys[lane], self.indices[lane]))
     }
 
     /// [`PixelSampler::next_2d`] of every lane at its dimension plus `offset`: x, then y.
     #[inline(always)]
     pub fn draw_2d(&self, offset: u32) -> [[f32; N]; 2] {
         let keys = self.keys(offset);
-        let mut out = [[0.0f32; N]; 2];
-        for lane in 0..N {
-            let point = DrawKeys::new(keys[lane]).draw_2d(self.indices[lane]);
-            out[0][lane] = point.x;
-            out[1][lane] = point.y;
-        }
-        out
+        let keys: [DrawKeys; N] = std::array::from_fn(|lane| DrawKeys::new(keys[lane]));
+        draw_2d_lanes(&keys, &self.indices)
     }
 }
 
@@ -249,6 +245,14 @@ impl<const N: usize> SamplerLanes<N> {
 #[inline]
 fn draw_key(pixel_state: u32, dimension: u32) -> u32 {
     hash_u32(pixel_state ^ hash_u32(dimension))
+}
+
+/// Sample `index` of the Owen-scrambled first Sobol dimension, keyed by `key`.
+#[inline(always)]
+fn draw_1d(key: u32, index: u32) -> f32 {
+    let shuffled = nested_uniform_scramble(index, key);
+    // Sobol dimension 0 mirrored is the (shuffled) index itself.
+    unit_float(scramble_mirrored(shuffled, hash_u32(key ^ X_SCRAMBLE_SALT)))
 }
 
 /// Sample `index` of the Owen-scrambled first two Sobol dimensions, keyed by `key`.
@@ -349,9 +353,7 @@ impl PixelSampler {
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
         let key = self.take(1);
-        let shuffled = nested_uniform_scramble(self.index, key);
-        // Sobol dimension 0 mirrored is the (shuffled) index itself.
-        unit_float(scramble_mirrored(shuffled, hash_u32(key ^ X_SCRAMBLE_SALT)))
+        draw_1d(key, self.index)
     }
 
     /// The next two dimensions: a point in [0, 1)^2.
