@@ -16,7 +16,7 @@
 //! may travel along (Crassin et al. 2011, sec. 3.1), and a lookup blends the three a
 //! direction sees.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A, Vec4};
 
 /// Default number of voxels along the longest side of the scene.
 pub const DEFAULT_RESOLUTION: u32 = 128;
@@ -274,60 +274,86 @@ impl VoxelLevel {
     /// blended by their weights (one-face levels ignore which).
     #[inline]
     pub fn trilinear(&self, v: Vec3, faces: &[(usize, f32); 3]) -> [f32; 4] {
-        let p = v - Vec3::splat(0.5);
+        let (corners, count) = self.corners(v);
+        let corners = &corners[..count];
+        let out = if self.faces == 1 {
+            blend_voxels(&self.voxels, corners)
+        } else {
+            blend_voxel_faces(&self.voxels, self.faces, corners, faces)
+        };
+        out.to_array()
+    }
+
+    /// The voxels a trilinear lookup at `v` reads, as (index, weight), in corner order (x
+    /// fastest), leaving out corners of zero weight and corners outside the level.
+    #[inline]
+    fn corners(&self, v: Vec3) -> ([(usize, f32); 8], usize) {
+        let p = Vec3A::from(v) - Vec3A::splat(0.5);
+        // Vec3A's floor is computed in vector registers, not by three calls to libm.
         let base = p.floor();
         let f = p - base;
         let (x0, y0, z0) = (base.x as i64, base.y as i64, base.z as i64);
         let [dx, dy, dz] = self.dims.map(i64::from);
         let weights = [[1.0 - f.x, f.x], [1.0 - f.y, f.y], [1.0 - f.z, f.z]];
-        let mut out = [0.0f32; 4];
+        let mut corners = [(0usize, 0.0f32); 8];
+        let mut count = 0;
         // Most lookups have all eight corners inside the level: one index and fixed
         // strides, no per-corner bounds test.
-        if x0 >= 0 && y0 >= 0 && z0 >= 0 && x0 + 1 < dx && y0 + 1 < dy && z0 + 1 < dz {
-            let first = (x0 + dx * (y0 + dy * z0)) as usize;
-            let (row, slice) = (dx as usize, (dx * dy) as usize);
-            for corner in 0..8 {
-                let (cx, cy, cz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-                let w = weights[0][cx] * weights[1][cy] * weights[2][cz];
-                if w != 0.0 {
-                    self.accumulate_voxel(&mut out, w, first + cx + row * cy + slice * cz, faces);
-                }
-            }
-            return out;
-        }
+        let inside = x0 >= 0 && y0 >= 0 && z0 >= 0 && x0 + 1 < dx && y0 + 1 < dy && z0 + 1 < dz;
+        let first = if inside {
+            (x0 + dx * (y0 + dy * z0)) as usize
+        } else {
+            0
+        };
+        let (row, slice) = (dx as usize, (dx * dy) as usize);
         for corner in 0..8 {
             let (cx, cy, cz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
             let w = weights[0][cx] * weights[1][cy] * weights[2][cz];
             if w == 0.0 {
                 continue;
             }
-            let Some(i) = self.voxel_index(x0 + cx as i64, y0 + cy as i64, z0 + cz as i64) else {
-                continue;
+            let index = if inside {
+                first + cx + row * cy + slice * cz
+            } else {
+                match self.voxel_index(x0 + cx as i64, y0 + cy as i64, z0 + cz as i64) {
+                    Some(i) => i,
+                    None => continue,
+                }
             };
-            self.accumulate_voxel(&mut out, w, i, faces);
+            corners[count] = (index, w);
+            count += 1;
         }
-        out
-    }
-
-    /// Adds `w` times voxel `i`, its `faces` blended by their weights, to `out`.
-    #[inline]
-    fn accumulate_voxel(&self, out: &mut [f32; 4], w: f32, i: usize, faces: &[(usize, f32); 3]) {
-        if self.faces == 1 {
-            accumulate(out, w, self.voxels[i]);
-        } else {
-            let voxel = &self.voxels[i * self.faces..(i + 1) * self.faces];
-            for &(face, fw) in faces {
-                accumulate(out, w * fw, voxel[face]);
-            }
-        }
+        (corners, count)
     }
 }
 
+/// The sum of one-face voxels `corners` (index, weight), in their order.
 #[inline]
-fn accumulate(out: &mut [f32; 4], w: f32, value: [f32; 4]) {
-    for (o, c) in out.iter_mut().zip(value) {
-        *o += w * c;
+fn blend_voxels(voxels: &[[f32; 4]], corners: &[(usize, f32)]) -> Vec4 {
+    let mut out = Vec4::ZERO;
+    for &(i, w) in corners {
+        out += Vec4::splat(w) * Vec4::from_array(voxels[i]);
     }
+    out
+}
+
+/// The sum of directional voxels `corners` (index, weight) of `face_count` faces each, of
+/// the faces `faces` weighted by their weights, corner by corner and face by face.
+#[inline]
+fn blend_voxel_faces(
+    voxels: &[[f32; 4]],
+    face_count: usize,
+    corners: &[(usize, f32)],
+    faces: &[(usize, f32); 3],
+) -> Vec4 {
+    let mut out = Vec4::ZERO;
+    for &(i, w) in corners {
+        let voxel = &voxels[i * face_count..(i + 1) * face_count];
+        for &(face, face_weight) in faces {
+            out += Vec4::splat(w * face_weight) * Vec4::from_array(voxel[face]);
+        }
+    }
+    out
 }
 
 /// The voxelised scene at every level of detail.
