@@ -49,6 +49,9 @@
 //! through fog and the medium vertex), `next_event` (light sampling and its shadow rays),
 //! `mis` (the power heuristic).
 
+mod lane_bsdf;
+mod lane_lights;
+mod lane_scatter;
 mod lane_waves;
 mod medium;
 mod mis;
@@ -236,11 +239,12 @@ impl WaveIntegrator for PathTracer {
             worker,
             self.shade_in_lanes,
         );
+        lane_scatter::scatter_lanes(self, context, &mut lanes, &mut current, worker);
         for (index, (ray, hit)) in current.iter_mut().zip(&hits).enumerate() {
             match lanes.lane_of(index) {
-                Some(lane) => lane_waves::finish_lane(
-                    self, context, ray, hit, &lanes, lane, image, waves, worker,
-                ),
+                Some(lane) => {
+                    lane_waves::finish_lane(context, ray, hit, &lanes, lane, image, waves, worker)
+                }
                 None => vertex::shade(self, context, ray, hit, image, waves, worker),
             }
         }
