@@ -26,13 +26,8 @@ const SCENES: [&str; 8] = [
     "assets/scenes/fp_magnifier.toml",
 ];
 
-/// The film of `scene` rendered small by the path tracer, in lanes or not, and how many
-/// hits the lanes shaded.
-fn render_film(scene: &str, in_lanes: bool, options: impl Fn(&mut RenderOptions)) -> (Film, u64) {
-    render_film_with(scene, PathTracer::default(), in_lanes, options)
-}
-
-/// [`render_film`] with the path tracer's settings `tracer`.
+/// The film of `scene` rendered small by the path tracer with the settings `tracer`, in
+/// lanes or not, and how many hits the lanes shaded.
 fn render_film_with(
     scene: &str,
     tracer: PathTracer,

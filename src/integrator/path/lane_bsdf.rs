@@ -15,16 +15,17 @@ use std::ops::Range;
 
 use glam::Vec3;
 
-use super::lane_scatter::ScatterLanes;
+use super::lane_scatter::{LaneContinuation, ScatterLanes};
 use super::lane_waves::{lane_inputs, PathLanes};
 use super::next_event::{delta_contribution, weighted_contribution};
 use super::vertex::{bsdf_has_smooth_part, medium_beyond, VertexSamples};
 use super::{LightStrategy, PathTracer};
 use crate::integrator::lanes::WaveLanes;
+use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::scene::MaterialModel;
 use crate::shading::{
-    self, Bsdf, LobeFlags, MaterialBsdf, MetallicRoughnessBsdf, OpaqueBsdf, OpaqueOnly,
+    self, Bsdf, LobeFlags, MaterialBsdf, MetallicRoughnessBsdf, OpaqueBsdf, OpaqueOnly, SpawnPoint,
 };
 
 /// A loop over one material's lanes, given the material and the lobe its lanes share.
@@ -217,11 +218,17 @@ impl Scattering<'_> {
             contribution
         };
         let largest = contribution.max_element();
-        if largest.is_nan() || largest <= 0.0 {
+        if largest.is_nan() || largest <= 0.0 || !scatter.segment[lane] {
             return;
         }
-        scatter.contribution.set(lane, contribution);
-        scatter.shadowed[lane] = scatter.segment[lane];
+        scatter.shadow[lane] = Some(ShadowRay {
+            origin: scatter.shadow_origin.get(lane),
+            direction: scatter.shadow_direction.get(lane),
+            tfar: scatter.shadow_tfar[lane],
+            light: None,
+            contribution,
+            slot: 0,
+        });
     }
 
     /// `vertex::continue_by_bsdf` up to the queue: the BSDF's sample, unless the depth,
@@ -242,19 +249,31 @@ impl Scattering<'_> {
             return;
         }
         let wi = sample.wi;
-        let crosses = wi.dot(lanes.incident_geometric.get(lane)) < 0.0;
+        let ng = lanes.incident_geometric.get(lane);
+        let crosses = wi.dot(ng) < 0.0;
         if crosses && !delta && !scatter.transmits[lane] {
             return;
         }
-        if self.context.effects.footprints && !delta {
-            scatter.next_value.set(lane, bsdf.eval(wo, wi));
-        }
-        scatter.next[lane] = true;
-        scatter.next_wi.set(lane, wi);
-        scatter.next_weight.set(lane, sample.weight);
-        scatter.next_pdf[lane] = sample.pdf;
-        scatter.next_flags[lane] = sample.flags;
-        scatter.next_eta[lane] = sample.eta;
-        scatter.next_crosses[lane] = crosses;
+        let value = if self.context.effects.footprints && !delta {
+            bsdf.eval(wo, wi)
+        } else {
+            Vec3::ZERO
+        };
+        let front = lanes
+            .direction
+            .get(lane)
+            .dot(lanes.geometric_normal.get(lane))
+            < 0.0;
+        scatter.next[lane] = Some(LaneContinuation {
+            sample,
+            crosses,
+            value,
+            spawn: SpawnPoint {
+                position: lanes.position.get(lane),
+                error: lanes.error.get(lane),
+            },
+            ng,
+            front,
+        });
     }
 }

@@ -17,8 +17,9 @@ use super::lane_waves::PathLanes;
 use super::{lane_bsdf, lane_lights, PathRay, PathTracer};
 use crate::integrator::lanes::soa::Vec3Lanes;
 use crate::integrator::lanes::{bsdf::incident_normals, refill};
+use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
-use crate::shading::{self, LightRef, LobeFlags};
+use crate::shading::{self, BsdfSample, LightRef, SpawnPoint};
 
 /// What stages 5 and 6 read of each lane's path and write for the walk, one entry per
 /// lane, reused from wave to wave.
@@ -59,22 +60,29 @@ pub(super) struct ScatterLanes {
     pub(super) shadow_direction: Vec3Lanes,
     pub(super) shadow_tfar: Vec<f32>,
 
-    // Stage 6, after the lights.
-    /// Whether the shadow ray is queued, and what it carries if unoccluded.
-    pub(super) shadowed: Vec<bool>,
-    pub(super) contribution: Vec3Lanes,
-    /// Whether the path continues, and the BSDF sample it continues along
-    /// (`shading::BsdfSample`), with whether it leaves below the geometric surface.
-    pub(super) next: Vec<bool>,
-    pub(super) next_wi: Vec3Lanes,
-    pub(super) next_weight: Vec3Lanes,
-    pub(super) next_pdf: Vec<f32>,
-    pub(super) next_flags: Vec<LobeFlags>,
-    pub(super) next_eta: Vec<f32>,
-    pub(super) next_crosses: Vec<bool>,
+    // Stage 6, after the lights: what the walk queues, one record per lane, as the walk
+    // reads them in the wave's order (a lane's record is one or two cache lines, where
+    // the arrays it is made from would be a dozen).
+    /// The shadow ray to queue, its slot left for the walk to set.
+    pub(super) shadow: Vec<Option<ShadowRay>>,
+    /// The BSDF sample the path continues along.
+    pub(super) next: Vec<Option<LaneContinuation>>,
+}
+
+/// What the walk needs of a lane whose path continues (`vertex::queue_continuation`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LaneContinuation {
+    pub(super) sample: BsdfSample,
+    /// Whether the sample leaves below the geometric surface.
+    pub(super) crosses: bool,
     /// The BSDF's value towards a non-delta sample, for the footprint's spread (only when
     /// footprints are on).
-    pub(super) next_value: Vec3Lanes,
+    pub(super) value: Vec3,
+    /// The hit's point and its rounding-error bound, where the ray leaves from.
+    pub(super) spawn: SpawnPoint,
+    /// The geometric normal on the viewer's side, and whether that is the front.
+    pub(super) ng: Vec3,
+    pub(super) front: bool,
 }
 
 impl ScatterLanes {
@@ -89,9 +97,6 @@ impl ScatterLanes {
             &mut self.lit,
             &mut self.delta,
             &mut self.segment,
-            &mut self.shadowed,
-            &mut self.next,
-            &mut self.next_crosses,
         ] {
             refill(flags, len, false);
         }
@@ -100,8 +105,6 @@ impl ScatterLanes {
             &mut self.light_distance,
             &mut self.light_pdf,
             &mut self.shadow_tfar,
-            &mut self.next_pdf,
-            &mut self.next_eta,
         ] {
             values.resize(len, 0.0);
         }
@@ -111,15 +114,12 @@ impl ScatterLanes {
             &mut self.radiance,
             &mut self.shadow_origin,
             &mut self.shadow_direction,
-            &mut self.contribution,
-            &mut self.next_wi,
-            &mut self.next_weight,
-            &mut self.next_value,
         ] {
             vectors.resize(len);
         }
         self.light.resize(len, LightRef::Environment);
-        self.next_flags.resize(len, LobeFlags::NONE);
+        refill(&mut self.shadow, len, None);
+        refill(&mut self.next, len, None);
     }
 }
 

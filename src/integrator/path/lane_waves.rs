@@ -1,6 +1,7 @@
 //! The path tracer's hits reconstructed and textured in lanes (`integrator::lanes`, stages
-//! 1-4), wave by wave, and each lane's vertex then finished in wave order from the lane
-//! arrays, without a `SurfaceHit` record or a per-ray texture lookup.
+//! 1-4), wave by wave, their lights and BSDFs then handled in lanes (`lane_scatter`), and
+//! each lane's vertex finished in wave order by queueing the rays those stages set up,
+//! without a `SurfaceHit` record or a per-ray texture lookup.
 //!
 //! A hit takes the lanes when it lies on a triangle mesh whose material emits nothing and
 //! bends no normal (`lanes::LaneMaterial::path_covers`), and its footprint moves to the hit
@@ -12,9 +13,9 @@
 //!
 //! What a lane adds is computed as `vertex::shade` computes it, operation for operation:
 //! the stages give the bits of `SurfaceLookup::surface_hit` and `shading::surface_inputs`,
-//! and [`finish_lane`] then runs the same steps in the same order (AOVs, absorption, the
-//! footprint at the hit, light sampling, the BSDF's continuation), so images are bit for
-//! bit those of the scalar path.
+//! `lane_scatter` runs the same steps (absorption, the footprint at the hit, light
+//! sampling, the BSDF's continuation), and [`finish_lane`] queues the rays in the wave's
+//! order, so images are bit for bit those of the scalar path.
 
 use crate::film::TileImage;
 use crate::integrator::lanes::footprints::{footprint_at_hit, texture_gradients, LaneFootprint};
@@ -31,7 +32,7 @@ use crate::render::tracer::TraceHit;
 use crate::sampler::PixelSampler;
 use crate::scene::Material;
 use crate::shading::surface_inputs::SurfaceInputs;
-use crate::shading::{BsdfSample, MaterialBsdf, SpawnPoint};
+use crate::shading::MaterialBsdf;
 use crate::simd;
 
 use super::lane_scatter::ScatterLanes;
@@ -197,35 +198,20 @@ pub(super) fn finish_lane(
         write_geometry_values(context, image, ray.slot, ray.direction, t, normal, st);
         write_material_aovs(image, ray.slot, &lane_inputs(material, lanes, lane));
     }
-    if scatter.shadowed[lane] {
+    if let Some(shadow) = scatter.shadow[lane] {
         waves.shadows.push(ShadowRay {
-            origin: scatter.shadow_origin.get(lane),
-            direction: scatter.shadow_direction.get(lane),
-            tfar: scatter.shadow_tfar[lane],
-            light: None,
-            contribution: scatter.contribution.get(lane),
             slot: ray.slot,
+            ..shadow
         });
     }
-    if !scatter.next[lane] {
+    let Some(next) = &scatter.next[lane] else {
         return;
-    }
-    let sample = BsdfSample {
-        wi: scatter.next_wi.get(lane),
-        weight: scatter.next_weight.get(lane),
-        pdf: scatter.next_pdf[lane],
-        flags: scatter.next_flags[lane],
-        eta: scatter.next_eta[lane],
     };
-    let geometric_normal = lanes.geometric_normal.get(lane);
     let site = SurfaceSite {
         material: material_index,
-        position: lanes.position.get(lane),
-        spawn: SpawnPoint {
-            position: lanes.position.get(lane),
-            error: lanes.error.get(lane),
-        },
-        geometric_normal,
+        position: next.spawn.position,
+        spawn: next.spawn,
+        geometric_normal: if next.front { next.ng } else { -next.ng },
         record: HitRecord::Deferred {
             hit,
             origin: ray.origin,
@@ -234,26 +220,26 @@ pub(super) fn finish_lane(
     };
     let spread = FootprintSpread {
         site: &site,
-        sample: &sample,
-        crosses: scatter.next_crosses[lane],
-        value: || scatter.next_value.get(lane),
+        sample: &next.sample,
+        crosses: next.crosses,
+        value: || next.value,
         // Only a delta reflection below the geometric surface asks: rare enough to build
         // the mixture again, as `vertex::SurfaceVertex` builds it.
         boundary_eta: || {
             let fresnel = context.effects.fresnel.then_some(context.options.fresnel);
             let inputs = lane_inputs(material, lanes, lane);
+            let outward = lanes.geometric_normal.get(lane);
             let bsdf = MaterialBsdf::from_surface_inputs(
                 material,
                 &inputs,
                 ray.direction,
-                geometric_normal,
+                outward,
                 fresnel,
             );
             bsdf.dielectric.split(ray.direction).boundary.eta
         },
     };
-    let front = ray.direction.dot(geometric_normal) < 0.0;
-    let side = (lanes.incident_geometric.get(lane), front);
+    let side = (next.ng, next.front);
     let u_roulette = path.vertex_samples[lane].roulette;
     queue_continuation(context, ray, spread, side, u_roulette, waves, worker);
 }
