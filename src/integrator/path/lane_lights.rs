@@ -32,11 +32,11 @@ pub(super) fn sample_lights(
     } = path;
     let lights = &context.lights;
     let area_only_by_bsdf = tracer.strategy == LightStrategy::BsdfSampling;
-    for lane in 0..lanes.len() {
+    // One set of vertex numbers per lane.
+    for (lane, u) in vertex_samples.iter().enumerate() {
         if !scatter.samples_light[lane] {
             continue;
         }
-        let u = &vertex_samples[lane];
         let Some((light, pmf)) = lights.choose(u.light) else {
             continue;
         };

@@ -178,6 +178,7 @@ fn pick_lanes(
 /// and order of `vertex::shade`, once stages 5 and 6 have run (`lane_scatter`): the camera
 /// hit's AOVs, then the shadow ray and the continuing ray those stages set up, queued in
 /// the wave's order. The lanes' materials emit nothing, so no emission is added.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn finish_lane(
     context: &RenderContext,
     ray: &PathRay,
