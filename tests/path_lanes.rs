@@ -7,24 +7,33 @@ use std::sync::Arc;
 
 use conetrace::film::{AovSelection, Film};
 use conetrace::footprint::LodStrategy;
-use conetrace::integrator::path::PathTracer;
+use conetrace::integrator::path::{LightStrategy, PathTracer};
 use conetrace::render::{self, RenderControl, RenderOptions};
 use conetrace::scene::load::load_scene;
 
-/// Scenes with textured, untextured, metallic-roughness, mirror and glass materials, area
-/// lights and an environment: what the lanes cover and what they leave to the scalar path.
-const SCENES: [&str; 6] = [
+/// Scenes with textured, untextured, metallic-roughness, mirror and glass materials (a
+/// glass lens mesh, whose hits the lanes shade with the whole mixture of lobes), point,
+/// area and environment lights, and absorbing glass: what the lanes cover and what they
+/// leave to the scalar path.
+const SCENES: [&str; 8] = [
     "assets/scenes/path_textured.toml",
     "assets/scenes/teapot_textured.toml",
     "assets/scenes/teapot_mirror.toml",
     "assets/scenes/cornell.toml",
     "assets/scenes/bench/env_lit_textured.toml",
     "assets/scenes/bench/untextured_specular.toml",
+    "assets/scenes/default.toml",
+    "assets/scenes/fp_magnifier.toml",
 ];
 
-/// The film of `scene` rendered small by the path tracer, in lanes or not, and how many
-/// hits the lanes shaded.
-fn render_film(scene: &str, in_lanes: bool, options: impl Fn(&mut RenderOptions)) -> (Film, u64) {
+/// The film of `scene` rendered small by the path tracer with the settings `tracer`, in
+/// lanes or not, and how many hits the lanes shaded.
+fn render_film_with(
+    scene: &str,
+    tracer: PathTracer,
+    in_lanes: bool,
+    options: impl Fn(&mut RenderOptions),
+) -> (Film, u64) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
     let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut render_options = RenderOptions::from_settings(&scene.settings);
@@ -35,7 +44,7 @@ fn render_film(scene: &str, in_lanes: bool, options: impl Fn(&mut RenderOptions)
     let context = render::prepare(Arc::new(scene), render_options).expect("prepare");
     let tracer = PathTracer {
         shade_in_lanes: in_lanes,
-        ..PathTracer::default()
+        ..tracer
     };
     let result = render::render(&context, &tracer, &RenderControl::default()).expect("render");
     (result.film, result.stats.counters.lane_hits)
@@ -64,10 +73,19 @@ fn assert_same_bits(scene: &str, variant: &str, lanes: &Film, scalar: &Film) {
 /// Renders every scene both ways and compares them; returns how many hits the lanes shaded
 /// in all.
 fn check_every_scene(variant: &str, options: impl Fn(&mut RenderOptions)) -> u64 {
+    check_every_scene_with(variant, PathTracer::default(), options)
+}
+
+/// [`check_every_scene`] with the path tracer's settings `tracer`.
+fn check_every_scene_with(
+    variant: &str,
+    tracer: PathTracer,
+    options: impl Fn(&mut RenderOptions),
+) -> u64 {
     let mut lane_hits = 0;
     for scene in SCENES {
-        let (lanes, hits) = render_film(scene, true, &options);
-        let (scalar, scalar_hits) = render_film(scene, false, &options);
+        let (lanes, hits) = render_film_with(scene, tracer, true, &options);
+        let (scalar, scalar_hits) = render_film_with(scene, tracer, false, &options);
         assert_eq!(scalar_hits, 0, "{scene}: the scalar render used the lanes");
         assert_same_bits(scene, variant, &lanes, &scalar);
         lane_hits += hits;
@@ -103,5 +121,31 @@ fn lanes_leave_ray_differentials_their_scalar_image() {
 #[test]
 fn lanes_give_the_scalar_path_s_image_without_footprints() {
     let lane_hits = check_every_scene("mip0", |options| options.lod = LodStrategy::Mip0);
+    assert!(lane_hits > 0, "no hit took the lanes");
+}
+
+#[test]
+fn lanes_weigh_light_and_bsdf_samples_as_the_scalar_path_under_every_strategy() {
+    // Light sampling alone (never weighted) and BSDF sampling alone (delta lights only):
+    // the lanes' stages 5 and 6 branch on the strategy as `next_event::sample_light` does.
+    for strategy in [LightStrategy::LightSampling, LightStrategy::BsdfSampling] {
+        let tracer = PathTracer {
+            strategy,
+            ..PathTracer::default()
+        };
+        let lane_hits = check_every_scene_with(&format!("{strategy:?}"), tracer, |_| {});
+        assert!(lane_hits > 0, "no hit took the lanes");
+    }
+}
+
+#[test]
+fn lanes_keep_the_scalar_path_s_diffuse_bounce_limit() {
+    // One non-delta bounce: the second diffuse vertex samples light unweighted and ends.
+    let tracer = PathTracer {
+        diffuse_bounces: 1,
+        ..PathTracer::default()
+    };
+    let lane_hits =
+        check_every_scene_with("diffuse_bounces 1", tracer, |options| options.max_depth = 3);
     assert!(lane_hits > 0, "no hit took the lanes");
 }

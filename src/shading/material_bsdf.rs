@@ -387,6 +387,75 @@ impl Bsdf for MaterialBsdf {
     }
 }
 
+/// The BSDF of a material whose only lobe is its opaque lobe `L` (`mirror` and
+/// `transmission` both zero): [`MaterialBsdf`]'s mixture with the weights (1, 0, 0), with the
+/// operations its methods then perform, so every value has the same bits, but without the
+/// matches over lobes and models. The path tracer's lanes run one `OpaqueOnly` per
+/// material group (`integrator::path::lane_bsdf`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OpaqueOnly<L> {
+    pub lobe: L,
+    /// The lobe's shading normal, on the viewer's side ([`OpaqueLobe::normal`]).
+    pub normal: Vec3,
+}
+
+impl OpaqueOnly<OpaqueBsdf> {
+    #[inline(always)]
+    pub fn classic(lobe: OpaqueBsdf) -> Self {
+        OpaqueOnly {
+            normal: lobe.n,
+            lobe,
+        }
+    }
+}
+
+impl OpaqueOnly<MetallicRoughnessBsdf> {
+    #[inline(always)]
+    pub fn metallic_roughness(lobe: MetallicRoughnessBsdf) -> Self {
+        OpaqueOnly {
+            normal: lobe.normal(),
+            lobe,
+        }
+    }
+}
+
+impl<L: Bsdf> Bsdf for OpaqueOnly<L> {
+    /// The mixture's `1 * f`.
+    #[inline(always)]
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        self.lobe.eval(wo, wi)
+    }
+
+    /// The mixture's sample with the opaque lobe chosen with probability 1: `u_lobe`
+    /// clamped as [`MaterialBsdf::sample`] rescales it, the density and weight those of the
+    /// mixture (here the lobe's own).
+    #[inline(always)]
+    fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let u_inner = u_lobe.clamp(0.0, 1.0 - f32::EPSILON);
+        let mut sample = self.lobe.sample(wo, u_inner, u)?;
+        if !sample.is_specular() {
+            sample.pdf = self.lobe.pdf(wo, sample.wi);
+            if sample.pdf.is_nan() || sample.pdf <= 0.0 {
+                return None;
+            }
+            let cos = sample.wi.dot(self.normal).abs();
+            sample.weight = self.lobe.eval(wo, sample.wi) * (cos / sample.pdf);
+        }
+        Some(sample)
+    }
+
+    /// The mixture's `1 * pdf`.
+    #[inline(always)]
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.lobe.pdf(wo, wi)
+    }
+
+    #[inline(always)]
+    fn flags(&self) -> LobeFlags {
+        self.lobe.flags()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -491,6 +560,62 @@ mod tests {
         let share = counts[0] as f32 / count as f32;
         assert!((share - expected).abs() < 0.01, "{share} vs {expected}");
         assert!(counts[1] > 0 && counts[2] > 0);
+    }
+
+    /// `OpaqueOnly` gives [`MaterialBsdf`]'s bits for a material without mirror or
+    /// transmission, for both models and a classic lobe with and without a highlight.
+    #[test]
+    fn an_opaque_only_material_matches_the_mixture_bit_for_bit() {
+        let mut u = Uniforms(41);
+        let mut classic = material(0.0, 0.0);
+        let mut dull = classic.clone();
+        if let MaterialModel::Classic(model) = &mut classic.model {
+            model.specular = 0.4;
+            model.shininess = 30.0;
+        }
+        if let MaterialModel::Classic(model) = &mut dull.model {
+            model.specular = 0.0;
+        }
+        let mut metal = material(0.0, 0.0);
+        metal.model = metallic_roughness(0.35, 0.6);
+        for m in [&classic, &dull, &metal] {
+            for _ in 0..2000 {
+                let d = crate::shading::bsdf::sample_uniform_sphere(u.vec2());
+                let ns = (Vec3::Z + 0.3 * crate::shading::bsdf::sample_uniform_sphere(u.vec2()))
+                    .normalize();
+                let mixture = MaterialBsdf::new(m, m.base_color, d, Vec3::Z, ns, None);
+                let opaque = match mixture.opaque {
+                    OpaqueLobe::Classic(lobe) => {
+                        let only = OpaqueOnly::classic(lobe);
+                        compare(&mixture, &only, d, &mut u);
+                        continue;
+                    }
+                    OpaqueLobe::MetallicRoughness(lobe) => OpaqueOnly::metallic_roughness(lobe),
+                };
+                compare(&mixture, &opaque, d, &mut u);
+            }
+        }
+
+        fn compare(mixture: &MaterialBsdf, only: &impl Bsdf, d: Vec3, u: &mut Uniforms) {
+            let (wo, wi) = (-d, crate::shading::bsdf::sample_uniform_sphere(u.vec2()));
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+            assert_eq!(bits(mixture.eval(wo, wi)), bits(only.eval(wo, wi)));
+            assert_eq!(mixture.pdf(wo, wi).to_bits(), only.pdf(wo, wi).to_bits());
+            assert_eq!(mixture.flags(), only.flags());
+            let (u_lobe, u_dir) = (u.next(), u.vec2());
+            let a = mixture.sample(wo, u_lobe, u_dir);
+            let b = only.sample(wo, u_lobe, u_dir);
+            match (a, b) {
+                (Some(a), Some(b)) => {
+                    assert_eq!(bits(a.wi), bits(b.wi));
+                    assert_eq!(bits(a.weight), bits(b.weight));
+                    assert_eq!(a.pdf.to_bits(), b.pdf.to_bits());
+                    assert_eq!((a.flags, a.eta.to_bits()), (b.flags, b.eta.to_bits()));
+                }
+                (None, None) => {}
+                (a, b) => panic!("{a:?} against {b:?}"),
+            }
+        }
     }
 
     #[test]

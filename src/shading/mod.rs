@@ -92,7 +92,7 @@ pub use fresnel::{fresnel, fresnel_dielectric, fresnel_schlick, DielectricBounda
 pub use light_interface::{EmissionLookup, LiSample, LightHit, OwnEmission};
 pub use light_selection::{LightRef, LightSelection, SceneLights};
 pub use lights::{is_delta_light, light_position, pdf_li, sample_li, LightSample};
-pub use material_bsdf::{MaterialBsdf, OpaqueLobe};
+pub use material_bsdf::{MaterialBsdf, OpaqueLobe, OpaqueOnly};
 pub use material_features::MaterialFeatures;
 pub use metallic_roughness::MetallicRoughnessBsdf;
 pub use mirror::SmoothMirror;

@@ -1,6 +1,7 @@
 //! The path tracer's hits reconstructed and textured in lanes (`integrator::lanes`, stages
-//! 1-4), wave by wave, and each lane's vertex then finished in wave order from the lane
-//! arrays, without a `SurfaceHit` record or a per-ray texture lookup.
+//! 1-4), wave by wave, their lights and BSDFs then handled in lanes (`lane_scatter`), and
+//! each lane's vertex finished in wave order by queueing the rays those stages set up,
+//! without a `SurfaceHit` record or a per-ray texture lookup.
 //!
 //! A hit takes the lanes when it lies on a triangle mesh whose material emits nothing and
 //! bends no normal (`lanes::LaneMaterial::path_covers`), and its footprint moves to the hit
@@ -12,9 +13,9 @@
 //!
 //! What a lane adds is computed as `vertex::shade` computes it, operation for operation:
 //! the stages give the bits of `SurfaceLookup::surface_hit` and `shading::surface_inputs`,
-//! and [`finish_lane`] then runs the same steps in the same order (AOVs, absorption, the
-//! footprint at the hit, light sampling, the BSDF's continuation), so images are bit for
-//! bit those of the scalar path.
+//! `lane_scatter` runs the same steps (absorption, the footprint at the hit, light
+//! sampling, the BSDF's continuation), and [`finish_lane`] queues the rays in the wave's
+//! order, so images are bit for bit those of the scalar path.
 
 use crate::film::TileImage;
 use crate::integrator::lanes::footprints::{footprint_at_hit, texture_gradients, LaneFootprint};
@@ -23,6 +24,7 @@ use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::picks::{LaneHit, LanePicks};
 use crate::integrator::lanes::textures::shading_inputs;
 use crate::integrator::lanes::WaveLanes;
+use crate::integrator::trace_wave::ShadowRay;
 use crate::integrator::wave_integrator::{write_geometry_values, write_material_aovs};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
@@ -30,11 +32,12 @@ use crate::render::tracer::TraceHit;
 use crate::sampler::PixelSampler;
 use crate::scene::Material;
 use crate::shading::surface_inputs::SurfaceInputs;
-use crate::shading::{self, SpawnPoint};
+use crate::shading::MaterialBsdf;
 use crate::simd;
 
-use super::vertex::{scatter_at_surface, HitRecord, SurfaceSite, VertexSamples};
-use super::{PathRay, PathTracer, PathWaves};
+use super::lane_scatter::ScatterLanes;
+use super::vertex::{queue_continuation, FootprintSpread, HitRecord, SurfaceSite, VertexSamples};
+use super::{PathRay, PathWaves};
 
 /// `PathLanes::lane_of_ray` for a ray shaded by the scalar path.
 const SCALAR: u32 = u32::MAX;
@@ -42,13 +45,15 @@ const SCALAR: u32 = u32::MAX;
 /// The lanes of the wave being shaded, reused from wave to wave.
 #[derive(Default)]
 pub(crate) struct PathLanes {
-    lanes: WaveLanes,
+    pub(super) lanes: WaveLanes,
     /// Per ray of the wave: its lane, or [`SCALAR`].
     lane_of_ray: Vec<u32>,
     /// The hits the lanes take, in the wave's order.
     picks: LanePicks,
     /// Per lane: the uniform numbers of its vertex, drawn for all lanes together.
-    vertex_samples: Vec<VertexSamples>,
+    pub(super) vertex_samples: Vec<VertexSamples>,
+    /// Stages 5 and 6: what they read of the paths and set up for the walk.
+    pub(super) scatter: ScatterLanes,
 }
 
 impl PathLanes {
@@ -97,8 +102,8 @@ const DRAW_WIDTH: usize = 16;
 
 /// Every lane's vertex numbers (light choice and point, BSDF lobe and direction, roulette),
 /// [`DRAW_WIDTH`] lanes at a time at the lanes' vector level. The samplers are moved on as
-/// each vertex takes its numbers (`vertex::scatter_at_surface`); a path that ends before
-/// then leaves its numbers unread.
+/// each path arrives at its hit (`lane_scatter`); a path that ends before then leaves its
+/// numbers unread.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 fn draw_vertex_samples(path: &mut PathLanes, rays: &[PathRay]) {
@@ -170,14 +175,13 @@ fn pick_lanes(
 }
 
 /// The vertex of the wave's ray `ray` (which hit `hit`) at its lane `lane`, in the steps
-/// and order of `vertex::shade`: the camera hit's AOVs, absorption, the footprint at the
-/// hit, then light sampling and the continuation (`vertex::scatter_at_surface`). The lanes'
-/// materials emit nothing, so no emission is added.
+/// and order of `vertex::shade`, once stages 5 and 6 have run (`lane_scatter`): the camera
+/// hit's AOVs, then the shadow ray and the continuing ray those stages set up, queued in
+/// the wave's order. The lanes' materials emit nothing, so no emission is added.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn finish_lane(
-    tracer: &PathTracer,
     context: &RenderContext,
-    ray: &mut PathRay,
+    ray: &PathRay,
     hit: &TraceHit,
     path: &PathLanes,
     lane: usize,
@@ -185,79 +189,66 @@ pub(super) fn finish_lane(
     waves: &mut PathWaves,
     worker: &mut WorkerState,
 ) {
-    let lanes = &path.lanes;
+    let (lanes, scatter) = (&path.lanes, &path.scatter);
     let material_index = lanes.material[lane];
     let material = &context.scene.materials[material_index as usize];
     let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
-    let t = lanes.t[lane];
-    let shading_normal = lanes.shading_normal.get(lane);
     if camera_first {
         let st = lanes.st.get(lane);
-        write_geometry_values(
-            context,
-            image,
-            ray.slot,
-            ray.direction,
-            t,
-            shading_normal,
-            st,
-        );
+        let (t, normal) = (lanes.t[lane], lanes.shading_normal.get(lane));
+        write_geometry_values(context, image, ray.slot, ray.direction, t, normal, st);
+        write_material_aovs(image, ray.slot, &lane_inputs(material, lanes, lane));
     }
-    arrive_at_hit(context, ray, t, worker);
-    let inputs = lane_inputs(material, lanes, lane);
-    if camera_first {
-        write_material_aovs(image, ray.slot, &inputs);
+    if let Some(shadow) = scatter.shadow[lane] {
+        waves.shadows.push(ShadowRay {
+            slot: ray.slot,
+            ..shadow
+        });
     }
+    let Some(next) = &scatter.next[lane] else {
+        return;
+    };
     let site = SurfaceSite {
         material: material_index,
-        position: lanes.position.get(lane),
-        spawn: SpawnPoint {
-            position: lanes.position.get(lane),
-            error: lanes.error.get(lane),
-        },
-        geometric_normal: lanes.geometric_normal.get(lane),
+        position: next.spawn.position,
+        spawn: next.spawn,
+        geometric_normal: if next.front { next.ng } else { -next.ng },
         record: HitRecord::Deferred {
             hit,
             origin: ray.origin,
             camera_first,
         },
     };
-    let drawn = &path.vertex_samples[lane];
-    scatter_at_surface(
-        tracer,
-        context,
-        ray,
-        &site,
-        material,
-        (&inputs, Some(drawn)),
-        waves,
-        worker,
-    );
-}
-
-/// Beer's law over the distance `t` travelled inside the ray's medium, and the ray's
-/// footprint moved to its hit (`vertex::shade`'s absorption and footprint steps).
-#[inline]
-fn arrive_at_hit(context: &RenderContext, ray: &mut PathRay, t: f32, worker: &mut WorkerState) {
-    let effects = &context.effects;
-    if effects.absorption && ray.sigma != glam::Vec3::ZERO {
-        ray.throughput *= shading::transmittance(ray.sigma, t);
-        worker.counters.absorption_evaluations += 1;
-    }
-    if effects.footprints {
-        worker.counters.footprint_updates += 1;
-        // `pick_lanes` leaves differentials, the one footprint without this, to the
-        // scalar path.
-        if let Some(at_hit) = ray.footprint.propagated(t) {
-            ray.footprint = at_hit;
-        }
-    }
+    let spread = FootprintSpread {
+        site: &site,
+        sample: &next.sample,
+        crosses: next.crosses,
+        value: || next.value,
+        // Only a delta reflection below the geometric surface asks: rare enough to build
+        // the mixture again, as `vertex::SurfaceVertex` builds it.
+        boundary_eta: || {
+            let fresnel = context.effects.fresnel.then_some(context.options.fresnel);
+            let inputs = lane_inputs(material, lanes, lane);
+            let outward = lanes.geometric_normal.get(lane);
+            let bsdf = MaterialBsdf::from_surface_inputs(
+                material,
+                &inputs,
+                ray.direction,
+                outward,
+                fresnel,
+            );
+            bsdf.dielectric.split(ray.direction).boundary.eta
+        },
+    };
+    let side = (next.ng, next.front);
+    let u_roulette = path.vertex_samples[lane].roulette;
+    queue_continuation(context, ray, spread, side, u_roulette, waves, worker);
 }
 
 /// The material's shading inputs at lane `lane`, as `shading::surface_inputs` gives them
 /// for a material that emits nothing and bends no normal.
 #[inline]
-fn lane_inputs(material: &Material, lanes: &WaveLanes, lane: usize) -> SurfaceInputs {
+pub(super) fn lane_inputs(material: &Material, lanes: &WaveLanes, lane: usize) -> SurfaceInputs {
     let model = material.model.metallic_roughness();
     SurfaceInputs {
         albedo: lanes.albedo.get(lane),

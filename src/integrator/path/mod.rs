@@ -41,14 +41,20 @@
 //! shadow rays pass the exact transmittance (`medium`, docs/fog.md).
 //!
 //! The hits the shading lanes cover (`crate::integrator::lanes`) are reconstructed and
-//! textured together, wave by wave, before the wave's vertices are finished in its order
-//! (`lane_waves`); the same bits as the scalar path's.
+//! textured together, wave by wave (`lane_waves`), their lights sampled and their BSDFs
+//! evaluated and sampled over the lane arrays, one lobe's code per material
+//! (`lane_scatter`), before the wave's vertices are finished in its order; the same bits
+//! as the scalar path's.
 //!
 //! Files: `vertex` (what a hit adds and where the path goes next), `lane_waves` (the hits
-//! reconstructed and textured in lanes), `medium` (free flights
+//! reconstructed and textured in lanes, and the walk that queues their rays),
+//! `lane_scatter`, `lane_lights` and `lane_bsdf` (stages 5 and 6 in lanes), `medium` (free flights
 //! through fog and the medium vertex), `next_event` (light sampling and its shadow rays),
 //! `mis` (the power heuristic).
 
+mod lane_bsdf;
+mod lane_lights;
+mod lane_scatter;
 mod lane_waves;
 mod medium;
 mod mis;
@@ -236,11 +242,12 @@ impl WaveIntegrator for PathTracer {
             worker,
             self.shade_in_lanes,
         );
+        lane_scatter::scatter_lanes(self, context, &mut lanes, &mut current, worker);
         for (index, (ray, hit)) in current.iter_mut().zip(&hits).enumerate() {
             match lanes.lane_of(index) {
-                Some(lane) => lane_waves::finish_lane(
-                    self, context, ray, hit, &lanes, lane, image, waves, worker,
-                ),
+                Some(lane) => {
+                    lane_waves::finish_lane(context, ray, hit, &lanes, lane, image, waves, worker)
+                }
                 None => vertex::shade(self, context, ray, hit, image, waves, worker),
             }
         }

@@ -41,10 +41,7 @@ impl Scatterer<'_> {
     #[inline]
     fn admits(&self, wi: Vec3) -> bool {
         match self {
-            Scatterer::Surface { ng, transmits, .. } => {
-                let cos = wi.dot(*ng);
-                cos > 0.0 || (*transmits && cos < 0.0)
-            }
+            Scatterer::Surface { ng, transmits, .. } => surface_admits(*ng, *transmits, wi),
             Scatterer::Medium(_) => true,
         }
     }
@@ -76,6 +73,15 @@ impl Scatterer<'_> {
             Scatterer::Medium(phase) => phase.pdf(-wo, wi),
         }
     }
+}
+
+/// Whether a surface whose geometric normal on the viewer's side is `ng` receives light
+/// from `wi`: from the viewer's side, and from the far side when it `transmits` with a
+/// density.
+#[inline(always)]
+pub(super) fn surface_admits(ng: Vec3, transmits: bool, wi: Vec3) -> bool {
+    let cos = wi.dot(ng);
+    cos > 0.0 || (transmits && cos < 0.0)
 }
 
 /// The shading point light sampling starts from.
@@ -124,7 +130,7 @@ pub(super) fn sample_light(
         return;
     }
     let mut emission = AdmittedEmission {
-        scatterer: &point.scatterer,
+        admits: |wi| point.scatterer.admits(wi),
         lookup: ContextEmission { context, worker },
     };
     let Some(sample) = lights.sample_li(light, point.position, u_point, &mut emission) else {
@@ -189,17 +195,8 @@ fn queue_shadow_ray(
     } else {
         point.origin
     };
-    let Some((direction, tfar)) = shading::shadow_ray_towards(origin, sample.light_point, wi)
-    else {
+    let Some((direction, tfar)) = shadow_segment(context, light, origin, sample) else {
         return;
-    };
-    // A sphere lamp hides nothing of itself from the surface point, but the offset origin
-    // sits closer to it and sees less of it: the segment stops where it enters the lamp.
-    let tfar = match light {
-        LightRef::Area(index) => {
-            context.lights.area.lights[index].clip_shadow_ray(origin, direction, tfar)
-        }
-        _ => tfar,
     };
     waves.shadows.push(ShadowRay {
         origin,
@@ -211,10 +208,31 @@ fn queue_shadow_ray(
     });
 }
 
+/// The shadow ray from `origin` towards `sample` of `light`: its unit direction and far
+/// end, `None` when the sampled point coincides with the origin.
+#[inline(always)]
+pub(super) fn shadow_segment(
+    context: &RenderContext,
+    light: LightRef,
+    origin: Vec3,
+    sample: &LiSample,
+) -> Option<(Vec3, f32)> {
+    let (direction, tfar) = shading::shadow_ray_towards(origin, sample.light_point, sample.wi)?;
+    // A sphere lamp hides nothing of itself from the surface point, but the offset origin
+    // sits closer to it and sees less of it: the segment stops where it enters the lamp.
+    let tfar = match light {
+        LightRef::Area(index) => {
+            context.lights.area.lights[index].clip_shadow_ray(origin, direction, tfar)
+        }
+        _ => tfar,
+    };
+    Some((direction, tfar))
+}
+
 /// What a delta light's sample adds: it arrives from one direction with probability 1, so
 /// no BSDF-sampled ray finds it and only the choice of the light (`pmf`) divides it.
 #[inline]
-fn delta_contribution(unweighted: Vec3, pmf: f32) -> Vec3 {
+pub(super) fn delta_contribution(unweighted: Vec3, pmf: f32) -> Vec3 {
     unweighted / pmf
 }
 
@@ -223,7 +241,7 @@ fn delta_contribution(unweighted: Vec3, pmf: f32) -> Vec3 {
 /// `bsdf_pdf()` with which BSDF sampling draws the same direction, unless it stands
 /// `alone`. A density that overflowed to infinity leaves nothing.
 #[inline]
-fn weighted_contribution(
+pub(super) fn weighted_contribution(
     unweighted: Vec3,
     light_pdf: f32,
     alone: bool,
@@ -256,17 +274,17 @@ impl EmissionLookup for ContextEmission<'_, '_> {
     }
 }
 
-/// [`ContextEmission`] for a shading point: a direction its scatterer cannot receive light
-/// from reads nothing (black), as its sample is dropped anyway.
-struct AdmittedEmission<'s, 'a, 'w> {
-    scatterer: &'s Scatterer<'s>,
-    lookup: ContextEmission<'a, 'w>,
+/// [`ContextEmission`] for a shading point: a direction it cannot receive light from
+/// (`admits` false) reads nothing (black), as its sample is dropped anyway.
+pub(super) struct AdmittedEmission<'a, 'w, A> {
+    pub(super) admits: A,
+    pub(super) lookup: ContextEmission<'a, 'w>,
 }
 
-impl EmissionLookup for AdmittedEmission<'_, '_, '_> {
+impl<A: Fn(Vec3) -> bool> EmissionLookup for AdmittedEmission<'_, '_, A> {
     #[inline]
     fn environment(&mut self, environment: &EnvironmentLight, wi: Vec3) -> Vec3 {
-        if self.scatterer.admits(wi) {
+        if (self.admits)(wi) {
             self.lookup.environment(environment, wi)
         } else {
             Vec3::ZERO

@@ -86,14 +86,7 @@ pub(super) fn shade(
     }
     let site = SurfaceSite::of_record(&surface);
     scatter_at_surface(
-        tracer,
-        context,
-        ray,
-        &site,
-        material,
-        (&inputs, None),
-        waves,
-        worker,
+        tracer, context, ray, &site, material, &inputs, waves, worker,
     );
 }
 
@@ -155,13 +148,13 @@ impl SurfaceSite<'_> {
 /// Where the path goes from a surface vertex whose emission has been added: the vertex's
 /// uniform numbers, next-event estimation and the BSDF-sampled continuation.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn scatter_at_surface(
+fn scatter_at_surface(
     tracer: &PathTracer,
     context: &RenderContext,
     ray: &mut PathRay,
     site: &SurfaceSite,
     material: &Material,
-    (inputs, drawn): (&SurfaceInputs, Option<&VertexSamples>),
+    inputs: &SurfaceInputs,
     waves: &mut PathWaves,
     worker: &mut WorkerState,
 ) {
@@ -169,7 +162,7 @@ pub(super) fn scatter_at_surface(
         // Past the last bounce a delta lobe's ray only collects emission (added before).
         return;
     }
-    let u = VertexSamples::take(ray, drawn);
+    let u = VertexSamples::draw(ray);
     let vertex = SurfaceVertex::new(tracer, context, ray, site, material, inputs);
     if vertex.lobes.has_density() && bsdf_has_smooth_part(&vertex.bsdf, vertex.wo, vertex.ns) {
         sample_direct_light(tracer, context, ray, &vertex, &u, waves, worker);
@@ -324,16 +317,16 @@ fn add_emission(
 /// this order whichever are used, so an image is a pure function of the seed.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct VertexSamples {
-    light: f32,
-    light_point: Vec2,
-    lobe: f32,
-    direction: Vec2,
-    roulette: f32,
+    pub(super) light: f32,
+    pub(super) light_point: Vec2,
+    pub(super) lobe: f32,
+    pub(super) direction: Vec2,
+    pub(super) roulette: f32,
 }
 
 impl VertexSamples {
     /// The dimensions a surface vertex takes.
-    const DIMENSIONS: u32 = 7;
+    pub(super) const DIMENSIONS: u32 = 7;
 
     fn draw(ray: &mut PathRay) -> VertexSamples {
         VertexSamples {
@@ -363,19 +356,6 @@ impl VertexSamples {
             direction: Vec2::new(direction[0][lane], direction[1][lane]),
             roulette: roulette[lane],
         })
-    }
-
-    /// The vertex's numbers: `drawn` when the lanes drew them (the ray's sampler then moves
-    /// past them), else drawn from the ray's sampler now.
-    #[inline]
-    fn take(ray: &mut PathRay, drawn: Option<&VertexSamples>) -> VertexSamples {
-        match drawn {
-            Some(drawn) => {
-                ray.sampler.skip_dimensions(VertexSamples::DIMENSIONS);
-                *drawn
-            }
-            None => VertexSamples::draw(ray),
-        }
     }
 }
 
@@ -517,16 +497,41 @@ fn continue_by_bsdf(
     if crosses && !delta && !vertex.bsdf.transmits_with_density() {
         return;
     }
+    let bsdf = &vertex.bsdf;
+    let spread = FootprintSpread {
+        site: vertex.site,
+        sample: &sample,
+        crosses,
+        value: || bsdf.eval(vertex.wo, wi),
+        boundary_eta: || bsdf.dielectric.split(ray.direction).boundary.eta,
+    };
+    let side = (vertex.ng, vertex.front);
+    queue_continuation(context, ray, spread, side, u.roulette, waves, worker);
+}
+
+/// Queue the ray a path continues along `spread.sample` from a surface vertex whose
+/// geometric normal on the viewer's side is `ng` (`front`: the ray arrived on the front
+/// side), unless Russian roulette (`u_roulette`) or a degenerate throughput ends it.
+pub(super) fn queue_continuation(
+    context: &RenderContext,
+    ray: &PathRay,
+    spread: FootprintSpread<impl FnOnce() -> Vec3, impl FnOnce() -> f32>,
+    (ng, front): (Vec3, bool),
+    u_roulette: f32,
+    waves: &mut PathWaves,
+    worker: &mut WorkerState,
+) {
+    let (site, sample, crosses) = (spread.site, *spread.sample, spread.crosses);
+    let delta = sample.is_specular();
     let throughput = ray.throughput * sample.weight;
-    let (footprint, approximate_footprint) =
-        spread_footprint(context, ray, vertex, &sample, crosses, worker);
+    let (footprint, approximate_footprint) = spread_footprint(context, ray, spread, worker);
     let sigma = if crosses {
-        medium_beyond(context, vertex.site.material, vertex.front)
+        medium_beyond(context, site.material, front)
     } else {
         ray.sigma
     };
     let depth = ray.depth + 1;
-    let Some(throughput) = continuing_throughput(throughput, depth, u.roulette, worker) else {
+    let Some(throughput) = continuing_throughput(throughput, depth, u_roulette, worker) else {
         return;
     };
     let kind = if crosses {
@@ -537,11 +542,8 @@ fn continue_by_bsdf(
     worker.counters.count_rays(kind, 1);
     worker.counters.path_bounces += 1;
     waves.buffers.rays.next.push(PathRay {
-        origin: vertex
-            .site
-            .spawn
-            .offset_origin(if crosses { -vertex.ng } else { vertex.ng }),
-        direction: wi,
+        origin: site.spawn.offset_origin(if crosses { -ng } else { ng }),
+        direction: sample.wi,
         start: 0.0,
         throughput,
         footprint,
@@ -550,7 +552,7 @@ fn continue_by_bsdf(
         depth,
         diffuse_depth: ray.diffuse_depth + u32::from(!delta),
         bsdf_pdf: (!delta).then_some(sample.pdf),
-        from: vertex.site.position,
+        from: site.position,
         kind,
         sigma,
         first_sample: ray.first_sample,
@@ -558,29 +560,40 @@ fn continue_by_bsdf(
     });
 }
 
-/// The footprint of the ray continuing along `sample`, and whether it is to be replaced by
-/// the camera's at the next hit: mirror and refraction as in Whitted, a cone widened by the
-/// BSDF spread heuristic (`crate::footprint::bsdf_spread_angle`) for a rough bounce. After a
-/// delta bounce the footprint was rebuilt at this hit and carries on.
-fn spread_footprint(
+/// What the footprint of a continuing ray is spread by: the vertex's site, the BSDF's
+/// sample, whether it leaves below the geometric surface, and what the BSDF answers when
+/// asked (only when needed): its value towards the sample, and the relative index of its
+/// smooth boundary.
+pub(super) struct FootprintSpread<'a, V, E> {
+    pub(super) site: &'a SurfaceSite<'a>,
+    pub(super) sample: &'a BsdfSample,
+    pub(super) crosses: bool,
+    pub(super) value: V,
+    pub(super) boundary_eta: E,
+}
+
+/// The footprint of the ray continuing along `spread.sample`, and whether it is to be
+/// replaced by the camera's at the next hit: mirror and refraction as in Whitted, a cone
+/// widened by the BSDF spread heuristic (`crate::footprint::bsdf_spread_angle`) for a rough
+/// bounce. After a delta bounce the footprint was rebuilt at this hit and carries on.
+pub(super) fn spread_footprint(
     context: &RenderContext,
     ray: &PathRay,
-    vertex: &SurfaceVertex,
-    sample: &BsdfSample,
-    crosses: bool,
+    spread: FootprintSpread<impl FnOnce() -> Vec3, impl FnOnce() -> f32>,
     worker: &mut WorkerState,
 ) -> (Footprint, bool) {
     if !context.effects.footprints {
         return (ray.footprint, false);
     }
     worker.counters.footprint_updates += 1;
+    let sample = spread.sample;
     let wi = sample.wi;
     if !sample.is_specular() {
-        let f = vertex.bsdf.eval(vertex.wo, wi);
+        let f = (spread.value)();
         return (ray.footprint.scatter(bsdf_spread_angle(luminance(f))), true);
     }
-    let surface = &*vertex.site.record(context, ray.direction);
-    if !crosses {
+    let surface = &*spread.site.record(context, ray.direction);
+    if !spread.crosses {
         return (ray.footprint.reflect(ray.direction, surface, wi), false);
     }
     // A delta reflection that leaves below the geometric surface bends the footprint as the
@@ -588,7 +601,7 @@ fn spread_footprint(
     let eta = if sample.is_transmission() {
         sample.eta
     } else {
-        vertex.bsdf.dielectric.split(ray.direction).boundary.eta
+        (spread.boundary_eta)()
     };
     (
         ray.footprint.refract(ray.direction, surface, eta, wi),
@@ -600,7 +613,7 @@ fn spread_footprint(
 /// seen from its front (`front`) or back: crossing the surface enters the material's medium
 /// from the front, and leaves it for the outside (no medium) from the back.
 #[inline]
-fn medium_beyond(context: &RenderContext, material: u32, front: bool) -> Vec3 {
+pub(super) fn medium_beyond(context: &RenderContext, material: u32, front: bool) -> Vec3 {
     if front {
         context.materials.sigma[material as usize]
     } else {
@@ -695,8 +708,8 @@ fn found_area_light(
 
 /// Whether the BSDF has a non-delta part that light sampling can reach from `wo`: its
 /// density is positive for some direction above the surface (the normal is one).
-#[inline]
-fn bsdf_has_smooth_part(bsdf: &MaterialBsdf, wo: Vec3, ns: Vec3) -> bool {
+#[inline(always)]
+pub(super) fn bsdf_has_smooth_part(bsdf: &impl Bsdf, wo: Vec3, ns: Vec3) -> bool {
     bsdf.pdf(wo, ns) > 0.0 || bsdf.eval(wo, ns).max_element() > 0.0
 }
 

@@ -1,0 +1,279 @@
+//! Stage 6 of the path tracer's lanes: the BSDF of every lane, one loop per material's
+//! range of lanes (the lanes are ordered by material), so that each loop runs one lobe's
+//! code. A material without mirror or transmission runs its opaque lobe alone
+//! (`shading::OpaqueOnly`: Lambert, Lambert plus Blinn-Phong, or glTF metallic-roughness);
+//! any other runs the whole mixture (`shading::MaterialBsdf`), built per lane from the
+//! lanes' inputs as `vertex::SurfaceVertex` builds it.
+//!
+//! Two passes: before the lights ([`test_smooth_parts`]), whether light sampling runs at
+//! each lane; after them ([`scatter`]), what the light sample delivers through the BSDF,
+//! weighted against BSDF sampling by the power heuristic (`next_event::sample_light`), and
+//! the BSDF-sampled direction the path continues along (`vertex::continue_by_bsdf`), each
+//! from the lane's own uniform numbers and with the scalar path's operations.
+
+use std::ops::Range;
+
+use glam::Vec3;
+
+use super::lane_scatter::{LaneContinuation, ScatterLanes};
+use super::lane_waves::{lane_inputs, PathLanes};
+use super::next_event::{delta_contribution, weighted_contribution};
+use super::vertex::{bsdf_has_smooth_part, medium_beyond, VertexSamples};
+use super::{LightStrategy, PathTracer};
+use crate::integrator::lanes::WaveLanes;
+use crate::integrator::trace_wave::ShadowRay;
+use crate::render::context::{RenderContext, WorkerState};
+use crate::scene::MaterialModel;
+use crate::shading::{
+    self, Bsdf, LobeFlags, MaterialBsdf, MetallicRoughnessBsdf, OpaqueBsdf, OpaqueOnly, SpawnPoint,
+};
+
+/// A loop over one material's lanes, given the material and the lobe its lanes share.
+trait MaterialLoop {
+    fn run<B: Bsdf>(&mut self, material: u32, lanes: Range<usize>, lobe: impl Fn(usize) -> B);
+}
+
+/// Run `each` over every material's range of lanes with its lobe.
+#[inline(always)]
+fn for_each_material(context: &RenderContext, lanes: &WaveLanes, each: &mut impl MaterialLoop) {
+    let fresnel = context.effects.fresnel.then_some(context.options.fresnel);
+    let (ns, albedo) = (&lanes.incident_shading, &lanes.albedo);
+    let (roughness, metallic) = (&lanes.roughness, &lanes.metallic);
+    for run in 0..lanes.material_runs.len() {
+        let (index, range) = lanes.material_run(run);
+        let material = &context.scene.materials[index as usize];
+        // The mixture's weights are then (1, 0, 0) exactly.
+        let opaque_only = material.mirror == 0.0 && material.transmission == 0.0;
+        match &material.model {
+            MaterialModel::Classic(classic) if opaque_only && classic.specular > 0.0 => {
+                each.run(index, range, |lane| {
+                    OpaqueOnly::classic(OpaqueBsdf {
+                        n: ns.get(lane),
+                        albedo: albedo.get(lane),
+                        specular: classic.specular,
+                        shininess: classic.shininess,
+                    })
+                })
+            }
+            // `OpaqueBsdf` reads `specular` only to test it for a positive value: the same
+            // lobe with a constant 0 compiles to Lambert alone.
+            MaterialModel::Classic(classic) if opaque_only => each.run(index, range, |lane| {
+                OpaqueOnly::classic(OpaqueBsdf {
+                    n: ns.get(lane),
+                    albedo: albedo.get(lane),
+                    specular: 0.0,
+                    shininess: classic.shininess,
+                })
+            }),
+            MaterialModel::MetallicRoughness(_) if opaque_only => each.run(index, range, |lane| {
+                let lobe = MetallicRoughnessBsdf::new(
+                    ns.get(lane),
+                    albedo.get(lane),
+                    roughness[lane],
+                    metallic[lane],
+                );
+                OpaqueOnly::metallic_roughness(lobe)
+            }),
+            _ => each.run(index, range, |lane| {
+                MaterialBsdf::from_surface_inputs(
+                    material,
+                    &lane_inputs(material, lanes, lane),
+                    lanes.direction.get(lane),
+                    lanes.geometric_normal.get(lane),
+                    fresnel,
+                )
+            }),
+        }
+    }
+}
+
+/// Which lanes sample a light (`ScatterLanes::samples_light`): those whose path scatters
+/// here and whose BSDF has a part with a density that light from above the shading normal
+/// reaches; and whether each BSDF transmits with a density.
+// Not inlined: one call per wave, and `perf` attributes each stage's time to it.
+#[inline(never)]
+pub(super) fn test_smooth_parts(
+    context: &RenderContext,
+    lanes: &WaveLanes,
+    scatter: &mut ScatterLanes,
+) {
+    struct SmoothParts<'a> {
+        lanes: &'a WaveLanes,
+        scatter: &'a mut ScatterLanes,
+    }
+    impl MaterialLoop for SmoothParts<'_> {
+        #[inline(always)]
+        fn run<B: Bsdf>(&mut self, _: u32, range: Range<usize>, lobe: impl Fn(usize) -> B) {
+            let scatter = &mut *self.scatter;
+            for lane in range {
+                if !scatter.active[lane] {
+                    continue;
+                }
+                let bsdf = lobe(lane);
+                let flags = bsdf.flags();
+                scatter.transmits[lane] = flags.contains(LobeFlags::GLOSSY_TRANSMISSION);
+                let wo = -self.lanes.direction.get(lane);
+                let ns = self.lanes.incident_shading.get(lane);
+                scatter.samples_light[lane] =
+                    flags.has_density() && bsdf_has_smooth_part(&bsdf, wo, ns);
+            }
+        }
+    }
+    for_each_material(context, lanes, &mut SmoothParts { lanes, scatter });
+}
+
+/// What each lane's light sample delivers through its BSDF if unoccluded, and whether its
+/// shadow ray is queued; and the BSDF sample its path continues along, if it continues.
+// Not inlined: one call per wave, and `perf` attributes each stage's time to it.
+#[inline(never)]
+pub(super) fn scatter(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    path: &mut PathLanes,
+    worker: &mut WorkerState,
+) {
+    let PathLanes {
+        lanes,
+        scatter,
+        vertex_samples,
+        ..
+    } = path;
+    let mut scattering = Scattering {
+        context,
+        light_alone: tracer.strategy == LightStrategy::LightSampling,
+        lanes,
+        samples: vertex_samples,
+        scatter,
+        worker,
+    };
+    for_each_material(context, lanes, &mut scattering);
+}
+
+/// The lanes of one material in [`scatter`].
+struct Scattering<'a> {
+    context: &'a RenderContext,
+    /// Light sampling stands alone (`LightStrategy::LightSampling`): never weighted.
+    light_alone: bool,
+    lanes: &'a WaveLanes,
+    samples: &'a [VertexSamples],
+    scatter: &'a mut ScatterLanes,
+    worker: &'a mut WorkerState,
+}
+
+impl MaterialLoop for Scattering<'_> {
+    #[inline(always)]
+    fn run<B: Bsdf>(&mut self, material: u32, range: Range<usize>, lobe: impl Fn(usize) -> B) {
+        for lane in range {
+            if !self.scatter.active[lane] {
+                continue;
+            }
+            let bsdf = lobe(lane);
+            if self.scatter.lit[lane] {
+                self.deliver_light(material, lane, &bsdf);
+            }
+            self.sample_continuation(lane, &bsdf);
+        }
+    }
+}
+
+impl Scattering<'_> {
+    /// `next_event::sample_light` after the light's sample, and `queue_shadow_ray` up to
+    /// the queue: the BSDF's value and, for a light with an area, the power heuristic
+    /// against BSDF sampling; Beer's law inside the medium the shadow ray crosses.
+    #[inline(always)]
+    fn deliver_light(&mut self, material: u32, lane: usize, bsdf: &impl Bsdf) {
+        let (lanes, scatter) = (self.lanes, &mut *self.scatter);
+        let wo = -lanes.direction.get(lane);
+        let ns = lanes.incident_shading.get(lane);
+        let wi = scatter.light_wi.get(lane);
+        let f = bsdf.eval(wo, wi) * ns.dot(wi).abs();
+        if f.max_element() <= 0.0 {
+            return;
+        }
+        let unweighted = lanes.throughput.get(lane) * f * scatter.radiance.get(lane);
+        let pmf = scatter.pmf[lane];
+        let contribution = if scatter.delta[lane] {
+            delta_contribution(unweighted, pmf)
+        } else {
+            // No BSDF ray competes when none continues along a non-delta lobe.
+            let alone = !scatter.rough_continues[lane] || self.light_alone;
+            let light_pdf = pmf * scatter.light_pdf[lane];
+            weighted_contribution(unweighted, light_pdf, alone, || bsdf.pdf(wo, wi))
+        };
+        let ng = lanes.incident_geometric.get(lane);
+        let sigma = if wi.dot(ng) < 0.0 {
+            let front = lanes
+                .direction
+                .get(lane)
+                .dot(lanes.geometric_normal.get(lane))
+                < 0.0;
+            medium_beyond(self.context, material, front)
+        } else {
+            scatter.sigma.get(lane)
+        };
+        let contribution = if self.context.effects.absorption && sigma != Vec3::ZERO {
+            self.worker.counters.absorption_evaluations += 1;
+            contribution * shading::transmittance(sigma, scatter.light_distance[lane])
+        } else {
+            contribution
+        };
+        let largest = contribution.max_element();
+        if largest.is_nan() || largest <= 0.0 || !scatter.segment[lane] {
+            return;
+        }
+        scatter.shadow[lane] = Some(ShadowRay {
+            origin: scatter.shadow_origin.get(lane),
+            direction: scatter.shadow_direction.get(lane),
+            tfar: scatter.shadow_tfar[lane],
+            light: None,
+            contribution,
+            slot: 0,
+        });
+    }
+
+    /// `vertex::continue_by_bsdf` up to the queue: the BSDF's sample, unless the depth,
+    /// the diffuse-bounce limit or a rough lobe's leak below the surface ends the path.
+    #[inline(always)]
+    fn sample_continuation(&mut self, lane: usize, bsdf: &impl Bsdf) {
+        let (lanes, scatter) = (self.lanes, &mut *self.scatter);
+        if !scatter.continues[lane] && !bsdf.flags().is_specular() {
+            return;
+        }
+        let u = &self.samples[lane];
+        let wo = -lanes.direction.get(lane);
+        let Some(sample) = bsdf.sample(wo, u.lobe, u.direction) else {
+            return;
+        };
+        let delta = sample.is_specular();
+        if !delta && !scatter.rough_continues[lane] {
+            return;
+        }
+        let wi = sample.wi;
+        let ng = lanes.incident_geometric.get(lane);
+        let crosses = wi.dot(ng) < 0.0;
+        if crosses && !delta && !scatter.transmits[lane] {
+            return;
+        }
+        let value = if self.context.effects.footprints && !delta {
+            bsdf.eval(wo, wi)
+        } else {
+            Vec3::ZERO
+        };
+        let front = lanes
+            .direction
+            .get(lane)
+            .dot(lanes.geometric_normal.get(lane))
+            < 0.0;
+        scatter.next[lane] = Some(LaneContinuation {
+            sample,
+            crosses,
+            value,
+            spawn: SpawnPoint {
+                position: lanes.position.get(lane),
+                error: lanes.error.get(lane),
+            },
+            ng,
+            front,
+        });
+    }
+}
