@@ -16,7 +16,6 @@
 use std::fmt;
 use std::fs::File;
 use std::io::{BufReader, Read};
-use std::marker::PhantomData;
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
@@ -26,7 +25,7 @@ use glam::Vec4;
 use super::image_load::{sniff_format, ImageFormat};
 use super::micro_cache::{self, ThreadTiles};
 use super::mip_pyramid::{MipLevel, MipPyramid};
-use super::texels::{ByteKind, FlatTexels, FloatKind, HalfKind, TexelKind, TexelSource, Texels};
+use super::texels::{TexelSource, Texels};
 use super::tiff_tile_reader::TiffTileReader;
 use super::tile_cache::{FileTally, LevelTiles, TextureCacheStats, TileCache};
 use super::tile_layout::TileLayout;
@@ -259,14 +258,8 @@ impl DemandLevel {
     /// read).
     pub(crate) fn texel_at_index(&self, index: usize) -> Vec4 {
         let (x, y) = self.layout.coordinates_of(index);
-        micro_cache::with_thread_tiles(|tiles| match &self.kind {
-            Texels::Float(_) => {
-                DemandTexels::<FloatKind>::new(self, tiles).texel_at(self.layout, x, y)
-            }
-            Texels::Half(_) => {
-                DemandTexels::<HalfKind>::new(self, tiles).texel_at(self.layout, x, y)
-            }
-            _ => DemandTexels::<ByteKind>::new(self, tiles).texel_at(self.layout, x, y),
+        micro_cache::with_thread_tiles(|tiles| {
+            DemandTexels::new(self, tiles).texel_at(self.layout, x, y)
         })
     }
 
@@ -392,43 +385,25 @@ impl DemandLevel {
 }
 
 /// The filters' view of a demand-loaded level during one lookup: the level and the
-/// thread's micro-cache, found once for the lookup, and the kind `K` of the level's tiles,
-/// picked once for the lookup, so that a fetch reads its tile without matching over the
-/// storage kinds.
-pub(crate) struct DemandTexels<'a, K> {
+/// thread's micro-cache, found once for the lookup.
+#[derive(Clone, Copy)]
+pub(crate) struct DemandTexels<'a> {
     level: &'a DemandLevel,
     tiles: ThreadTiles<'a>,
-    kind: PhantomData<K>,
 }
 
-impl<K> Clone for DemandTexels<'_, K> {
-    #[inline(always)]
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-
-impl<K> Copy for DemandTexels<'_, K> {}
-
-impl<'a, K: TexelKind> DemandTexels<'a, K> {
-    /// `level`, whose tiles are of kind `K`, read through the thread's micro-cache `tiles`.
+impl<'a> DemandTexels<'a> {
     #[inline(always)]
     pub(crate) fn new(level: &'a DemandLevel, tiles: ThreadTiles<'a>) -> Self {
-        DemandTexels {
-            level,
-            tiles,
-            kind: PhantomData,
-        }
+        DemandTexels { level, tiles }
     }
 }
 
-impl<'a, K: TexelKind> TexelSource<'a> for DemandTexels<'a, K> {
+impl<'a> TexelSource<'a> for DemandTexels<'a> {
     #[inline(always)]
     fn view(self, texels: &'a Texels) -> Option<Self> {
         match texels {
-            Texels::OnDemand(level) if K::view(level.kind()).is_some() => {
-                Some(DemandTexels::new(level, self.tiles))
-            }
+            Texels::OnDemand(level) => Some(DemandTexels::new(level, self.tiles)),
             _ => None,
         }
     }
@@ -442,7 +417,7 @@ impl<'a, K: TexelKind> TexelSource<'a> for DemandTexels<'a, K> {
                 tile_x,
                 tile_y,
                 #[inline(always)]
-                |tile| K::view(tile).map(|texels| texels.texel(offset)),
+                |tile| Some(tile.resident_texel(offset)),
             )
             .unwrap_or(Vec4::ZERO)
     }
@@ -463,7 +438,7 @@ impl<'a, K: TexelKind> TexelSource<'a> for DemandTexels<'a, K> {
                 // Inline: out of line, every fetch paid a call and a result returned
                 // through memory (a quarter of `bench textures`' cached bilinear time).
                 #[inline(always)]
-                |tile| K::view(tile)?.bilinear_quad(offset, stride, blend),
+                |tile| tile.quad(offset, stride, blend),
             ),
             None => Some(self.four_texels(layout, x, y, blend)),
         }

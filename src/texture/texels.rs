@@ -63,24 +63,8 @@ macro_rules! with_texel_source {
             Texels::OnDemand(level) => $crate::texture::micro_cache::with_thread_tiles(
                 #[inline(always)]
                 |tiles| {
-                    use $crate::texture::demand_tiles::DemandTexels;
-                    use $crate::texture::texels::{ByteKind, FloatKind, HalfKind};
-                    // The tiles' kind picked once here, so each fetch reads its tile
-                    // as that kind without a match over all of them.
-                    match level.kind() {
-                        Texels::Float(_) => {
-                            let $source = DemandTexels::<FloatKind>::new(level, tiles);
-                            $body
-                        }
-                        Texels::Half(_) => {
-                            let $source = DemandTexels::<HalfKind>::new(level, tiles);
-                            $body
-                        }
-                        _ => {
-                            let $source = DemandTexels::<ByteKind>::new(level, tiles);
-                            $body
-                        }
-                    }
+                    let $source = $crate::texture::demand_tiles::DemandTexels::new(level, tiles);
+                    $body
                 },
             ),
         }
@@ -285,43 +269,6 @@ impl PartialEq for Texels {
             _ => false,
         }
     }
-}
-
-/// A storage kind by itself, with no texels: what a demand-loaded level's fetches are
-/// compiled for, each tile borrowed as [`TexelKind::View`] only while it is read.
-pub(crate) trait TexelKind: Copy {
-    /// The kind's texels borrowed from one buffer.
-    type View<'t>: FlatTexels<'t>;
-
-    /// The texels of `texels` when they are of this kind.
-    #[inline(always)]
-    fn view(texels: &Texels) -> Option<Self::View<'_>> {
-        <Self::View<'_> as FlatTexels<'_>>::view(texels)
-    }
-}
-
-/// The kind of [`FloatTexels`].
-#[derive(Clone, Copy)]
-pub(crate) struct FloatKind;
-
-/// The kind of [`HalfTexels`].
-#[derive(Clone, Copy)]
-pub(crate) struct HalfKind;
-
-/// The kind of [`ByteTexels`].
-#[derive(Clone, Copy)]
-pub(crate) struct ByteKind;
-
-impl TexelKind for FloatKind {
-    type View<'t> = FloatTexels<'t>;
-}
-
-impl TexelKind for HalfKind {
-    type View<'t> = HalfTexels<'t>;
-}
-
-impl TexelKind for ByteKind {
-    type View<'t> = ByteTexels<'t>;
 }
 
 /// One storage kind of texels in one buffer, borrowed, addressed by index. Filters are
