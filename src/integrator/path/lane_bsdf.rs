@@ -202,12 +202,7 @@ impl Scattering<'_> {
         };
         let ng = lanes.incident_geometric.get(lane);
         let sigma = if wi.dot(ng) < 0.0 {
-            let front = lanes
-                .direction
-                .get(lane)
-                .dot(lanes.geometric_normal.get(lane))
-                < 0.0;
-            medium_beyond(self.context, material, front)
+            medium_beyond(self.context, material, arrives_on_front(lanes, lane))
         } else {
             scatter.sigma.get(lane)
         };
@@ -259,11 +254,7 @@ impl Scattering<'_> {
         } else {
             Vec3::ZERO
         };
-        let front = lanes
-            .direction
-            .get(lane)
-            .dot(lanes.geometric_normal.get(lane))
-            < 0.0;
+        let front = arrives_on_front(lanes, lane);
         scatter.next[lane] = Some(LaneContinuation {
             sample,
             crosses,
@@ -276,4 +267,15 @@ impl Scattering<'_> {
             front,
         });
     }
+}
+
+/// Whether the lane's ray arrived on the front of its surface (against the geometric
+/// normal), as `vertex::SurfaceVertex::front` says for one ray.
+#[inline(always)]
+fn arrives_on_front(lanes: &WaveLanes, lane: usize) -> bool {
+    lanes
+        .direction
+        .get(lane)
+        .dot(lanes.geometric_normal.get(lane))
+        < 0.0
 }
