@@ -19,7 +19,10 @@
 //! Both sides are timed by the CPU time of the measuring thread (Linux
 //! `CLOCK_THREAD_CPUTIME_ID`; Python's `time.thread_time`), not by the wall clock:
 //! on a shared machine with more runnable jobs than cores, wall time mostly measures
-//! the other jobs. `--wall-clock` restores wall-clock timing on both sides.
+//! the other jobs. `--wall-clock` restores wall-clock timing on both sides. Each row times
+//! its resident and cached lookups in alternating slices, so that the other jobs' weight
+//! on the caches (which CPU time does not remove) changes both alike and the ratio of the
+//! two holds still while each rate moves with the load.
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -41,7 +44,7 @@ pub struct BenchTexturesArgs {
     /// Number of distinct queries per query set.
     #[arg(long, default_value_t = 100_000)]
     pub queries: usize,
-    /// Minimum measuring time per row for our side, in seconds.
+    /// Minimum measuring time per row for each of our sides (resident, cached), in seconds.
     #[arg(long, default_value_t = 1.0)]
     pub seconds: f64,
     /// Anisotropy limit.
@@ -185,14 +188,15 @@ struct Row {
     filter: FilterMode,
     set: QuerySet,
     cap: u64,
-    resident_per_sec: f64,
     cached: CachedRun,
     oiio_raw_ns: Option<f64>,
 }
 
-/// The demand-loaded side of a row: its rate and what the cache did while it was timed.
+/// The demand-loaded side of a row: its rate, the resident rate timed beside it, and what
+/// the cache did while it was timed.
 struct CachedRun {
     per_sec: f64,
+    resident_per_sec: f64,
     micro_hit_rate: f64,
     tiles_loaded: u64,
 }
@@ -274,19 +278,29 @@ fn noise_texture(size: u32) -> Vec<[f32; 4]> {
         .collect()
 }
 
-/// Lookups per second on one thread, repeating the query set for `min_time`, after one
-/// untimed pass (which opens the files and fills the caches, as OIIO's side does).
-fn measure(
+/// Slices per side in [`measure_alternating`].
+const ALTERNATIONS: u32 = 8;
+
+/// One untimed pass over the query set (it opens the files and fills the caches, as OIIO's
+/// side does).
+fn warm(tex: &Texture, queries: &[TextureQuery], opts: &FilterOptions) {
+    let mut acc = glam::Vec4::ZERO;
+    for q in queries {
+        acc += tex.sample(black_box(q), opts);
+    }
+    black_box(acc);
+}
+
+/// Lookups made and time taken repeating the query set for at least `min_time` (at least
+/// one pass).
+fn time_lookups(
     tex: &Texture,
     queries: &[TextureQuery],
     opts: &FilterOptions,
     min_time: Duration,
     wall: bool,
-) -> f64 {
+) -> (usize, Duration) {
     let mut acc = glam::Vec4::ZERO;
-    for q in queries {
-        acc += tex.sample(black_box(q), opts);
-    }
     let mut done = 0usize;
     let start = Clock::start(wall);
     loop {
@@ -299,12 +313,43 @@ fn measure(
         }
     }
     black_box(acc);
-    done as f64 / start.elapsed().as_secs_f64()
+    (done, start.elapsed())
 }
 
-/// [`measure`] of `tx` demand-loaded into a fresh cache of `cap` bytes, with the
-/// micro-cache hit rate and the tiles read over the whole run.
+/// Lookups per second on one thread of `resident` and of `cached`, after one untimed pass
+/// each: the two are timed in alternating slices of `min_time / ALTERNATIONS` until each
+/// has had `min_time`, so a change of load during the row weighs on both. A side whose
+/// passes take longer than that (a cap that evicts) simply takes fewer slices.
+fn measure_alternating(
+    resident: &Texture,
+    cached: &Texture,
+    queries: &[TextureQuery],
+    opts: &FilterOptions,
+    min_time: Duration,
+    wall: bool,
+) -> (f64, f64) {
+    warm(resident, queries, opts);
+    warm(cached, queries, opts);
+    let slice = min_time / ALTERNATIONS;
+    let mut totals = [(0usize, Duration::ZERO); 2];
+    while totals.iter().any(|&(_, time)| time < min_time) {
+        for (total, tex) in totals.iter_mut().zip([resident, cached]) {
+            if total.1 < min_time {
+                let (done, time) = time_lookups(tex, queries, opts, slice, wall);
+                total.0 += done;
+                total.1 += time;
+            }
+        }
+    }
+    let [resident_rate, cached_rate] =
+        totals.map(|(done, time)| done as f64 / time.as_secs_f64());
+    (resident_rate, cached_rate)
+}
+
+/// [`measure_alternating`] of `resident` and of `tx` demand-loaded into a fresh cache of
+/// `cap` bytes, with the micro-cache hit rate and the tiles read over the whole run.
 fn measure_cached(
+    resident: &Texture,
     tx: &Path,
     cap: u64,
     queries: &[TextureQuery],
@@ -320,7 +365,8 @@ fn measure_cached(
             tx.display()
         ));
     }
-    let per_sec = measure(&tex, queries, opts, min_time, wall);
+    let (resident_per_sec, per_sec) =
+        measure_alternating(resident, &tex, queries, opts, min_time, wall);
     crate::texture::flush_micro_caches();
     if let Some(failure) = tex.tile_failure() {
         return Err(failure.to_string());
@@ -328,6 +374,7 @@ fn measure_cached(
     let stats = tex.cache_stats().unwrap_or_default();
     Ok(CachedRun {
         per_sec,
+        resident_per_sec,
         micro_hit_rate: stats.micro_cache_hit_rate(),
         tiles_loaded: stats.tiles_loaded,
     })
@@ -500,18 +547,6 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
             continue;
         }
         let queries = query_set(*set, *level0, args.queries.max(1), size);
-        let resident_rates: Vec<f64> = filters
-            .iter()
-            .map(|&filter| {
-                measure(
-                    &resident,
-                    &queries,
-                    &options(args, filter),
-                    min_time,
-                    args.wall_clock,
-                )
-            })
-            .collect();
         for &cap in &caps {
             let mut oiio = Vec::new();
             if let Some(script) = &script {
@@ -530,9 +565,17 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
                 oiio_caps.push((cap, times.cache_mb));
                 oiio = times.filters;
             }
-            for (&filter, &resident_per_sec) in filters.iter().zip(&resident_rates) {
+            for &filter in &filters {
                 let opts = options(args, filter);
-                let cached = measure_cached(&tx, cap, &queries, &opts, min_time, args.wall_clock)?;
+                let cached = measure_cached(
+                    &resident,
+                    &tx,
+                    cap,
+                    &queries,
+                    &opts,
+                    min_time,
+                    args.wall_clock,
+                )?;
                 let oiio_raw_ns = oiio
                     .iter()
                     .find(|(name, _)| *name == filter.to_string())
@@ -541,7 +584,6 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
                     filter,
                     set: *set,
                     cap,
-                    resident_per_sec,
                     cached,
                     oiio_raw_ns,
                 });
@@ -577,7 +619,7 @@ fn print_header(
         "Texture {} made into a 64x64-tiled .tx by maketx ({}x{}, {} levels), one thread, {} queries per set, \
          max aniso {}, rates per second of {clock}. \"resident\": the .tx decoded whole; \"cached\": the same \
          .tx read tile by tile into a fresh cache of the row's cap (micro-cache hits and tiles loaded over the \
-         whole timed run).",
+         whole timed run); each row times the two in alternating slices.",
         source.display(),
         tex.width(),
         tex.height(),
@@ -638,9 +680,9 @@ fn print_table(rows: &[Row], overhead: Option<(f64, f64)>) {
             r.filter,
             r.set.name(),
             crate::render::memory::Bytes(r.cap),
-            r.resident_per_sec / 1e6,
+            r.cached.resident_per_sec / 1e6,
             r.cached.per_sec / 1e6,
-            r.cached.per_sec / r.resident_per_sec,
+            r.cached.per_sec / r.cached.resident_per_sec,
             100.0 * r.cached.micro_hit_rate,
             r.cached.tiles_loaded,
             oiio
