@@ -110,6 +110,9 @@ pub struct DemandLevel {
     level: usize,
     layout: TileLayout,
     tiles_x: usize,
+    /// Tiles of the level: a fetch checks its index against this field rather than
+    /// following `tiles` to the slots' length.
+    tile_count: usize,
     texel_count: usize,
     /// No texels, of the storage kind every tile of the level has.
     kind: Texels,
@@ -220,6 +223,7 @@ pub(crate) fn open(
                 level,
                 layout,
                 tiles_x: layout.tiles_x(),
+                tile_count: layout.tiles_x() * layout.tiles_y(),
                 texel_count: width as usize * height as usize,
                 kind: kind.clone(),
                 tiles: Arc::new(tiles),
@@ -275,7 +279,7 @@ impl DemandLevel {
         read: impl FnOnce(&Texels) -> Option<R>,
     ) -> Option<R> {
         let index = tile_y * self.tiles_x + tile_x;
-        if tile_x >= self.tiles_x || index >= self.tiles.len() {
+        if tile_x >= self.tiles_x || index >= self.tile_count {
             return None;
         }
         tiles.with_tile(self.id, index, || self.fetch(index, tile_x, tile_y), read)

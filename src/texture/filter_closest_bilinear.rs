@@ -23,6 +23,11 @@ fn to_texel(s: f32, n: u32) -> (f32, f32) {
 }
 
 /// Reads texel (i, j) after wrapping; black outside for [`WrapMode::Black`].
+///
+/// The storage kind is picked here rather than in [`MipLevel::texel_vec4`]: a closure of
+/// this function's own is the body of the thread's micro-cache access, so that access is
+/// compiled for the closest lookup alone and inlined into it, not shared (and called out
+/// of line) by every caller of `texel_vec4`.
 #[inline(always)]
 fn fetch<O: TexelObserver>(
     level: &MipLevel,
@@ -38,7 +43,8 @@ fn fetch<O: TexelObserver>(
     ) {
         (Some(x), Some(y)) => {
             obs.touch(level_index, x, y);
-            level.texel_vec4(x, y)
+            let layout = level.layout();
+            with_texel_source!(&level.texels, |texels| texels.texel_at(layout, x, y))
         }
         _ => Vec4::ZERO,
     }

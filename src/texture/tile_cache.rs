@@ -190,11 +190,6 @@ impl LevelTiles {
         }
     }
 
-    /// Number of slots.
-    pub(crate) fn len(&self) -> usize {
-        self.slots.len()
-    }
-
     /// The tile in slot `index` if it is resident, marked as referenced.
     pub(crate) fn resident(&self, index: usize) -> Option<Arc<Texels>> {
         let mut slot = locked(self.slots.get(index)?);
