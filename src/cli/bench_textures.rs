@@ -341,8 +341,7 @@ fn measure_alternating(
             }
         }
     }
-    let [resident_rate, cached_rate] =
-        totals.map(|(done, time)| done as f64 / time.as_secs_f64());
+    let [resident_rate, cached_rate] = totals.map(|(done, time)| done as f64 / time.as_secs_f64());
     (resident_rate, cached_rate)
 }
 

@@ -198,16 +198,21 @@ fn bilinear_any_wrap<O: TexelObserver>(
         wrap_texel(j, level.height, wrap.1),
         wrap_texel(j + 1.0, level.height, wrap.1),
     ];
-    let mut corner = [Vec4::ZERO; 4];
-    for (row, y) in ys.iter().enumerate() {
-        let Some(y) = *y else { continue };
-        for (col, x) in xs.iter().enumerate() {
-            if let Some(x) = *x {
-                obs.touch(level_index, x, y);
-                corner[2 * row + col] = level.texel_vec4(x, y);
+    let layout = level.layout();
+    // One pick of the storage kind (one micro-cache access) for the four texels.
+    let corner = with_texel_source!(&level.texels, |texels| {
+        let mut corner = [Vec4::ZERO; 4];
+        for (row, y) in ys.iter().enumerate() {
+            let Some(y) = *y else { continue };
+            for (col, x) in xs.iter().enumerate() {
+                if let Some(x) = *x {
+                    obs.touch(level_index, x, y);
+                    corner[2 * row + col] = texels.texel_at(layout, x, y);
+                }
             }
         }
-    }
+        corner
+    });
     let top = corner[0] * (1.0 - fs) + corner[1] * fs;
     let bottom = corner[2] * (1.0 - fs) + corner[3] * fs;
     top * (1.0 - ft) + bottom * ft
@@ -244,10 +249,16 @@ fn bilinear_periodic<O: TexelObserver>(
     obs.touch(level_index, x1, y0);
     obs.touch(level_index, x0, y1);
     obs.touch(level_index, x1, y1);
-    let a = level.texel_vec4(x0, y0);
-    let b = level.texel_vec4(x1, y0);
-    let c = level.texel_vec4(x0, y1);
-    let d = level.texel_vec4(x1, y1);
+    let layout = level.layout();
+    // One pick of the storage kind (for a demand-loaded level, one micro-cache access and
+    // not one per texel: the coarse levels a trilinear lookup reads are mostly edges).
+    let [a, b, c, d] = with_texel_source!(&level.texels, |texels| [
+        (x0, y0),
+        (x1, y0),
+        (x0, y1),
+        (x1, y1)
+    ]
+    .map(|(x, y)| texels.texel_at(layout, x, y)));
     let top = a * (1.0 - fs) + b * fs;
     let bottom = c * (1.0 - fs) + d * fs;
     Some(top * (1.0 - ft) + bottom * ft)
