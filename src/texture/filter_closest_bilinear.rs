@@ -26,8 +26,8 @@ fn to_texel(s: f32, n: u32) -> (f32, f32) {
 ///
 /// The storage kind is picked here rather than in [`MipLevel::texel_vec4`]: a closure of
 /// this function's own is the body of the thread's micro-cache access, so that access is
-/// compiled for the closest lookup alone and inlined into it, not shared (and called out
-/// of line) by every caller of `texel_vec4`.
+/// compiled for the closest lookup alone, not shared with (and called out of line for)
+/// every other reader of `texel_vec4`.
 #[inline(always)]
 fn fetch<O: TexelObserver>(
     level: &MipLevel,

@@ -75,7 +75,8 @@ impl MipLevel {
         self.texel_vec4(x, y).to_array()
     }
 
-    /// [`MipLevel::texel`] as a vector: the accessor every filter reads through.
+    /// [`MipLevel::texel`] as a vector. The filters do not read through it: they pick the
+    /// storage kind once per lookup or footprint (`with_texel_source!`).
     #[inline(always)]
     pub(crate) fn texel_vec4(&self, x: usize, y: usize) -> glam::Vec4 {
         let layout = self.layout();
