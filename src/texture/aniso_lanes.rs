@@ -1,4 +1,5 @@
-//! The anisotropic filter's probes on an 8-bit level, [`PROBE_LANES`] at a time.
+//! Bilinear blocks on an 8-bit level, [`PROBE_LANES`] at a time: the anisotropic filter's
+//! probes, and the bilinear lookups of a batch (`Texture::sample_batch`).
 //!
 //! Texel coordinates, the integer floor, the in-bounds and same-tile tests, the tile
 //! addressing and the bilinear blend run in lanes, one probe per lane, so that inside
