@@ -88,8 +88,34 @@ pub fn mean_of_sum(sum: i128, count: u32) -> f32 {
     if count == 0 {
         return 0.0;
     }
-    // `sum as f64` and the division round once each; the power of two is exact.
-    ((sum as f64 / count as f64) * 2f64.powi(-FRACTION_BITS)) as f32
+    // The conversion and the division round once each; the power of two is exact.
+    ((to_f64(sum) / count as f64) * 2f64.powi(-FRACTION_BITS)) as f32
+}
+
+/// `value as f64` (rounded to nearest, ties to even), without the library call that
+/// conversion from `i128` costs on every channel of every pixel. The magnitude's top 64
+/// bits, with every bit below them folded into the lowest one, round to the same `f64`: the
+/// lowest bit lies below the rounding position (bit 10 of 64) and keeps whether anything
+/// nonzero follows it, which is all rounding to nearest reads beyond that position.
+#[inline]
+pub fn to_f64(value: i128) -> f64 {
+    let magnitude = value.unsigned_abs();
+    let high = (magnitude >> 64) as u64;
+    let rounded = if high == 0 {
+        magnitude as u64 as f64
+    } else {
+        let dropped = 64 - high.leading_zeros();
+        let top = (magnitude >> dropped) as u64;
+        let sticky = (magnitude & ((1u128 << dropped) - 1) != 0) as u64;
+        // 2^dropped, dropped <= 64: exact.
+        let scale = f64::from_bits(u64::from(1023 + dropped) << 52);
+        (top | sticky) as f64 * scale
+    };
+    if value < 0 {
+        -rounded
+    } else {
+        rounded
+    }
 }
 
 /// Adds one sample's RGB to a pixel's fixed-point sum.
@@ -135,6 +161,37 @@ mod tests {
     fn to_fixed_via_f64(value: f32) -> i128 {
         let clamped = (value as f64).clamp(-MAX_SAMPLE_MAGNITUDE, MAX_SAMPLE_MAGNITUDE);
         (clamped * 2f64.powi(FRACTION_BITS)).round() as i128
+    }
+
+    #[test]
+    fn the_conversion_to_f64_rounds_as_the_language_does() {
+        let mut values = vec![0i128, 1, -1, i128::MAX, i128::MIN, i128::MIN + 1];
+        for k in 0..127 {
+            let p = 1i128 << k;
+            // Powers of two, their neighbours, and ties between two f64s at every scale.
+            for v in [
+                p,
+                p - 1,
+                p + 1,
+                p + (p >> 53),
+                p + (p >> 53) + 1,
+                p + (p >> 54),
+            ] {
+                values.extend([v, -v]);
+            }
+            let tie = p | (p >> 53);
+            values.extend([tie, -tie, tie | 1, tie | (p >> 54), tie + (p >> 52)]);
+        }
+        let mut state = 5u64;
+        let mut next = || crate::test_rng::xorshift64(&mut state);
+        for _ in 0..200_000 {
+            let bits = (u128::from(next()) << 64) | u128::from(next());
+            let v = (bits as i128) >> (next() % 127);
+            values.extend([v, -v]);
+        }
+        for v in values {
+            assert_eq!(to_f64(v).to_bits(), (v as f64).to_bits(), "{v}");
+        }
     }
 
     #[test]

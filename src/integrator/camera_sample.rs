@@ -194,6 +194,30 @@ struct BlockLanes {
     axis_cosine: Option<[f32; PACKET]>,
 }
 
+impl BlockLanes {
+    /// Origin, unit direction and start (where the scene's bounds begin) of lane `lane`'s
+    /// ray.
+    #[inline(always)]
+    fn ray(&self, context: &RenderContext, lane: usize) -> (Vec3, Vec3, f32) {
+        let camera = &context.camera;
+        match &self.pinhole {
+            Some((d, starts)) => (
+                camera.eye(),
+                Vec3::new(d[0][lane], d[1][lane], d[2][lane]),
+                starts[lane],
+            ),
+            None => {
+                let lens = Vec2::new(self.draws.lens[0][lane], self.draws.lens[1][lane]);
+                let (origin, direction) = camera.generate_ray(self.fx[lane], self.fy[lane], lens);
+                let start = context.surfaces.bounds.map_or(0.0, |bounds| {
+                    shading::entry_distance(origin, direction, bounds)
+                });
+                (origin, direction, start)
+            }
+        }
+    }
+}
+
 impl CameraBlock {
     /// Makes the block's rays, emits them in lane order and empties the block. Lanes past
     /// `len` keep the previous block's pixels: computed and ignored.
@@ -210,51 +234,54 @@ impl CameraBlock {
             || self.lanes(context, image_width),
         );
         let BlockLanes {
-            draws,
             fx,
             fy,
-            pinhole,
             axis_cosine,
+            ..
         } = &lanes;
-        let bounds = context.surfaces.bounds;
-        for lane in 0..self.len {
-            let (origin, direction, start) = match pinhole {
-                Some((d, starts)) => (
-                    camera.eye(),
-                    Vec3::new(d[0][lane], d[1][lane], d[2][lane]),
-                    starts[lane],
-                ),
-                None => {
-                    let lens = Vec2::new(draws.lens[0][lane], draws.lens[1][lane]);
-                    let (origin, direction) = camera.generate_ray(fx[lane], fy[lane], lens);
-                    let start = bounds.map_or(0.0, |bounds| {
-                        shading::entry_distance(origin, direction, bounds)
-                    });
-                    (origin, direction, start)
-                }
-            };
-            let footprint = if context.effects.footprints {
-                let lod = context.options.lod;
+        // Two loops rather than a branch per lane: with the footprint chosen per lane, the
+        // point sample's footprint (its tag alone) went through the stack and the ray's
+        // copy of it stalled on store forwarding, on every camera ray.
+        if context.effects.footprints {
+            let lod = context.options.lod;
+            for lane in 0..self.len {
+                let (origin, direction, start) = lanes.ray(context, lane);
                 let dw = match axis_cosine {
                     Some(dw) => dw[lane],
                     None => camera.axis_cosine(direction),
                 };
-                camera.sample_footprint_at(lod, fx[lane], fy[lane], origin, dw, spp)
-            } else {
-                Footprint::none()
-            };
-            emit(CameraRay {
-                origin,
-                direction,
-                start,
-                footprint,
-                slot: self.slot[lane],
-                sample: self.index[lane],
-                kept: self.kept[lane],
-                sampler: draws.samplers[lane],
-            });
+                let footprint =
+                    camera.sample_footprint_at(lod, fx[lane], fy[lane], origin, dw, spp);
+                emit(self.ray(lane, (origin, direction, start), footprint, &lanes));
+            }
+        } else {
+            for lane in 0..self.len {
+                let ray = lanes.ray(context, lane);
+                emit(self.ray(lane, ray, Footprint::none(), &lanes));
+            }
         }
         self.len = 0;
+    }
+
+    /// Lane `lane`'s camera ray with the origin, direction and start `ray` and `footprint`.
+    #[inline(always)]
+    fn ray(
+        &self,
+        lane: usize,
+        (origin, direction, start): (Vec3, Vec3, f32),
+        footprint: Footprint,
+        lanes: &BlockLanes,
+    ) -> CameraRay {
+        CameraRay {
+            origin,
+            direction,
+            start,
+            footprint,
+            slot: self.slot[lane],
+            sample: self.index[lane],
+            kept: self.kept[lane],
+            sampler: lanes.draws.samplers[lane],
+        }
     }
 
     /// The block's lane values, every lane the same bits as the one-ray functions give. A

@@ -45,6 +45,38 @@ pub fn sample_binding(
     (query, texel)
 }
 
+/// [`sample_binding`]'s texels for many queries of one binding (made by
+/// `binding_query`), into `out`: the lookups of the shading lanes, one batch per material
+/// run and texture.
+pub fn sample_binding_batch(
+    context: &RenderContext,
+    binding: &TextureBinding,
+    queries: &[TextureQuery],
+    worker: &mut WorkerState,
+    out: &mut [Vec4],
+) {
+    let filter = &context.texture_filters[binding.texture];
+    worker.counters.texture_lookups += queries.len() as u64;
+    match &context.external_textures {
+        Some(external) => {
+            for (query, texel) in queries.iter().zip(out) {
+                *texel = crate::render::external_textures::sample_external(
+                    external.as_ref(),
+                    binding.texture,
+                    query,
+                    filter,
+                );
+            }
+        }
+        None => context.textures[binding.texture].sample_batch(
+            queries,
+            filter,
+            worker.texture_tiles.get_mut(binding.texture),
+            out,
+        ),
+    }
+}
+
 /// The radiance an area light emits at texture coordinates `st` (from its front side): its
 /// emission factor, times its material's emission texture read at level 0 with the render's
 /// filter and zero gradients (a point lookup: bilinear for the filtering modes, the nearest

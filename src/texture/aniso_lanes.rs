@@ -1,4 +1,5 @@
-//! The anisotropic filter's probes on an 8-bit level, [`PROBE_LANES`] at a time.
+//! Bilinear blocks on an 8-bit level, [`PROBE_LANES`] at a time: the anisotropic filter's
+//! probes, and the bilinear lookups of a batch (`Texture::sample_batch`).
 //!
 //! Texel coordinates, the integer floor, the in-bounds and same-tile tests, the tile
 //! addressing and the bilinear blend run in lanes, one probe per lane, so that inside
@@ -25,7 +26,7 @@ pub(crate) const PROBE_LANES: usize = 8;
 const MAX_EXTENT: u32 = 1 << 22;
 const TILE_MASK: u32 = TEXTURE_TILE_SIZE - 1;
 
-type Lanes<T> = [T; PROBE_LANES];
+pub(crate) type Lanes<T> = [T; PROBE_LANES];
 
 /// The lanes `f(0)`, `f(1)`, ... A plain loop rather than `array::from_fn` or `map`,
 /// which the release build left out of line (`core::array::try_from_fn`), so compiled at
@@ -91,8 +92,22 @@ pub(crate) fn addressable(level: &MipLevel) -> bool {
 #[inline(always)]
 pub(crate) fn byte_probes(level: &MipLevel, texels: ByteTexels, step: &ProbeStep) -> ProbeValues {
     let (x, y) = texel_positions(level, step);
+    byte_bilinear(level, texels, x, y, step.count.saturating_sub(step.first))
+}
+
+/// Bilinear values at the texel-space positions (`x`, `y`) (x = s * width - 0.5) of the
+/// first `count` lanes on `level` (its texels `texels`; [`addressable`]): the anisotropic
+/// probes, and the batched bilinear lookups of `Texture::sample_batch`.
+#[inline(always)]
+pub(crate) fn byte_bilinear(
+    level: &MipLevel,
+    texels: ByteTexels,
+    x: Lanes<f32>,
+    y: Lanes<f32>,
+    count: usize,
+) -> ProbeValues {
     let (i, j) = (lanes(|l| floor_i32(x[l])), lanes(|l| floor_i32(y[l])));
-    let (index, stride, mut served) = block_addresses(level, step, i, j);
+    let (index, stride, mut served) = block_addresses(level, count, i, j);
     let corners = read_blocks(texels, index, stride, &mut served);
     let fs = lanes(|l| x[l] - i[l] as f32);
     let ft = lanes(|l| y[l] - j[l] as f32);
@@ -134,11 +149,11 @@ fn floor_i32(x: f32) -> i32 {
 
 /// Index of each block's upper-left texel and its tile's row stride (as
 /// `TileLayout::block_in_one_tile` and `tile_start` give them), and whether the probe is
-/// one of the step's with its block inside the level and inside one tile.
+/// one of the first `count` with its block inside the level and inside one tile.
 #[inline(always)]
 fn block_addresses(
     level: &MipLevel,
-    step: &ProbeStep,
+    count: usize,
     i: Lanes<i32>,
     j: Lanes<i32>,
 ) -> (Lanes<u32>, Lanes<u32>, Lanes<bool>) {
@@ -154,7 +169,6 @@ fn block_addresses(
             .wrapping_add((x[l] & !TILE_MASK).wrapping_mul(tile_h[l]));
         tile_start.wrapping_add(local_y[l].wrapping_mul(stride[l]).wrapping_add(local_x[l]))
     });
-    let count = step.count.saturating_sub(step.first);
     let served = lanes(|l| {
         (l < count)
             & (x[l] < w - 1)

@@ -24,6 +24,7 @@
 
 mod aniso;
 mod aniso_lanes;
+mod batch;
 mod demand_tiles;
 mod ellipse;
 mod ewa;

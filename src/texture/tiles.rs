@@ -23,6 +23,11 @@ pub const TEXTURE_TILE_SIZE: u32 = 64;
 pub(crate) trait TexelObserver {
     /// Texel (x, y) of mip level `level` is read.
     fn touch(&mut self, level: usize, x: usize, y: usize);
+
+    /// The next lookup starts: an observer that counts each lookup's distinct tiles starts
+    /// a new count (one observer can then serve a batch of lookups).
+    #[inline(always)]
+    fn begin_lookup(&mut self) {}
 }
 
 /// The observer of plain lookups: does nothing.
@@ -40,7 +45,8 @@ impl TexelObserver for NoTextureTiles {
 const TILES_REMEMBERED: usize = 8;
 
 /// The observer of recording lookups: adds the texel's tile to a [`TextureTileSet`]. One
-/// recorder serves one lookup, so it also counts that lookup's distinct tiles (touches).
+/// recorder serves one lookup at a time (`begin_lookup` starts the next), so it also counts
+/// each lookup's distinct tiles (touches).
 pub(crate) struct TextureTileRecorder<'a> {
     /// The bitmaps of the looked-up texture, found once per lookup.
     texture: &'a mut TextureTiles,
@@ -64,6 +70,11 @@ impl<'a> TextureTileRecorder<'a> {
 }
 
 impl TexelObserver for TextureTileRecorder<'_> {
+    #[inline(always)]
+    fn begin_lookup(&mut self) {
+        self.seen_count = 0;
+    }
+
     #[inline]
     fn touch(&mut self, level: usize, x: usize, y: usize) {
         let key = (

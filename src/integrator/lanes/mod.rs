@@ -39,13 +39,14 @@ pub(crate) mod picks;
 pub(crate) mod soa;
 pub(crate) mod textures;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use self::soa::{Vec2Lanes, Vec3Lanes};
 
 use crate::render::context::RenderContext;
 use crate::scene::Material;
 use crate::simd;
+use crate::texture::TextureQuery;
 
 /// What the lanes need to know of a material, computed once per render.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -157,6 +158,9 @@ pub(crate) struct WaveLanes {
     pub metallic: Vec<f32>,
     /// Perceptual roughness of metallic-roughness lanes (unused by classic ones).
     pub roughness: Vec<f32>,
+    /// One material run's queries of one texture binding, and their texels.
+    pub texture_queries: Vec<TextureQuery>,
+    pub texels: Vec<Vec4>,
 
     // Stage 5.
     /// Per light and lane (light-major): unit direction to the light and its irradiance

@@ -1,6 +1,6 @@
 //! Stage 4: the materials' textures read at the lanes' hits. The lanes are ordered by
 //! material, so each texture binding is looked up for its material's range of lanes in one
-//! loop, and the texels combined into albedo, metallic and roughness as
+//! batch (`Texture::sample_batch`), and the texels combined into albedo, metallic and roughness as
 //! `shading::surface_inputs` combines them (glTF 2.0: the base colour's RGB, the
 //! metallic-roughness texture's blue and green).
 
@@ -8,7 +8,8 @@ use glam::Vec4;
 
 use super::WaveLanes;
 use crate::render::context::{RenderContext, WorkerState};
-use crate::render::surface_textures::sample_binding;
+use crate::render::prepared::binding_query;
+use crate::render::surface_textures::sample_binding_batch;
 use crate::scene::{Material, TextureBinding};
 
 /// Albedo, metallic and roughness of every lane (the lanes ordered by material).
@@ -34,12 +35,24 @@ pub(crate) fn shading_inputs(
         lanes.metallic[range.clone()].fill(model.map_or(0.0, |model| model.metallic));
         lanes.roughness[range.clone()].fill(model.map_or(0.0, |model| model.roughness));
         for (binding, channel) in texture_reads(material) {
-            for lane in range.clone() {
-                let st = lanes.st.get(lane);
-                let (_, texel) =
-                    sample_binding(context, binding, st, lanes.gradients[lane], worker);
+            let mut queries = std::mem::take(&mut lanes.texture_queries);
+            let mut texels = std::mem::take(&mut lanes.texels);
+            queries.clear();
+            queries.extend(range.clone().map(|lane| {
+                binding_query(
+                    &binding.transform,
+                    lanes.st.get(lane),
+                    lanes.gradients[lane],
+                )
+            }));
+            texels.clear();
+            texels.resize(queries.len(), Vec4::ZERO);
+            sample_binding_batch(context, binding, &queries, worker, &mut texels);
+            for (lane, &texel) in range.clone().zip(&texels) {
                 apply_texel(lanes, lane, channel, material, texel);
             }
+            lanes.texture_queries = queries;
+            lanes.texels = texels;
         }
     }
 }

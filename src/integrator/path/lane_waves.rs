@@ -24,7 +24,6 @@ use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::picks::{LaneHit, LanePicks};
 use crate::integrator::lanes::textures::shading_inputs;
 use crate::integrator::lanes::WaveLanes;
-use crate::integrator::trace_wave::ShadowRay;
 use crate::integrator::wave_integrator::{write_geometry_values, write_material_aovs};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
@@ -199,11 +198,13 @@ pub(super) fn finish_lane(
         write_geometry_values(context, image, ray.slot, ray.direction, t, normal, st);
         write_material_aovs(image, ray.slot, &lane_inputs(material, lanes, lane));
     }
-    if let Some(shadow) = scatter.shadow[lane] {
-        waves.shadows.push(ShadowRay {
-            slot: ray.slot,
-            ..shadow
-        });
+    if let Some(shadow) = &scatter.shadow[lane] {
+        // Copied where it lies and then given its slot: built as a new value, the ray went
+        // through the stack in pieces that the copy's wider loads straddled.
+        waves.shadows.push(*shadow);
+        if let Some(queued) = waves.shadows.last_mut() {
+            queued.slot = ray.slot;
+        }
     }
     let Some(next) = &scatter.next[lane] else {
         return;
@@ -215,7 +216,7 @@ pub(super) fn finish_lane(
         geometric_normal: if next.front { next.ng } else { -next.ng },
         record: HitRecord::Deferred {
             hit,
-            origin: ray.origin,
+            origin: &ray.origin,
             camera_first,
         },
     };

@@ -112,7 +112,9 @@ pub(super) enum HitRecord<'a> {
     /// `camera_first` (which wants texture coordinates for its AOVs).
     Deferred {
         hit: &'a TraceHit,
-        origin: Vec3,
+        // A reference, not a copy: a `Vec3` copied into the record straddled the 8-byte
+        // loads that then moved the record, a store-forwarding stall per lane.
+        origin: &'a Vec3,
         camera_first: bool,
     },
 }
@@ -138,7 +140,9 @@ impl SurfaceSite<'_> {
                 camera_first,
             } => {
                 let detail = texturing::surface_detail(context, camera_first, hit);
-                let surface = context.surfaces.surface_hit(origin, direction, hit, detail);
+                let surface = context
+                    .surfaces
+                    .surface_hit(*origin, direction, hit, detail);
                 Cow::Owned(surface)
             }
         }
