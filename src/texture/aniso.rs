@@ -245,12 +245,12 @@ fn each_probe<'a, S: TexelSource<'a>, O: TexelObserver>(
         };
         let values = aniso_lanes::byte_probes(level, bytes, &step, wrap);
         for i in first..line.n.min(first + PROBE_LANES) {
-            let value = match values.get(bytes, i - first) {
-                Some((value, texels)) => {
-                    texels.each(|x, y| obs.touch(m, x, y));
-                    value
-                }
-                None => scalar(i, obs),
+            let lane = i - first;
+            let value = if values.served(lane) {
+                values.each_texel_read(lane, |x, y| obs.touch(m, x, y));
+                values.value(bytes, lane)
+            } else {
+                scalar(i, obs)
             };
             visit(i, value);
         }

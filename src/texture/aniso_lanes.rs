@@ -78,47 +78,25 @@ pub(crate) struct ProbeBlocks {
     columns: AxisTexels,
     rows: AxisTexels,
     served: Lanes<bool>,
-}
-
-/// The texels one served probe read: its block's columns and rows, `None` for one outside
-/// the level under a black wrap.
-#[derive(Clone, Copy)]
-pub(crate) struct BlockTexels {
-    columns: [Option<usize>; 2],
-    rows: [Option<usize>; 2],
-}
-
-impl BlockTexels {
-    /// Calls `touch(x, y)` for each texel read, in the order the scalar probe reads them
-    /// (row by row, left to right).
-    #[inline(always)]
-    pub(crate) fn each(self, mut touch: impl FnMut(usize, usize)) {
-        for y in self.rows.into_iter().flatten() {
-            for x in self.columns.into_iter().flatten() {
-                touch(x, y);
-            }
-        }
-    }
+    /// A black wrap on either axis, so a texel may be outside (the other modes map every
+    /// texel inside, and [`ProbeBlocks::value`] skips the test).
+    black: bool,
 }
 
 impl ProbeBlocks {
-    /// The bilinear value of probe `first + lane` read from `texels` (those the blocks were
-    /// addressed in) and the texels it read, or `None` when the scalar path must compute it.
+    /// Whether probe `first + lane` is served here (else the scalar path computes it).
     #[inline(always)]
-    pub(crate) fn get(&self, texels: ByteTexels, lane: usize) -> Option<(Vec4, BlockTexels)> {
-        if !self.served[lane] {
-            return None;
-        }
-        let pick = |axis: &AxisTexels, k: usize| {
-            axis.inside[k][lane].then_some(axis.texel[k][lane] as usize)
-        };
-        let block = BlockTexels {
-            columns: [pick(&self.columns, 0), pick(&self.columns, 1)],
-            rows: [pick(&self.rows, 0), pick(&self.rows, 1)],
-        };
+    pub(crate) fn served(&self, lane: usize) -> bool {
+        self.served[lane]
+    }
+
+    /// The bilinear value of served probe `first + lane`, read from `texels` (those the
+    /// blocks were addressed in).
+    #[inline(always)]
+    pub(crate) fn value(&self, texels: ByteTexels, lane: usize) -> Vec4 {
         let texel = |corner: usize| {
-            let inside =
-                self.columns.inside[corner & 1][lane] & self.rows.inside[corner >> 1][lane];
+            let inside = !self.black
+                || self.columns.inside[corner & 1][lane] & self.rows.inside[corner >> 1][lane];
             if inside {
                 texels.texel(self.index[corner][lane] as usize)
             } else {
@@ -130,7 +108,24 @@ impl ProbeBlocks {
         let (fs, ft) = (self.fraction[0][lane], self.fraction[1][lane]);
         let top = a * (1.0 - fs) + b * fs;
         let bottom = c * (1.0 - fs) + d * fs;
-        Some((top * (1.0 - ft) + bottom * ft, block))
+        top * (1.0 - ft) + bottom * ft
+    }
+
+    /// Calls `touch(x, y)` for each texel served probe `first + lane` read, in the order the
+    /// scalar probe reads them (row by row, left to right; a texel outside under a black
+    /// wrap is not read).
+    #[inline(always)]
+    pub(crate) fn each_texel_read(&self, lane: usize, mut touch: impl FnMut(usize, usize)) {
+        for r in 0..2 {
+            for c in 0..2 {
+                if self.rows.inside[r][lane] & self.columns.inside[c][lane] {
+                    touch(
+                        self.columns.texel[c][lane] as usize,
+                        self.rows.texel[r][lane] as usize,
+                    );
+                }
+            }
+        }
     }
 }
 
@@ -167,6 +162,7 @@ pub(crate) fn byte_probes(
         columns,
         rows,
         served,
+        black: wrap.0 == WrapMode::Black || wrap.1 == WrapMode::Black,
     }
 }
 
