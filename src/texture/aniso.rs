@@ -202,8 +202,9 @@ fn probes<'a, S: TexelSource<'a>, O: TexelObserver>(
 /// level, in probe order (the order the weighted sum must keep to give the same bits).
 /// On 8-bit levels the probes are computed [`PROBE_LANES`] at a time by
 /// [`aniso_lanes::byte_probes`], wrapped blocks and blocks across tile edges included; a
-/// probe it leaves (a block more than a period outside the level) and every probe of
-/// another kind go through [`bilinear_from`]. Observers are told of the same
+/// probe it leaves (more than a period outside a repeating level whose side is not a power
+/// of two, or 2^22 texels away) and every probe of another kind go through
+/// [`bilinear_from`]. Observers are told of the same
 /// texels in the same order either way.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]

@@ -12,9 +12,10 @@
 //! `filter_closest_bilinear::bilinear_from` (and, for a block across an edge of the level,
 //! its wrapped paths, which blend the same way), so its value has the same bits. Each of
 //! the block's texels is addressed on its own, so a block across a tile edge or wrapped
-//! across the level's edge is served like one inside a tile; only a probe whose block
-//! starts more than one period away from the level (a texel coordinate below -side or at
-//! least side, NaN included) is left to the scalar path. The caller sums the probe values
+//! across the level's edge is served like one inside a tile; only a probe more than one
+//! period away from the level on an axis whose side is not a power of two and which
+//! repeats (periodic or mirror), or 2^22 texels or more away (NaN included), is left to the
+//! scalar path. The caller sums the probe values
 //! in probe order, as the scalar loop does, so the filter's result is unchanged at every
 //! vector level.
 
@@ -67,6 +68,8 @@ pub(crate) struct ProbeStep {
 struct AxisTexels {
     texel: [Lanes<u32>; 2],
     inside: [Lanes<bool>; 2],
+    /// Lanes whose texels these are (the others take the scalar path).
+    served: Lanes<bool>,
 }
 
 /// Where one step's probes read: the index of each of a block's four texels (corner-major:
@@ -150,11 +153,9 @@ pub(crate) fn byte_probes(
     let (x, y) = texel_positions(level, step);
     let (i, j) = (lanes(|l| floor_i32(x[l])), lanes(|l| floor_i32(y[l])));
     let count = step.count.saturating_sub(step.first);
-    let mut served = lanes(|l| {
-        (l < count) & within_a_period(i[l], level.width) & within_a_period(j[l], level.height)
-    });
     let columns = wrap_axis(&i, level.width, wrap.0);
     let rows = wrap_axis(&j, level.height, wrap.1);
+    let mut served = lanes(|l| (l < count) & columns.served[l] & rows.served[l]);
     let index = block_indices(level, &columns, &rows, texels.len(), &mut served);
     ProbeBlocks {
         index,
@@ -179,7 +180,7 @@ fn texel_positions(level: &MipLevel, step: &ProbeStep) -> (Lanes<f32>, Lanes<f32
 
 /// floor(x) for x in [-2^22, 2^22], as `filter_closest_bilinear::floor_i32` and
 /// `wrap::floor_f32` give it there; x beyond (NaN included) gives -2^22 or 2^22, which
-/// [`within_a_period`] refuses. Written without a float-to-integer cast, whose saturation
+/// [`wrap_axis`] refuses. Written without a float-to-integer cast, whose saturation
 /// Rust defines and LLVM left scalar: adding 1.5 * 2^23 rounds x to an integer held in the
 /// low mantissa bits (the sum stays in [2^23, 2^24], where the spacing is 1), and a
 /// rounding upward is stepped back.
@@ -192,51 +193,89 @@ fn floor_i32(x: f32) -> i32 {
     rounded - ((rounded as f32 > clamped) as i32)
 }
 
-/// Whether a block starting at texel `i` of an axis of `n` texels lies within one period
-/// of the level: i in [-n, n), where every wrap mode maps both of its texels without a
-/// division (the range the scalar periodic path also serves).
-#[inline(always)]
-fn within_a_period(i: i32, n: u32) -> bool {
-    let n = n as i32;
-    (i >= -n) & (i < n)
-}
-
 /// Both texels of each lane's block along an axis of `n` texels, from the block's first
-/// texel `i` (in [-n, n) on the lanes served), as `wrap::wrap_texel` maps texels i and
-/// i + 1. One loop per mode, so the mode is not decided per lane.
+/// texel `i`, as `wrap::wrap_texel` maps texels i and i + 1, and whether the lane can be
+/// served: |i| < 2^22 ([`floor_i32`]'s range), and for a periodic or mirrored axis whose
+/// side is not a power of two i in [-n, n) (where the wrap needs no division; the range
+/// the scalar periodic path serves too). A power-of-two side wraps any i with a mask, as
+/// `rem_euclid` does. One loop per mode, so the mode is not decided per lane.
 #[inline(always)]
 fn wrap_axis(i: &Lanes<i32>, n: u32, mode: WrapMode) -> AxisTexels {
     let n = n as i32;
+    let limit = MAX_EXTENT as i32;
+    let in_range = |i: i32| (i > -limit) & (i < limit);
+    let within_a_period = |i: i32| (i >= -n) & (i < n);
+    let inside = |_: i32| true;
+    let power_of_two = n.count_ones() == 1;
     match mode {
-        WrapMode::Periodic => axis_texels(i, |k| {
-            let k = if k < 0 { k + n } else { k };
-            (if k >= n { k - n } else { k }, true)
-        }),
-        WrapMode::Clamp => axis_texels(i, |k| (k.clamp(0, n - 1), true)),
-        WrapMode::Black => axis_texels(i, |k| {
-            let inside = (k >= 0) & (k < n);
-            (if inside { k } else { 0 }, inside)
-        }),
-        WrapMode::Mirror => axis_texels(i, |k| {
-            // rem_euclid(k, 2n) folded back into [0, n), for k in [-n, n].
-            let k = if k < 0 { -1 - k } else { k };
-            (if k >= n { 2 * n - 1 - k } else { k }, true)
-        }),
+        WrapMode::Periodic if power_of_two => axis_texels(i, in_range, |k| k & (n - 1), inside),
+        WrapMode::Periodic => axis_texels(
+            i,
+            within_a_period,
+            |k| {
+                let k = if k < 0 { k + n } else { k };
+                if k >= n {
+                    k - n
+                } else {
+                    k
+                }
+            },
+            inside,
+        ),
+        WrapMode::Clamp => axis_texels(i, in_range, |k| k.clamp(0, n - 1), inside),
+        WrapMode::Black => axis_texels(
+            i,
+            in_range,
+            |k| if (k >= 0) & (k < n) { k } else { 0 },
+            |k| (k >= 0) & (k < n),
+        ),
+        WrapMode::Mirror if power_of_two => axis_texels(
+            i,
+            in_range,
+            |k| {
+                let k = k & (2 * n - 1);
+                if k >= n {
+                    2 * n - 1 - k
+                } else {
+                    k
+                }
+            },
+            inside,
+        ),
+        WrapMode::Mirror => axis_texels(
+            i,
+            within_a_period,
+            |k| {
+                // rem_euclid(k, 2n) folded back into [0, n), for k in [-n, n].
+                let k = if k < 0 { -1 - k } else { k };
+                if k >= n {
+                    2 * n - 1 - k
+                } else {
+                    k
+                }
+            },
+            inside,
+        ),
     }
 }
 
-/// [`wrap_axis`] for one mode: `texel(k)` is the stored texel of coordinate k in [-n, n]
-/// and whether it is inside.
+/// [`wrap_axis`] for one mode: the lanes `served` serves, and for texel coordinate k the
+/// stored texel `texel(k)` and whether it is `inside`.
 #[inline(always)]
-fn axis_texels(i: &Lanes<i32>, texel: impl Fn(i32) -> (i32, bool)) -> AxisTexels {
-    let first = lanes(|l| texel(i[l]));
-    let second = lanes(|l| texel(i[l].wrapping_add(1)));
+fn axis_texels(
+    i: &Lanes<i32>,
+    served: impl Fn(i32) -> bool,
+    texel: impl Fn(i32) -> i32,
+    inside: impl Fn(i32) -> bool,
+) -> AxisTexels {
+    let next = lanes(|l| i[l].wrapping_add(1));
     AxisTexels {
         texel: [
-            lanes(|l| first[l].0 as u32),
-            lanes(|l| second[l].0 as u32),
+            lanes(|l| texel(i[l]) as u32),
+            lanes(|l| texel(next[l]) as u32),
         ],
-        inside: [lanes(|l| first[l].1), lanes(|l| second[l].1)],
+        inside: [lanes(|l| inside(i[l])), lanes(|l| inside(next[l]))],
+        served: lanes(|l| served(i[l])),
     }
 }
 
@@ -278,9 +317,9 @@ fn block_indices(
     };
     let corners = [index(0, 0), index(1, 0), index(0, 1), index(1, 1)];
     let len = u32::try_from(len).unwrap_or(u32::MAX);
-    for (l, lane_served) in served.iter_mut().enumerate() {
-        *lane_served &= corners.iter().all(|corner| corner[l] < len);
-    }
+    // `&` rather than `all`, whose early exit kept the test one lane at a time.
+    let [a, b, c, d] = &corners;
+    *served = lanes(|l| served[l] & (a[l] < len) & (b[l] < len) & (c[l] < len) & (d[l] < len));
     corners
 }
 
@@ -309,12 +348,22 @@ mod tests {
             }
             x = if x < 4.0 { x + 0.25 } else { x * 1.37 };
         }
-        for beyond in [limit, 1e9, f32::INFINITY, -limit, -1e9, f32::NEG_INFINITY, f32::NAN] {
+        for beyond in [
+            limit,
+            1e9,
+            f32::INFINITY,
+            -limit,
+            -1e9,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ] {
             assert!(floor_i32(beyond).unsigned_abs() >= MAX_EXTENT, "{beyond}");
         }
     }
 
-    /// Every mode's lane wrap maps texels -n..=n as `wrap::wrap_texel` does.
+    /// Every mode's lane wrap maps the texels of the blocks it serves as
+    /// `wrap::wrap_texel` does, and serves every block within a period, and every block on
+    /// a power-of-two side.
     #[test]
     fn axis_wrap_matches_wrap_texel() {
         for n in [1u32, 2, 3, 7, 64, 65] {
@@ -324,17 +373,25 @@ mod tests {
                 WrapMode::Black,
                 WrapMode::Mirror,
             ] {
-                let starts: Vec<i32> = (-(n as i32)..n as i32).collect();
+                let side = n as i32;
+                let starts: Vec<i32> = (-3 * side - 2..3 * side + 2).collect();
                 for chunk in starts.chunks(PROBE_LANES) {
                     let i = lanes(|l| chunk.get(l).copied().unwrap_or(0));
                     let axis = wrap_axis(&i, n, mode);
                     for (l, &start) in chunk.iter().enumerate() {
+                        let repeats = matches!(mode, WrapMode::Periodic | WrapMode::Mirror);
+                        let must_serve =
+                            !repeats || n.is_power_of_two() || (-side..side).contains(&start);
+                        assert!(
+                            !must_serve || axis.served[l],
+                            "{mode:?} n {n} start {start}"
+                        );
+                        if !axis.served[l] {
+                            continue;
+                        }
                         for k in 0..2 {
-                            let scalar = super::super::wrap::wrap_texel(
-                                (start + k as i32) as f32,
-                                n,
-                                mode,
-                            );
+                            let scalar =
+                                super::super::wrap::wrap_texel((start + k as i32) as f32, n, mode);
                             let lane = axis.inside[k][l].then_some(axis.texel[k][l] as usize);
                             assert_eq!(lane, scalar, "{mode:?} n {n} texel {}", start + k as i32);
                         }
