@@ -201,8 +201,10 @@ fn probes<'a, S: TexelSource<'a>, O: TexelObserver>(
 /// Calls `visit(i, value)` with the bilinear value of each probe i of `line` on one
 /// level, in probe order (the order the weighted sum must keep to give the same bits).
 /// On 8-bit levels the probes are computed [`PROBE_LANES`] at a time by
-/// [`aniso_lanes::byte_probes`]; a probe it leaves (a block across an edge) and every
-/// probe of another kind go through [`bilinear_from`]. Observers are told of the same
+/// [`aniso_lanes::byte_probes`], wrapped blocks and blocks across tile edges included; a
+/// probe it leaves (more than a period outside a repeating level whose side is not a power
+/// of two, or 2^22 texels away) and every probe of another kind go through
+/// [`bilinear_from`]. Observers are told of the same
 /// texels in the same order either way.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -242,17 +244,14 @@ fn each_probe<'a, S: TexelSource<'a>, O: TexelObserver>(
             dt: line.dt,
             inv_n: line.inv_n,
         };
-        let values = aniso_lanes::byte_probes(level, bytes, &step);
+        let values = aniso_lanes::byte_probes(level, bytes, &step, wrap);
         for i in first..line.n.min(first + PROBE_LANES) {
-            let value = match values.get(i - first) {
-                Some((value, x, y)) => {
-                    obs.touch(m, x, y);
-                    obs.touch(m, x + 1, y);
-                    obs.touch(m, x, y + 1);
-                    obs.touch(m, x + 1, y + 1);
-                    value
-                }
-                None => scalar(i, obs),
+            let lane = i - first;
+            let value = if values.served(lane) {
+                values.each_texel_read(lane, |x, y| obs.touch(m, x, y));
+                values.value(bytes, lane)
+            } else {
+                scalar(i, obs)
             };
             visit(i, value);
         }

@@ -1,23 +1,31 @@
 //! Bilinear blocks on an 8-bit level, [`PROBE_LANES`] at a time: the anisotropic filter's
 //! probes, and the bilinear lookups of a batch (`Texture::sample_batch`).
 //!
-//! Texel coordinates, the integer floor, the in-bounds and same-tile tests, the tile
-//! addressing and the bilinear blend run in lanes, one probe per lane, so that inside
-//! `simd::dispatch` (where `aniso::sample` runs) they compile to vector instructions; the
-//! texel reads and byte decoding stay one lane at a time (the 256-entry tables are
-//! loads either way).
+//! Texel coordinates, the integer floor, the wrap of each axis and the tile addressing of
+//! each of a block's four texels run in lanes, one probe per lane, so that inside
+//! `simd::dispatch` (where `aniso::sample` runs) they compile to vector instructions. The
+//! texel reads, the byte decoding (256-entry tables: loads either way) and the bilinear
+//! blend then run one probe at a time on its four texels as `Vec4`s, straight from the
+//! reads: moving decoded texels into channel-major lanes went through the stack one lane at
+//! a time, and the vector loads after those narrow stores stalled.
 //!
-//! A lane performs exactly the f32 and integer operations
-//! `filter_closest_bilinear::bilinear_from` performs for its probe, so its value has the
-//! same bits; a probe whose block crosses a tile or level edge is left to that scalar
-//! path. The caller sums the probe values in probe order, as the scalar loop does, so the
-//! filter's result is unchanged at every vector level.
+//! A probe performs exactly the f32 and integer operations of the scalar probe,
+//! `filter_closest_bilinear::bilinear_from` (and, for a block across an edge of the level,
+//! its wrapped paths, which blend the same way), so its value has the same bits. Each of
+//! the block's texels is addressed on its own, so a block across a tile edge or wrapped
+//! across the level's edge is served like one inside a tile; only a probe more than one
+//! period away from the level on an axis whose side is not a power of two and which
+//! repeats (periodic or mirror), or 2^22 texels or more away (NaN included), is left to the
+//! scalar path. The caller sums the probe values
+//! in probe order, as the scalar loop does, so the filter's result is unchanged at every
+//! vector level.
 
 use glam::Vec4;
 
 use super::mip_pyramid::MipLevel;
 use super::texels::{ByteTexels, FlatTexels};
 use super::tiles::TEXTURE_TILE_SIZE;
+use super::WrapMode;
 
 /// Probes computed per step: one AVX2 register of f32, half an AVX-512 one.
 pub(crate) const PROBE_LANES: usize = 8;
@@ -54,28 +62,74 @@ pub(crate) struct ProbeStep {
     pub(crate) inv_n: f32,
 }
 
-/// Bilinear values of one step's probes, channel-major, with the texel block each served
-/// probe read (for the observer) and which probes were served.
-pub(crate) struct ProbeValues {
-    rgba: [Lanes<f32>; 4],
-    block: [Lanes<u32>; 2],
+/// The columns (or rows) of the two texels of each lane's block along one axis, as
+/// `wrap::wrap_texel` maps them, and whether each is inside the level (only a black wrap
+/// leaves one outside, and it then counts as zero).
+#[derive(Clone, Copy)]
+struct AxisTexels {
+    texel: [Lanes<u32>; 2],
+    inside: [Lanes<bool>; 2],
+    /// Lanes whose texels these are (the others take the scalar path).
     served: Lanes<bool>,
 }
 
-impl ProbeValues {
-    /// The value of probe `first + lane` and the upper-left texel of its block, or `None`
-    /// when the scalar path must compute it.
+/// Where one step's probes read: the index of each of a block's four texels (corner-major:
+/// upper left, upper right, lower left, lower right), the blend fractions, which texels are
+/// inside the level, and which probes are served.
+pub(crate) struct ProbeBlocks {
+    index: [Lanes<u32>; 4],
+    fraction: [Lanes<f32>; 2],
+    columns: AxisTexels,
+    rows: AxisTexels,
+    served: Lanes<bool>,
+    /// A black wrap on either axis, so a texel may be outside (the other modes map every
+    /// texel inside, and [`ProbeBlocks::value`] skips the test).
+    black: bool,
+}
+
+impl ProbeBlocks {
+    /// Whether probe `first + lane` is served here (else the scalar path computes it).
     #[inline(always)]
-    pub(crate) fn get(&self, lane: usize) -> Option<(Vec4, usize, usize)> {
-        self.served[lane].then(|| {
-            let [r, g, b, a] = &self.rgba;
-            let v = Vec4::new(r[lane], g[lane], b[lane], a[lane]);
-            (
-                v,
-                self.block[0][lane] as usize,
-                self.block[1][lane] as usize,
-            )
-        })
+    pub(crate) fn served(&self, lane: usize) -> bool {
+        self.served[lane]
+    }
+
+    /// The bilinear value of served probe `first + lane`, read from `texels` (those the
+    /// blocks were addressed in).
+    #[inline(always)]
+    pub(crate) fn value(&self, texels: ByteTexels, lane: usize) -> Vec4 {
+        let texel = |corner: usize| {
+            let inside = !self.black
+                || self.columns.inside[corner & 1][lane] & self.rows.inside[corner >> 1][lane];
+            if inside {
+                texels.texel(self.index[corner][lane] as usize)
+            } else {
+                Vec4::ZERO
+            }
+        };
+        let (a, b, c, d) = (texel(0), texel(1), texel(2), texel(3));
+        // `bilinear_from`'s blend.
+        let (fs, ft) = (self.fraction[0][lane], self.fraction[1][lane]);
+        let top = a * (1.0 - fs) + b * fs;
+        let bottom = c * (1.0 - fs) + d * fs;
+        top * (1.0 - ft) + bottom * ft
+    }
+
+    /// Calls `touch(x, y)` for each texel served probe `first + lane` read, in the order the
+    /// scalar probe reads them (row by row, left to right; a texel outside under a black
+    /// wrap is not read).
+    #[inline(always)]
+    pub(crate) fn each_texel_read(&self, lane: usize, mut touch: impl FnMut(usize, usize)) {
+        for r in 0..2 {
+            for c in 0..2 {
+                if self.rows.inside[r][lane] & self.columns.inside[c][lane] {
+                    touch(
+                        self.columns.texel[c][lane] as usize,
+                        self.rows.texel[r][lane] as usize,
+                    );
+                }
+            }
+        }
     }
 }
 
@@ -88,38 +142,43 @@ pub(crate) fn addressable(level: &MipLevel) -> bool {
         && u32::try_from(level.width as u64 * level.height as u64).is_ok()
 }
 
-/// The step's probes on `level` (its texels `texels`; [`addressable`]).
+/// Where the step's probes on `level` (its texels `texels`; [`addressable`]) read under
+/// `wrap`.
 #[inline(always)]
-pub(crate) fn byte_probes(level: &MipLevel, texels: ByteTexels, step: &ProbeStep) -> ProbeValues {
+pub(crate) fn byte_probes(
+    level: &MipLevel,
+    texels: ByteTexels,
+    step: &ProbeStep,
+    wrap: (WrapMode, WrapMode),
+) -> ProbeBlocks {
     let (x, y) = texel_positions(level, step);
-    byte_bilinear(level, texels, x, y, step.count.saturating_sub(step.first))
+    byte_blocks(level, texels, x, y, step.count.saturating_sub(step.first), wrap)
 }
 
-/// Bilinear values at the texel-space positions (`x`, `y`) (x = s * width - 0.5) of the
-/// first `count` lanes on `level` (its texels `texels`; [`addressable`]): the anisotropic
-/// probes, and the batched bilinear lookups of `Texture::sample_batch`.
+/// Where bilinear lookups at the texel-space positions (`x`, `y`) (x = s * width - 0.5) of
+/// the first `count` lanes read on `level` (its texels `texels`; [`addressable`]) under
+/// `wrap`: the anisotropic probes, and the bilinear lookups of `Texture::sample_batch`.
 #[inline(always)]
-pub(crate) fn byte_bilinear(
+pub(crate) fn byte_blocks(
     level: &MipLevel,
     texels: ByteTexels,
     x: Lanes<f32>,
     y: Lanes<f32>,
     count: usize,
-) -> ProbeValues {
+    wrap: (WrapMode, WrapMode),
+) -> ProbeBlocks {
     let (i, j) = (lanes(|l| floor_i32(x[l])), lanes(|l| floor_i32(y[l])));
-    let (index, stride, mut served) = block_addresses(level, count, i, j);
-    let corners = read_blocks(texels, index, stride, &mut served);
-    let fs = lanes(|l| x[l] - i[l] as f32);
-    let ft = lanes(|l| y[l] - j[l] as f32);
-    ProbeValues {
-        rgba: [
-            blend(&corners, 0, &fs, &ft),
-            blend(&corners, 1, &fs, &ft),
-            blend(&corners, 2, &fs, &ft),
-            blend(&corners, 3, &fs, &ft),
-        ],
-        block: [lanes(|l| i[l] as u32), lanes(|l| j[l] as u32)],
+    let columns = wrap_axis(&i, level.width, wrap.0);
+    let rows = wrap_axis(&j, level.height, wrap.1);
+    let mut served = lanes(|l| (l < count) & columns.served[l] & rows.served[l]);
+    let index = block_indices(level, &columns, &rows, texels.len(), &mut served);
+    ProbeBlocks {
+        index,
+        fraction: [lanes(|l| x[l] - i[l] as f32), lanes(|l| y[l] - j[l] as f32)],
+        columns,
+        rows,
         served,
+        black: wrap.0 == WrapMode::Black || wrap.1 == WrapMode::Black,
     }
 }
 
@@ -134,96 +193,149 @@ fn texel_positions(level: &MipLevel, step: &ProbeStep) -> (Lanes<f32>, Lanes<f32
     (x, y)
 }
 
-/// floor(x) for x in [0, 2^22), the probes that can be served, as
-/// `filter_closest_bilinear::floor_i32` gives it there; anything else (NaN included) gives
-/// -1 or at least 2^22, which no served block has. Written without a float-to-integer
-/// cast, whose saturation Rust defines and LLVM left scalar: adding 1.5 * 2^23 rounds x to
-/// an integer held in the low mantissa bits, and a rounding upward is stepped back.
+/// floor(x) for x in [-2^22, 2^22], as `filter_closest_bilinear::floor_i32` and
+/// `wrap::floor_f32` give it there; x beyond (NaN included) gives -2^22 or 2^22, which
+/// [`wrap_axis`] refuses. Written without a float-to-integer cast, whose saturation
+/// Rust defines and LLVM left scalar: adding 1.5 * 2^23 rounds x to an integer held in the
+/// low mantissa bits (the sum stays in [2^23, 2^24], where the spacing is 1), and a
+/// rounding upward is stepped back.
 #[inline(always)]
 fn floor_i32(x: f32) -> i32 {
     const MAGIC: f32 = 12_582_912.0; // 1.5 * 2^23
-    let clamped = x.max(-1.0).min(MAX_EXTENT as f32);
+    let limit = MAX_EXTENT as f32;
+    let clamped = x.max(-limit).min(limit);
     let rounded = (clamped + MAGIC).to_bits() as i32 - MAGIC.to_bits() as i32;
     rounded - ((rounded as f32 > clamped) as i32)
 }
 
-/// Index of each block's upper-left texel and its tile's row stride (as
-/// `TileLayout::block_in_one_tile` and `tile_start` give them), and whether the probe is
-/// one of the first `count` with its block inside the level and inside one tile.
+/// Both texels of each lane's block along an axis of `n` texels, from the block's first
+/// texel `i`, as `wrap::wrap_texel` maps texels i and i + 1, and whether the lane can be
+/// served: |i| < 2^22 ([`floor_i32`]'s range), and for a periodic or mirrored axis whose
+/// side is not a power of two i in [-n, n) (where the wrap needs no division; the range
+/// the scalar periodic path serves too). A power-of-two side wraps any i with a mask, as
+/// `rem_euclid` does. One loop per mode, so the mode is not decided per lane.
 #[inline(always)]
-fn block_addresses(
+fn wrap_axis(i: &Lanes<i32>, n: u32, mode: WrapMode) -> AxisTexels {
+    let n = n as i32;
+    let limit = MAX_EXTENT as i32;
+    let in_range = |i: i32| (i > -limit) & (i < limit);
+    let within_a_period = |i: i32| (i >= -n) & (i < n);
+    let inside = |_: i32| true;
+    let power_of_two = n.count_ones() == 1;
+    match mode {
+        WrapMode::Periodic if power_of_two => axis_texels(i, in_range, |k| k & (n - 1), inside),
+        WrapMode::Periodic => axis_texels(
+            i,
+            within_a_period,
+            |k| {
+                let k = if k < 0 { k + n } else { k };
+                if k >= n {
+                    k - n
+                } else {
+                    k
+                }
+            },
+            inside,
+        ),
+        WrapMode::Clamp => axis_texels(i, in_range, |k| k.clamp(0, n - 1), inside),
+        WrapMode::Black => axis_texels(
+            i,
+            in_range,
+            |k| if (k >= 0) & (k < n) { k } else { 0 },
+            |k| (k >= 0) & (k < n),
+        ),
+        WrapMode::Mirror if power_of_two => axis_texels(
+            i,
+            in_range,
+            |k| {
+                let k = k & (2 * n - 1);
+                if k >= n {
+                    2 * n - 1 - k
+                } else {
+                    k
+                }
+            },
+            inside,
+        ),
+        WrapMode::Mirror => axis_texels(
+            i,
+            within_a_period,
+            |k| {
+                // rem_euclid(k, 2n) folded back into [0, n), for k in [-n, n].
+                let k = if k < 0 { -1 - k } else { k };
+                if k >= n {
+                    2 * n - 1 - k
+                } else {
+                    k
+                }
+            },
+            inside,
+        ),
+    }
+}
+
+/// [`wrap_axis`] for one mode: the lanes `served` serves, and for texel coordinate k the
+/// stored texel `texel(k)` and whether it is `inside`.
+#[inline(always)]
+fn axis_texels(
+    i: &Lanes<i32>,
+    served: impl Fn(i32) -> bool,
+    texel: impl Fn(i32) -> i32,
+    inside: impl Fn(i32) -> bool,
+) -> AxisTexels {
+    let next = lanes(|l| i[l].wrapping_add(1));
+    AxisTexels {
+        texel: [
+            lanes(|l| texel(i[l]) as u32),
+            lanes(|l| texel(next[l]) as u32),
+        ],
+        inside: [lanes(|l| inside(i[l])), lanes(|l| inside(next[l]))],
+        served: lanes(|l| served(i[l])),
+    }
+}
+
+/// Index of each of the four texels of each lane's block, corner-major (upper left, upper
+/// right, lower left, lower right), as `TileLayout::locate` and `tile_start` give it; a
+/// lane with an index past the buffer (`len` texels) is left to the scalar path.
+#[inline(always)]
+fn block_indices(
     level: &MipLevel,
-    count: usize,
-    i: Lanes<i32>,
-    j: Lanes<i32>,
-) -> (Lanes<u32>, Lanes<u32>, Lanes<bool>) {
+    columns: &AxisTexels,
+    rows: &AxisTexels,
+    len: usize,
+    served: &mut Lanes<bool>,
+) -> [Lanes<u32>; 4] {
     let (w, h) = (level.width, level.height);
     let tile_extent = |start: u32, size: u32| size.wrapping_sub(start).min(TEXTURE_TILE_SIZE);
-    let (x, y) = (lanes(|l| i[l] as u32), lanes(|l| j[l] as u32));
-    let stride = lanes(|l| tile_extent(x[l] & !TILE_MASK, w));
-    let tile_h = lanes(|l| tile_extent(y[l] & !TILE_MASK, h));
-    let (local_x, local_y) = (lanes(|l| x[l] & TILE_MASK), lanes(|l| y[l] & TILE_MASK));
-    let index = lanes(|l| {
-        let tile_start = (y[l] & !TILE_MASK)
-            .wrapping_mul(w)
-            .wrapping_add((x[l] & !TILE_MASK).wrapping_mul(tile_h[l]));
-        tile_start.wrapping_add(local_y[l].wrapping_mul(stride[l]).wrapping_add(local_x[l]))
-    });
-    let served = lanes(|l| {
-        (l < count)
-            & (x[l] < w - 1)
-            & (y[l] < h - 1)
-            & (local_x[l] + 1 < stride[l])
-            & (local_y[l] + 1 < tile_h[l])
-    });
-    (index, stride, served)
-}
-
-/// The four decoded texels of each served probe's block, corner-major then channel-major;
-/// a block the buffer does not hold is left to the scalar path.
-#[inline(always)]
-fn read_blocks(
-    texels: ByteTexels,
-    index: Lanes<u32>,
-    stride: Lanes<u32>,
-    served: &mut Lanes<bool>,
-) -> [[Lanes<f32>; 4]; 4] {
-    let mut corners = [[[0.0f32; PROBE_LANES]; 4]; 4];
-    for l in 0..PROBE_LANES {
-        if !served[l] {
-            continue;
-        }
-        let block = texels.bilinear_quad(index[l] as usize, stride[l] as usize, |a, b, c, d| {
-            [a, b, c, d]
-        });
-        match block {
-            Some(block) => {
-                for (corner, texel) in corners.iter_mut().zip(block) {
-                    for (channel, value) in corner.iter_mut().zip(texel.to_array()) {
-                        channel[l] = value;
-                    }
-                }
-            }
-            None => served[l] = false,
-        }
-    }
+    let column = |k: usize| {
+        let x = &columns.texel[k];
+        let start = lanes(|l| x[l] & !TILE_MASK);
+        let width = lanes(|l| tile_extent(start[l], w));
+        (start, width, lanes(|l| x[l] & TILE_MASK))
+    };
+    let row = |k: usize| {
+        let y = &rows.texel[k];
+        let start = lanes(|l| y[l] & !TILE_MASK);
+        let height = lanes(|l| tile_extent(start[l], h));
+        (start, height, lanes(|l| y[l] & TILE_MASK))
+    };
+    let (cols, rws) = ([column(0), column(1)], [row(0), row(1)]);
+    let index = |c: usize, r: usize| {
+        let (x_start, tile_w, local_x) = &cols[c];
+        let (y_start, tile_h, local_y) = &rws[r];
+        lanes(|l| {
+            let tile_start = y_start[l]
+                .wrapping_mul(w)
+                .wrapping_add(x_start[l].wrapping_mul(tile_h[l]));
+            tile_start.wrapping_add(local_y[l].wrapping_mul(tile_w[l]).wrapping_add(local_x[l]))
+        })
+    };
+    let corners = [index(0, 0), index(1, 0), index(0, 1), index(1, 1)];
+    let len = u32::try_from(len).unwrap_or(u32::MAX);
+    // `&` rather than `all`, whose early exit kept the test one lane at a time.
+    let [a, b, c, d] = &corners;
+    *served = lanes(|l| served[l] & (a[l] < len) & (b[l] < len) & (c[l] < len) & (d[l] < len));
     corners
-}
-
-/// Channel `c` of the bilinear blend, the operations of `bilinear_from`'s blend.
-#[inline(always)]
-fn blend(corners: &[[Lanes<f32>; 4]; 4], c: usize, fs: &Lanes<f32>, ft: &Lanes<f32>) -> Lanes<f32> {
-    let [a, b, cc, d] = [
-        &corners[0][c],
-        &corners[1][c],
-        &corners[2][c],
-        &corners[3][c],
-    ];
-    lanes(|l| {
-        let top = a[l] * (1.0 - fs[l]) + b[l] * fs[l];
-        let bottom = cc[l] * (1.0 - fs[l]) + d[l] * fs[l];
-        top * (1.0 - ft[l]) + bottom * ft[l]
-    })
 }
 
 #[cfg(test)]
@@ -232,26 +344,75 @@ mod tests {
 
     #[test]
     fn floor_matches_the_scalar_floor_where_blocks_can_be_served() {
+        let limit = MAX_EXTENT as f32;
         let mut x = 0.0f32;
-        while x < MAX_EXTENT as f32 {
+        while x < limit {
             for v in [
                 x,
                 x.next_up(),
-                x.next_down().max(0.0),
+                x.next_down(),
                 x + 0.5,
                 x + 0.999_999,
+                -x,
+                -x - 0.5,
+                (-x).next_down(),
             ] {
-                if v < MAX_EXTENT as f32 {
+                if v.abs() < limit {
                     assert_eq!(floor_i32(v), v.floor() as i32, "{v}");
                 }
             }
             x = if x < 4.0 { x + 0.25 } else { x * 1.37 };
         }
-        for outside in [-0.0001f32, -1.0, -1e9, f32::NAN, f32::NEG_INFINITY] {
-            assert_eq!(floor_i32(outside), -1, "{outside}");
+        for beyond in [
+            limit,
+            1e9,
+            f32::INFINITY,
+            -limit,
+            -1e9,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ] {
+            assert!(floor_i32(beyond).unsigned_abs() >= MAX_EXTENT, "{beyond}");
         }
-        for beyond in [MAX_EXTENT as f32, 1e9, f32::INFINITY] {
-            assert!(floor_i32(beyond) >= MAX_EXTENT as i32, "{beyond}");
+    }
+
+    /// Every mode's lane wrap maps the texels of the blocks it serves as
+    /// `wrap::wrap_texel` does, and serves every block within a period, and every block on
+    /// a power-of-two side.
+    #[test]
+    fn axis_wrap_matches_wrap_texel() {
+        for n in [1u32, 2, 3, 7, 64, 65] {
+            for mode in [
+                WrapMode::Periodic,
+                WrapMode::Clamp,
+                WrapMode::Black,
+                WrapMode::Mirror,
+            ] {
+                let side = n as i32;
+                let starts: Vec<i32> = (-3 * side - 2..3 * side + 2).collect();
+                for chunk in starts.chunks(PROBE_LANES) {
+                    let i = lanes(|l| chunk.get(l).copied().unwrap_or(0));
+                    let axis = wrap_axis(&i, n, mode);
+                    for (l, &start) in chunk.iter().enumerate() {
+                        let repeats = matches!(mode, WrapMode::Periodic | WrapMode::Mirror);
+                        let must_serve =
+                            !repeats || n.is_power_of_two() || (-side..side).contains(&start);
+                        assert!(
+                            !must_serve || axis.served[l],
+                            "{mode:?} n {n} start {start}"
+                        );
+                        if !axis.served[l] {
+                            continue;
+                        }
+                        for k in 0..2 {
+                            let scalar =
+                                super::super::wrap::wrap_texel((start + k as i32) as f32, n, mode);
+                            let lane = axis.inside[k][l].then_some(axis.texel[k][l] as usize);
+                            assert_eq!(lane, scalar, "{mode:?} n {n} texel {}", start + k as i32);
+                        }
+                    }
+                }
+            }
         }
     }
 }

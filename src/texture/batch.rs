@@ -90,8 +90,9 @@ impl Texture {
 }
 
 /// The bilinear lookups of a resident 8-bit level, [`PROBE_LANES`] queries at a time:
-/// positions, blocks and blends in lanes (`aniso_lanes::byte_bilinear`), and a lookup whose
-/// block crosses a tile or level edge by [`bilinear_from`], one lane at a time.
+/// positions, wraps and tile addresses in lanes (`aniso_lanes::byte_blocks`), each value
+/// read and blended on its own, and a lookup the lanes cannot address (far outside a level
+/// that repeats and is not a power of two wide) by [`bilinear_from`].
 #[inline(always)]
 fn byte_bilinear_lanes<'a, S: TexelSource<'a>, O: TexelObserver>(
     level: &'a MipLevel,
@@ -110,18 +111,14 @@ fn byte_bilinear_lanes<'a, S: TexelSource<'a>, O: TexelObserver>(
         let t: Lanes<f32> = std::array::from_fn(|l| wrap::reduce_coordinate(query(l).t, wrap.1));
         let x = std::array::from_fn(|l| s[l] * w - 0.5);
         let y = std::array::from_fn(|l| t[l] * h - 0.5);
-        let values = aniso_lanes::byte_bilinear(level, bytes, x, y, chunk.len());
+        let blocks = aniso_lanes::byte_blocks(level, bytes, x, y, chunk.len(), wrap);
         for (l, texel) in texels_out.iter_mut().enumerate() {
             obs.begin_lookup();
-            *texel = match values.get(l) {
-                Some((value, xi, yi)) => {
-                    obs.touch(0, xi, yi);
-                    obs.touch(0, xi + 1, yi);
-                    obs.touch(0, xi, yi + 1);
-                    obs.touch(0, xi + 1, yi + 1);
-                    value
-                }
-                None => bilinear_from(level, texels, 0, s[l], t[l], wrap, obs),
+            *texel = if blocks.served(l) {
+                blocks.each_texel_read(l, |x, y| obs.touch(0, x, y));
+                blocks.value(bytes, l)
+            } else {
+                bilinear_from(level, texels, 0, s[l], t[l], wrap, obs)
             };
         }
     }

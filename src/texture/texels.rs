@@ -475,6 +475,12 @@ impl<'a> ByteTexels<'a> {
             alpha: &LINEAR_BYTES,
         }
     }
+
+    /// Number of texels.
+    #[inline(always)]
+    pub(crate) fn len(self) -> usize {
+        self.texels.len()
+    }
 }
 
 impl<'a> FlatTexels<'a> for ByteTexels<'a> {
