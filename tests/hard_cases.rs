@@ -18,13 +18,6 @@ use conetrace::texture::{FilterMode, FilterOptions, Texture, TextureQuery, WrapM
 use glam::Vec3;
 
 const SIZE: u32 = 32;
-const FILTERS: [FilterMode; 5] = [
-    FilterMode::Closest,
-    FilterMode::Bilinear,
-    FilterMode::Trilinear,
-    FilterMode::Aniso,
-    FilterMode::Ewa,
-];
 const LODS: [LodStrategy; 2] = [LodStrategy::Cone, LodStrategy::Differential];
 
 fn checker_png() -> String {
@@ -153,7 +146,7 @@ fn grazing_rays_on_a_textured_plane_every_lod_and_filter() {
     for eye_height in [1e-5f32, 1e-3] {
         let scene = textured_plane_scene(eye_height);
         for lod in LODS {
-            for filter in FILTERS {
+            for filter in FilterMode::ALL {
                 let film = render_in(dir.path(), &scene, options(lod, filter))
                     .unwrap_or_else(|e| panic!("{e}"));
                 assert_sane(&film, max_level, &format!("h={eye_height} {lod} {filter}"));
@@ -576,7 +569,7 @@ material = "mirror"
         tex = checker_png()
     );
     for lod in LODS {
-        for filter in FILTERS {
+        for filter in FilterMode::ALL {
             let mut opts = options(lod, filter);
             opts.spp = 2;
             let film = render_in(dir.path(), &scene, opts).unwrap();
@@ -686,7 +679,7 @@ fn tiny_and_odd_textures_with_extreme_queries() {
     for (w, h) in [(1, 1), (1, 7), (9, 1), (13, 5), (3, 17)] {
         let texture = ramp_texture(w, h);
         let max_level = (texture.level_count() - 1) as f32;
-        for filter in FILTERS {
+        for filter in FilterMode::ALL {
             for wrap in [WrapMode::Periodic, WrapMode::Clamp, WrapMode::Mirror] {
                 let opts = FilterOptions {
                     filter,

@@ -152,7 +152,14 @@ pub(crate) fn byte_probes(
     wrap: (WrapMode, WrapMode),
 ) -> ProbeBlocks {
     let (x, y) = texel_positions(level, step);
-    byte_blocks(level, texels, x, y, step.count.saturating_sub(step.first), wrap)
+    byte_blocks(
+        level,
+        texels,
+        x,
+        y,
+        step.count.saturating_sub(step.first),
+        wrap,
+    )
 }
 
 /// Where bilinear lookups at the texel-space positions (`x`, `y`) (x = s * width - 0.5) of

@@ -194,13 +194,6 @@ mod tests {
             .collect()
     }
 
-    const FILTERS: [FilterMode; 5] = [
-        FilterMode::Closest,
-        FilterMode::Bilinear,
-        FilterMode::Trilinear,
-        FilterMode::Aniso,
-        FilterMode::Ewa,
-    ];
     const WRAPS: [WrapMode; 4] = [
         WrapMode::Periodic,
         WrapMode::Clamp,
@@ -222,7 +215,7 @@ mod tests {
     fn a_batch_gives_every_lookup_the_bits_of_a_single_lookup_at_every_vector_level() {
         for texture in textures() {
             let queries = queries(texture.width(), texture.height());
-            for filter in FILTERS {
+            for filter in FilterMode::ALL {
                 for (k, &wrap_s) in WRAPS.iter().enumerate() {
                     let opts = FilterOptions {
                         filter,
@@ -255,7 +248,7 @@ mod tests {
     fn a_recording_batch_records_the_tiles_and_touches_of_single_lookups() {
         for texture in textures() {
             let queries = queries(texture.width(), texture.height());
-            for filter in FILTERS {
+            for filter in FilterMode::ALL {
                 let opts = FilterOptions {
                     filter,
                     ..FilterOptions::default()

@@ -107,6 +107,17 @@ pub enum FilterMode {
     Ewa,
 }
 
+impl FilterMode {
+    /// Every filter, from the cheapest.
+    pub const ALL: [FilterMode; 5] = [
+        FilterMode::Closest,
+        FilterMode::Bilinear,
+        FilterMode::Trilinear,
+        FilterMode::Aniso,
+        FilterMode::Ewa,
+    ];
+}
+
 /// Options that travel with every lookup.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FilterOptions {
