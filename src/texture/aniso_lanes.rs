@@ -40,7 +40,7 @@ pub(crate) type Lanes<T> = [T; PROBE_LANES];
 /// which the release build left out of line (`core::array::try_from_fn`), so compiled at
 /// the baseline level and called per step.
 #[inline(always)]
-fn lanes<T: Copy + Default>(mut f: impl FnMut(usize) -> T) -> Lanes<T> {
+pub(crate) fn lanes<T: Copy + Default>(mut f: impl FnMut(usize) -> T) -> Lanes<T> {
     let mut out = [T::default(); PROBE_LANES];
     for (lane, value) in out.iter_mut().enumerate() {
         *value = f(lane);

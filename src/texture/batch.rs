@@ -7,7 +7,7 @@ use glam::Vec4;
 
 use crate::simd;
 
-use super::aniso_lanes::{self, Lanes, PROBE_LANES};
+use super::aniso_lanes::{self, lanes, Lanes, PROBE_LANES};
 use super::filter_closest_bilinear::bilinear_from;
 use super::mip_pyramid::MipLevel;
 use super::texels::{with_texel_source, ByteTexels, TexelSource};
@@ -107,10 +107,10 @@ fn byte_bilinear_lanes<'a, S: TexelSource<'a>, O: TexelObserver>(
     for (chunk, texels_out) in queries.chunks(PROBE_LANES).zip(out.chunks_mut(PROBE_LANES)) {
         // A short last chunk repeats its last query in the lanes it does not use.
         let query = |l: usize| &chunk[l.min(chunk.len() - 1)];
-        let s: Lanes<f32> = std::array::from_fn(|l| wrap::reduce_coordinate(query(l).s, wrap.0));
-        let t: Lanes<f32> = std::array::from_fn(|l| wrap::reduce_coordinate(query(l).t, wrap.1));
-        let x = std::array::from_fn(|l| s[l] * w - 0.5);
-        let y = std::array::from_fn(|l| t[l] * h - 0.5);
+        let s: Lanes<f32> = lanes(|l| wrap::reduce_coordinate(query(l).s, wrap.0));
+        let t: Lanes<f32> = lanes(|l| wrap::reduce_coordinate(query(l).t, wrap.1));
+        let x = lanes(|l| s[l] * w - 0.5);
+        let y = lanes(|l| t[l] * h - 0.5);
         let blocks = aniso_lanes::byte_blocks(level, bytes, x, y, chunk.len(), wrap);
         for (l, texel) in texels_out.iter_mut().enumerate() {
             obs.begin_lookup();
