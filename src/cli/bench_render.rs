@@ -1,7 +1,10 @@
 //! `conetrace bench render`: raw packet traversal vs full shading, side by side in one run.
 //!
-//! Both passes use the same scene, camera rays (4x4 blocks as 16-wide packets), tiles and
-//! threads. The raw pass only traces camera rays; the traversal pass adds one occlusion ray
+//! Every pass uses the same scene, tiles, threads and camera rays: the render's own, every
+//! sample of every pixel in the packets the integrator builds (a pixel's samples together
+//! for Whitted, one sample of 4x4 pixel blocks at a time for the path tracer), so the
+//! traversal floor is measured at the render's sample count. The raw pass only traces
+//! camera rays; the traversal pass adds one occlusion ray
 //! per hit and light but shades nothing (the Embree work of camera-plus-shadow rendering);
 //! the full pass renders the rays with shading, shadow rays and secondary rays, and the
 //! direct pass with shading and shadow rays only. Each pass runs several times and the
@@ -17,7 +20,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::cli::bench_scene::BenchSceneArgs;
@@ -30,7 +33,7 @@ use crate::render::tracer::{
 };
 use crate::render::{self, RenderContext, RenderControl, RenderOptions};
 use crate::shading::{self, SpawnPoint};
-use conetrace::film::{block_order, PixelRect};
+use conetrace::integrator::for_each_camera_run;
 use conetrace::integrator::selection::{IntegratorKind, SelectedIntegrator};
 
 #[derive(Args, Debug)]
@@ -112,26 +115,9 @@ impl TraversalVariant {
     }
 }
 
-/// The pixel-centre camera rays of `tile`, each run of 16 one 4x4 block (as the integrator
-/// orders them).
-fn camera_rays_of_tile(context: &RenderContext, tile: PixelRect, rays: &mut Vec<TraceRay>) {
-    rays.clear();
-    for (x, y) in block_order(tile) {
-        let px = (tile.x0 + x) as f32 + 0.5;
-        let py = (tile.y0 + y) as f32 + 0.5;
-        let (origin, direction) = context.camera.generate_ray(px, py, Vec2::splat(0.5));
-        rays.push(TraceRay {
-            origin,
-            direction,
-            tfar: f32::INFINITY,
-            cone_width: 0.0,
-            cone_spread: 0.0,
-        });
-    }
-}
-
-/// Camera rays of every pixel traced through Embree with no shading; returns rays traced.
-pub fn trace_camera_rays_only(context: &RenderContext) -> u64 {
+/// The render's camera rays (every sample of every pixel, in the integrator's packets)
+/// traced through Embree with no shading; returns rays traced.
+pub fn trace_camera_rays_only(context: &RenderContext, kind: IntegratorKind) -> u64 {
     let options = &context.options;
     let tiles = render::work_tiles(options.width, options.height);
     tiles
@@ -146,21 +132,28 @@ pub fn trace_camera_rays_only(context: &RenderContext) -> u64 {
                 )
             },
             |(rays, hits, counters), tile| {
-                camera_rays_of_tile(context, *tile, rays);
-                context.tracer.intersect(rays, hits, true, counters);
-                rays.len() as u64
+                let mut traced = 0;
+                let in_flight = kind.samples_in_flight();
+                for_each_camera_run(context, *tile, in_flight, rays, |rays| {
+                    context.tracer.intersect(rays, hits, true, counters);
+                    traced += rays.len() as u64;
+                });
+                traced
             },
         )
         .sum()
 }
 
-/// Camera rays traced as 16-wide packets, then, from every hit, one occlusion ray towards
-/// each light traced as a stream: the Embree work of camera-plus-shadow rendering with no
+/// The render's camera rays traced as in [`trace_camera_rays_only`], then, from every hit,
+/// one occlusion ray towards each light traced as a stream: the Embree work of camera-plus-shadow rendering with no
 /// shading at all (no hit reconstruction, footprints, texture lookups or light evaluation).
 /// The shadow origin steps back along the camera ray, past the error bound of
 /// `origin + t * direction` (`shading::SpawnPoint::along_ray`), instead of along the surface
 /// normal from a recomputed point, which needs no surface reconstruction. Returns (camera rays, shadow rays).
-pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) {
+pub fn trace_camera_and_shadow_rays_only(
+    context: &RenderContext,
+    kind: IntegratorKind,
+) -> (u64, u64) {
     let options = &context.options;
     let tiles = render::work_tiles(options.width, options.height);
     let lights = &context.scene.lights;
@@ -178,35 +171,40 @@ pub fn trace_camera_and_shadow_rays_only(context: &RenderContext) -> (u64, u64) 
                 )
             },
             |(rays, hits, shadow_rays, blocked, counters), tile| {
-                camera_rays_of_tile(context, *tile, rays);
-                context.tracer.intersect(rays, hits, true, counters);
-                shadow_rays.clear();
-                for (ray, hit) in rays.iter().zip(hits.iter()) {
-                    if !hit.is_hit() {
-                        continue;
+                let mut traced = (0, 0);
+                let in_flight = kind.samples_in_flight();
+                for_each_camera_run(context, *tile, in_flight, rays, |rays| {
+                    context.tracer.intersect(rays, hits, true, counters);
+                    shadow_rays.clear();
+                    for (ray, hit) in rays.iter().zip(hits.iter()) {
+                        if !hit.is_hit() {
+                            continue;
+                        }
+                        let origin = SpawnPoint::along_ray(ray.origin, ray.direction, hit.t)
+                            .offset_origin(-ray.direction);
+                        for light in lights {
+                            let sample = shading::sample_li(light, origin);
+                            let tfar = shading::shadow_ray_end(
+                                sample.distance,
+                                shading::light_position(light).unwrap_or(Vec3::ZERO),
+                                0.0,
+                            );
+                            shadow_rays.push(TraceRay {
+                                origin,
+                                direction: sample.direction_to_light,
+                                tfar,
+                                cone_width: 0.0,
+                                cone_spread: 0.0,
+                            });
+                        }
                     }
-                    let origin = SpawnPoint::along_ray(ray.origin, ray.direction, hit.t)
-                        .offset_origin(-ray.direction);
-                    for light in lights {
-                        let sample = shading::sample_li(light, origin);
-                        let tfar = shading::shadow_ray_end(
-                            sample.distance,
-                            shading::light_position(light).unwrap_or(Vec3::ZERO),
-                            0.0,
-                        );
-                        shadow_rays.push(TraceRay {
-                            origin,
-                            direction: sample.direction_to_light,
-                            tfar,
-                            cone_width: 0.0,
-                            cone_spread: 0.0,
-                        });
+                    if !shadow_rays.is_empty() {
+                        context.tracer.occluded(shadow_rays, blocked, counters);
                     }
-                }
-                if !shadow_rays.is_empty() {
-                    context.tracer.occluded(shadow_rays, blocked, counters);
-                }
-                (rays.len() as u64, shadow_rays.len() as u64)
+                    traced.0 += rays.len() as u64;
+                    traced.1 += shadow_rays.len() as u64;
+                });
+                traced
             },
         )
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
@@ -236,8 +234,8 @@ impl PairedCost {
     fn measure(
         &mut self,
         round: usize,
-        a: &RenderContext,
-        b: &RenderContext,
+        (a, b): (&RenderContext, &RenderContext),
+        kind: IntegratorKind,
         render_timed: &dyn Fn(&RenderContext) -> Result<render::RenderResult, CommandError>,
     ) -> Result<(), CommandError> {
         let time = |f: &dyn Fn()| {
@@ -257,13 +255,13 @@ impl PairedCost {
         };
         let (x, y) = pair(order.map(|c| {
             time(&|| {
-                trace_camera_rays_only(c);
+                trace_camera_rays_only(c, kind);
             })
         }));
         self.rounds.push(("camera rays, no shading", x, y));
         let (x, y) = pair(order.map(|c| {
             time(&|| {
-                trace_camera_and_shadow_rays_only(c);
+                trace_camera_and_shadow_rays_only(c, kind);
             })
         }));
         self.rounds.push(("camera + shadow rays, no shading", x, y));
@@ -402,8 +400,8 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             .into_iter()
             .chain(variants.iter().map(|v| &v.context));
         for c in warm_up {
-            trace_camera_rays_only(c);
-            trace_camera_and_shadow_rays_only(c);
+            trace_camera_rays_only(c, kind);
+            trace_camera_and_shadow_rays_only(c, kind);
             check_traversal(c)?;
             render_timed(c)?;
         }
@@ -420,10 +418,10 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         let mut full_counters = WorkCounters::default();
         for round in 0..repeat {
             let start = Instant::now();
-            raw_rays = trace_camera_rays_only(&context);
+            raw_rays = trace_camera_rays_only(&context, kind);
             raw_times.push(start.elapsed().as_secs_f64());
             let start = Instant::now();
-            traversal_rays = trace_camera_and_shadow_rays_only(&context);
+            traversal_rays = trace_camera_and_shadow_rays_only(&context, kind);
             traversal_times.push(start.elapsed().as_secs_f64());
             check_traversal(&context)?;
             let result = render_timed(&context)?;
@@ -433,12 +431,12 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
             direct_times.push(result.stats.seconds);
             direct_counters = result.stats.counters;
             // Robust vs fast, paired within the round.
-            robust_cost.measure(round, &context, &fast_context, &render_timed)?;
+            robust_cost.measure(round, (&context, &fast_context), kind, &render_timed)?;
             check_traversal(&context)?;
             check_traversal(&fast_context)?;
             for run in &mut variants {
                 run.cost
-                    .measure(round, &context, &run.context, &render_timed)?;
+                    .measure(round, (&context, &run.context), kind, &render_timed)?;
                 check_traversal(&run.context)?;
                 if let Some((a, b)) = run.time_builds(context.tracer.settings())? {
                     run.cost.record_build(a, b);
@@ -464,7 +462,7 @@ pub fn run(args: &BenchRenderArgs) -> Result<(), CommandError> {
         );
         println!("| pass | seconds | camera Mrays/s | all Mrays/s |");
         println!("|---|---|---|---|");
-        println!("| raw packet traversal (camera rays, no shading) | {raw:.4} | {raw_rate:.2} | {raw_rate:.2} |");
+        println!("| raw packet traversal ({raw_rays} camera rays, no shading) | {raw:.4} | {raw_rate:.2} | {raw_rate:.2} |");
         let traversal = median(&traversal_times);
         let traversal_rate = (traversal_rays.0 + traversal_rays.1) as f64 / traversal / 1e6;
         println!(

@@ -165,6 +165,34 @@ pub(crate) fn for_each_camera_ray(
     }
 }
 
+/// Calls `trace` with the camera rays a render traces for `tile`, one sample run at a time
+/// ([`sample_runs`], up to `in_flight` samples of a pixel together), as Embree is given
+/// them: every sample of every pixel in the packets the integrators build. Nothing is
+/// shaded; `conetrace bench render` times this as the traversal floor of the render's own
+/// camera rays.
+pub fn for_each_camera_run(
+    context: &RenderContext,
+    tile: PixelRect,
+    in_flight: u32,
+    rays: &mut Vec<crate::render::tracer::TraceRay>,
+    mut trace: impl FnMut(&[crate::render::tracer::TraceRay]),
+) {
+    let spp = context.options.spp.max(1);
+    for run in sample_runs(0..spp, spp, in_flight) {
+        rays.clear();
+        for_each_camera_ray(context, tile, &run, context.options.width, |ray| {
+            let wave_ray = crate::integrator::trace_wave::WaveRay {
+                origin: ray.origin,
+                direction: ray.direction,
+                start: ray.start,
+                footprint: &ray.footprint,
+            };
+            rays.push(wave_ray.traced());
+        });
+        trace(rays);
+    }
+}
+
 /// Lanes of one packet.
 const PACKET: usize = 16;
 

@@ -23,6 +23,7 @@ mod wave_integrator;
 mod wave_order;
 pub mod whitted;
 
+pub use camera_sample::for_each_camera_run;
 pub use path::PathTracer;
 pub use selection::{IntegratorChoice, IntegratorKind, SelectedIntegrator};
 pub use vct::Vct;

@@ -42,6 +42,18 @@ pub enum IntegratorKind {
 }
 
 impl IntegratorKind {
+    /// How many samples of a pixel the integrator traces together, its camera rays in
+    /// one packet ([`crate::integrator::for_each_camera_run`]).
+    pub fn samples_in_flight(self) -> u32 {
+        match self {
+            // The voxel cone tracer renders its tiles with Whitted's waves.
+            IntegratorKind::Whitted | IntegratorKind::Vct => {
+                crate::integrator::whitted::SAMPLES_IN_FLIGHT
+            }
+            IntegratorKind::Path => crate::integrator::path::SAMPLES_IN_FLIGHT,
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             IntegratorKind::Whitted => "whitted",

@@ -19,6 +19,22 @@ pub(crate) struct WaveRay<'a> {
     pub footprint: &'a Footprint,
 }
 
+impl WaveRay<'_> {
+    /// The ray as Embree traces it: from `start`, where its cone is as wide as it has grown
+    /// by then.
+    #[inline]
+    pub(crate) fn traced(&self) -> TraceRay {
+        let (cone_width, cone_spread) = self.footprint.cone_at_origin();
+        TraceRay {
+            origin: self.origin + self.direction * self.start,
+            direction: self.direction,
+            tfar: f32::INFINITY,
+            cone_width: cone_width + cone_spread * self.start,
+            cone_spread,
+        }
+    }
+}
+
 /// Closest hits of `rays` into `hits`, with distances counted from each ray's origin;
 /// `trace_rays` is a reused buffer.
 pub(crate) fn trace_wave<'a>(
@@ -29,17 +45,7 @@ pub(crate) fn trace_wave<'a>(
     hits: &mut Vec<TraceHit>,
     counters: &mut WorkCounters,
 ) {
-    let trace_ray = |ray: WaveRay| {
-        let (cone_width, cone_spread) = ray.footprint.cone_at_origin();
-        // Traced from `start`: the cone is as wide there as it has grown by then.
-        TraceRay {
-            origin: ray.origin + ray.direction * ray.start,
-            direction: ray.direction,
-            tfar: f32::INFINITY,
-            cone_width: cone_width + cone_spread * ray.start,
-            cone_spread,
-        }
-    };
+    let trace_ray = |ray: WaveRay| ray.traced();
     if coherent {
         trace_rays.clear();
         trace_rays.extend(rays.clone().map(trace_ray));

@@ -169,14 +169,16 @@ pub struct PathWaves {
     lanes: lane_waves::PathLanes,
 }
 
+/// One sample of every pixel at a time: camera rays are a small share of a path tracer's
+/// rays, and 16 samples in flight cost more in memory traffic than their coherent packets
+/// save (docs/benchmarks.md).
+pub(crate) const SAMPLES_IN_FLIGHT: u32 = 1;
+
 impl WaveIntegrator for PathTracer {
     type Ray = PathRay;
     type State = PathWaves;
 
-    // One sample of every pixel at a time: camera rays are a small share of a path
-    // tracer's rays, and 16 samples in flight cost more in memory traffic than their
-    // coherent packets save (docs/benchmarks.md).
-    const SAMPLES_IN_FLIGHT: u32 = 1;
+    const SAMPLES_IN_FLIGHT: u32 = SAMPLES_IN_FLIGHT;
     const COUNTS_PATHS: bool = true;
     const DROPS_NONFINITE_SAMPLES: bool = true;
 

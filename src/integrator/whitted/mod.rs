@@ -151,6 +151,9 @@ pub(crate) fn render_tile_with(
 }
 
 /// Whitted's waves with the light `indirect` adds to every opaque lobe.
+/// Samples of a pixel traced together: a packet's worth (`camera_sample`).
+pub(crate) const SAMPLES_IN_FLIGHT: u32 = MAX_SAMPLES_IN_FLIGHT;
+
 struct WhittedShading<'a> {
     indirect: &'a dyn IndirectLight,
 }
@@ -159,8 +162,7 @@ impl WaveIntegrator for WhittedShading<'_> {
     type Ray = PathRay;
     type State = Waves;
 
-    // A packet's worth of each pixel's samples (`camera_sample`).
-    const SAMPLES_IN_FLIGHT: u32 = MAX_SAMPLES_IN_FLIGHT;
+    const SAMPLES_IN_FLIGHT: u32 = SAMPLES_IN_FLIGHT;
     const COUNTS_PATHS: bool = false;
     const DROPS_NONFINITE_SAMPLES: bool = false;
 
