@@ -19,10 +19,12 @@ starts = [s[0] for s in syms]
 def kernel_stage(start, size):
     out = subprocess.run(["objdump", "-d", "-l", "--no-show-raw-insn", f"--start-address={start}",
                           f"--stop-address={start + size}", binary], capture_output=True, text=True).stdout
-    # The path tracer's draws of its vertices' numbers are sampler code inlined into the
-    # lanes' own kernel: named by the caller, not by the sampler's lines.
-    if "integrator/path/lane_waves" in out:
-        return "integrator/path/lane_waves"
+    # The path tracer's stage kernels are named by their own file, whatever shading and
+    # sampler code they inline: its lights, its BSDF, the paths' arrival at their hits, and
+    # the draws of its vertices' numbers (sampler code inlined into the lanes' kernel).
+    for caller in ("lane_lights", "lane_bsdf", "lane_scatter", "lane_waves"):
+        if f"integrator/path/{caller}.rs" in out:
+            return f"integrator/path/{caller}"
     counts = collections.Counter(re.findall(r"src/(integrator/lanes/[a-z]+|integrator/camera_sample|sampler/[a-z]+|texture/[a-z_]+)\.rs", out))
     for name, _ in counts.most_common():
         if "soa" in name:
@@ -48,7 +50,9 @@ RULES = [
 KERNEL = {"integrator/lanes/interpolate": "2 interpolate", "integrator/lanes/footprints": "3 footprints",
           "integrator/lanes/lights": "5 lights and shadow rays", "integrator/lanes/bsdf": "6 BSDF",
           "integrator/camera_sample": "camera rays",
-          "integrator/path/lane_waves": "vertex samples (path lanes)", "sampler/scramble": "camera rays", "sampler/mod": "camera rays"}
+          "integrator/path/lane_waves": "vertex samples (path lanes)",
+          "integrator/path/lane_lights": "5 lights and shadow rays", "integrator/path/lane_bsdf": "6 BSDF",
+          "integrator/path/lane_scatter": "7 film and integrator loop", "sampler/scramble": "camera rays", "sampler/mod": "camera rays"}
 # The texture filters run inside `simd::dispatch` too (aniso::sample): any texture/ source is stage 4.
 TEXTURE_STAGE = "4 textures (lookups and filter)"
 kernel_cache = {}

@@ -39,6 +39,26 @@ pub struct OpaqueBsdf {
     pub shininess: f32,
 }
 
+impl OpaqueBsdf {
+    /// [`Bsdf::sample`] once its direction `wi` is drawn (`bsdf::sample_cosine_hemisphere`
+    /// about `n`), for lanes that draw many directions in loops of their own.
+    #[inline(always)]
+    pub fn sample_along(&self, wo: Vec3, wi: Vec3) -> Option<BsdfSample> {
+        let pdf = self.pdf(wo, wi);
+        if pdf <= 0.0 {
+            return None;
+        }
+        // Drawn by the diffuse lobe's cosine, whatever the highlight adds to its value.
+        let weight = self.eval(wo, wi) * self.n.dot(wi) / pdf;
+        Some(BsdfSample::reflected(
+            wi,
+            weight,
+            pdf,
+            LobeFlags::DIFFUSE_REFLECTION,
+        ))
+    }
+}
+
 impl Bsdf for OpaqueBsdf {
     /// Zero when the light is below the surface (`n . wi <= 0`) or the viewer is
     /// (`n . wo <= 0`).
@@ -60,19 +80,7 @@ impl Bsdf for OpaqueBsdf {
         if self.n.dot(wo) <= 0.0 {
             return None;
         }
-        let wi = sample_cosine_hemisphere(self.n, u);
-        let pdf = self.pdf(wo, wi);
-        if pdf <= 0.0 {
-            return None;
-        }
-        // Drawn by the diffuse lobe's cosine, whatever the highlight adds to its value.
-        let weight = self.eval(wo, wi) * self.n.dot(wi) / pdf;
-        Some(BsdfSample::reflected(
-            wi,
-            weight,
-            pdf,
-            LobeFlags::DIFFUSE_REFLECTION,
-        ))
+        self.sample_along(wo, sample_cosine_hemisphere(self.n, u))
     }
 
     #[inline]

@@ -195,7 +195,15 @@ pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
 /// 1997) lifted onto the hemisphere (pbrt-v4, section A.5.3).
 #[inline]
 pub fn sample_cosine_hemisphere(n: Vec3, u: Vec2) -> Vec3 {
-    let d = concentric_disk(u);
+    let (r, theta) = concentric_polar(u);
+    lift_to_hemisphere(n, disk_point(r, theta.cos(), theta.sin()))
+}
+
+/// The unit disk's point `d` lifted onto the hemisphere about the unit `n`: the second half
+/// of [`sample_cosine_hemisphere`], for lanes that take the first half's sines and cosines
+/// in a loop of their own.
+#[inline(always)]
+pub fn lift_to_hemisphere(n: Vec3, d: Vec2) -> Vec3 {
     let z = (1.0 - d.length_squared()).max(0.0).sqrt();
     let (t, b) = orthonormal_basis(n);
     (t * d.x + b * d.y + n * z).normalize()
@@ -212,19 +220,25 @@ pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
 }
 
 /// Shirley and Chiu's concentric map from the unit square to the unit disk, which keeps
-/// strata compact.
-#[inline]
-fn concentric_disk(u: Vec2) -> Vec2 {
+/// strata compact, as the polar coordinates `(r, theta)` of the disk's point ((0, 0) for
+/// its centre); [`disk_point`] makes the point.
+#[inline(always)]
+pub fn concentric_polar(u: Vec2) -> (f32, f32) {
     let o = 2.0 * u - Vec2::ONE;
     if o == Vec2::ZERO {
-        return Vec2::ZERO;
+        return (0.0, 0.0);
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
+    if o.x.abs() > o.y.abs() {
         (o.x, PI / 4.0 * (o.y / o.x))
     } else {
         (o.y, PI / 2.0 - PI / 4.0 * (o.x / o.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
+    }
+}
+
+/// The disk's point at radius `r` and the angle whose cosine and sine are given.
+#[inline(always)]
+pub fn disk_point(r: f32, cos_theta: f32, sin_theta: f32) -> Vec2 {
+    r * Vec2::new(cos_theta, sin_theta)
 }
 
 #[cfg(test)]

@@ -407,6 +407,32 @@ impl OpaqueOnly<OpaqueBsdf> {
             lobe,
         }
     }
+
+    /// [`Bsdf::sample`] once the lobe's cosine has drawn `wi`
+    /// (`bsdf::sample_cosine_hemisphere` about the lobe's normal): what the classic lobe's
+    /// sample does with it (`OpaqueBsdf::sample_along`), then the mixture's density and
+    /// weight.
+    #[inline(always)]
+    pub fn sample_along(&self, wo: Vec3, wi: Vec3) -> Option<BsdfSample> {
+        self.as_mixture(wo, self.lobe.sample_along(wo, wi)?)
+    }
+}
+
+impl<L: Bsdf> OpaqueOnly<L> {
+    /// The lobe's sample as the mixture's, the density and weight recomputed as
+    /// [`MaterialBsdf::sample`] does for a lobe chosen with probability 1.
+    #[inline(always)]
+    fn as_mixture(&self, wo: Vec3, mut sample: BsdfSample) -> Option<BsdfSample> {
+        if !sample.is_specular() {
+            sample.pdf = self.lobe.pdf(wo, sample.wi);
+            if sample.pdf.is_nan() || sample.pdf <= 0.0 {
+                return None;
+            }
+            let cos = sample.wi.dot(self.normal).abs();
+            sample.weight = self.lobe.eval(wo, sample.wi) * (cos / sample.pdf);
+        }
+        Some(sample)
+    }
 }
 
 impl OpaqueOnly<MetallicRoughnessBsdf> {
@@ -432,16 +458,7 @@ impl<L: Bsdf> Bsdf for OpaqueOnly<L> {
     #[inline(always)]
     fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let u_inner = u_lobe.clamp(0.0, 1.0 - f32::EPSILON);
-        let mut sample = self.lobe.sample(wo, u_inner, u)?;
-        if !sample.is_specular() {
-            sample.pdf = self.lobe.pdf(wo, sample.wi);
-            if sample.pdf.is_nan() || sample.pdf <= 0.0 {
-                return None;
-            }
-            let cos = sample.wi.dot(self.normal).abs();
-            sample.weight = self.lobe.eval(wo, sample.wi) * (cos / sample.pdf);
-        }
-        Some(sample)
+        self.as_mixture(wo, self.lobe.sample(wo, u_inner, u)?)
     }
 
     /// The mixture's `1 * pdf`.
@@ -588,6 +605,13 @@ mod tests {
                     OpaqueLobe::Classic(lobe) => {
                         let only = OpaqueOnly::classic(lobe);
                         compare(&mixture, &only, d, &mut u);
+                        // The lanes draw the cosine's direction apart from the sample.
+                        let (wo, u_lobe, u_dir) = (-d, u.next(), u.vec2());
+                        let drawn = crate::shading::bsdf::sample_cosine_hemisphere(lobe.n, u_dir);
+                        same_sample(
+                            mixture.sample(wo, u_lobe, u_dir),
+                            only.sample_along(wo, drawn),
+                        );
                         continue;
                     }
                     OpaqueLobe::MetallicRoughness(lobe) => OpaqueOnly::metallic_roughness(lobe),
@@ -603,8 +627,14 @@ mod tests {
             assert_eq!(mixture.pdf(wo, wi).to_bits(), only.pdf(wo, wi).to_bits());
             assert_eq!(mixture.flags(), only.flags());
             let (u_lobe, u_dir) = (u.next(), u.vec2());
-            let a = mixture.sample(wo, u_lobe, u_dir);
-            let b = only.sample(wo, u_lobe, u_dir);
+            same_sample(
+                mixture.sample(wo, u_lobe, u_dir),
+                only.sample(wo, u_lobe, u_dir),
+            );
+        }
+
+        fn same_sample(a: Option<BsdfSample>, b: Option<BsdfSample>) {
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
             match (a, b) {
                 (Some(a), Some(b)) => {
                     assert_eq!(bits(a.wi), bits(b.wi));

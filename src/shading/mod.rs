@@ -84,7 +84,7 @@ pub use alias_table::AliasTable;
 pub use area_lights::{AreaLight, AreaLightSample, AreaLights, AreaShape};
 pub use beer::{sigma_from_attenuation, transmittance};
 pub use brdf::OpaqueBsdf;
-pub use bsdf::{Bsdf, BsdfSample, LobeFlags};
+pub use bsdf::{concentric_polar, disk_point, lift_to_hemisphere, Bsdf, BsdfSample, LobeFlags};
 pub use conductor::RoughConductor;
 pub use dielectric::{DielectricSplit, SmoothDielectric};
 pub use environment_light::{EnvironmentLight, EnvironmentMap, EnvironmentSample};

@@ -25,12 +25,26 @@ use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::scene::MaterialModel;
 use crate::shading::{
-    self, Bsdf, LobeFlags, MaterialBsdf, MetallicRoughnessBsdf, OpaqueBsdf, OpaqueOnly, SpawnPoint,
+    self, Bsdf, BsdfSample, LobeFlags, MaterialBsdf, MetallicRoughnessBsdf, OpaqueBsdf, OpaqueOnly,
+    SpawnPoint,
 };
 
 /// A loop over one material's lanes, given the material and the lobe its lanes share.
 trait MaterialLoop {
     fn run<B: Bsdf>(&mut self, material: u32, lanes: Range<usize>, lobe: impl Fn(usize) -> B);
+
+    /// [`MaterialLoop::run`] for the classic opaque lobe, which draws its directions by the
+    /// cosine about its normal alone, whatever the lanes' inputs: a loop may draw them for
+    /// the whole range first.
+    #[inline(always)]
+    fn run_classic(
+        &mut self,
+        material: u32,
+        lanes: Range<usize>,
+        lobe: impl Fn(usize) -> OpaqueOnly<OpaqueBsdf>,
+    ) {
+        self.run(material, lanes, lobe)
+    }
 }
 
 /// Run `each` over every material's range of lanes with its lobe.
@@ -45,26 +59,27 @@ fn for_each_material(context: &RenderContext, lanes: &WaveLanes, each: &mut impl
         // The mixture's weights are then (1, 0, 0) exactly.
         let opaque_only = material.mirror == 0.0 && material.transmission == 0.0;
         match &material.model {
-            MaterialModel::Classic(classic) if opaque_only && classic.specular > 0.0 => {
-                each.run(index, range, |lane| {
+            MaterialModel::Classic(classic) if opaque_only && classic.specular > 0.0 => each
+                .run_classic(index, range, |lane| {
                     OpaqueOnly::classic(OpaqueBsdf {
                         n: ns.get(lane),
                         albedo: albedo.get(lane),
                         specular: classic.specular,
                         shininess: classic.shininess,
                     })
-                })
-            }
+                }),
             // `OpaqueBsdf` reads `specular` only to test it for a positive value: the same
             // lobe with a constant 0 compiles to Lambert alone.
-            MaterialModel::Classic(classic) if opaque_only => each.run(index, range, |lane| {
-                OpaqueOnly::classic(OpaqueBsdf {
-                    n: ns.get(lane),
-                    albedo: albedo.get(lane),
-                    specular: 0.0,
-                    shininess: classic.shininess,
+            MaterialModel::Classic(classic) if opaque_only => {
+                each.run_classic(index, range, |lane| {
+                    OpaqueOnly::classic(OpaqueBsdf {
+                        n: ns.get(lane),
+                        albedo: albedo.get(lane),
+                        specular: 0.0,
+                        shininess: classic.shininess,
+                    })
                 })
-            }),
+            }
             MaterialModel::MetallicRoughness(_) if opaque_only => each.run(index, range, |lane| {
                 let lobe = MetallicRoughnessBsdf::new(
                     ns.get(lane),
@@ -171,7 +186,32 @@ impl MaterialLoop for Scattering<'_> {
             if self.scatter.lit[lane] {
                 self.deliver_light(material, lane, &bsdf);
             }
-            self.sample_continuation(lane, &bsdf);
+            self.sample_continuation(lane, &bsdf, |wo, u| bsdf.sample(wo, u.lobe, u.direction));
+        }
+    }
+
+    /// The cosine's directions drawn for the whole range in three short loops (the disk's
+    /// polar coordinates, their cosines and sines, the lift onto the hemisphere), whose
+    /// lanes the processor overlaps and the compiler vectorises, then each lane as
+    /// [`MaterialLoop::run`] takes it, with its drawn direction.
+    #[inline(always)]
+    fn run_classic(
+        &mut self,
+        material: u32,
+        range: Range<usize>,
+        lobe: impl Fn(usize) -> OpaqueOnly<OpaqueBsdf>,
+    ) {
+        self.draw_cosine_directions(range.clone());
+        for lane in range {
+            if !self.scatter.active[lane] {
+                continue;
+            }
+            let bsdf = lobe(lane);
+            if self.scatter.lit[lane] {
+                self.deliver_light(material, lane, &bsdf);
+            }
+            let wi = self.scatter.cosine_wi.get(lane);
+            self.sample_continuation(lane, &bsdf, |wo, _| bsdf.sample_along(wo, wi));
         }
     }
 }
@@ -226,17 +266,50 @@ impl Scattering<'_> {
         });
     }
 
-    /// `vertex::continue_by_bsdf` up to the queue: the BSDF's sample, unless the depth,
-    /// the diffuse-bounce limit or a rough lobe's leak below the surface ends the path.
+    /// The cosine-distributed direction about each lane's shading normal
+    /// (`bsdf::sample_cosine_hemisphere`) from its vertex numbers, for the lanes of `range`
+    /// whose paths may continue along a rough lobe, into `ScatterLanes::cosine_wi`.
     #[inline(always)]
-    fn sample_continuation(&mut self, lane: usize, bsdf: &impl Bsdf) {
+    fn draw_cosine_directions(&mut self, range: Range<usize>) {
+        let (lanes, scatter) = (self.lanes, &mut *self.scatter);
+        for lane in range.clone() {
+            (scatter.disk_radius[lane], scatter.disk_angle[lane]) =
+                shading::concentric_polar(self.samples[lane].direction);
+        }
+        for lane in range.clone() {
+            if scatter.active[lane] && scatter.rough_continues[lane] {
+                let angle = scatter.disk_angle[lane];
+                (scatter.disk_cos[lane], scatter.disk_sin[lane]) = (angle.cos(), angle.sin());
+            }
+        }
+        for lane in range {
+            let (r, cos, sin) = (
+                scatter.disk_radius[lane],
+                scatter.disk_cos[lane],
+                scatter.disk_sin[lane],
+            );
+            let n = lanes.incident_shading.get(lane);
+            let wi = shading::lift_to_hemisphere(n, shading::disk_point(r, cos, sin));
+            scatter.cosine_wi.set(lane, wi);
+        }
+    }
+
+    /// `vertex::continue_by_bsdf` up to the queue: the BSDF's sample (`draw`, given the
+    /// outgoing direction and the lane's vertex numbers), unless the depth, the
+    /// diffuse-bounce limit or a rough lobe's leak below the surface ends the path.
+    #[inline(always)]
+    fn sample_continuation(
+        &mut self,
+        lane: usize,
+        bsdf: &impl Bsdf,
+        draw: impl FnOnce(Vec3, &VertexSamples) -> Option<BsdfSample>,
+    ) {
         let (lanes, scatter) = (self.lanes, &mut *self.scatter);
         if !scatter.continues[lane] && !bsdf.flags().is_specular() {
             return;
         }
-        let u = &self.samples[lane];
         let wo = -lanes.direction.get(lane);
-        let Some(sample) = bsdf.sample(wo, u.lobe, u.direction) else {
+        let Some(sample) = draw(wo, &self.samples[lane]) else {
             return;
         };
         let delta = sample.is_specular();

@@ -67,6 +67,14 @@ pub(super) struct ScatterLanes {
     pub(super) shadow: Vec<Option<ShadowRay>>,
     /// The BSDF sample the path continues along.
     pub(super) next: Vec<Option<LaneContinuation>>,
+
+    // Stage 6's drawing of the classic lobe's directions (`lane_bsdf`): the concentric
+    // disk's polar coordinates, the angle's cosine and sine, and the direction.
+    pub(super) disk_radius: Vec<f32>,
+    pub(super) disk_angle: Vec<f32>,
+    pub(super) disk_cos: Vec<f32>,
+    pub(super) disk_sin: Vec<f32>,
+    pub(super) cosine_wi: Vec3Lanes,
 }
 
 /// What the walk needs of a lane whose path continues (`vertex::queue_continuation`).
@@ -105,6 +113,10 @@ impl ScatterLanes {
             &mut self.light_distance,
             &mut self.light_pdf,
             &mut self.shadow_tfar,
+            &mut self.disk_radius,
+            &mut self.disk_angle,
+            &mut self.disk_cos,
+            &mut self.disk_sin,
         ] {
             values.resize(len, 0.0);
         }
@@ -114,6 +126,7 @@ impl ScatterLanes {
             &mut self.radiance,
             &mut self.shadow_origin,
             &mut self.shadow_direction,
+            &mut self.cosine_wi,
         ] {
             vectors.resize(len);
         }
