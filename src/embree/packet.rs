@@ -137,6 +137,39 @@ impl<const N: usize> RayPacket<N> {
         self.valid[lane] = -1;
     }
 
+    /// Every lane invalid, with the rows that every ray sets alike (time, mask, id, flags
+    /// and the cleared hit) written whole: then [`RayPacket::put_ray`] writes only a ray's
+    /// own values, and the packet is the one [`RayPacket::set_ray`] would make.
+    #[inline]
+    pub fn reset_lanes(&mut self) {
+        self.rows[TIME] = [0; N];
+        self.rows[MASK] = [u32::MAX; N];
+        self.rows[ID] = std::array::from_fn(|lane| lane as u32);
+        self.rows[FLAGS] = [0; N];
+        for row in [GEOM_ID, PRIM_ID] {
+            self.rows[row] = [INVALID_GEOMETRY_ID; N];
+        }
+        for level in 0..ffi::RTC_MAX_INSTANCE_LEVEL_COUNT as usize {
+            self.rows[INST_ID + level] = [INVALID_GEOMETRY_ID; N];
+        }
+        self.valid = [0; N];
+    }
+
+    /// Puts `ray` in `lane` of a packet made ready by [`RayPacket::reset_lanes`] and marks
+    /// the lane valid.
+    #[inline]
+    pub fn put_ray(&mut self, lane: usize, ray: &Ray) {
+        self.set_f(ORG_X, lane, ray.origin.x);
+        self.set_f(ORG_Y, lane, ray.origin.y);
+        self.set_f(ORG_Z, lane, ray.origin.z);
+        self.set_f(TNEAR, lane, ray.tnear);
+        self.set_f(DIR_X, lane, ray.direction.x);
+        self.set_f(DIR_Y, lane, ray.direction.y);
+        self.set_f(DIR_Z, lane, ray.direction.z);
+        self.set_f(TFAR, lane, ray.tfar);
+        self.valid[lane] = -1;
+    }
+
     /// Marks `lane` valid (traced) or invalid (left untouched by traces).
     #[inline]
     pub fn set_valid(&mut self, lane: usize, valid: bool) {
@@ -504,6 +537,34 @@ mod tests {
         assert!(p.hit(5).is_none());
         p.set_valid(5, false);
         assert!(!p.is_valid(5));
+    }
+
+    /// A packet reset and filled ray by ray holds, in every lane it fills, what `set_ray`
+    /// writes, its other lanes invalid, whatever the packet held before.
+    #[test]
+    fn reset_and_put_rays_match_set_ray() {
+        let ray = |lane: usize| {
+            let x = lane as f32;
+            Ray::segment(
+                Vec3::new(x, -2.0, 3.5),
+                Vec3::new(0.0, 0.6, 0.8),
+                0.25 * x,
+                9.0 + x,
+            )
+        };
+        let mut expected = RayPacket::<16>::new();
+        (0..11).for_each(|lane| expected.set_ray(lane, &ray(lane)));
+        let mut packet = RayPacket::<16>::new();
+        // Leftovers of a fuller packet, hit and all.
+        (0..16).for_each(|lane| packet.set_ray(lane, &ray(lane + 20)));
+        packet.rows[GEOM_ID] = [3; 16];
+        packet.rows[TIME] = [7; 16];
+        packet.reset_lanes();
+        (0..11).for_each(|lane| packet.put_ray(lane, &ray(lane)));
+        assert_eq!(packet.valid, expected.valid);
+        for (row, (got, want)) in packet.rows.iter().zip(&expected.rows).enumerate() {
+            assert_eq!(got[..11], want[..11], "row {row}");
+        }
     }
 
     /// An error Embree reports while a trace runs (here provoked from inside a filter

@@ -650,17 +650,15 @@ fn fill_packet(
     packet: &mut RayPacket<16>,
     payload: &mut [RayPayload; 16],
 ) -> usize {
+    packet.reset_lanes();
     let mut lanes = 0;
     for (lane, ray) in rays.take(16).enumerate() {
-        packet.set_ray(lane, &embree_ray(&ray));
+        packet.put_ray(lane, &embree_ray(&ray));
         payload[lane] = RayPayload {
             cone_width: ray.cone_width,
             cone_spread: ray.cone_spread,
         };
         lanes = lane + 1;
-    }
-    for lane in lanes..16 {
-        packet.set_valid(lane, false);
     }
     lanes
 }
