@@ -33,9 +33,10 @@ def kernel_stage(start, size):
     return "?"
 
 RULES = [
-    ("picking and ordering lanes", ["lane_waves::pick_lanes", "LanePicks::place", "lay_out_by_material"]),
+    ("picking and ordering lanes", ["lane_waves::pick_lanes", "LanePicks::place", "lay_out_by_material", "LaneSurface"]),
     ("1 gather", ["lanes::gather"]),
-    ("2 interpolate", ["lanes::interpolate", "surface_hit", "spawn_point", "on_triangle", "SurfaceLookup"]),
+    ("2 interpolate", ["lanes::interpolate", "surface_hit", "spawn_point", "on_triangle", "on_sphere", "lat_long_frame",
+                       "SurfaceLookup"]),
     ("3 footprints", ["lanes::footprints", "texture_gradients", "project_cone", "footprint::"]),
     ("4 textures (lookups and filter)", ["lanes::textures", "texture::", "surface_textures", "sample_binding", "surface_inputs", "mip"]),
     ("5 lights and shadow rays", ["lanes::lights", "path::lane_lights", "shading::lights", "sample_li", "shadow_ray", "queue_shadow",

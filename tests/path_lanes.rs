@@ -12,10 +12,12 @@ use conetrace::render::{self, RenderControl, RenderOptions};
 use conetrace::scene::load::load_scene;
 
 /// Scenes with textured, untextured, metallic-roughness, mirror and glass materials (a
-/// glass lens mesh, whose hits the lanes shade with the whole mixture of lobes), point,
-/// area and environment lights, and absorbing glass: what the lanes cover and what they
-/// leave to the scalar path.
-const SCENES: [&str; 8] = [
+/// glass lens mesh, whose hits the lanes shade with the whole mixture of lobes), on meshes
+/// and on spheres (diffuse, textured, mirror and glass spheres), emissive quads seen
+/// directly, through delta lobes and by BSDF-sampled rays, point, area and environment
+/// lights, and absorbing glass: what the lanes cover and what they leave to the scalar
+/// path.
+const SCENES: [&str; 10] = [
     "assets/scenes/path_textured.toml",
     "assets/scenes/teapot_textured.toml",
     "assets/scenes/teapot_mirror.toml",
@@ -24,6 +26,8 @@ const SCENES: [&str; 8] = [
     "assets/scenes/bench/untextured_specular.toml",
     "assets/scenes/default.toml",
     "assets/scenes/fp_magnifier.toml",
+    "assets/scenes/fp_convex.toml",
+    "assets/scenes/bench/near_light.toml",
 ];
 
 /// The film of `scene` rendered small by the path tracer with the settings `tracer`, in

@@ -170,16 +170,6 @@ impl SurfaceLookup {
         }
     }
 
-    /// The mesh (index into `SceneDescription::meshes`) `hit` lies on, and its material;
-    /// `None` for spheres and patches.
-    #[inline]
-    pub fn mesh_at(&self, hit: &TraceHit) -> Option<(usize, usize)> {
-        match self.geometries[hit.geometry as usize] {
-            GeometryRef::Mesh(index) => Some((index, self.scene.meshes[index].material)),
-            _ => None,
-        }
-    }
-
     /// The index of the material at `hit`.
     #[inline]
     fn material_index(&self, hit: &TraceHit) -> usize {

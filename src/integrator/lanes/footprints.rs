@@ -1,14 +1,18 @@
 //! Stage 3: footprints at the hits and the texture gradients they give, for the lanes that
 //! read a texture (`footprint::Footprint::texture_gradients` over lane arrays: the cone's
 //! circle projected onto the tangent plane as an ellipse, whose axes map to st through the
-//! triangle's barycentric derivatives).
+//! triangle's barycentric derivatives, or on spheres through dP/ds and dP/dt).
+
+use std::ops::Range;
 
 use glam::{Vec2, Vec3};
 
 use super::soa::corner_lanes_2;
 use super::WaveLanes;
-use crate::footprint::robust::{unit_direction, unit_normal};
-use crate::footprint::{general_st_offset, project_cone_to_ellipse, Footprint, TextureGradients};
+use crate::footprint::robust::{unit_direction, unit_normal, unit_or};
+use crate::footprint::{
+    general_st_offset, lat_long_frame, project_cone_to_ellipse, Footprint, TextureGradients,
+};
 use crate::simd;
 
 /// A footprint at a hit as the lanes take it.
@@ -48,12 +52,13 @@ pub(crate) fn footprint_at_hit(footprint: &Footprint) -> Option<LaneFootprint> {
 /// the projected cone mapped to st, the stretch clamped to `max_aniso`.
 ///
 /// One vector loop ([`barycentric_gradients`]) does every lane on a triangle with usable
-/// barycentric offsets; the few on degenerate triangles are done again, lane by lane,
-/// through dP/ds and dP/dt.
+/// barycentric offsets, another ([`sphere_gradients`]) every sphere lane; the few on
+/// degenerate triangles are done again, lane by lane, through dP/ds and dP/dt.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn texture_gradients(lanes: &mut WaveLanes, max_aniso: f32) {
     let len = lanes.len();
+    let (triangles, spheres) = lanes.sections();
     if lanes.cone_width[..len].iter().all(Option::is_none) {
         // Point samples only (mip0, or no textured lane): no ellipse is projected.
         super::refill(&mut lanes.gradients, len, [0.0; 4]);
@@ -66,12 +71,19 @@ pub(crate) fn texture_gradients(lanes: &mut WaveLanes, max_aniso: f32) {
     simd::run_at(
         lanes.level(),
         #[inline(always)]
-        || barycentric_gradients(lanes, &cone_width[..len], max_aniso),
+        || {
+            barycentric_gradients(lanes, &cone_width[triangles.clone()], max_aniso);
+            sphere_gradients(lanes, &cone_width, spheres.clone(), max_aniso);
+        },
     );
     for (lane, width) in cone_width[..len].iter().enumerate() {
         if lanes.degenerate[lane] {
             let (dpdx, dpdy) = ellipse_axes(lanes, lane, width.unwrap_or(0.0), max_aniso);
-            let g = triangle_gradients(lanes, lane, dpdx, dpdy);
+            let g = if triangles.contains(&lane) {
+                triangle_gradients(lanes, lane, dpdx, dpdy)
+            } else {
+                unframed_sphere_gradients(lanes, lane, dpdx, dpdy)
+            };
             lanes.gradients[lane] = [g.dsdx, g.dtdx, g.dsdy, g.dtdy];
         }
     }
@@ -91,7 +103,7 @@ fn ellipse_axes(lanes: &WaveLanes, lane: usize, width: f32, max_aniso: f32) -> (
 /// `lanes.degenerate` the textured lanes whose triangle does not.
 #[inline(always)]
 fn barycentric_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_aniso: f32) {
-    let len = lanes.len();
+    let len = cone_width.len();
     let direction = lanes.direction.lanes(len);
     let normal = lanes.geometric_normal.lanes(len);
     let (e1, e2) = (lanes.edge1.lanes(len), lanes.edge2.lanes(len));
@@ -127,6 +139,67 @@ fn barycentric_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_
         };
         degenerate[lane] = textured && x_offsets.is_none();
     }
+}
+
+/// The gradients of every sphere lane `spheres` with dP/ds or dP/dt
+/// (`footprint::surface_gradients` on a sphere, its first case), and in `lanes.degenerate`
+/// the textured lanes without either.
+#[inline(always)]
+fn sphere_gradients(
+    lanes: &mut WaveLanes,
+    cone_width: &[Option<f32>],
+    spheres: Range<usize>,
+    max_aniso: f32,
+) {
+    let cone_width = &cone_width[spheres.clone()];
+    let direction = lanes.direction.range(spheres.clone());
+    let normal = lanes.geometric_normal.range(spheres.clone());
+    let (dpds, dpdt) = (
+        lanes.dpds.range(spheres.clone()),
+        lanes.dpdt.range(spheres.clone()),
+    );
+    let has_st = &lanes.has_st[spheres.clone()];
+    let gradients = &mut lanes.gradients[spheres.clone()];
+    let degenerate = &mut lanes.degenerate[spheres];
+    for k in 0..cone_width.len() {
+        let textured = cone_width[k].is_some() && has_st[k];
+        let d = unit_direction(direction.get(k));
+        let n = unit_normal(normal.get(k), d);
+        let width = cone_width[k].unwrap_or(0.0);
+        let (dpdx, dpdy) = project_cone_to_ellipse(width, d, n, max_aniso);
+        let (dpds, dpdt) = (dpds.get(k), dpdt.get(k));
+        let framed = dpds != Vec3::ZERO || dpdt != Vec3::ZERO;
+        let g = TextureGradients::from_axes(
+            general_st_offset(dpds, dpdt, dpdx),
+            general_st_offset(dpds, dpdt, dpdy),
+        );
+        gradients[k] = if textured && framed {
+            [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
+        } else {
+            [0.0; 4]
+        };
+        degenerate[k] = textured && !framed;
+    }
+}
+
+/// The st axes of the world-space footprint axes `dpdx`, `dpdy` on lane `lane`'s sphere
+/// when its hit has neither dP/ds nor dP/dt: the lat-long frame at its point
+/// (`footprint::surface_gradients`' fallback).
+fn unframed_sphere_gradients(
+    lanes: &WaveLanes,
+    lane: usize,
+    dpdx: Vec3,
+    dpdy: Vec3,
+) -> TextureGradients {
+    let n = unit_or(
+        lanes.sphere_point.get(lane) - lanes.center.get(lane),
+        Vec3::Y,
+    );
+    let (_, dpds, dpdt) = lat_long_frame(n, lanes.radius[lane]);
+    TextureGradients::from_axes(
+        general_st_offset(dpds, dpdt, dpdx),
+        general_st_offset(dpds, dpdt, dpdy),
+    )
 }
 
 /// The st axes of the world-space footprint axes `dpdx`, `dpdy` on lane `lane`'s triangle:

@@ -1,12 +1,13 @@
-//! Stage 1: the vertex data of each lane's triangle, gathered into lane arrays (one array
-//! per coordinate). Indexed loads from the meshes: the one stage that cannot be a straight
-//! vector loop.
+//! Stage 1: the vertex data of each lane's triangle, and the centre and radius of each
+//! lane's sphere, gathered into lane arrays (one array per coordinate). Indexed loads from
+//! the scene: the one stage that cannot be a straight vector loop.
 
 use super::{refill, WaveLanes};
-use crate::scene::TriangleMesh;
+use crate::scene::{Sphere, TriangleMesh};
 
-/// Gather every lane's triangle: positions always, vertex normals (zero where the mesh has
-/// none), and texture coordinates for lanes that want them and whose mesh has them.
+/// Gather every triangle lane's triangle: positions always, vertex normals (zero where the
+/// mesh has none), and texture coordinates for lanes that want them and whose mesh has
+/// them.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn gather_triangles(lanes: &mut WaveLanes, meshes: &[TriangleMesh]) {
@@ -15,9 +16,9 @@ pub(crate) fn gather_triangles(lanes: &mut WaveLanes, meshes: &[TriangleMesh]) {
         array.refill(len);
     }
     refill(&mut lanes.has_st, len, false);
-    for lane in 0..len {
+    for lane in lanes.sections().0 {
         let mesh = &meshes[lanes.mesh[lane] as usize];
-        let corners = mesh.triangles[lanes.triangle[lane] as usize].map(|i| i as usize);
+        let corners = mesh.triangles[lanes.primitive[lane] as usize].map(|i| i as usize);
         for (corner, &i) in corners.iter().enumerate() {
             lanes.p[corner].set(lane, mesh.positions[i]);
         }
@@ -37,14 +38,32 @@ fn gather_texture_coordinates(lanes: &mut WaveLanes, meshes: &[TriangleMesh]) {
     for array in &mut lanes.st_vertices {
         array.refill(len);
     }
-    for lane in 0..len {
+    for lane in lanes.sections().0 {
         if !lanes.has_st[lane] {
             continue;
         }
         let mesh = &meshes[lanes.mesh[lane] as usize];
-        let corners = mesh.triangles[lanes.triangle[lane] as usize].map(|i| i as usize);
+        let corners = mesh.triangles[lanes.primitive[lane] as usize].map(|i| i as usize);
         for (corner, &i) in corners.iter().enumerate() {
             lanes.st_vertices[corner].set(lane, mesh.st[i]);
         }
+    }
+}
+
+/// Gather every sphere lane's sphere: its centre and radius. Every sphere has texture
+/// coordinates (its lat-long parameterisation), so a lane has them when it wants them.
+/// Runs after [`gather_triangles`], which clears `has_st`.
+// Not inlined: one call per wave, and `perf` attributes each stage's time to it.
+#[inline(never)]
+pub(crate) fn gather_spheres(lanes: &mut WaveLanes, spheres: &[Sphere]) {
+    let len = lanes.len();
+    lanes.center.resize(len);
+    lanes.radius.resize(len, 0.0);
+    lanes.has_st.resize(len, false);
+    for lane in lanes.sections().1 {
+        let sphere = &spheres[lanes.primitive[lane] as usize];
+        lanes.center.set(lane, sphere.center);
+        lanes.radius[lane] = sphere.radius;
+        lanes.has_st[lane] = lanes.wants_st[lane];
     }
 }

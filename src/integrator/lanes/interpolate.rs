@@ -1,15 +1,20 @@
-//! Stage 2: what the hits' barycentrics give, over lane arrays: the point with its rounding
-//! error bound, the triangle's edges and normals, the shading normal and the texture
-//! coordinates, computed as `render::prepared::SurfaceLookup::surface_hit` does.
+//! Stage 2: what the hits give, over lane arrays, computed as
+//! `render::prepared::SurfaceLookup::surface_hit` does: on triangles, from the
+//! barycentrics, the point with its rounding error bound, the triangle's edges and normals,
+//! the shading normal and the texture coordinates; on spheres, the ray's point projected
+//! onto the sphere, its normal, and the lat-long coordinates with dP/ds, dP/dt.
 //!
-//! Each loop reads and writes one array per coordinate and has no branch but selects, so
-//! it runs 8 or 16 lanes per instruction at the level `simd::dispatch` picks; the
-//! operations and their order are the scalar path's, so every level gives its bits.
+//! Each triangle loop reads and writes one array per coordinate and has no branch but
+//! selects, so it runs 8 or 16 lanes per instruction at the level `simd::dispatch` picks;
+//! the operations and their order are the scalar path's, so every level gives its bits.
+
+use std::ops::Range;
 
 use glam::{Vec2, Vec3};
 
 use super::soa::{corner_lanes, corner_lanes_2, normalize_or, select};
 use super::WaveLanes;
+use crate::footprint::lat_long_frame;
 use crate::shading::SpawnPoint;
 use crate::simd;
 
@@ -18,6 +23,7 @@ use crate::simd;
 #[inline(never)]
 pub(crate) fn interpolate(lanes: &mut WaveLanes) {
     let len = lanes.len();
+    let (triangles, spheres) = lanes.sections();
     for array in [
         &mut lanes.position,
         &mut lanes.error,
@@ -34,11 +40,23 @@ pub(crate) fn interpolate(lanes: &mut WaveLanes) {
         lanes.level(),
         #[inline(always)]
         || {
-            spawn_points(lanes, len);
-            normals(lanes, len);
-            texture_coordinates(lanes, len);
+            let triangles = triangles.end;
+            spawn_points(lanes, triangles);
+            normals(lanes, triangles);
+            texture_coordinates(lanes, triangles);
         },
     );
+    for array in [&mut lanes.sphere_point, &mut lanes.dpds, &mut lanes.dpdt] {
+        array.resize(len);
+    }
+    if !spheres.is_empty() {
+        simd::run_at(
+            lanes.level(),
+            #[inline(always)]
+            || sphere_points(lanes, spheres.clone()),
+        );
+        sphere_frames(lanes, spheres);
+    }
 }
 
 /// The point and the bound on its error (`SpawnPoint::on_triangle`, in double precision).
@@ -122,5 +140,49 @@ fn texture_coordinates(lanes: &mut WaveLanes, len: usize) {
         let st = if has_st[lane] { st } else { Vec2::ZERO };
         s[lane] = st.x;
         t[lane] = st.y;
+    }
+}
+
+/// The ray's point projected onto the sphere, and its normal (`SpawnPoint::on_sphere`);
+/// the spawn point projected from that point once more, as `SurfaceHit::spawn_point`
+/// projects it. A sphere's shading normal is its geometric one.
+#[inline(always)]
+fn sphere_points(lanes: &mut WaveLanes, spheres: Range<usize>) {
+    let origin = lanes.origin.range(spheres.clone());
+    let direction = lanes.direction.range(spheres.clone());
+    let t = &lanes.t[spheres.clone()];
+    let center = lanes.center.range(spheres.clone());
+    let radius = &lanes.radius[spheres.clone()];
+    let mut point = lanes.sphere_point.range_mut(spheres.clone());
+    let mut position = lanes.position.range_mut(spheres.clone());
+    let mut error = lanes.error.range_mut(spheres.clone());
+    let mut geometric_normal = lanes.geometric_normal.range_mut(spheres.clone());
+    let mut shading_normal = lanes.shading_normal.range_mut(spheres.clone());
+    for k in 0..t.len() {
+        let (c, r) = (center.get(k), radius[k]);
+        let near = origin.get(k) + direction.get(k) * t[k];
+        let (surface, normal) = SpawnPoint::on_sphere(c, r, near);
+        let spawn = SpawnPoint::on_sphere(c, r, surface.position).0;
+        point.set(k, surface.position);
+        position.set(k, spawn.position);
+        error.set(k, spawn.error);
+        geometric_normal.set(k, normal);
+        shading_normal.set(k, normal);
+    }
+}
+
+/// Lat-long texture coordinates and dP/ds, dP/dt of the sphere lanes that want texture
+/// coordinates (`footprint::lat_long_frame`), zero elsewhere. Lane by lane: the frame's
+/// inverse trigonometric functions are calls, which no vector loop would run.
+fn sphere_frames(lanes: &mut WaveLanes, spheres: Range<usize>) {
+    for lane in spheres {
+        let (st, dpds, dpdt) = if lanes.has_st[lane] {
+            lat_long_frame(lanes.geometric_normal.get(lane), lanes.radius[lane])
+        } else {
+            (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
+        };
+        lanes.st.set(lane, st);
+        lanes.dpds.set(lane, dpds);
+        lanes.dpdt.set(lane, dpdt);
     }
 }

@@ -1,14 +1,18 @@
-//! Shading a wave's triangle hits together, stage by stage, over lane arrays (structure of
-//! arrays, one array per coordinate): each stage is a plain loop over slices that reads the
-//! arrays the stages before it wrote, so no per-ray record (`SurfaceHit` with its `Patch`,
-//! `SurfaceInputs`, `MaterialBsdf`) is built or copied between stages, and the arrays live
-//! in the per-thread state, reused from wave to wave.
+//! Shading a wave's hits on triangles and analytic spheres together, stage by stage, over
+//! lane arrays (structure of arrays, one array per coordinate): each stage is a plain loop
+//! over slices that reads the arrays the stages before it wrote, so no per-ray record
+//! (`SurfaceHit` with its `Patch`, `SurfaceInputs`, `MaterialBsdf`) is built or copied
+//! between stages, and the arrays live in the per-thread state, reused from wave to wave.
 //!
-//! The lanes are ordered by material as they are placed ([`picks::LanePicks::place`]), so a
-//! material's lanes are one range of every array. The stages, in order:
-//! 1. [`gather`]: the triangles' vertex positions, normals and texture coordinates;
+//! The lanes are placed in two sections, the triangle lanes and then the sphere lanes
+//! (from [`WaveLanes::spheres_start`]), each ordered by material
+//! ([`picks::LanePicks::place`]), so a material's lanes on one kind of surface are one range
+//! of every array and stages 1-3 run one loop per kind. The stages, in order:
+//! 1. [`gather`]: the triangles' vertex positions, normals and texture coordinates, the
+//!    spheres' centres and radii;
 //! 2. [`interpolate`]: the point and its rounding-error bound, the geometric and shading
-//!    normals, texture coordinates, and the triangle's barycentric derivatives;
+//!    normals, texture coordinates, and the triangle's barycentric derivatives or the
+//!    sphere's dP/ds, dP/dt;
 //! 3. [`footprints`]: each textured lane's footprint width at the hit and its texture
 //!    gradients;
 //! 4. [`textures`]: the lookups, each texture binding read for its material's range in one
@@ -51,12 +55,13 @@ use crate::texture::TextureQuery;
 /// What the lanes need to know of a material, computed once per render.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct LaneMaterial {
-    /// Whether the lanes shade this material: an opaque lobe that spawns no ray in this
-    /// render, emits nothing and bends no normal (see [`LaneMaterial::of`]).
+    /// Whether Whitted's lanes shade this material: an opaque lobe that spawns no ray in
+    /// this render, emits nothing and bends no normal (see [`LaneMaterial::of`]).
     pub covers: bool,
     /// Whether the path tracer's lanes reconstruct and texture this material's hits: it
-    /// emits nothing and bends no normal (see [`LaneMaterial::of`]); its BSDF, whichever
-    /// lobes it has, is sampled from the lanes' inputs.
+    /// bends no normal and reads no emission texture (see [`LaneMaterial::of`]); its BSDF,
+    /// whichever lobes it has, is sampled from the lanes' inputs, and its emission added as
+    /// the scalar path adds it.
     pub path_covers: bool,
     /// Whether shading reads a texture (`render::surface_textures::reads_textures`).
     pub textured: bool,
@@ -66,17 +71,20 @@ pub(crate) struct LaneMaterial {
 }
 
 impl LaneMaterial {
-    /// Emissive materials (the emission test needs the hit's side) and normal-mapped ones
-    /// (their tangent frame needs dP/ds, dP/dt) take the scalar path in every integrator.
-    /// Whitted's lanes also leave out those whose mirror or dielectric lobe spawns rays in
-    /// this render, and an opaque weight of zero (nothing to light).
+    /// Normal-mapped materials (their tangent frame needs dP/ds, dP/dt) and emission-textured
+    /// emitters (the lanes read no emission texture) take the scalar path in every
+    /// integrator. Whitted's lanes also leave out every emitter (its emission test needs
+    /// the hit's side), those whose mirror or dielectric lobe spawns rays in this render,
+    /// and an opaque weight of zero (nothing to light).
     pub(crate) fn of(context: &RenderContext, material: &Material) -> LaneMaterial {
         let effects = &context.effects;
         let opaque_weight = (1.0 - material.mirror) * (1.0 - material.transmission);
         let spawns = (effects.mirror_reflection && material.mirror > 0.0)
             || (effects.refraction && material.transmission > 0.0);
-        let path_covers = material.emission == Vec3::ZERO && material.normal_texture.is_none();
-        let covers = path_covers && !spawns && opaque_weight > 0.0;
+        let emits = material.emission != Vec3::ZERO;
+        let path_covers =
+            material.normal_texture.is_none() && !(emits && material.emission_texture.is_some());
+        let covers = path_covers && !emits && !spawns && opaque_weight > 0.0;
         LaneMaterial {
             covers,
             path_covers,
@@ -105,15 +113,23 @@ pub(crate) struct WaveLanes {
     /// Index of each lane's ray and hit in the wave.
     pub wave_index: Vec<u32>,
     pub material: Vec<u32>,
-    /// The mesh (index into `SceneDescription::meshes`) and triangle of each lane.
+    /// The mesh (index into `SceneDescription::meshes`) of each triangle lane.
     pub mesh: Vec<u32>,
-    pub triangle: Vec<u32>,
+    /// The triangle of the lane's mesh, or the sphere (index into
+    /// `SceneDescription::spheres`).
+    pub primitive: Vec<u32>,
+    /// Barycentrics as the intersector reported them (triangle lanes).
     pub u: Vec<f32>,
     pub v: Vec<f32>,
     /// Hit distance along the ray, as the intersector reported it.
     pub t: Vec<f32>,
+    /// The ray's origin (read by sphere lanes, whose point is projected from the ray's).
+    pub origin: Vec3Lanes,
     /// Unit ray direction.
     pub direction: Vec3Lanes,
+    /// Lanes `spheres_start..len()` lie on spheres, those before it on triangles: each
+    /// section ordered by material, so stages 1-3 run one straight loop per kind of surface.
+    pub spheres_start: usize,
     /// Whether the lane needs texture coordinates (its material reads a texture, or the
     /// uv AOV is written from it).
     pub wants_st: Vec<bool>,
@@ -130,8 +146,12 @@ pub(crate) struct WaveLanes {
     pub n: [Vec3Lanes; 3],
     /// Vertex texture coordinates, read only for textured lanes.
     pub st_vertices: [Vec2Lanes; 3],
-    /// Whether the lane wants texture coordinates and its mesh has them.
+    /// Whether the lane wants texture coordinates and its mesh has them (every sphere has
+    /// them).
     pub has_st: Vec<bool>,
+    /// Sphere lanes: the sphere's centre and radius.
+    pub center: Vec3Lanes,
+    pub radius: Vec<f32>,
 
     // Stage 2.
     pub position: Vec3Lanes,
@@ -145,12 +165,20 @@ pub(crate) struct WaveLanes {
     pub geometric_normal: Vec3Lanes,
     pub shading_normal: Vec3Lanes,
     pub st: Vec2Lanes,
+    /// Sphere lanes: the ray's point projected onto the sphere (`SurfaceHit::position`),
+    /// from which `position`, the spawn point, is projected once more as
+    /// `SurfaceHit::spawn_point` projects it.
+    pub sphere_point: Vec3Lanes,
+    /// Sphere lanes that want texture coordinates: dP/ds and dP/dt of the lat-long
+    /// parameterisation (`footprint::lat_long_frame`).
+    pub dpds: Vec3Lanes,
+    pub dpdt: Vec3Lanes,
 
     // Stage 3.
     /// `[ds/dx, dt/dx, ds/dy, dt/dy]`, zero for a point sample.
     pub gradients: Vec<[f32; 4]>,
-    /// Textured lanes on triangles without barycentric offsets (degenerate), whose
-    /// gradients take the lane-by-lane path.
+    /// Textured lanes on triangles without barycentric offsets (degenerate), or on spheres
+    /// without dP/ds and dP/dt, whose gradients take the lane-by-lane path.
     pub degenerate: Vec<bool>,
 
     // Stage 4.
@@ -187,6 +215,9 @@ pub(crate) struct WaveLanes {
     material_counts: Vec<usize>,
     /// The lane of each picked hit, in the wave's order (`lay_out_by_material`).
     lane_of_pick: Vec<u32>,
+    /// Each picked hit's place in the layout: its material, counted after every material's
+    /// triangle lanes when it lies on a sphere.
+    section_keys: Vec<u32>,
 }
 
 impl WaveLanes {
@@ -224,52 +255,84 @@ impl WaveLanes {
         self.wave_index.clear();
         self.material.clear();
         self.mesh.clear();
-        self.triangle.clear();
+        self.primitive.clear();
         self.u.clear();
         self.v.clear();
         self.t.clear();
+        self.origin.clear();
         self.direction.clear();
+        self.spheres_start = 0;
         self.throughput.clear();
         self.wants_st.clear();
         self.cone_width.clear();
     }
 
-    /// Lay out one lane for each picked hit, `materials` holding their materials in the
-    /// wave's order: the lanes are ordered by material (stably), the runs recorded in
-    /// `material_runs`, and `lane_of_pick[k]` set to the lane of the `k`-th picked hit, for
-    /// [`picks::LanePicks::place`] to fill.
-    fn lay_out_by_material(&mut self, materials: &[u32]) {
+    /// Lay out one lane for each picked hit, `materials` holding their materials and
+    /// `on_sphere` whether they lie on a sphere, in the wave's order: the triangle lanes
+    /// first and then the sphere lanes (from `spheres_start`), each section ordered by
+    /// material (stably), the runs recorded in `material_runs`, and `lane_of_pick[k]` set
+    /// to the lane of the `k`-th picked hit, for [`picks::LanePicks::place`] to fill.
+    fn lay_out_by_material(&mut self, materials: &[u32], on_sphere: &[bool]) {
+        let scene_materials = self.materials.len();
+        self.section_keys.clear();
+        self.section_keys.extend(
+            materials
+                .iter()
+                .zip(on_sphere)
+                .map(|(&m, &sphere)| m + if sphere { scene_materials as u32 } else { 0 }),
+        );
         count_material_runs(
             &mut self.material_counts,
             &mut self.material_runs,
-            self.materials.len(),
-            materials,
+            scene_materials,
+            &self.section_keys,
         );
+        self.spheres_start = on_sphere.iter().filter(|&&sphere| !sphere).count();
         self.lane_of_pick.clear();
-        self.lane_of_pick.extend(materials.iter().map(|&m| {
-            let next = &mut self.material_counts[m as usize];
-            *next += 1;
-            (*next - 1) as u32
-        }));
+        self.lane_of_pick
+            .extend(self.section_keys.iter().map(|&key| {
+                let next = &mut self.material_counts[key as usize];
+                *next += 1;
+                (*next - 1) as u32
+            }));
         let len = materials.len();
         for values in [
             &mut self.wave_index,
             &mut self.material,
             &mut self.mesh,
-            &mut self.triangle,
+            &mut self.primitive,
         ] {
             values.resize(len, 0);
         }
         for values in [&mut self.u, &mut self.v, &mut self.t] {
             values.resize(len, 0.0);
         }
+        self.origin.resize(len);
         self.direction.resize(len);
         self.throughput.resize(len);
         self.wants_st.resize(len, false);
         self.cone_width.resize(len, None);
     }
 
-    /// Run `run` of the ordered lanes: its material and its range of lanes.
+    /// The lanes on triangles and the lanes on spheres.
+    #[inline]
+    pub(crate) fn sections(&self) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+        (0..self.spheres_start, self.spheres_start..self.len())
+    }
+
+    /// The point on the surface at lane `lane` (`SurfaceHit::position`): the spawn point's
+    /// on triangles, the first projection of the ray's point on spheres.
+    #[inline]
+    pub(crate) fn surface_point(&self, lane: usize) -> Vec3 {
+        if lane < self.spheres_start {
+            self.position.get(lane)
+        } else {
+            self.sphere_point.get(lane)
+        }
+    }
+
+    /// Run `run` of the ordered lanes: its material and its range of lanes (a material
+    /// with lanes on both kinds of surface has a run in each section).
     pub(crate) fn material_run(&self, run: usize) -> (u32, std::ops::Range<usize>) {
         let start = match run {
             0 => 0,
@@ -280,27 +343,27 @@ impl WaveLanes {
     }
 }
 
-/// The `(material, end)` runs of lanes with `materials` once ordered by material into
-/// `runs`, and in `counts` (one per material of the scene) where each material's first lane
-/// goes.
+/// The `(material, end)` runs of lanes with section keys `keys` (a material, plus
+/// `scene_materials` on spheres) once ordered by key into `runs`, and in `counts` (one per
+/// key) where each key's first lane goes.
 fn count_material_runs(
     counts: &mut Vec<usize>,
     runs: &mut Vec<(u32, usize)>,
     scene_materials: usize,
-    materials: &[u32],
+    keys: &[u32],
 ) {
     counts.clear();
-    counts.resize(scene_materials, 0);
-    for &m in materials {
-        counts[m as usize] += 1;
+    counts.resize(2 * scene_materials, 0);
+    for &key in keys {
+        counts[key as usize] += 1;
     }
     runs.clear();
     let mut end = 0;
-    for (material, count) in counts.iter_mut().enumerate() {
+    for (key, count) in counts.iter_mut().enumerate() {
         let start = end;
         end += *count;
         if *count > 0 {
-            runs.push((material as u32, end));
+            runs.push(((key % scene_materials) as u32, end));
         }
         *count = start;
     }

@@ -1,21 +1,54 @@
 //! The hits of a wave an integrator hands to the lanes: picked in the wave's order, then
-//! each placed straight at its lane, the lanes ordered by material (a counting sort,
-//! stable: the lanes of one material keep the wave's order). Placing each hit once costs
-//! nothing, where pushing the lanes and then permuting them copies every array again.
+//! each placed straight at its lane, the triangle lanes before the sphere lanes and each
+//! section ordered by material (a counting sort, stable: the lanes of one material keep the
+//! wave's order). Placing each hit once costs nothing, where pushing the lanes and then
+//! permuting them copies every array again.
 
 use glam::Vec3;
 
 use super::{LaneMaterial, WaveLanes};
+use crate::render::prepared::{GeometryRef, SurfaceLookup};
 use crate::render::tracer::TraceHit;
 
-/// What a lane needs of its ray and hit, besides the pick's material and mesh.
+/// The kind of surface a lane's hit lies on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LaneSurface {
+    /// A triangle of this mesh (index into `SceneDescription::meshes`).
+    Mesh(usize),
+    /// One of the scene's analytic spheres.
+    Sphere,
+}
+
+impl LaneSurface {
+    /// The surface `hit` lies on and its material, if the lanes reconstruct hits on it
+    /// (triangles and spheres; curved and height patches take the scalar path).
+    #[inline]
+    pub(crate) fn at(surfaces: &SurfaceLookup, hit: &TraceHit) -> Option<(LaneSurface, usize)> {
+        let scene = &surfaces.scene;
+        match surfaces.geometries[hit.geometry as usize] {
+            GeometryRef::Mesh(index) => {
+                Some((LaneSurface::Mesh(index), scene.meshes[index].material))
+            }
+            GeometryRef::Spheres => Some((
+                LaneSurface::Sphere,
+                scene.spheres[hit.primitive as usize].material,
+            )),
+            GeometryRef::Patches | GeometryRef::HeightPatches => None,
+        }
+    }
+}
+
+/// What a lane needs of its ray and hit, besides the pick's material and surface.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LaneHit {
-    pub triangle: u32,
+    /// The triangle of the mesh, or the sphere.
+    pub primitive: u32,
     /// Barycentrics as the intersector reported them.
     pub uv: (f32, f32),
     /// Hit distance along the ray.
     pub t: f32,
+    /// The ray's origin.
+    pub origin: Vec3,
     /// Unit ray direction.
     pub direction: Vec3,
     pub throughput: Vec3,
@@ -24,13 +57,20 @@ pub(crate) struct LaneHit {
 }
 
 impl LaneHit {
-    /// The lane of a ray in direction `direction` carrying `throughput`, which hit `hit`.
+    /// The lane of a ray from `origin` in direction `direction` carrying `throughput`,
+    /// which hit `hit`.
     #[inline(always)]
-    pub(crate) fn new(hit: &TraceHit, direction: Vec3, throughput: Vec3, wants_st: bool) -> Self {
+    pub(crate) fn new(
+        hit: &TraceHit,
+        (origin, direction): (Vec3, Vec3),
+        throughput: Vec3,
+        wants_st: bool,
+    ) -> Self {
         LaneHit {
-            triangle: hit.primitive,
+            primitive: hit.primitive,
             uv: (hit.u, hit.v),
             t: hit.t,
+            origin,
             direction,
             throughput,
             wants_st,
@@ -43,7 +83,9 @@ impl LaneHit {
 pub(crate) struct LanePicks {
     ray: Vec<u32>,
     material: Vec<u32>,
+    /// The mesh of a triangle hit (zero for a sphere's).
     mesh: Vec<u32>,
+    on_sphere: Vec<bool>,
     /// The footprint's width at the hit, for a textured material under a cone-like
     /// footprint (`None`: a point sample).
     cone_width: Vec<Option<f32>>,
@@ -54,6 +96,7 @@ impl LanePicks {
         self.ray.clear();
         self.material.clear();
         self.mesh.clear();
+        self.on_sphere.clear();
         self.cone_width.clear();
     }
 
@@ -61,22 +104,28 @@ impl LanePicks {
         self.ray.len()
     }
 
-    /// Pick the wave's ray `ray`, whose hit lies on mesh `mesh` of material `material`.
+    /// Pick the wave's ray `ray`, whose hit lies on `surface` of material `material`.
     #[inline]
     pub(crate) fn push(
         &mut self,
         ray: usize,
         material: usize,
-        mesh: usize,
+        surface: LaneSurface,
         cone_width: Option<f32>,
     ) {
         self.ray.push(ray as u32);
         self.material.push(material as u32);
-        self.mesh.push(mesh as u32);
+        let (mesh, on_sphere) = match surface {
+            LaneSurface::Mesh(mesh) => (mesh as u32, false),
+            LaneSurface::Sphere => (0, true),
+        };
+        self.mesh.push(mesh);
+        self.on_sphere.push(on_sphere);
         self.cone_width.push(cone_width);
     }
 
-    /// Lay the picks out in `lanes`, ordered by material with the runs recorded in
+    /// Lay the picks out in `lanes`, triangles then spheres, each ordered by material with
+    /// the runs recorded in
     /// `lanes.material_runs`; each lane filled from `hit(ray, material)` for its ray and
     /// the ray's material, and `lane_of_ray[ray]` set to its lane.
     pub(crate) fn place(
@@ -85,14 +134,15 @@ impl LanePicks {
         lane_of_ray: &mut [u32],
         mut hit: impl FnMut(usize, LaneMaterial) -> LaneHit,
     ) {
-        lanes.lay_out_by_material(&self.material);
+        lanes.lay_out_by_material(&self.material, &self.on_sphere);
         for (k, &ray) in self.ray.iter().enumerate() {
             let lane = lanes.lane_of_pick[k] as usize;
             lane_of_ray[ray as usize] = lane as u32;
             let LaneHit {
-                triangle,
+                primitive,
                 uv: (u, v),
                 t,
+                origin,
                 direction,
                 throughput,
                 wants_st,
@@ -100,10 +150,11 @@ impl LanePicks {
             lanes.wave_index[lane] = ray;
             lanes.material[lane] = self.material[k];
             lanes.mesh[lane] = self.mesh[k];
-            lanes.triangle[lane] = triangle;
+            lanes.primitive[lane] = primitive;
             lanes.u[lane] = u;
             lanes.v[lane] = v;
             lanes.t[lane] = t;
+            lanes.origin.set(lane, origin);
             lanes.direction.set(lane, direction);
             lanes.throughput.set(lane, throughput);
             lanes.wants_st[lane] = wants_st;
@@ -117,36 +168,48 @@ mod tests {
     use super::*;
 
     #[test]
-    fn placing_orders_lanes_by_material_stably_and_maps_rays_to_lanes() {
+    fn placing_puts_triangles_before_spheres_orders_each_by_material_stably_and_maps_rays() {
         let mut lanes = WaveLanes {
             materials: vec![LaneMaterial::default(); 4],
             ..WaveLanes::default()
         };
         let mut picks = LanePicks::default();
-        // Rays 0..7 of which 2 is not picked.
+        // Rays 0..7 of which 2 is not picked; 3 and 5 hit spheres.
         for (ray, material) in [(0, 3), (1, 1), (3, 3), (4, 0), (5, 1), (6, 3)] {
-            picks.push(ray, material, 9, Some(ray as f32));
+            let surface = if ray == 3 || ray == 5 {
+                LaneSurface::Sphere
+            } else {
+                LaneSurface::Mesh(9)
+            };
+            picks.push(ray, material, surface, Some(ray as f32));
         }
         let mut lane_of_ray = vec![u32::MAX; 7];
         picks.place(&mut lanes, &mut lane_of_ray, |ray, _| LaneHit {
-            triangle: 100 + ray as u32,
+            primitive: 100 + ray as u32,
             uv: (ray as f32, 0.5),
             t: 1.0,
+            origin: Vec3::splat(-(ray as f32)),
             direction: Vec3::Z,
             throughput: Vec3::splat(ray as f32),
             wants_st: ray % 2 == 0,
         });
-        assert_eq!(lanes.wave_index, [4, 1, 5, 0, 3, 6]);
-        assert_eq!(lanes.material, [0, 1, 1, 3, 3, 3]);
-        assert_eq!(lanes.triangle, [104, 101, 105, 100, 103, 106]);
-        assert_eq!(lanes.u, [4.0, 1.0, 5.0, 0.0, 3.0, 6.0]);
-        assert_eq!(lanes.throughput.x, [4.0, 1.0, 5.0, 0.0, 3.0, 6.0]);
-        assert_eq!(lanes.wants_st, [true, false, false, true, false, true]);
-        assert_eq!(lanes.cone_width, [4.0, 1.0, 5.0, 0.0, 3.0, 6.0].map(Some));
-        assert_eq!(lane_of_ray, [3, 1, u32::MAX, 4, 0, 2, 5]);
+        assert_eq!(lanes.wave_index, [4, 1, 0, 6, 5, 3]);
+        assert_eq!(lanes.material, [0, 1, 3, 3, 1, 3]);
+        assert_eq!(lanes.mesh, [9, 9, 9, 9, 0, 0]);
+        assert_eq!(lanes.spheres_start, 4);
+        assert_eq!(lanes.primitive, [104, 101, 100, 106, 105, 103]);
+        assert_eq!(lanes.u, [4.0, 1.0, 0.0, 6.0, 5.0, 3.0]);
+        assert_eq!(lanes.origin.y, [-4.0, -1.0, -0.0, -6.0, -5.0, -3.0]);
+        assert_eq!(lanes.throughput.x, [4.0, 1.0, 0.0, 6.0, 5.0, 3.0]);
+        assert_eq!(lanes.wants_st, [true, false, true, true, false, false]);
+        assert_eq!(lanes.cone_width, [4.0, 1.0, 0.0, 6.0, 5.0, 3.0].map(Some));
+        assert_eq!(lane_of_ray, [2, 1, u32::MAX, 5, 0, 4, 3]);
         let runs: Vec<_> = (0..lanes.material_runs.len())
             .map(|run| lanes.material_run(run))
             .collect();
-        assert_eq!(runs, [(0, 0..1), (1, 1..3), (3, 3..6)]);
+        assert_eq!(
+            runs,
+            [(0, 0..1), (1, 1..2), (3, 2..4), (1, 4..5), (3, 5..6)]
+        );
     }
 }

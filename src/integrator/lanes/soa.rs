@@ -67,6 +67,16 @@ impl Vec3Lanes {
         }
     }
 
+    /// The lanes `range`, writable.
+    #[inline(always)]
+    pub(crate) fn range_mut(&mut self, range: std::ops::Range<usize>) -> Vec3SlicesMut<'_> {
+        Vec3SlicesMut {
+            x: &mut self.x[range.clone()],
+            y: &mut self.y[range.clone()],
+            z: &mut self.z[range],
+        }
+    }
+
     /// The first `len` lanes, writable.
     #[inline(always)]
     pub(crate) fn lanes_mut(&mut self, len: usize) -> Vec3SlicesMut<'_> {

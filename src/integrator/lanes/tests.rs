@@ -1,5 +1,6 @@
 //! The lane stages against the scalar path they replace: stages 1-3 must give the very bits
-//! of `SurfaceLookup::surface_hit` and `Footprint::texture_gradients`.
+//! of `SurfaceLookup::surface_hit` and `Footprint::texture_gradients`, on triangles and on
+//! spheres.
 
 use std::sync::Arc;
 
@@ -7,15 +8,15 @@ use glam::{Vec2, Vec3};
 
 use super::bsdf::{eval_lights, incident_normals};
 use super::footprints::{lane_footprint, texture_gradients, LaneFootprint};
-use super::gather::gather_triangles;
+use super::gather::{gather_spheres, gather_triangles};
 use super::interpolate::interpolate;
 use super::lights::{sample_lights, shadow_rays};
-use super::picks::{LaneHit, LanePicks};
+use super::picks::{LaneHit, LanePicks, LaneSurface};
 use super::{LaneMaterial, WaveLanes};
 use crate::footprint::{ConeEnvelope, Footprint, RayCone};
 use crate::render::prepared::{GeometryRef, SurfaceDetail, SurfaceLookup};
 use crate::render::tracer::TraceHit;
-use crate::scene::{Light, Material, SceneDescription, TriangleMesh};
+use crate::scene::{Light, Material, SceneDescription, Sphere, TriangleMesh};
 
 /// A small deterministic generator (xorshift), values in [0, 1).
 struct Numbers(u32);
@@ -35,7 +36,8 @@ impl Numbers {
 
 /// Two meshes of 64 triangles each: one with normals (some pointing away from the face) and
 /// texture coordinates, one with neither; the first mesh's triangle 0 is degenerate
-/// (collinear), the second's texture coordinates are missing.
+/// (collinear), the second's texture coordinates are missing. And 16 spheres of both
+/// materials, of radii from 0.01 to 100, some far from the origin.
 fn scene(numbers: &mut Numbers) -> SceneDescription {
     let mut textured = TriangleMesh {
         name: "textured".into(),
@@ -72,114 +74,171 @@ fn scene(numbers: &mut Numbers) -> SceneDescription {
             },
         ],
         meshes: vec![textured, flat],
+        spheres: (0..16)
+            .map(|i| Sphere {
+                center: numbers.vec3(if i % 4 == 0 { 2000.0 } else { 10.0 }),
+                radius: 10f32.powf(4.0 * numbers.next() - 2.0),
+                material: i % 2,
+            })
+            .collect(),
         ..SceneDescription::default()
     }
 }
 
+/// The geometries of [`scene`]: its two meshes, then its spheres.
+const GEOMETRIES: [GeometryRef; 3] = [
+    GeometryRef::Mesh(0),
+    GeometryRef::Mesh(1),
+    GeometryRef::Spheres,
+];
+
+/// A wave of hits on [`scene`]: per ray, its hit, origin, direction, footprint and whether
+/// it wants texture coordinates. Triangles and spheres alternate with the two materials,
+/// and a fifth of the sphere hits want no texture coordinates.
+fn wave(numbers: &mut Numbers) -> Vec<(TraceHit, Vec3, Vec3, Footprint, bool)> {
+    (0..768u32)
+        .map(|index| {
+            let (u, v) = (numbers.next(), numbers.next());
+            let (u, v) = if u + v > 1.0 {
+                (1.0 - u, 1.0 - v)
+            } else {
+                (u, v)
+            };
+            let geometry = index % 3;
+            let primitive = if geometry == 2 {
+                (index / 3) % 16
+            } else {
+                (index / 2) % 64
+            };
+            let hit = TraceHit {
+                u,
+                v,
+                t: 0.5 + 20.0 * numbers.next(),
+                geometry,
+                primitive,
+            };
+            let origin = numbers.vec3(40.0);
+            let direction = numbers.vec3(1.0).normalize();
+            let footprint = match index % 4 {
+                0 | 3 => Footprint::Cone1(RayCone::new(0.0, 0.002 + 0.01 * numbers.next())),
+                1 => Footprint::Cone(ConeEnvelope::new(
+                    RayCone::new(0.01, 0.003),
+                    RayCone::new(0.0, -0.001),
+                    false,
+                )),
+                _ => Footprint::Mip0,
+            };
+            let wants_st = geometry != 2 || index % 5 != 0;
+            (hit, origin, direction, footprint, wants_st)
+        })
+        .collect()
+}
+
 #[test]
-fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit() {
+fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit_at_every_level() {
     let mut numbers = Numbers(0x9e37_79b9);
     let scene = Arc::new(scene(&mut numbers));
-    let lookup = SurfaceLookup::new(
-        scene.clone(),
-        vec![GeometryRef::Mesh(0), GeometryRef::Mesh(1)],
-    );
-    let mut lanes = WaveLanes {
-        materials: vec![
-            LaneMaterial {
-                covers: true,
-                path_covers: true,
-                textured: true,
-                opaque_weight: 1.0,
+    let lookup = SurfaceLookup::new(scene.clone(), GEOMETRIES.to_vec());
+    let rays = wave(&mut numbers);
+    for level in crate::simd::Level::supported() {
+        let mut lanes = WaveLanes {
+            materials: vec![
+                LaneMaterial {
+                    covers: true,
+                    path_covers: true,
+                    textured: true,
+                    opaque_weight: 1.0,
+                };
+                2
+            ],
+            level: Some(level),
+            ..WaveLanes::default()
+        };
+        let mut picks = LanePicks::default();
+        for (index, (hit, _, _, footprint, wants_st)) in rays.iter().enumerate() {
+            let cone_width = match lane_footprint(footprint, hit.t) {
+                Some(LaneFootprint::Cone(width)) if *wants_st => Some(width),
+                _ => None,
             };
-            2
-        ],
-        ..WaveLanes::default()
+            let (surface, material) = LaneSurface::at(&lookup, hit).expect("a lane surface");
+            picks.push(index, material, surface, cone_width);
+        }
+        let mut lane_of_ray = vec![u32::MAX; rays.len()];
+        picks.place(&mut lanes, &mut lane_of_ray, |index, _| {
+            let (hit, origin, direction, _, wants_st) = &rays[index];
+            LaneHit::new(hit, (*origin, *direction), Vec3::ONE, *wants_st)
+        });
+        gather_triangles(&mut lanes, &scene.meshes);
+        gather_spheres(&mut lanes, &scene.spheres);
+        interpolate(&mut lanes);
+        texture_gradients(&mut lanes, 16.0);
+        for (index, ray) in rays.iter().enumerate() {
+            compare_surface(&lookup, &lanes, lane_of_ray[index] as usize, ray);
+        }
+        // The cases the comparison is meant to cover did occur.
+        let (triangles, spheres) = lanes.sections();
+        let filtered = |lanes_of: std::ops::Range<usize>| {
+            lanes_of
+                .filter(|&lane| lanes.gradients[lane] != [0.0; 4])
+                .count()
+        };
+        assert!(filtered(triangles.clone()) > 100, "{level:?}");
+        assert!(filtered(spheres.clone()) > 100, "{level:?}");
+        assert_eq!(triangles.len(), 512);
+        assert!(lanes.has_st[triangles].iter().filter(|&&s| !s).count() == 256);
+        assert!(lanes.has_st[spheres].iter().any(|&s| !s));
+    }
+}
+
+/// Lane `lane` against the scalar path's surface and gradients for `ray`.
+fn compare_surface(
+    lookup: &SurfaceLookup,
+    lanes: &WaveLanes,
+    lane: usize,
+    (hit, origin, direction, footprint, wants_st): &(TraceHit, Vec3, Vec3, Footprint, bool),
+) {
+    let detail = if *wants_st {
+        SurfaceDetail::Texturing
+    } else {
+        SurfaceDetail::Geometry
     };
-    let mut rays = Vec::new();
-    let mut picks = LanePicks::default();
-    for index in 0..512u32 {
-        let (u, v) = (numbers.next(), numbers.next());
-        let (u, v) = if u + v > 1.0 {
-            (1.0 - u, 1.0 - v)
-        } else {
-            (u, v)
-        };
-        let hit = TraceHit {
-            u,
-            v,
-            t: 0.5 + 20.0 * numbers.next(),
-            geometry: index % 2,
-            primitive: (index / 2) % 64,
-        };
-        let direction = numbers.vec3(1.0).normalize();
-        let footprint = match index % 3 {
-            0 => Footprint::Cone1(RayCone::new(0.0, 0.002 + 0.01 * numbers.next())),
-            1 => Footprint::Cone(ConeEnvelope::new(
-                RayCone::new(0.01, 0.003),
-                RayCone::new(0.0, -0.001),
-                false,
-            )),
-            _ => Footprint::Mip0,
-        };
-        let cone_width = match lane_footprint(&footprint, hit.t) {
-            Some(LaneFootprint::Cone(width)) => Some(width),
-            _ => None,
-        };
-        picks.push(
-            index as usize,
-            hit.geometry as usize,
-            hit.geometry as usize,
-            cone_width,
-        );
-        rays.push((hit, direction, footprint));
-    }
-    let mut lane_of_ray = vec![u32::MAX; rays.len()];
-    picks.place(&mut lanes, &mut lane_of_ray, |index, _| {
-        let (hit, direction, _) = &rays[index];
-        LaneHit::new(hit, *direction, Vec3::ONE, true)
-    });
-    gather_triangles(&mut lanes, &scene.meshes);
-    interpolate(&mut lanes);
-    texture_gradients(&mut lanes, 16.0);
-    for (index, (hit, direction, footprint)) in rays.iter().enumerate() {
-        let lane = lane_of_ray[index] as usize;
-        let origin = Vec3::ZERO;
-        let surface = lookup.surface_hit(origin, *direction, hit, SurfaceDetail::Texturing);
-        let spawn = surface.spawn_point();
-        let same =
-            |a: Vec3, b: Vec3| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits);
-        assert!(
-            same(lanes.position.get(lane), surface.position),
-            "lane {lane}"
-        );
-        assert!(same(lanes.error.get(lane), spawn.error), "lane {lane}");
-        assert!(same(
-            lanes.geometric_normal.get(lane),
-            surface.geometric_normal
-        ));
-        assert!(
-            same(lanes.shading_normal.get(lane), surface.shading_normal),
-            "lane {lane}"
-        );
-        assert_eq!(
-            lanes.st.get(lane).to_array().map(f32::to_bits),
-            surface.st.to_array().map(f32::to_bits)
-        );
-        let mut moved = *footprint;
-        moved.transfer(*direction, &surface);
-        let g = moved.texture_gradients(*direction, &surface, 16.0);
-        let expected = [g.dsdx, g.dtdx, g.dsdy, g.dtdy].map(f32::to_bits);
-        assert_eq!(
-            lanes.gradients[lane].map(f32::to_bits),
-            expected,
-            "lane {lane}"
-        );
-    }
-    // The cases the comparison is meant to cover did occur.
-    let filtered = (0..rays.len()).filter(|&lane| lanes.gradients[lane] != [0.0; 4]);
-    assert!(filtered.count() > 100);
-    assert!(lanes.has_st.iter().filter(|&&s| !s).count() == 256);
+    let surface = lookup.surface_hit(*origin, *direction, hit, detail);
+    let spawn = surface.spawn_point();
+    let same = |a: Vec3, b: Vec3| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits);
+    assert!(
+        same(lanes.position.get(lane), spawn.position),
+        "lane {lane}"
+    );
+    assert!(same(lanes.error.get(lane), spawn.error), "lane {lane}");
+    assert!(
+        same(lanes.surface_point(lane), surface.position),
+        "lane {lane}"
+    );
+    assert!(same(
+        lanes.geometric_normal.get(lane),
+        surface.geometric_normal
+    ));
+    assert!(
+        same(lanes.shading_normal.get(lane), surface.shading_normal),
+        "lane {lane}"
+    );
+    assert_eq!(
+        lanes.st.get(lane).to_array().map(f32::to_bits),
+        surface.st.to_array().map(f32::to_bits)
+    );
+    let mut moved = *footprint;
+    moved.transfer(*direction, &surface);
+    let g = moved.texture_gradients(*direction, &surface, 16.0);
+    let expected = if *wants_st {
+        [g.dsdx, g.dtdx, g.dsdy, g.dtdy].map(f32::to_bits)
+    } else {
+        [0; 4]
+    };
+    assert_eq!(
+        lanes.gradients[lane].map(f32::to_bits),
+        expected,
+        "lane {lane}"
+    );
 }
 
 /// Materials of every lobe the lanes run: classic without and with a highlight, and
@@ -228,7 +287,8 @@ fn punctual_lights() -> Vec<Light> {
 
 /// Stages 5 and 6 at every vector level give the bits of the scalar functions they stand
 /// for: `sample_li`, the lobes' `eval`, `SpawnPoint::offset_origin` and
-/// `shadow_ray_towards`, on lanes of three materials pushed out of order.
+/// `shadow_ray_towards`, on triangle and sphere lanes of three materials pushed out of
+/// order.
 #[test]
 fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
     let mut numbers = Numbers(0x2545_f491);
@@ -256,16 +316,26 @@ fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
             let direction = numbers.vec3(1.0).normalize();
             let throughput = Vec3::new(numbers.next(), 1.0, numbers.next());
             let material = (index * 7 + index / 5) % 3;
-            let (mesh, triangle) = (index % 2, 1 + index % 63);
+            let geometry = index % 3;
+            let primitive = if geometry == 2 {
+                index % 16
+            } else {
+                1 + index % 63
+            };
             let hit = TraceHit {
                 u,
                 v,
-                t: 1.0,
-                geometry: mesh,
-                primitive: triangle,
+                t: 1.0 + numbers.next(),
+                geometry,
+                primitive,
             };
-            picks.push(index as usize, material as usize, mesh as usize, None);
-            hits.push(LaneHit::new(&hit, direction, throughput, false));
+            let surface = match GEOMETRIES[geometry as usize] {
+                GeometryRef::Mesh(mesh) => LaneSurface::Mesh(mesh),
+                _ => LaneSurface::Sphere,
+            };
+            picks.push(index as usize, material as usize, surface, None);
+            let origin = numbers.vec3(30.0);
+            hits.push(LaneHit::new(&hit, (origin, direction), throughput, false));
         }
         let mut lane_of_ray = vec![u32::MAX; hits.len()];
         picks.place(&mut lanes, &mut lane_of_ray, |index, _| hits[index]);
@@ -275,7 +345,9 @@ fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
             .enumerate()
             .any(|(i, &l)| i != l as usize));
         gather_triangles(&mut lanes, &scene.meshes);
+        gather_spheres(&mut lanes, &scene.spheres);
         interpolate(&mut lanes);
+        assert_eq!(lanes.sections().1.len(), 100);
         let len = lanes.len();
         lanes.albedo.resize(len);
         lanes.metallic.resize(len, 0.0);

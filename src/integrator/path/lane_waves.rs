@@ -3,25 +3,28 @@
 //! each lane's vertex finished in wave order by queueing the rays those stages set up,
 //! without a `SurfaceHit` record or a per-ray texture lookup.
 //!
-//! A hit takes the lanes when it lies on a triangle mesh whose material emits nothing and
-//! bends no normal (`lanes::LaneMaterial::path_covers`), and its footprint moves to the hit
-//! by its distance alone (not a ray differential). These take the scalar path
-//! (`vertex::shade`), hit by hit: misses; spheres, curved and height patches; emitters and
-//! normal-mapped materials; ray differentials; every hit when fog is on; and, in a render
-//! that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`), the rays of
-//! first samples, which record their pixel's first lookup.
+//! A hit takes the lanes when it lies on a triangle mesh or an analytic sphere whose
+//! material bends no normal and reads no emission texture
+//! (`lanes::LaneMaterial::path_covers`: mirrors, glass and emitters included), and its
+//! footprint moves to the hit by its distance alone (not a ray differential). These take
+//! the scalar path (`vertex::shade`), hit by hit: misses; curved and height patches;
+//! normal-mapped materials and emission-textured emitters; ray differentials; every hit
+//! when fog is on; and, in a render that writes the texture-lookup AOVs (`tex`,
+//! `texcolor`, `lod`, `footprint`), the rays of first samples, which record their pixel's
+//! first lookup.
 //!
 //! What a lane adds is computed as `vertex::shade` computes it, operation for operation:
 //! the stages give the bits of `SurfaceLookup::surface_hit` and `shading::surface_inputs`,
 //! `lane_scatter` runs the same steps (absorption, the footprint at the hit, light
-//! sampling, the BSDF's continuation), and [`finish_lane`] queues the rays in the wave's
-//! order, so images are bit for bit those of the scalar path.
+//! sampling, the BSDF's continuation), and [`finish_lane`] adds the emission the ray sees
+//! (`vertex::add_seen_emission`) and queues the rays in the wave's order, so images are bit
+//! for bit those of the scalar path.
 
 use crate::film::TileImage;
 use crate::integrator::lanes::footprints::{footprint_at_hit, texture_gradients, LaneFootprint};
-use crate::integrator::lanes::gather::gather_triangles;
+use crate::integrator::lanes::gather::{gather_spheres, gather_triangles};
 use crate::integrator::lanes::interpolate::interpolate;
-use crate::integrator::lanes::picks::{LaneHit, LanePicks};
+use crate::integrator::lanes::picks::{LaneHit, LanePicks, LaneSurface};
 use crate::integrator::lanes::textures::shading_inputs;
 use crate::integrator::lanes::WaveLanes;
 use crate::integrator::wave_integrator::{write_geometry_values, write_material_aovs};
@@ -31,12 +34,15 @@ use crate::render::tracer::TraceHit;
 use crate::sampler::PixelSampler;
 use crate::scene::Material;
 use crate::shading::surface_inputs::SurfaceInputs;
-use crate::shading::MaterialBsdf;
+use crate::shading::{self, LightHit, MaterialBsdf};
 use crate::simd;
 
 use super::lane_scatter::ScatterLanes;
-use super::vertex::{queue_continuation, FootprintSpread, HitRecord, SurfaceSite, VertexSamples};
-use super::{PathRay, PathWaves};
+use super::vertex::{
+    add_seen_emission, queue_continuation, FootprintSpread, HitRecord, SeenEmission, SurfaceSite,
+    VertexSamples,
+};
+use super::{PathRay, PathTracer, PathWaves};
 
 /// `PathLanes::lane_of_ray` for a ray shaded by the scalar path.
 const SCALAR: u32 = u32::MAX;
@@ -64,10 +70,10 @@ impl PathLanes {
     }
 }
 
-/// Pick the wave's rays the lanes shade (none unless `enabled`), order them by material,
-/// and run stages 1-4 over them: the triangles' vertex data, the interpolated point,
-/// normals and texture coordinates, the footprints' texture gradients, and the texture
-/// lookups (albedo, metallic, roughness).
+/// Pick the wave's rays the lanes shade (none unless `enabled`), order them by surface and
+/// material, and run stages 1-4 over them: the triangles' vertex data and the spheres'
+/// centres and radii, the point, normals and texture coordinates, the footprints' texture
+/// gradients, and the texture lookups (albedo, metallic, roughness).
 pub(super) fn shade_lanes(
     context: &RenderContext,
     path: &mut PathLanes,
@@ -90,6 +96,7 @@ pub(super) fn shade_lanes(
     }
     worker.counters.lane_hits += lanes.len() as u64;
     gather_triangles(lanes, &context.surfaces.scene.meshes);
+    gather_spheres(lanes, &context.surfaces.scene.spheres);
     interpolate(lanes);
     texture_gradients(lanes, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
@@ -146,7 +153,7 @@ fn pick_lanes(
         if !hit.is_hit() || (ray.first_sample && records_lookups) {
             continue;
         }
-        let Some((mesh, material)) = context.surfaces.mesh_at(hit) else {
+        let Some((surface, material)) = LaneSurface::at(&context.surfaces, hit) else {
             continue;
         };
         let lane_material = path.lanes.materials[material];
@@ -162,23 +169,24 @@ fn pick_lanes(
             },
             _ => None,
         };
-        path.picks.push(index, material, mesh, cone_width);
+        path.picks.push(index, material, surface, cone_width);
     }
     path.picks
         .place(&mut path.lanes, &mut path.lane_of_ray, |index, material| {
             let (ray, hit) = (&rays[index], &hits[index]);
             let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
             let wants_st = material.textured || (camera_first && uv_aov);
-            LaneHit::new(hit, ray.direction, ray.throughput, wants_st)
+            LaneHit::new(hit, (ray.origin, ray.direction), ray.throughput, wants_st)
         });
 }
 
 /// The vertex of the wave's ray `ray` (which hit `hit`) at its lane `lane`, in the steps
 /// and order of `vertex::shade`, once stages 5 and 6 have run (`lane_scatter`): the camera
-/// hit's AOVs, then the shadow ray and the continuing ray those stages set up, queued in
-/// the wave's order. The lanes' materials emit nothing, so no emission is added.
+/// hit's AOVs, the emission the ray sees, then the shadow ray and the continuing ray those
+/// stages set up, queued in the wave's order.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn finish_lane(
+    tracer: &PathTracer,
     context: &RenderContext,
     ray: &PathRay,
     hit: &TraceHit,
@@ -198,6 +206,9 @@ pub(super) fn finish_lane(
         write_geometry_values(context, image, ray.slot, ray.direction, t, normal, st);
         write_material_aovs(image, ray.slot, &lane_inputs(material, lanes, lane));
     }
+    if shading::material_features::emits(material) {
+        add_lane_emission(tracer, context, ray, (lanes, lane), material, image, worker);
+    }
     if let Some(shadow) = &scatter.shadow[lane] {
         // Copied where it lies and then given its slot: built as a new value, the ray went
         // through the stack in pieces that the copy's wider loads straddled.
@@ -211,7 +222,7 @@ pub(super) fn finish_lane(
     };
     let site = SurfaceSite {
         material: material_index,
-        position: next.spawn.position,
+        position: lanes.surface_point(lane),
         spawn: next.spawn,
         geometric_normal: if next.front { next.ng } else { -next.ng },
         record: HitRecord::Deferred {
@@ -246,8 +257,42 @@ pub(super) fn finish_lane(
     queue_continuation(context, ray, spread, side, u_roulette, waves, worker);
 }
 
+/// The emission of `material` (which reads no emission texture) that the ray of lane
+/// `lane` sees, added as `vertex::shade` adds it.
+fn add_lane_emission(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &PathRay,
+    (lanes, lane): (&WaveLanes, usize),
+    material: &Material,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    let area = &context.lights.area;
+    let primitive = lanes.primitive[lane];
+    let light = if lane < lanes.spheres_start {
+        area.mesh_light(lanes.mesh[lane] as usize, primitive)
+    } else {
+        area.sphere_light(primitive as usize)
+    };
+    let normal = lanes.geometric_normal.get(lane);
+    let seen = SeenEmission {
+        light,
+        light_hit: LightHit {
+            direction: ray.direction,
+            point: lanes.surface_point(lane),
+            normal,
+            st: lanes.st.get(lane),
+        },
+        emission: material.emission,
+        // `shading::area_lights::emits_towards`.
+        facing: material.two_sided || ray.direction.dot(normal) < 0.0,
+    };
+    add_seen_emission(tracer, context, ray, &seen, image, worker);
+}
+
 /// The material's shading inputs at lane `lane`, as `shading::surface_inputs` gives them
-/// for a material that emits nothing and bends no normal.
+/// for a material that bends no normal and reads no emission texture.
 #[inline]
 pub(super) fn lane_inputs(material: &Material, lanes: &WaveLanes, lane: usize) -> SurfaceInputs {
     let model = material.model.metallic_roughness();

@@ -247,9 +247,9 @@ impl WaveIntegrator for PathTracer {
         lane_scatter::scatter_lanes(self, context, &mut lanes, &mut current, worker);
         for (index, (ray, hit)) in current.iter_mut().zip(&hits).enumerate() {
             match lanes.lane_of(index) {
-                Some(lane) => {
-                    lane_waves::finish_lane(context, ray, hit, &lanes, lane, image, waves, worker)
-                }
+                Some(lane) => lane_waves::finish_lane(
+                    self, context, ray, hit, &lanes, lane, image, waves, worker,
+                ),
                 None => vertex::shade(self, context, ray, hit, image, waves, worker),
             }
         }

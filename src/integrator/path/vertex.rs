@@ -296,21 +296,59 @@ fn add_emission(
         GeometryRef::Spheres => area.sphere_light(emitter.hit.primitive as usize),
         GeometryRef::Patches | GeometryRef::HeightPatches => None,
     };
-    let found = match light {
+    let surface = emitter.surface;
+    let light_hit = LightHit {
+        direction: ray.direction,
+        point: surface.position,
+        normal: surface.geometric_normal,
+        st: surface.st,
+    };
+    let emission = emitter.emission;
+    let facing = shading::area_lights::emits_towards(emitter.material, surface, ray.direction);
+    let seen = SeenEmission {
+        light,
+        light_hit,
+        emission,
+        facing,
+    };
+    add_seen_emission(tracer, context, ray, &seen, image, worker);
+}
+
+/// What a ray sees of an emitting surface: the area light it is (if the surface is one),
+/// the ray's hit as the light sees it, the material's emission there, and whether the
+/// surface emits towards the ray (`shading::area_lights::emits_towards`).
+pub(super) struct SeenEmission {
+    pub(super) light: Option<usize>,
+    pub(super) light_hit: LightHit,
+    pub(super) emission: Vec3,
+    pub(super) facing: bool,
+}
+
+/// The emission `seen` adds to the ray's pixel: read as light sampling reads it and weighted
+/// against it for a BSDF-sampled ray that found an area light, else taken whole (from the
+/// front side unless the material is two-sided). The scalar path's step and the lanes'.
+pub(super) fn add_seen_emission(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &PathRay,
+    seen: &SeenEmission,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    let found = match seen.light {
         // A BSDF-sampled ray reads the light's emission as light sampling does, so both
         // strategies estimate the same radiance.
         Some(index) if ray.bsdf_pdf.is_some() => found_area_light(
             tracer,
             context,
             ray,
-            emitter.surface,
+            &seen.light_hit,
             LightRef::Area(index),
             worker,
         ),
         // Seen by the camera or through a delta lobe: taken whole, filtered by the ray's
         // footprint. Emitters that are not lights are found by BSDF rays alone.
-        _ => shading::area_lights::emits_towards(emitter.material, emitter.surface, ray.direction)
-            .then_some((emitter.emission, 1.0)),
+        _ => seen.facing.then_some((seen.emission, 1.0)),
     };
     if let Some((emission, weight)) = found {
         add_radiance(image, ray.slot, ray.throughput * emission * weight);
@@ -682,30 +720,25 @@ fn found_light_weight(
     }
 }
 
-/// The emission a BSDF-sampled `ray` finds on the area light `light` at `surface`, with its
-/// weight against light sampling; `None` when it emits nothing towards the ray.
+/// The emission a BSDF-sampled `ray` finds on the area light `light` where it hits it
+/// (`hit`), with its weight against light sampling; `None` when it emits nothing towards
+/// the ray.
 fn found_area_light(
     tracer: &PathTracer,
     context: &RenderContext,
     ray: &PathRay,
-    surface: &SurfaceHit,
+    hit: &LightHit,
     light: LightRef,
     worker: &mut WorkerState,
 ) -> Option<(Vec3, f32)> {
     let lights = &context.lights;
-    let hit = LightHit {
-        direction: ray.direction,
-        point: surface.position,
-        normal: surface.geometric_normal,
-        st: surface.st,
-    };
-    let emission = lights.le(light, &hit, &mut ContextEmission { context, worker });
+    let emission = lights.le(light, hit, &mut ContextEmission { context, worker });
     if emission == Vec3::ZERO {
         // Behind a one-sided light (or on a black texel): nothing to add.
         return None;
     }
     let weight = found_light_weight(tracer, ray, lights.pmf(light), || {
-        lights.pdf_li(light, ray.from, &hit)
+        lights.pdf_li(light, ray.from, hit)
     });
     Some((emission, weight))
 }

@@ -1,10 +1,11 @@
 //! Whitted's waves shaded in lanes (`integrator::lanes`): which hits take the lanes, the
 //! stages run over them, and what each lane adds to the film and the shadow queue.
 //!
-//! A hit takes the lanes when it lies on a triangle mesh, its material is one the lanes
-//! cover (`lanes::LaneMaterial::of`: opaque, not emissive, not normal-mapped), and the light
-//! beyond the shadow rays is Whitted's ambient term. These take the scalar path
-//! (`surface::shade_hit`), hit by hit: misses; spheres, curved and height patches; mirrors,
+//! A hit takes the lanes when it lies on a triangle mesh or an analytic sphere, its
+//! material is one the lanes cover (`lanes::LaneMaterial::of`: opaque, not emissive, not
+//! normal-mapped), and the light beyond the shadow rays is Whitted's ambient term. These
+//! take the scalar path (`surface::shade_hit`), hit by hit: misses; curved and height
+//! patches; mirrors,
 //! dielectrics, emitters and normal-mapped materials; rays inside an absorbing medium;
 //! footprints kept as ray differentials at textured materials; first samples of a render
 //! that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`); every hit
@@ -17,10 +18,10 @@ use super::{add_radiance, Waves};
 use crate::film::TileImage;
 use crate::integrator::lanes::bsdf::{eval_lights, incident_normals};
 use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, LaneFootprint};
-use crate::integrator::lanes::gather::gather_triangles;
+use crate::integrator::lanes::gather::{gather_spheres, gather_triangles};
 use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::lights::{sample_lights, shadow_rays};
-use crate::integrator::lanes::picks::LaneHit;
+use crate::integrator::lanes::picks::{LaneHit, LaneSurface};
 use crate::integrator::lanes::textures::shading_inputs;
 use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
@@ -61,7 +62,7 @@ pub(super) fn pick_lanes(
         {
             continue;
         }
-        let Some((mesh, material)) = context.surfaces.mesh_at(hit) else {
+        let Some((surface, material)) = LaneSurface::at(&context.surfaces, hit) else {
             continue;
         };
         let lane_material = waves.lanes.materials[material];
@@ -78,7 +79,7 @@ pub(super) fn pick_lanes(
         } else {
             None
         };
-        waves.picks.push(index, material, mesh, cone_width);
+        waves.picks.push(index, material, surface, cone_width);
     }
     let uv_aov = context.options.aovs.surface;
     let (rays, hits) = (&waves.buffers.rays.current, &waves.buffers.trace_hits);
@@ -89,7 +90,7 @@ pub(super) fn pick_lanes(
             let (ray, hit) = (&rays[index], &hits[index]);
             let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
             let wants_st = material.textured || (camera_first && uv_aov);
-            LaneHit::new(hit, ray.direction, ray.throughput, wants_st)
+            LaneHit::new(hit, (ray.origin, ray.direction), ray.throughput, wants_st)
         },
     );
     worker.counters.lane_hits += waves.lanes.len() as u64;
@@ -106,6 +107,7 @@ pub(super) fn shade_lanes(context: &RenderContext, waves: &mut Waves, worker: &m
     }
     let scene = &context.scene;
     gather_triangles(lanes, &context.surfaces.scene.meshes);
+    gather_spheres(lanes, &context.surfaces.scene.spheres);
     interpolate(lanes);
     texture_gradients(lanes, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
