@@ -45,6 +45,19 @@ trait MaterialLoop {
     ) {
         self.run(material, lanes, lobe)
     }
+
+    /// [`MaterialLoop::run`] for a mixture whose every lobe with a weight is a delta lobe
+    /// (a classic material with no opaque weight: mirror and smooth boundary alone), which
+    /// gives every lane the same flags, with no density.
+    #[inline(always)]
+    fn run_delta_only<B: Bsdf>(
+        &mut self,
+        material: u32,
+        lanes: Range<usize>,
+        lobe: impl Fn(usize) -> B,
+    ) {
+        self.run(material, lanes, lobe)
+    }
 }
 
 /// Run `each` over every material's range of lanes with its lobe.
@@ -89,15 +102,25 @@ fn for_each_material(context: &RenderContext, lanes: &WaveLanes, each: &mut impl
                 );
                 OpaqueOnly::metallic_roughness(lobe)
             }),
-            _ => each.run(index, range, |lane| {
-                MaterialBsdf::from_surface_inputs(
-                    material,
-                    &lane_inputs(material, lanes, lane),
-                    lanes.direction.get(lane),
-                    lanes.geometric_normal.get(lane),
-                    fresnel,
-                )
-            }),
+            model => {
+                let mixture = |lane| {
+                    MaterialBsdf::from_surface_inputs(
+                        material,
+                        &lane_inputs(material, lanes, lane),
+                        lanes.direction.get(lane),
+                        lanes.geometric_normal.get(lane),
+                        fresnel,
+                    )
+                };
+                // The classic model has no rough boundary; with no opaque weight its
+                // mixture keeps only the mirror and the smooth boundary.
+                let opaque_weight = (1.0 - material.mirror) * (1.0 - material.transmission);
+                if matches!(model, MaterialModel::Classic(_)) && opaque_weight <= 0.0 {
+                    each.run_delta_only(index, range, mixture)
+                } else {
+                    each.run(index, range, mixture)
+                }
+            }
         }
     }
 }
@@ -133,6 +156,11 @@ pub(super) fn test_smooth_parts(
                     flags.has_density() && bsdf_has_smooth_part(&bsdf, wo, ns);
             }
         }
+
+        /// Delta lobes alone: no lane transmits with a density or samples a light, as
+        /// `ScatterLanes::reset` left them, so no lane's mixture is built here.
+        #[inline(always)]
+        fn run_delta_only<B: Bsdf>(&mut self, _: u32, _: Range<usize>, _: impl Fn(usize) -> B) {}
     }
     for_each_material(context, lanes, &mut SmoothParts { lanes, scatter });
 }
