@@ -65,6 +65,7 @@ pub use tiles::{TextureTileSet, TEXTURE_TILE_SIZE};
 pub use tx_writer::{write_tx, TxCompression, TxOptions};
 
 use demand_tiles::DemandFile;
+use micro_cache::ThreadTiles;
 use tiles::{NoTextureTiles, TexelObserver, TextureTileRecorder};
 
 /// How 8-bit RGB texels are decoded on load (alpha is always linear).
@@ -538,6 +539,39 @@ impl Texture {
         opts: &FilterOptions,
         obs: &mut O,
     ) -> Vec4 {
+        match opts.filter {
+            // One fetch: found where it is made (see `filter_closest_bilinear::fetch`).
+            FilterMode::Closest | FilterMode::Bilinear => self.sample_in(q, opts, None, obs),
+            FilterMode::Trilinear | FilterMode::Aniso | FilterMode::Ewa => self.with_lookup_tiles(
+                #[inline(always)]
+                |tiles| self.sample_in(q, opts, Some(tiles), obs),
+            ),
+        }
+    }
+
+    /// `body` given the micro-cache the lookups of this texture fetch their tiles through:
+    /// the thread's, found once, for a demand-loaded texture; none for a resident one, which
+    /// then makes no thread-local access.
+    #[inline(always)]
+    fn with_lookup_tiles<R>(&self, body: impl FnOnce(ThreadTiles<'_>) -> R) -> R {
+        match self.demand {
+            Some(_) => micro_cache::with_thread_tiles(body),
+            None => body(ThreadTiles::none()),
+        }
+    }
+
+    /// [`Texture::sample_observed`] with the lookup's tiles fetched through `tiles`. With
+    /// `None`, closest and bilinear find the thread's micro-cache at their fetch; the
+    /// mip-mapped filters, which [`Texture::sample_observed`] always hands the thread's, would
+    /// go to the shared cache for every tile.
+    #[inline(always)]
+    fn sample_in<O: TexelObserver>(
+        &self,
+        q: &TextureQuery,
+        opts: &FilterOptions,
+        tiles: Option<ThreadTiles<'_>>,
+        obs: &mut O,
+    ) -> Vec4 {
         let wrap = (opts.wrap_s, opts.wrap_t);
         let q = &TextureQuery {
             s: wrap::reduce_coordinate(q.s, opts.wrap_s),
@@ -545,16 +579,17 @@ impl Texture {
             ..*q
         };
         let p = &self.pyramid;
+        let found = || tiles.unwrap_or(ThreadTiles::none());
         match opts.filter {
             FilterMode::Closest => {
-                filter_closest_bilinear::closest(&p.levels[0], 0, q.s, q.t, wrap, obs)
+                filter_closest_bilinear::closest(&p.levels[0], 0, q.s, q.t, wrap, tiles, obs)
             }
             FilterMode::Bilinear => {
-                filter_closest_bilinear::bilinear(&p.levels[0], 0, q.s, q.t, wrap, obs)
+                filter_closest_bilinear::bilinear(&p.levels[0], 0, q.s, q.t, wrap, tiles, obs)
             }
-            FilterMode::Trilinear => trilinear::sample(p, q, wrap, obs),
-            FilterMode::Aniso => aniso::sample(p, q, opts.max_aniso, wrap, obs),
-            FilterMode::Ewa => ewa::sample(p, q, opts.max_aniso, wrap, obs),
+            FilterMode::Trilinear => trilinear::sample(p, q, wrap, found(), obs),
+            FilterMode::Aniso => aniso::sample(p, q, opts.max_aniso, wrap, found(), obs),
+            FilterMode::Ewa => ewa::sample(p, q, opts.max_aniso, wrap, found(), obs),
         }
     }
 }
