@@ -62,7 +62,7 @@ fn fetch<O: TexelObserver>(
 /// A demand-loaded level reads its tile through `tiles` (`None`: the thread's micro-cache,
 /// found for this one fetch).
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 pub(crate) fn closest<O: TexelObserver>(
     level: &MipLevel,
     level_index: usize,
