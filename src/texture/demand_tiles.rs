@@ -481,6 +481,8 @@ impl<'a> TexelSource<'a> for DemandTexels<'a> {
                             served[l] = true;
                         }
                     };
+                    // The lane indexes the values and flags of `serve` as well.
+                    #[allow(clippy::needless_range_loop)]
                     for l in lane..PROBE_LANES {
                         if in_this_tile[l] {
                             serve(l, value_in_tile(blocks, texels, l));
