@@ -13,6 +13,7 @@ use super::aniso_lanes::{self, ProbeStep, PROBE_LANES};
 use super::ellipse;
 pub(crate) use super::ellipse::footprint;
 use super::filter_closest_bilinear::bilinear_from;
+use super::micro_cache::ThreadTiles;
 use super::mip_pyramid::{MipLevel, MipPyramid};
 use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
@@ -50,18 +51,21 @@ fn symmetric_weights(weights: &mut [f32], inv_n: f32, gauss_scale: f32) -> f32 {
 /// shares) and, through [`simd::dispatch`], for the vector level the processor has: the
 /// probe steps of [`aniso_lanes`] compile to vector instructions only there. Every level
 /// gives the same bits (the lanes do the scalar probe's operations; Rust never contracts
-/// to FMA).
+/// to FMA). Demand-loaded levels read through `tiles`, found before the dispatch: the
+/// thread-local access is out of line and compiled at the baseline level, so code inlined
+/// into it would lose the vector instructions.
 #[inline(never)]
 pub(crate) fn sample<O: TexelObserver>(
     pyramid: &MipPyramid,
     q: &TextureQuery,
     max_aniso: f32,
     wrap: (WrapMode, WrapMode),
+    tiles: ThreadTiles<'_>,
     obs: &mut O,
 ) -> Vec4 {
     simd::dispatch(
         #[inline(always)]
-        || sample_at_level(pyramid, q, max_aniso, wrap, obs),
+        || sample_at_level(pyramid, q, max_aniso, wrap, tiles, obs),
     )
 }
 
@@ -72,9 +76,10 @@ fn sample_at_level<O: TexelObserver>(
     q: &TextureQuery,
     max_aniso: f32,
     wrap: (WrapMode, WrapMode),
+    tiles: ThreadTiles<'_>,
     obs: &mut O,
 ) -> Vec4 {
-    with_texel_source!(&pyramid.levels[0].texels, |kind| sample_from(
+    with_texel_source!(&pyramid.levels[0].texels, tiles, |kind| sample_from(
         kind, pyramid, q, max_aniso, wrap, obs
     ))
 }
@@ -128,7 +133,7 @@ fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
         let level = &pyramid.levels[m];
         let level_sum = match kind.view(&level.texels) {
             Some(texels) => probes(level, texels, m, q, &line, weights, wrap, obs),
-            None => probes_other_kind(level, m, q, &line, weights, wrap, obs),
+            None => probes_other_kind(level, m, q, &line, weights, wrap, kind.thread_tiles(), obs),
         };
         sum += level_weight * level_sum;
     }
@@ -200,12 +205,13 @@ fn probes<'a, S: TexelSource<'a>, O: TexelObserver>(
 
 /// Calls `visit(i, value)` with the bilinear value of each probe i of `line` on one
 /// level, in probe order (the order the weighted sum must keep to give the same bits).
-/// On 8-bit levels the probes are computed [`PROBE_LANES`] at a time by
-/// [`aniso_lanes::byte_probes`], wrapped blocks and blocks across tile edges included; a
-/// probe it leaves (more than a period outside a repeating level whose side is not a power
-/// of two, or 2^22 texels away) and every probe of another kind go through
-/// [`bilinear_from`]. Observers are told of the same
-/// texels in the same order either way.
+/// The probes are addressed [`PROBE_LANES`] at a time by [`aniso_lanes::probe_blocks`],
+/// wrapped blocks and blocks across tile edges included, and read by the level's texels
+/// ([`TexelSource::block_values`]: a resident level from its buffer, a demand-loaded one
+/// with one fetch per tile the step's blocks lie in). A probe they leave (more than a period
+/// outside a repeating level whose side is not a power of two, 2^22 texels away, or on a
+/// demand-loaded level across a tile edge) goes through [`bilinear_from`]. Observers are
+/// told of the same texels in the same order either way.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn each_probe<'a, S: TexelSource<'a>, O: TexelObserver>(
@@ -230,10 +236,10 @@ fn each_probe<'a, S: TexelSource<'a>, O: TexelObserver>(
             obs,
         )
     };
-    let bytes = match texels.as_byte_texels() {
-        Some(bytes) if aniso_lanes::addressable(level) => bytes,
-        _ => return (0..line.n).for_each(|i| visit(i, scalar(i, obs))),
-    };
+    if !aniso_lanes::addressable(level) {
+        return (0..line.n).for_each(|i| visit(i, scalar(i, obs)));
+    }
+    let len = texels.lane_buffer_len();
     for first in (0..line.n).step_by(PROBE_LANES) {
         let step = ProbeStep {
             first,
@@ -244,12 +250,13 @@ fn each_probe<'a, S: TexelSource<'a>, O: TexelObserver>(
             dt: line.dt,
             inv_n: line.inv_n,
         };
-        let values = aniso_lanes::byte_probes(level, bytes, &step, wrap);
+        let blocks = aniso_lanes::probe_blocks(level, len, &step, wrap);
+        let (values, served) = texels.block_values(&blocks);
         for i in first..line.n.min(first + PROBE_LANES) {
             let lane = i - first;
-            let value = if values.served(lane) {
-                values.each_texel_read(lane, |x, y| obs.touch(m, x, y));
-                values.value(bytes, lane)
+            let value = if served[lane] {
+                blocks.each_texel_read(lane, |x, y| obs.touch(m, x, y));
+                values[lane]
             } else {
                 scalar(i, obs)
             };
@@ -259,6 +266,7 @@ fn each_probe<'a, S: TexelSource<'a>, O: TexelObserver>(
 }
 
 /// [`probes`] for the rare level whose storage kind differs from level 0's.
+#[allow(clippy::too_many_arguments)]
 #[cold]
 #[inline(never)]
 fn probes_other_kind<O: TexelObserver>(
@@ -268,9 +276,10 @@ fn probes_other_kind<O: TexelObserver>(
     line: &ProbeLine,
     weights: (&[f32], f32),
     wrap: (WrapMode, WrapMode),
+    tiles: ThreadTiles<'_>,
     obs: &mut O,
 ) -> Vec4 {
-    with_texel_source!(&level.texels, |texels| probes(
+    with_texel_source!(&level.texels, tiles, |texels| probes(
         level, texels, m, q, line, weights, wrap, obs
     ))
 }
@@ -338,6 +347,7 @@ mod tests {
                 &q,
                 16.0,
                 (WrapMode::Periodic, WrapMode::Mirror),
+                ThreadTiles::none(),
                 &mut NoTextureTiles,
             );
             assert!(
@@ -372,8 +382,24 @@ mod tests {
             ..along_s
         };
         let wrap = (WrapMode::Periodic, WrapMode::Periodic);
-        let a = sample(&p, &along_s, 16.0, wrap, &mut NoTextureTiles).x;
-        let b = sample(&p, &along_t, 16.0, wrap, &mut NoTextureTiles).x;
+        let a = sample(
+            &p,
+            &along_s,
+            16.0,
+            wrap,
+            ThreadTiles::none(),
+            &mut NoTextureTiles,
+        )
+        .x;
+        let b = sample(
+            &p,
+            &along_t,
+            16.0,
+            wrap,
+            ThreadTiles::none(),
+            &mut NoTextureTiles,
+        )
+        .x;
         assert!((a - 0.5).abs() < 0.1, "{a}");
         assert!(b > 0.9, "{b}");
     }
@@ -424,9 +450,84 @@ mod tests {
         }
     }
 
-    /// The vector probe steps on 8-bit levels give the bits and the texel reads of the
-    /// scalar probes at every vector level, for every probe count from 1 to past
-    /// MAX_STACK_PROBES, inside the level and across its edges and tile edges.
+    /// `float` stored as halves (the values of the tests' pyramids are bytes / 255 or
+    /// their sRGB decoding, which round to halves; the probes compare with themselves).
+    fn half_pyramid(float: &MipPyramid) -> MipPyramid {
+        let levels = float
+            .levels
+            .iter()
+            .map(|l| MipLevel {
+                texels: super::super::texels::Texels::Half(vec![])
+                    .same_kind_from(&l.to_rgba_f32(), "t")
+                    .unwrap(),
+                ..l.clone()
+            })
+            .collect();
+        MipPyramid { levels }
+    }
+
+    /// On every level of `pyramid` the probes of `q` read by [`each_probe`] at every vector
+    /// level have the bits and the texel reads of `bilinear_from` at each probe's position.
+    fn probes_match_the_scalar_probe(
+        pyramid: &MipPyramid,
+        q: &TextureQuery,
+        wrap: (WrapMode, WrapMode),
+    ) {
+        let f = footprint(pyramid, q, 1024.0);
+        let n = probe_count(f.aspect);
+        let (sin, cos) = if n > 1 {
+            f.axes.direction()
+        } else {
+            (0.0, 1.0)
+        };
+        let ll = 2.0 * (f.axes.major - f.axes.minor);
+        let line = ProbeLine {
+            n,
+            ds: cos * ll * 0.5,
+            dt: sin * ll * 0.5,
+            inv_n: 1.0 / n as f32,
+            gauss_scale: f.axes.major / ll,
+        };
+        for (m, level) in pyramid.levels.iter().enumerate().step_by(2) {
+            with_texel_source!(&level.texels, ThreadTiles::none(), |texels| {
+                let mut scalar_log = TouchLog::default();
+                let scalar: Vec<u32> = (0..n)
+                    .flat_map(|i| {
+                        let p = 2.0 * (i as f32 + 0.5) * line.inv_n - 1.0;
+                        let (s, t) = (q.s + p * line.ds, q.t + p * line.dt);
+                        bilinear_from(level, texels, m, s, t, wrap, &mut scalar_log)
+                            .to_array()
+                            .map(f32::to_bits)
+                    })
+                    .collect();
+                for vector_level in crate::simd::Level::supported() {
+                    let mut log = TouchLog::default();
+                    let mut lanes = Vec::new();
+                    crate::simd::run_at(
+                        vector_level,
+                        #[inline(always)]
+                        || {
+                            each_probe(level, texels, m, q, &line, wrap, &mut log, |i, v| {
+                                assert_eq!(i, lanes.len() / 4);
+                                lanes.extend(v.to_array().map(f32::to_bits));
+                            })
+                        },
+                    );
+                    assert_eq!(lanes, scalar, "{vector_level:?} level {m} n {n} {q:?}");
+                    assert!(
+                        log.0 == scalar_log.0,
+                        "{vector_level:?} level {m}: reads differ"
+                    );
+                }
+            });
+        }
+    }
+
+    /// The probe steps in lanes give the bits and the texel reads of the scalar probe
+    /// (`bilinear_from` at each probe's position) on 8-bit, half and f32 levels, at every
+    /// vector level, for every probe count from 1 to past MAX_STACK_PROBES, inside the level
+    /// and across its edges and tile edges; whole lookups agree across the kinds holding the
+    /// same values.
     #[test]
     fn every_supported_level_gives_the_scalar_probe_bits() {
         let mut state = 7u32;
@@ -437,6 +538,7 @@ mod tests {
         let mut counts = std::collections::BTreeSet::new();
         for (w, h) in [(150, 70), (13, 7), (256, 256)] {
             let (bytes, float) = byte_and_float_pyramids(w, h, w * h);
+            let half = half_pyramid(&float);
             for n in (1..=140).chain([200, 257]) {
                 for (minor, wrap) in [
                     (0.4 / w as f32, (WrapMode::Periodic, WrapMode::Periodic)),
@@ -445,22 +547,26 @@ mod tests {
                 ] {
                     let q = query_with_probes(n, minor, &mut random);
                     counts.insert(probe_count(footprint(&bytes, &q, 1024.0).aspect));
-                    let mut scalar_log = TouchLog::default();
-                    let scalar = sample(&float, &q, 1024.0, wrap, &mut scalar_log);
+                    for pyramid in [&bytes, &float, &half] {
+                        probes_match_the_scalar_probe(pyramid, &q, wrap);
+                    }
+                    let none = ThreadTiles::none();
+                    let mut float_log = TouchLog::default();
+                    let float_value = sample(&float, &q, 1024.0, wrap, none, &mut float_log);
                     for level in crate::simd::Level::supported() {
                         let mut log = TouchLog::default();
                         let lanes = crate::simd::run_at(
                             level,
                             #[inline(always)]
-                            || sample_at_level(&bytes, &q, 1024.0, wrap, &mut log),
+                            || sample_at_level(&bytes, &q, 1024.0, wrap, none, &mut log),
                         );
                         assert_eq!(
                             lanes.to_array().map(f32::to_bits),
-                            scalar.to_array().map(f32::to_bits),
+                            float_value.to_array().map(f32::to_bits),
                             "{level:?} {w}x{h} n {n} {q:?}"
                         );
                         assert!(
-                            log.0 == scalar_log.0,
+                            log.0 == float_log.0,
                             "{level:?} {w}x{h} n {n}: reads differ"
                         );
                     }

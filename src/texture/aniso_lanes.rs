@@ -1,5 +1,6 @@
-//! Bilinear blocks on an 8-bit level, [`PROBE_LANES`] at a time: the anisotropic filter's
-//! probes, and the bilinear lookups of a batch (`Texture::sample_batch`).
+//! Bilinear blocks on a level, [`PROBE_LANES`] at a time: the anisotropic filter's probes (on
+//! levels of every storage kind, resident or demand-loaded), and the bilinear lookups of a
+//! batch on an 8-bit level (`Texture::sample_batch`).
 //!
 //! Texel coordinates, the integer floor, the wrap of each axis and the tile addressing of
 //! each of a block's four texels run in lanes, one probe per lane, so that inside
@@ -23,7 +24,7 @@
 use glam::Vec4;
 
 use super::mip_pyramid::MipLevel;
-use super::texels::{ByteTexels, FlatTexels};
+use super::texels::FlatTexels;
 use super::tiles::TEXTURE_TILE_SIZE;
 use super::WrapMode;
 
@@ -74,10 +75,13 @@ struct AxisTexels {
 }
 
 /// Where one step's probes read: the index of each of a block's four texels (corner-major:
-/// upper left, upper right, lower left, lower right), the blend fractions, which texels are
+/// upper left, upper right, lower left, lower right) in the level's buffer, and the number
+/// of its tile with its index inside that tile; the blend fractions, which texels are
 /// inside the level, and which probes are served.
 pub(crate) struct ProbeBlocks {
     index: [Lanes<u32>; 4],
+    tile: [Lanes<u32>; 4],
+    in_tile: [Lanes<u32>; 4],
     fraction: [Lanes<f32>; 2],
     columns: AxisTexels,
     rows: AxisTexels,
@@ -94,21 +98,62 @@ impl ProbeBlocks {
         self.served[lane]
     }
 
-    /// The bilinear value of served probe `first + lane`, read from `texels` (those the
-    /// blocks were addressed in).
+    /// The bilinear value of served probe `first + lane`, read from `texels` (the buffer
+    /// the blocks were addressed in).
     #[inline(always)]
-    pub(crate) fn value(&self, texels: ByteTexels, lane: usize) -> Vec4 {
+    pub(crate) fn value<'a, F: FlatTexels<'a>>(&self, texels: F, lane: usize) -> Vec4 {
+        self.blend(lane, |corner| {
+            texels.texel(self.index[corner][lane] as usize)
+        })
+    }
+
+    /// The served lanes whose four texels lie in one tile (that of corner 0, [`Self::tile`]),
+    /// which [`ProbeBlocks::value_in_tile`] reads from that tile alone.
+    #[inline(always)]
+    pub(crate) fn single_tile(&self) -> Lanes<bool> {
+        let [a, b, c, d] = &self.tile;
+        lanes(|l| self.served[l] & (a[l] == b[l]) & (a[l] == c[l]) & (a[l] == d[l]))
+    }
+
+    /// The number of the tile (row of tiles times tiles per row, plus column) holding the
+    /// upper-left texel of lane `lane`'s block.
+    #[inline(always)]
+    pub(crate) fn tile(&self, lane: usize) -> u32 {
+        self.tile[0][lane]
+    }
+
+    /// [`ProbeBlocks::value`] of a [`ProbeBlocks::single_tile`] lane read from `tile`, the
+    /// texels of its tile; `None` when an index lies past them (a tile of another size than
+    /// the layout's, which the scalar path then reads).
+    #[inline(always)]
+    pub(crate) fn value_in_tile<'a, F: FlatTexels<'a>>(
+        &self,
+        tile: F,
+        lane: usize,
+    ) -> Option<Vec4> {
+        let len = u32::try_from(tile.len()).unwrap_or(u32::MAX);
+        let [a, b, c, d] = &self.in_tile;
+        ((a[lane] < len) & (b[lane] < len) & (c[lane] < len) & (d[lane] < len)).then(|| {
+            self.blend(lane, |corner| {
+                tile.texel(self.in_tile[corner][lane] as usize)
+            })
+        })
+    }
+
+    /// `bilinear_from`'s blend of lane `lane`'s four texels, each read by `texel(corner)`
+    /// unless it lies outside under a black wrap (zero).
+    #[inline(always)]
+    fn blend(&self, lane: usize, texel: impl Fn(usize) -> Vec4) -> Vec4 {
         let texel = |corner: usize| {
             let inside = !self.black
                 || self.columns.inside[corner & 1][lane] & self.rows.inside[corner >> 1][lane];
             if inside {
-                texels.texel(self.index[corner][lane] as usize)
+                texel(corner)
             } else {
                 Vec4::ZERO
             }
         };
         let (a, b, c, d) = (texel(0), texel(1), texel(2), texel(3));
-        // `bilinear_from`'s blend.
         let (fs, ft) = (self.fraction[0][lane], self.fraction[1][lane]);
         let top = a * (1.0 - fs) + b * fs;
         let bottom = c * (1.0 - fs) + d * fs;
@@ -133,7 +178,7 @@ impl ProbeBlocks {
     }
 }
 
-/// Whether [`byte_probes`] can address `level`: its texel indices fit in u32 and its
+/// Whether [`probe_blocks`] can address `level`: its texel indices fit in u32 and its
 /// sides in [`MAX_EXTENT`].
 #[inline(always)]
 pub(crate) fn addressable(level: &MipLevel) -> bool {
@@ -142,19 +187,20 @@ pub(crate) fn addressable(level: &MipLevel) -> bool {
         && u32::try_from(level.width as u64 * level.height as u64).is_ok()
 }
 
-/// Where the step's probes on `level` (its texels `texels`; [`addressable`]) read under
-/// `wrap`.
+/// Where the step's probes on `level` ([`addressable`]) read under `wrap`; `len` is the
+/// length of the buffer the level's texels are indexed in (a demand-loaded level, whose
+/// texels are read by tile, has none: `usize::MAX`).
 #[inline(always)]
-pub(crate) fn byte_probes(
+pub(crate) fn probe_blocks(
     level: &MipLevel,
-    texels: ByteTexels,
+    len: usize,
     step: &ProbeStep,
     wrap: (WrapMode, WrapMode),
 ) -> ProbeBlocks {
     let (x, y) = texel_positions(level, step);
-    byte_blocks(
+    blocks(
         level,
-        texels,
+        len,
         x,
         y,
         step.count.saturating_sub(step.first),
@@ -163,12 +209,12 @@ pub(crate) fn byte_probes(
 }
 
 /// Where bilinear lookups at the texel-space positions (`x`, `y`) (x = s * width - 0.5) of
-/// the first `count` lanes read on `level` (its texels `texels`; [`addressable`]) under
-/// `wrap`: the anisotropic probes, and the bilinear lookups of `Texture::sample_batch`.
+/// the first `count` lanes read on `level` ([`addressable`]; its texels in a buffer of `len`)
+/// under `wrap`: the anisotropic probes, and the bilinear lookups of `Texture::sample_batch`.
 #[inline(always)]
-pub(crate) fn byte_blocks(
+pub(crate) fn blocks(
     level: &MipLevel,
-    texels: ByteTexels,
+    len: usize,
     x: Lanes<f32>,
     y: Lanes<f32>,
     count: usize,
@@ -178,9 +224,11 @@ pub(crate) fn byte_blocks(
     let columns = wrap_axis(&i, level.width, wrap.0);
     let rows = wrap_axis(&j, level.height, wrap.1);
     let mut served = lanes(|l| (l < count) & columns.served[l] & rows.served[l]);
-    let index = block_indices(level, &columns, &rows, texels.len(), &mut served);
+    let addresses = block_addresses(level, &columns, &rows, len, &mut served);
     ProbeBlocks {
-        index,
+        index: addresses.index,
+        tile: addresses.tile,
+        in_tile: addresses.in_tile,
         fraction: [lanes(|l| x[l] - i[l] as f32), lanes(|l| y[l] - j[l] as f32)],
         columns,
         rows,
@@ -301,18 +349,29 @@ fn axis_texels(
     }
 }
 
-/// Index of each of the four texels of each lane's block, corner-major (upper left, upper
-/// right, lower left, lower right), as `TileLayout::locate` and `tile_start` give it; a
-/// lane with an index past the buffer (`len` texels) is left to the scalar path.
+/// Where each of the four texels of each lane's block lies, corner-major (upper left, upper
+/// right, lower left, lower right).
+struct BlockAddresses {
+    /// Index in the level's buffer, as `TileLayout::locate` and `tile_start` give it.
+    index: [Lanes<u32>; 4],
+    /// Number of the texel's tile: row of tiles times tiles per row, plus column.
+    tile: [Lanes<u32>; 4],
+    /// Index inside the tile (row-major with the tile's own width).
+    in_tile: [Lanes<u32>; 4],
+}
+
+/// [`BlockAddresses`] of each lane's block; a lane with a buffer index past the buffer
+/// (`len` texels) is left to the scalar path.
 #[inline(always)]
-fn block_indices(
+fn block_addresses(
     level: &MipLevel,
     columns: &AxisTexels,
     rows: &AxisTexels,
     len: usize,
     served: &mut Lanes<bool>,
-) -> [Lanes<u32>; 4] {
+) -> BlockAddresses {
     let (w, h) = (level.width, level.height);
+    let tiles_x = w.div_ceil(TEXTURE_TILE_SIZE);
     let tile_extent = |start: u32, size: u32| size.wrapping_sub(start).min(TEXTURE_TILE_SIZE);
     let column = |k: usize| {
         let x = &columns.texel[k];
@@ -327,22 +386,50 @@ fn block_indices(
         (start, height, lanes(|l| y[l] & TILE_MASK))
     };
     let (cols, rws) = ([column(0), column(1)], [row(0), row(1)]);
-    let index = |c: usize, r: usize| {
-        let (x_start, tile_w, local_x) = &cols[c];
-        let (y_start, tile_h, local_y) = &rws[r];
+    let in_tile = |c: usize, r: usize| {
+        let (_, tile_w, local_x) = &cols[c];
+        let (_, _, local_y) = &rws[r];
+        lanes(|l| local_y[l].wrapping_mul(tile_w[l]).wrapping_add(local_x[l]))
+    };
+    let tile = |c: usize, r: usize| {
+        let (x_start, ..) = &cols[c];
+        let (y_start, ..) = &rws[r];
+        let shift = TEXTURE_TILE_SIZE.trailing_zeros();
+        lanes(|l| {
+            (y_start[l] >> shift)
+                .wrapping_mul(tiles_x)
+                .wrapping_add(x_start[l] >> shift)
+        })
+    };
+    let index = |c: usize, r: usize, in_tile: &Lanes<u32>| {
+        let (x_start, ..) = &cols[c];
+        let (y_start, tile_h, _) = &rws[r];
         lanes(|l| {
             let tile_start = y_start[l]
                 .wrapping_mul(w)
                 .wrapping_add(x_start[l].wrapping_mul(tile_h[l]));
-            tile_start.wrapping_add(local_y[l].wrapping_mul(tile_w[l]).wrapping_add(local_x[l]))
+            tile_start.wrapping_add(in_tile[l])
         })
     };
-    let corners = [index(0, 0), index(1, 0), index(0, 1), index(1, 1)];
+    // Written out rather than mapped over the corners: `map` may be left out of line (see
+    // `lanes`).
+    let in_tile = [in_tile(0, 0), in_tile(1, 0), in_tile(0, 1), in_tile(1, 1)];
+    let tile = [tile(0, 0), tile(1, 0), tile(0, 1), tile(1, 1)];
+    let index = [
+        index(0, 0, &in_tile[0]),
+        index(1, 0, &in_tile[1]),
+        index(0, 1, &in_tile[2]),
+        index(1, 1, &in_tile[3]),
+    ];
     let len = u32::try_from(len).unwrap_or(u32::MAX);
     // `&` rather than `all`, whose early exit kept the test one lane at a time.
-    let [a, b, c, d] = &corners;
+    let [a, b, c, d] = &index;
     *served = lanes(|l| served[l] & (a[l] < len) & (b[l] < len) & (c[l] < len) & (d[l] < len));
-    corners
+    BlockAddresses {
+        index,
+        tile,
+        in_tile,
+    }
 }
 
 #[cfg(test)]

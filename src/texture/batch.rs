@@ -9,8 +9,9 @@ use crate::simd;
 
 use super::aniso_lanes::{self, lanes, Lanes, PROBE_LANES};
 use super::filter_closest_bilinear::bilinear_from;
+use super::micro_cache::ThreadTiles;
 use super::mip_pyramid::MipLevel;
-use super::texels::{with_texel_source, ByteTexels, TexelSource};
+use super::texels::{with_texel_source, ByteTexels, FlatTexels, TexelSource};
 use super::tiles::{NoTextureTiles, TexelObserver, TextureTileRecorder};
 use super::{wrap, FilterMode, FilterOptions, Texture, TextureQuery, TextureTileSet, WrapMode};
 
@@ -46,7 +47,8 @@ impl Texture {
         }
     }
 
-    /// [`Texture::batch_at`] told to `obs`, one lookup after the other.
+    /// [`Texture::batch_at`] told to `obs`, one lookup after the other, the thread's
+    /// micro-cache found once for the batch.
     fn batch_observed<O: TexelObserver>(
         &self,
         vector_level: simd::Level,
@@ -55,21 +57,34 @@ impl Texture {
         obs: &mut O,
         out: &mut [Vec4],
     ) {
+        self.with_lookup_tiles(|tiles| self.batch_in(vector_level, queries, opts, tiles, obs, out))
+    }
+
+    /// [`Texture::batch_observed`] with the tiles fetched through `tiles`.
+    fn batch_in<O: TexelObserver>(
+        &self,
+        vector_level: simd::Level,
+        queries: &[TextureQuery],
+        opts: &FilterOptions,
+        tiles: ThreadTiles<'_>,
+        obs: &mut O,
+        out: &mut [Vec4],
+    ) {
         if opts.filter != FilterMode::Bilinear {
             for (q, texel) in queries.iter().zip(out) {
                 obs.begin_lookup();
-                *texel = self.sample_observed(q, opts, obs);
+                *texel = self.sample_in(q, opts, Some(tiles), obs);
             }
             return;
         }
-        // `sample_observed`'s bilinear case, with the storage kind matched once.
+        // `sample_in`'s bilinear case, with the storage kind matched once.
         let level = &self.pyramid.levels[0];
         let wrap = (opts.wrap_s, opts.wrap_t);
         simd::run_at(
             vector_level,
             #[inline(always)]
             || {
-                with_texel_source!(&level.texels, |texels| {
+                with_texel_source!(&level.texels, tiles, |texels| {
                     match TexelSource::as_byte_texels(texels) {
                         Some(bytes) if aniso_lanes::addressable(level) => {
                             byte_bilinear_lanes(level, texels, bytes, queries, wrap, obs, out)
@@ -90,7 +105,7 @@ impl Texture {
 }
 
 /// The bilinear lookups of a resident 8-bit level, [`PROBE_LANES`] queries at a time:
-/// positions, wraps and tile addresses in lanes (`aniso_lanes::byte_blocks`), each value
+/// positions, wraps and tile addresses in lanes (`aniso_lanes::blocks`), each value
 /// read and blended on its own, and a lookup the lanes cannot address (far outside a level
 /// that repeats and is not a power of two wide) by [`bilinear_from`].
 #[inline(always)]
@@ -111,7 +126,7 @@ fn byte_bilinear_lanes<'a, S: TexelSource<'a>, O: TexelObserver>(
         let t: Lanes<f32> = lanes(|l| wrap::reduce_coordinate(query(l).t, wrap.1));
         let x = lanes(|l| s[l] * w - 0.5);
         let y = lanes(|l| t[l] * h - 0.5);
-        let blocks = aniso_lanes::byte_blocks(level, bytes, x, y, chunk.len(), wrap);
+        let blocks = aniso_lanes::blocks(level, bytes.len(), x, y, chunk.len(), wrap);
         for (l, texel) in texels_out.iter_mut().enumerate() {
             obs.begin_lookup();
             *texel = if blocks.served(l) {

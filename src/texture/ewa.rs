@@ -15,6 +15,7 @@ use glam::Vec4;
 
 use super::ellipse;
 use super::filter_closest_bilinear::bilinear;
+use super::micro_cache::ThreadTiles;
 use super::mip_pyramid::{MipLevel, MipPyramid};
 use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
@@ -25,13 +26,14 @@ use super::{TextureQuery, WrapMode};
 const ALPHA: f32 = 2.0;
 
 /// The EWA lookup (kept out of line: it is large and would crowd the other filters'
-/// registers in `Texture::sample`).
+/// registers in `Texture::sample`); demand-loaded levels read through `tiles`.
 #[inline(never)]
 pub(crate) fn sample<O: TexelObserver>(
     pyramid: &MipPyramid,
     q: &TextureQuery,
     max_aniso: f32,
     wrap: (WrapMode, WrapMode),
+    tiles: ThreadTiles<'_>,
     obs: &mut O,
 ) -> Vec4 {
     let f = ellipse::footprint(pyramid, q, max_aniso);
@@ -39,7 +41,7 @@ pub(crate) fn sample<O: TexelObserver>(
     if f.magnified && f.axes.major * l0.width.max(l0.height) as f32 <= 1.0 {
         // The whole ellipse fits inside one texel: the reconstruction filter
         // (bilinear) is the right kernel, as for a point sample.
-        return bilinear(l0, 0, q.s, q.t, wrap, obs);
+        return bilinear(l0, 0, q.s, q.t, wrap, Some(tiles), obs);
     }
     let (sin, cos) = f.axes.theta().sin_cos();
     let major = [cos * f.axes.major, sin * f.axes.major];
@@ -52,7 +54,7 @@ pub(crate) fn sample<O: TexelObserver>(
         }
         let m = f.levels.levels[k];
         let level = &pyramid.levels[m];
-        sum += w * with_texel_source!(&level.texels, |texels| ewa_on_level(
+        sum += w * with_texel_source!(&level.texels, tiles, |texels| ewa_on_level(
             level, texels, m, q.s, q.t, major, minor, wrap, obs
         ));
     }
@@ -168,6 +170,7 @@ mod tests {
                 &q,
                 16.0,
                 (WrapMode::Clamp, WrapMode::Periodic),
+                ThreadTiles::none(),
                 &mut NoTextureTiles,
             );
             assert!((v - Vec4::splat(0.3)).abs().max_element() < 1e-5);

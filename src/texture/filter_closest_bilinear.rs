@@ -7,6 +7,7 @@
 
 use glam::Vec4;
 
+use super::micro_cache::ThreadTiles;
 use super::mip_pyramid::MipLevel;
 use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
@@ -22,12 +23,13 @@ fn to_texel(s: f32, n: u32) -> (f32, f32) {
     (i, x - i)
 }
 
-/// Reads texel (i, j) after wrapping; black outside for [`WrapMode::Black`].
+/// Reads texel (i, j) after wrapping, a demand-loaded level's tile through `tiles` (`None`:
+/// through the thread's micro-cache, found here); black outside for [`WrapMode::Black`].
 ///
-/// The storage kind is picked here rather than in [`MipLevel::texel_vec4`]: a closure of
-/// this function's own is the body of the thread's micro-cache access, so that access is
-/// compiled for the closest lookup alone, not shared with (and called out of line for)
-/// every other reader of `texel_vec4`.
+/// A lookup of a single texel finds the thread's micro-cache here rather than in
+/// `Texture::sample`: the thread-local access, out of line, then holds this fetch alone, and
+/// the texel's load is reached in fewer steps (measured in docs/texture-filtering.md).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn fetch<O: TexelObserver>(
     level: &MipLevel,
@@ -35,6 +37,7 @@ fn fetch<O: TexelObserver>(
     i: f32,
     j: f32,
     wrap: (WrapMode, WrapMode),
+    tiles: Option<ThreadTiles<'_>>,
     obs: &mut O,
 ) -> Vec4 {
     match (
@@ -44,20 +47,29 @@ fn fetch<O: TexelObserver>(
         (Some(x), Some(y)) => {
             obs.touch(level_index, x, y);
             let layout = level.layout();
-            with_texel_source!(&level.texels, |texels| texels.texel_at(layout, x, y))
+            match tiles {
+                Some(tiles) => {
+                    with_texel_source!(&level.texels, tiles, |texels| texels.texel_at(layout, x, y))
+                }
+                None => with_texel_source!(&level.texels, |texels| texels.texel_at(layout, x, y)),
+            }
         }
         _ => Vec4::ZERO,
     }
 }
 
 /// The texel nearest to (s, t); a fraction of exactly 0.5 picks the lower texel, as in OIIO.
-#[inline]
+/// A demand-loaded level reads its tile through `tiles` (`None`: the thread's micro-cache,
+/// found for this one fetch).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn closest<O: TexelObserver>(
     level: &MipLevel,
     level_index: usize,
     s: f32,
     t: f32,
     wrap: (WrapMode, WrapMode),
+    tiles: Option<ThreadTiles<'_>>,
     obs: &mut O,
 ) -> Vec4 {
     let (mut i, fs) = to_texel(s, level.width);
@@ -68,7 +80,7 @@ pub(crate) fn closest<O: TexelObserver>(
     if ft > 0.5 {
         j += 1.0;
     }
-    fetch(level, level_index, i, j, wrap, obs)
+    fetch(level, level_index, i, j, wrap, tiles, obs)
 }
 
 /// floor(x) as an integer for |x| < 2^31 (saturating beyond, 0 for NaN): truncate,
@@ -81,7 +93,9 @@ fn floor_i32(x: f32) -> i32 {
 }
 
 /// Bilinear interpolation of the four texels around (s, t): [`bilinear_from`] with the
-/// level's storage kind picked here.
+/// level's storage kind picked here, a demand-loaded level read through `tiles` (`None`:
+/// the thread's micro-cache, found here, as [`closest`] finds it).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn bilinear<O: TexelObserver>(
     level: &MipLevel,
@@ -89,21 +103,34 @@ pub(crate) fn bilinear<O: TexelObserver>(
     s: f32,
     t: f32,
     wrap: (WrapMode, WrapMode),
+    tiles: Option<ThreadTiles<'_>>,
     obs: &mut O,
 ) -> Vec4 {
-    with_texel_source!(&level.texels, |texels| bilinear_from(
-        level,
-        texels,
-        level_index,
-        s,
-        t,
-        wrap,
-        obs
-    ))
+    match tiles {
+        Some(tiles) => with_texel_source!(&level.texels, tiles, |texels| bilinear_from(
+            level,
+            texels,
+            level_index,
+            s,
+            t,
+            wrap,
+            obs
+        )),
+        None => with_texel_source!(&level.texels, |texels| bilinear_from(
+            level,
+            texels,
+            level_index,
+            s,
+            t,
+            wrap,
+            obs
+        )),
+    }
 }
 
 /// [`bilinear`] kept out of line, for the rare level whose storage kind differs from the
 /// one a mip-mapped filter was compiled for.
+#[allow(clippy::too_many_arguments)]
 #[cold]
 #[inline(never)]
 pub(crate) fn bilinear_other_kind<O: TexelObserver>(
@@ -112,9 +139,10 @@ pub(crate) fn bilinear_other_kind<O: TexelObserver>(
     s: f32,
     t: f32,
     wrap: (WrapMode, WrapMode),
+    tiles: ThreadTiles<'_>,
     obs: &mut O,
 ) -> Vec4 {
-    bilinear(level, level_index, s, t, wrap, obs)
+    bilinear(level, level_index, s, t, wrap, Some(tiles), obs)
 }
 
 /// Bilinear interpolation of the four texels around (s, t), reading `texels` (the
@@ -152,17 +180,19 @@ pub(crate) fn bilinear_from<'a, S: TexelSource<'a>, O: TexelObserver>(
         };
         return match texels.bilinear_block(level.layout(), xi, yi, blend) {
             Some(v) => v,
-            None => bilinear_wrapped(level, level_index, s, t, wrap, obs),
+            None => bilinear_wrapped(level, texels, level_index, s, t, wrap, obs),
         };
     }
-    bilinear_wrapped(level, level_index, s, t, wrap, obs)
+    bilinear_wrapped(level, texels, level_index, s, t, wrap, obs)
 }
 
 /// [`bilinear`] for footprints that reach past an edge: every texel goes through
-/// [`wrap_texel`]; texels outside under [`WrapMode::Black`] count as zero.
+/// [`wrap_texel`]; texels outside under [`WrapMode::Black`] count as zero. Reads `texels`,
+/// the level's own.
 #[inline(never)]
-fn bilinear_wrapped<O: TexelObserver>(
-    level: &MipLevel,
+fn bilinear_wrapped<'a, S: TexelSource<'a>, O: TexelObserver>(
+    level: &'a MipLevel,
+    texels: S,
     level_index: usize,
     s: f32,
     t: f32,
@@ -170,18 +200,19 @@ fn bilinear_wrapped<O: TexelObserver>(
     obs: &mut O,
 ) -> Vec4 {
     if wrap == (WrapMode::Periodic, WrapMode::Periodic) {
-        if let Some(v) = bilinear_periodic(level, level_index, s, t, obs) {
+        if let Some(v) = bilinear_periodic(level, texels, level_index, s, t, obs) {
             return v;
         }
     }
-    bilinear_any_wrap(level, level_index, s, t, wrap, obs)
+    bilinear_any_wrap(level, texels, level_index, s, t, wrap, obs)
 }
 
 /// Bilinear interpolation with every texel mapped by [`wrap_texel`]: any wrap mode,
 /// any coordinate.
 #[inline(always)]
-fn bilinear_any_wrap<O: TexelObserver>(
-    level: &MipLevel,
+fn bilinear_any_wrap<'a, S: TexelSource<'a>, O: TexelObserver>(
+    level: &'a MipLevel,
+    texels: S,
     level_index: usize,
     s: f32,
     t: f32,
@@ -199,20 +230,31 @@ fn bilinear_any_wrap<O: TexelObserver>(
         wrap_texel(j + 1.0, level.height, wrap.1),
     ];
     let layout = level.layout();
-    // One pick of the storage kind (one micro-cache access) for the four texels.
-    let corner = with_texel_source!(&level.texels, |texels| {
-        let mut corner = [Vec4::ZERO; 4];
-        for (row, y) in ys.iter().enumerate() {
-            let Some(y) = *y else { continue };
-            for (col, x) in xs.iter().enumerate() {
-                if let Some(x) = *x {
-                    obs.touch(level_index, x, y);
-                    corner[2 * row + col] = texels.texel_at(layout, x, y);
+    // For a demand-loaded level, one tile fetch when all four are inside and share a tile.
+    let corner = {
+        match (xs, ys) {
+            ([Some(x0), Some(x1)], [Some(y0), Some(y1)]) => {
+                obs.touch(level_index, x0, y0);
+                obs.touch(level_index, x1, y0);
+                obs.touch(level_index, x0, y1);
+                obs.touch(level_index, x1, y1);
+                texels.corner_texels(layout, [x0, x1], [y0, y1])
+            }
+            _ => {
+                let mut corner = [Vec4::ZERO; 4];
+                for (row, y) in ys.iter().enumerate() {
+                    let Some(y) = *y else { continue };
+                    for (col, x) in xs.iter().enumerate() {
+                        if let Some(x) = *x {
+                            obs.touch(level_index, x, y);
+                            corner[2 * row + col] = texels.texel_at(layout, x, y);
+                        }
+                    }
                 }
+                corner
             }
         }
-        corner
-    });
+    };
     let top = corner[0] * (1.0 - fs) + corner[1] * fs;
     let bottom = corner[2] * (1.0 - fs) + corner[3] * fs;
     top * (1.0 - ft) + bottom * ft
@@ -223,8 +265,9 @@ fn bilinear_any_wrap<O: TexelObserver>(
 /// footprint is larger than the texture, then `None`). Same texels and weights as
 /// [`wrap_texel`].
 #[inline(always)]
-fn bilinear_periodic<O: TexelObserver>(
-    level: &MipLevel,
+fn bilinear_periodic<'a, S: TexelSource<'a>, O: TexelObserver>(
+    level: &'a MipLevel,
+    texels: S,
     level_index: usize,
     s: f32,
     t: f32,
@@ -250,15 +293,10 @@ fn bilinear_periodic<O: TexelObserver>(
     obs.touch(level_index, x0, y1);
     obs.touch(level_index, x1, y1);
     let layout = level.layout();
-    // One pick of the storage kind (for a demand-loaded level, one micro-cache access and
-    // not one per texel: the coarse levels a trilinear lookup reads are mostly edges).
-    let [a, b, c, d] = with_texel_source!(&level.texels, |texels| [
-        (x0, y0),
-        (x1, y0),
-        (x0, y1),
-        (x1, y1)
-    ]
-    .map(|(x, y)| texels.texel_at(layout, x, y)));
+    // For a demand-loaded level, one tile fetch when the four texels share a tile (the
+    // coarse levels a trilinear lookup reads are mostly edges, and a level of one tile
+    // always does).
+    let [a, b, c, d] = texels.corner_texels(layout, [x0, x1], [y0, y1]);
     let top = a * (1.0 - fs) + b * fs;
     let bottom = c * (1.0 - fs) + d * fs;
     Some(top * (1.0 - ft) + bottom * ft)
@@ -279,11 +317,14 @@ mod tests {
     }
 
     const P: (WrapMode, WrapMode) = (WrapMode::Periodic, WrapMode::Periodic);
+    /// Resident levels fetch no tile.
+    const NONE: ThreadTiles<'static> = ThreadTiles::none();
+    const NO_TILES: Option<ThreadTiles<'static>> = Some(NONE);
 
     #[test]
     fn bilinear_hits_texel_centres_and_interpolates_between() {
         let l = ramp();
-        let at = |s, t, w| bilinear(&l, 0, s, t, w, &mut NoTextureTiles).x;
+        let at = |s, t, w| bilinear(&l, 0, s, t, w, NO_TILES, &mut NoTextureTiles).x;
         assert_eq!(at(0.125, 0.25, P), 0.0);
         assert_eq!(at(0.375, 0.75, P), 11.0);
         assert!((at(0.25, 0.5, P) - 5.5).abs() < 1e-6);
@@ -294,7 +335,9 @@ mod tests {
         let black = (WrapMode::Black, WrapMode::Black);
         // Half of texel 0, half of black.
         assert!(at(0.0, 0.25, black).abs() < 1e-6);
-        assert!((bilinear(&l, 0, 0.0, 0.25, black, &mut NoTextureTiles).w - 0.5).abs() < 1e-6);
+        assert!(
+            (bilinear(&l, 0, 0.0, 0.25, black, NO_TILES, &mut NoTextureTiles).w - 0.5).abs() < 1e-6
+        );
     }
 
     #[test]
@@ -304,7 +347,7 @@ mod tests {
         for k in 0..200 {
             let s = -1.3 + 0.0371 * k as f32;
             let t = 2.1 - 0.0243 * k as f32;
-            let v = bilinear(&l, 0, s, t, P, &mut NoTextureTiles);
+            let v = bilinear(&l, 0, s, t, P, NO_TILES, &mut NoTextureTiles);
             assert!((v - Vec4::ONE).abs().max_element() < 1e-6);
         }
     }
@@ -362,15 +405,38 @@ mod tests {
             let s = -0.2 + 1.4 * ((k * 37) % 2000) as f32 / 2000.0;
             let t = -0.2 + 1.4 * ((k * 91) % 2000) as f32 / 2000.0;
             for wrap in [P, (WrapMode::Black, WrapMode::Clamp)] {
-                let fast = bilinear(&l, 0, s, t, wrap, &mut NoTextureTiles);
-                let slow = bilinear_wrapped(&l, 0, s, t, wrap, &mut NoTextureTiles);
+                let fast = bilinear(&l, 0, s, t, wrap, NO_TILES, &mut NoTextureTiles);
+                let slow = with_texel_source!(&l.texels, NONE, |x| bilinear_wrapped(
+                    &l,
+                    x,
+                    0,
+                    s,
+                    t,
+                    wrap,
+                    &mut NoTextureTiles
+                ));
                 assert_eq!(fast, slow, "s {s} t {t}");
             }
             // The integer periodic path against wrap_texel, also a period away.
             for shift in [-1.0f32, 0.0, 0.9] {
                 let (ss, ts) = (s + shift, t - shift);
-                let generic = bilinear_any_wrap(&l, 0, ss, ts, P, &mut NoTextureTiles);
-                if let Some(v) = bilinear_periodic(&l, 0, ss, ts, &mut NoTextureTiles) {
+                let generic = with_texel_source!(&l.texels, NONE, |x| bilinear_any_wrap(
+                    &l,
+                    x,
+                    0,
+                    ss,
+                    ts,
+                    P,
+                    &mut NoTextureTiles
+                ));
+                if let Some(v) = with_texel_source!(&l.texels, NONE, |x| bilinear_periodic(
+                    &l,
+                    x,
+                    0,
+                    ss,
+                    ts,
+                    &mut NoTextureTiles
+                )) {
                     assert_eq!(v, generic, "s {ss} t {ts}");
                     periodic += 1;
                 }
@@ -388,7 +454,7 @@ mod tests {
     #[test]
     fn closest_rounds_half_down() {
         let l = ramp();
-        let at = |s: f32| closest(&l, 0, s, 0.25, P, &mut NoTextureTiles).x;
+        let at = |s: f32| closest(&l, 0, s, 0.25, P, NO_TILES, &mut NoTextureTiles).x;
         assert_eq!(at(0.2), 0.0);
         assert_eq!(at(0.26), 1.0);
         // s * 4 = 1 exactly: fraction 0.5 stays on texel 0.

@@ -3,8 +3,9 @@
 //! a tile the thread used lately touches only the thread's own memory (no lock, no shared
 //! write, no reference count), so lookups scale with the cores.
 //!
-//! A lookup finds the thread's micro-cache once ([`with_thread_tiles`]) and every fetch
-//! of its footprint goes to it directly. A hit compares the packed key (level id, tile
+//! A lookup, or a batch of lookups, finds the thread's micro-cache once
+//! ([`with_thread_tiles`]) and hands it down as a [`ThreadTiles`], as OpenImageIO hands its
+//! per-thread info to every lookup; every fetch of its footprints goes to it directly. A hit compares the packed key (level id, tile
 //! index) with the keys of the entries that served the last two fetches (a footprint's
 //! fetches nearly always share its tile), else with all 8, adds one to a plain per-entry
 //! counter and reads the tile through the entry's `Arc` without cloning it. An entry owns an `Arc` of its tile, so a tile stays valid while the thread
@@ -125,10 +126,13 @@ thread_local! {
     static MICRO: RefCell<MicroCache> = const { RefCell::new(MicroCache::new()) };
 }
 
-/// This thread's micro-cache, found once for a whole lookup: the filters' fetches then
-/// reach it without a thread-local access each (one lookup makes one fetch per bilinear
-/// block, per probe, per EWA texel). `None` while the thread is being torn down: fetches
-/// then go to the shared cache every time.
+/// This thread's micro-cache, found once for a whole lookup or batch of lookups (the
+/// counterpart of OpenImageIO's per-thread `Perthread` info handed to every lookup): the
+/// filters' fetches then reach it without a thread-local access each (one lookup makes one
+/// fetch per bilinear block, per step of anisotropic probes, per EWA texel), and code that
+/// runs inside `simd::dispatch` receives it as an argument rather than being inlined into
+/// the thread-local access, which is compiled at the baseline vector level. `None` while
+/// the thread is being torn down: fetches then go to the shared cache every time.
 #[derive(Clone, Copy)]
 pub(crate) struct ThreadTiles<'t>(Option<&'t RefCell<MicroCache>>);
 
@@ -151,6 +155,13 @@ pub(crate) fn with_thread_tiles<R>(body: impl FnOnce(ThreadTiles<'_>) -> R) -> R
 }
 
 impl ThreadTiles<'_> {
+    /// No micro-cache: the lookups of a resident texture, which fetch no tile, and fetches
+    /// that go to the shared cache every time.
+    #[inline(always)]
+    pub(crate) const fn none() -> Self {
+        ThreadTiles(None)
+    }
+
     /// `read` of tile `index` of the level with id `level`: from the micro-cache (the
     /// tiles of the last fetches first), or else from `fetch` (the shared cache or the
     /// file), kept for the next fetches. `None` when `fetch` finds no tile (it cannot be

@@ -65,6 +65,7 @@ pub use tiles::{TextureTileSet, TEXTURE_TILE_SIZE};
 pub use tx_writer::{write_tx, TxCompression, TxOptions};
 
 use demand_tiles::DemandFile;
+use micro_cache::ThreadTiles;
 use tiles::{NoTextureTiles, TexelObserver, TextureTileRecorder};
 
 /// How 8-bit RGB texels are decoded on load (alpha is always linear).
@@ -531,11 +532,29 @@ impl Texture {
         }
     }
 
-    #[inline]
+    // Out of line, as LLVM compiled it before the lookups took their tiles as an argument:
+    // inlined into a caller's loop, it left `closest` out of line and a call per lookup.
+    #[inline(never)]
     fn sample_observed<O: TexelObserver>(
         &self,
         q: &TextureQuery,
         opts: &FilterOptions,
+        obs: &mut O,
+    ) -> Vec4 {
+        self.sample_in(q, opts, None, obs)
+    }
+
+    /// [`Texture::sample_observed`] with the lookup's tiles fetched through `tiles`, or with
+    /// `None` through the thread's micro-cache found for this lookup: by each mip-mapped
+    /// filter before it starts (before the anisotropic filter's vector dispatch, whose code
+    /// inlined into the out-of-line thread-local access would lose its vector level), and by
+    /// closest and bilinear at their single fetch (see `filter_closest_bilinear::fetch`).
+    #[inline(always)]
+    fn sample_in<O: TexelObserver>(
+        &self,
+        q: &TextureQuery,
+        opts: &FilterOptions,
+        tiles: Option<ThreadTiles<'_>>,
         obs: &mut O,
     ) -> Vec4 {
         let wrap = (opts.wrap_s, opts.wrap_t);
@@ -547,14 +566,51 @@ impl Texture {
         let p = &self.pyramid;
         match opts.filter {
             FilterMode::Closest => {
-                filter_closest_bilinear::closest(&p.levels[0], 0, q.s, q.t, wrap, obs)
+                filter_closest_bilinear::closest(&p.levels[0], 0, q.s, q.t, wrap, tiles, obs)
             }
             FilterMode::Bilinear => {
-                filter_closest_bilinear::bilinear(&p.levels[0], 0, q.s, q.t, wrap, obs)
+                filter_closest_bilinear::bilinear(&p.levels[0], 0, q.s, q.t, wrap, tiles, obs)
             }
-            FilterMode::Trilinear => trilinear::sample(p, q, wrap, obs),
-            FilterMode::Aniso => aniso::sample(p, q, opts.max_aniso, wrap, obs),
-            FilterMode::Ewa => ewa::sample(p, q, opts.max_aniso, wrap, obs),
+            FilterMode::Trilinear => self.with_tiles(
+                tiles,
+                #[inline(always)]
+                |tiles| trilinear::sample(p, q, wrap, tiles, obs),
+            ),
+            FilterMode::Aniso => self.with_tiles(
+                tiles,
+                #[inline(always)]
+                |tiles| aniso::sample(p, q, opts.max_aniso, wrap, tiles, obs),
+            ),
+            FilterMode::Ewa => self.with_tiles(
+                tiles,
+                #[inline(always)]
+                |tiles| ewa::sample(p, q, opts.max_aniso, wrap, tiles, obs),
+            ),
+        }
+    }
+
+    /// `body` given `tiles`, or else the micro-cache the lookups of this texture fetch their
+    /// tiles through ([`Texture::with_lookup_tiles`]).
+    #[inline(always)]
+    fn with_tiles<R>(
+        &self,
+        tiles: Option<ThreadTiles<'_>>,
+        body: impl FnOnce(ThreadTiles<'_>) -> R,
+    ) -> R {
+        match tiles {
+            Some(tiles) => body(tiles),
+            None => self.with_lookup_tiles(body),
+        }
+    }
+
+    /// `body` given the micro-cache the lookups of this texture fetch their tiles through:
+    /// the thread's, found once, for a demand-loaded texture; none for a resident one, which
+    /// then makes no thread-local access.
+    #[inline(always)]
+    fn with_lookup_tiles<R>(&self, body: impl FnOnce(ThreadTiles<'_>) -> R) -> R {
+        match self.demand {
+            Some(_) => micro_cache::with_thread_tiles(body),
+            None => body(ThreadTiles::none()),
         }
     }
 }

@@ -17,8 +17,10 @@ use std::sync::{Arc, LazyLock};
 use glam::Vec4;
 use half::f16;
 
+use super::aniso_lanes::{lanes, Lanes, ProbeBlocks};
 use super::demand_tiles::DemandLevel;
 use super::image_load::srgb_to_linear;
+use super::micro_cache::ThreadTiles;
 use super::tile_layout::TileLayout;
 use super::{ColorSpace, TextureError};
 
@@ -39,10 +41,29 @@ pub(crate) fn byte_table(color_space: ColorSpace) -> &'static [f32; 256] {
 }
 
 /// Evaluates `$body` with `$source` bound to the [`TexelSource`] of `$texels`'s storage
-/// kind: one match, and `$body` compiled once per kind. For a demand-loaded level `$body`
-/// runs inside the thread's micro-cache access, found once for all its fetches.
+/// kind: one match, and `$body` compiled once per kind. A demand-loaded level fetches its
+/// tiles through `$tiles`, the lookup's [`ThreadTiles`](super::micro_cache::ThreadTiles)
+/// found once by its caller; without `$tiles`, `$body` runs inside the thread's micro-cache
+/// access, found here (for readers outside a lookup, such as `MipLevel::texel`).
 macro_rules! with_texel_source {
     ($texels:expr, |$source:ident| $body:expr) => {{
+        match $texels {
+            texels @ $crate::texture::texels::Texels::OnDemand(_) => {
+                $crate::texture::micro_cache::with_thread_tiles(
+                    #[inline(always)]
+                    |tiles| {
+                        $crate::texture::texels::with_texel_source!(texels, tiles, |$source| $body)
+                    },
+                )
+            }
+            texels => $crate::texture::texels::with_texel_source!(
+                texels,
+                $crate::texture::micro_cache::ThreadTiles::none(),
+                |$source| $body
+            ),
+        }
+    }};
+    ($texels:expr, $tiles:expr, |$source:ident| $body:expr) => {{
         #[allow(unused_imports)]
         use $crate::texture::texels::{
             ByteTexels, FlatTexels, FloatTexels, HalfTexels, TexelSource, Texels,
@@ -60,13 +81,10 @@ macro_rules! with_texel_source {
                 let $source = ByteTexels::new(texels, *colour);
                 $body
             }
-            Texels::OnDemand(level) => $crate::texture::micro_cache::with_thread_tiles(
-                #[inline(always)]
-                |tiles| {
-                    let $source = $crate::texture::demand_tiles::DemandTexels::new(level, tiles);
-                    $body
-                },
-            ),
+            Texels::OnDemand(level) => {
+                let $source = $crate::texture::demand_tiles::DemandTexels::new(level, $tiles);
+                $body
+            }
         }
     }};
 }
@@ -282,6 +300,9 @@ pub(crate) trait FlatTexels<'a>: Copy {
     /// Linear RGBA of texel `index` (in range).
     fn texel(self, index: usize) -> Vec4;
 
+    /// Number of texels.
+    fn len(self) -> usize;
+
     /// These texels as 8-bit texels, when they are.
     #[inline(always)]
     fn as_byte_texels(self) -> Option<ByteTexels<'a>> {
@@ -321,11 +342,42 @@ pub(crate) trait TexelSource<'a>: Copy {
         blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
     ) -> Option<R>;
 
-    /// These texels as resident 8-bit texels, when they are: the kind whose anisotropic
-    /// probes run in vector lanes (`aniso_lanes`).
+    /// These texels as resident 8-bit texels, when they are: the kind whose batched
+    /// bilinear lookups run in vector lanes (`Texture::sample_batch`).
     #[inline(always)]
     fn as_byte_texels(self) -> Option<ByteTexels<'a>> {
         None
+    }
+
+    /// The micro-cache these texels' tiles are fetched through (none for a resident kind):
+    /// what a filter hands on when it reads another level of the lookup.
+    #[inline(always)]
+    fn thread_tiles(self) -> ThreadTiles<'a> {
+        ThreadTiles::none()
+    }
+
+    /// Length of the buffer `aniso_lanes::blocks` addresses these texels in: the level's
+    /// texel count for a resident kind, `usize::MAX` for a demand-loaded level (read tile by
+    /// tile, with no buffer of its own).
+    fn lane_buffer_len(self) -> usize;
+
+    /// The bilinear values of the blocks of `blocks` (addressed on these texels' level with
+    /// [`TexelSource::lane_buffer_len`]) that these texels serve, and which lanes those are;
+    /// the others are left to the scalar path.
+    fn block_values(self, blocks: &ProbeBlocks) -> (Lanes<Vec4>, Lanes<bool>);
+
+    /// Texels (xs\[0\], ys\[0\]), (xs\[1\], ys\[0\]), (xs\[0\], ys\[1\]) and
+    /// (xs\[1\], ys\[1\]) of a level tiled by `layout` (all in range): a bilinear footprint
+    /// wrapped across the level's edge. One fetch each; a demand-loaded level fetches a tile
+    /// holding all four once.
+    #[inline(always)]
+    fn corner_texels(self, layout: TileLayout, xs: [usize; 2], ys: [usize; 2]) -> [Vec4; 4] {
+        [
+            self.texel_at(layout, xs[0], ys[0]),
+            self.texel_at(layout, xs[1], ys[0]),
+            self.texel_at(layout, xs[0], ys[1]),
+            self.texel_at(layout, xs[1], ys[1]),
+        ]
     }
 
     /// [`TexelSource::bilinear_block`] across a tile edge (about 1 block in 32): four
@@ -359,6 +411,24 @@ macro_rules! resident_texel_source {
             #[inline(always)]
             fn as_byte_texels(self) -> Option<ByteTexels<'a>> {
                 <Self as FlatTexels<'a>>::as_byte_texels(self)
+            }
+
+            #[inline(always)]
+            fn lane_buffer_len(self) -> usize {
+                FlatTexels::len(self)
+            }
+
+            #[inline(always)]
+            fn block_values(self, blocks: &ProbeBlocks) -> (Lanes<Vec4>, Lanes<bool>) {
+                let served = lanes(|l| blocks.served(l));
+                let values = lanes(|l| {
+                    if served[l] {
+                        blocks.value(self, l)
+                    } else {
+                        Vec4::ZERO
+                    }
+                });
+                (values, served)
             }
 
             #[inline(always)]
@@ -420,6 +490,11 @@ impl<'a> FlatTexels<'a> for FloatTexels<'a> {
     }
 
     #[inline(always)]
+    fn len(self) -> usize {
+        self.0.len()
+    }
+
+    #[inline(always)]
     fn bilinear_quad<R>(
         self,
         k: usize,
@@ -451,6 +526,11 @@ impl<'a> FlatTexels<'a> for HalfTexels<'a> {
     }
 
     #[inline(always)]
+    fn len(self) -> usize {
+        self.0.len()
+    }
+
+    #[inline(always)]
     fn bilinear_quad<R>(
         self,
         k: usize,
@@ -475,12 +555,6 @@ impl<'a> ByteTexels<'a> {
             alpha: &LINEAR_BYTES,
         }
     }
-
-    /// Number of texels.
-    #[inline(always)]
-    pub(crate) fn len(self) -> usize {
-        self.texels.len()
-    }
 }
 
 impl<'a> FlatTexels<'a> for ByteTexels<'a> {
@@ -495,6 +569,11 @@ impl<'a> FlatTexels<'a> for ByteTexels<'a> {
     #[inline(always)]
     fn texel(self, index: usize) -> Vec4 {
         byte_texel(self.texels[index], self.colour, self.alpha)
+    }
+
+    #[inline(always)]
+    fn len(self) -> usize {
+        self.texels.len()
     }
 
     #[inline(always)]

@@ -6,6 +6,7 @@ use glam::Vec4;
 
 use super::ellipse::{adjust_derivatives, choose_levels, LevelChoice};
 use super::filter_closest_bilinear::{bilinear_from, bilinear_other_kind};
+use super::micro_cache::ThreadTiles;
 use super::mip_pyramid::MipPyramid;
 use super::texels::{with_texel_source, TexelSource};
 use super::tiles::TexelObserver;
@@ -24,15 +25,16 @@ pub(crate) fn level_choice(pyramid: &MipPyramid, q: &TextureQuery) -> LevelChoic
 }
 
 /// The trilinear lookup, compiled once per storage kind (that of level 0, which every
-/// level of a pyramid normally shares).
+/// level of a pyramid normally shares); demand-loaded levels read through `tiles`.
 #[inline]
 pub(crate) fn sample<O: TexelObserver>(
     pyramid: &MipPyramid,
     q: &TextureQuery,
     wrap: (WrapMode, WrapMode),
+    tiles: ThreadTiles<'_>,
     obs: &mut O,
 ) -> Vec4 {
-    with_texel_source!(&pyramid.levels[0].texels, |kind| sample_from(
+    with_texel_source!(&pyramid.levels[0].texels, tiles, |kind| sample_from(
         kind, pyramid, q, wrap, obs
     ))
 }
@@ -58,7 +60,7 @@ fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
         let level = &pyramid.levels[m];
         sum += w * match kind.view(&level.texels) {
             Some(texels) => bilinear_from(level, texels, m, q.s, q.t, wrap, obs),
-            None => bilinear_other_kind(level, m, q.s, q.t, wrap, obs),
+            None => bilinear_other_kind(level, m, q.s, q.t, wrap, kind.thread_tiles(), obs),
         };
     }
     sum
@@ -91,6 +93,7 @@ mod tests {
                 &p,
                 &q,
                 (WrapMode::Periodic, WrapMode::Periodic),
+                ThreadTiles::none(),
                 &mut NoTextureTiles,
             );
             assert!((v - Vec4::ONE).abs().max_element() < 1e-5);
