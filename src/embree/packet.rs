@@ -117,15 +117,8 @@ impl<const N: usize> RayPacket<N> {
     /// Puts `ray` in `lane`, marks the lane valid and clears its hit.
     #[inline]
     pub fn set_ray(&mut self, lane: usize, ray: &Ray) {
-        self.set_f(ORG_X, lane, ray.origin.x);
-        self.set_f(ORG_Y, lane, ray.origin.y);
-        self.set_f(ORG_Z, lane, ray.origin.z);
-        self.set_f(TNEAR, lane, ray.tnear);
-        self.set_f(DIR_X, lane, ray.direction.x);
-        self.set_f(DIR_Y, lane, ray.direction.y);
-        self.set_f(DIR_Z, lane, ray.direction.z);
+        self.put_ray(lane, ray);
         self.set_f(TIME, lane, 0.0);
-        self.set_f(TFAR, lane, ray.tfar);
         self.rows[MASK][lane] = u32::MAX;
         self.rows[ID][lane] = lane as u32;
         self.rows[FLAGS][lane] = 0;
@@ -134,7 +127,6 @@ impl<const N: usize> RayPacket<N> {
         for level in 0..ffi::RTC_MAX_INSTANCE_LEVEL_COUNT as usize {
             self.rows[INST_ID + level][lane] = INVALID_GEOMETRY_ID;
         }
-        self.valid[lane] = -1;
     }
 
     /// Every lane invalid, with the rows that every ray sets alike (time, mask, id, flags

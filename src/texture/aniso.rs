@@ -96,23 +96,8 @@ fn sample_from<'a, S: TexelSource<'a>, O: TexelObserver>(
     obs: &mut O,
 ) -> Vec4 {
     let f = ellipse::footprint(pyramid, q, max_aniso);
-    let n = probe_count(f.aspect);
-    // One probe sits at (s, t): the axis direction is not needed.
-    let (sin, cos) = if n > 1 {
-        f.axes.direction()
-    } else {
-        (0.0, 1.0)
-    };
-    // Probe offsets p in [-1, 1] map to half the distance between the ellipse's
-    // end-circle centres, (major - minor) / 2, on either side of (s, t).
-    let ll = 2.0 * (f.axes.major - f.axes.minor);
-    let line = ProbeLine {
-        n,
-        ds: cos * ll * 0.5,
-        dt: sin * ll * 0.5,
-        inv_n: 1.0 / n as f32,
-        gauss_scale: f.axes.major / ll,
-    };
+    let line = ProbeLine::of(&f);
+    let n = line.n;
 
     // Gaussian weights exp(-2 x^2), x = p * major / (2 (major - minor)), shared by
     // both levels; kept on the stack up to MAX_STACK_PROBES probes.
@@ -149,6 +134,30 @@ struct ProbeLine {
     dt: f32,
     inv_n: f32,
     gauss_scale: f32,
+}
+
+impl ProbeLine {
+    /// The probes of the footprint `f`: offsets p in [-1, 1] map to half the distance
+    /// between the ellipse's end-circle centres, (major - minor) / 2, on either side of
+    /// (s, t).
+    #[inline(always)]
+    fn of(f: &ellipse::Footprint) -> ProbeLine {
+        let n = probe_count(f.aspect);
+        // One probe sits at (s, t): the axis direction is not needed.
+        let (sin, cos) = if n > 1 {
+            f.axes.direction()
+        } else {
+            (0.0, 1.0)
+        };
+        let ll = 2.0 * (f.axes.major - f.axes.minor);
+        ProbeLine {
+            n,
+            ds: cos * ll * 0.5,
+            dt: sin * ll * 0.5,
+            inv_n: 1.0 / n as f32,
+            gauss_scale: f.axes.major / ll,
+        }
+    }
 }
 
 /// Weighted average of the probes of `line` on one level, reading `texels` (the level's
@@ -474,20 +483,8 @@ mod tests {
         wrap: (WrapMode, WrapMode),
     ) {
         let f = footprint(pyramid, q, 1024.0);
-        let n = probe_count(f.aspect);
-        let (sin, cos) = if n > 1 {
-            f.axes.direction()
-        } else {
-            (0.0, 1.0)
-        };
-        let ll = 2.0 * (f.axes.major - f.axes.minor);
-        let line = ProbeLine {
-            n,
-            ds: cos * ll * 0.5,
-            dt: sin * ll * 0.5,
-            inv_n: 1.0 / n as f32,
-            gauss_scale: f.axes.major / ll,
-        };
+        let line = ProbeLine::of(&f);
+        let n = line.n;
         for (m, level) in pyramid.levels.iter().enumerate().step_by(2) {
             with_texel_source!(&level.texels, ThreadTiles::none(), |texels| {
                 let mut scalar_log = TouchLog::default();

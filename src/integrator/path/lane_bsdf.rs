@@ -206,16 +206,9 @@ struct Scattering<'a> {
 impl MaterialLoop for Scattering<'_> {
     #[inline(always)]
     fn run<B: Bsdf>(&mut self, material: u32, range: Range<usize>, lobe: impl Fn(usize) -> B) {
-        for lane in range {
-            if !self.scatter.active[lane] {
-                continue;
-            }
-            let bsdf = lobe(lane);
-            if self.scatter.lit[lane] {
-                self.deliver_light(material, lane, &bsdf);
-            }
-            self.sample_continuation(lane, &bsdf, |wo, u| bsdf.sample(wo, u.lobe, u.direction));
-        }
+        self.each_lane(material, range, lobe, |bsdf, wo, u, _| {
+            bsdf.sample(wo, u.lobe, u.direction)
+        });
     }
 
     /// The cosine's directions drawn for the whole range in three short loops (the disk's
@@ -230,6 +223,24 @@ impl MaterialLoop for Scattering<'_> {
         lobe: impl Fn(usize) -> OpaqueOnly<OpaqueBsdf>,
     ) {
         self.draw_cosine_directions(range.clone());
+        self.each_lane(material, range, lobe, |bsdf, wo, _, wi| {
+            bsdf.sample_along(wo, wi)
+        });
+    }
+}
+
+impl Scattering<'_> {
+    /// Each active lane of `range`: the light its sample delivers, then its continuation,
+    /// drawn by `draw` from the BSDF, the outgoing direction, the lane's vertex numbers and
+    /// its drawn cosine direction (read only by the classic lobe's runs).
+    #[inline(always)]
+    fn each_lane<B: Bsdf>(
+        &mut self,
+        material: u32,
+        range: Range<usize>,
+        lobe: impl Fn(usize) -> B,
+        draw: impl Fn(&B, Vec3, &VertexSamples, Vec3) -> Option<BsdfSample>,
+    ) {
         for lane in range {
             if !self.scatter.active[lane] {
                 continue;
@@ -239,12 +250,10 @@ impl MaterialLoop for Scattering<'_> {
                 self.deliver_light(material, lane, &bsdf);
             }
             let wi = self.scatter.cosine_wi.get(lane);
-            self.sample_continuation(lane, &bsdf, |wo, _| bsdf.sample_along(wo, wi));
+            self.sample_continuation(lane, &bsdf, |wo, u| draw(&bsdf, wo, u, wi));
         }
     }
-}
 
-impl Scattering<'_> {
     /// `next_event::sample_light` after the light's sample, and `queue_shadow_ray` up to
     /// the queue: the BSDF's value and, for a light with an area, the power heuristic
     /// against BSDF sampling; Beer's law inside the medium the shadow ray crosses.
