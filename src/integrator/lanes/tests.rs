@@ -141,19 +141,7 @@ fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit_at_every_level(
     let lookup = SurfaceLookup::new(scene.clone(), GEOMETRIES.to_vec());
     let rays = wave(&mut numbers);
     for level in crate::simd::Level::supported() {
-        let mut lanes = WaveLanes {
-            materials: vec![
-                LaneMaterial {
-                    covers: true,
-                    path_covers: true,
-                    textured: true,
-                    opaque_weight: 1.0,
-                };
-                2
-            ],
-            level: Some(level),
-            ..WaveLanes::default()
-        };
+        let mut lanes = lanes_at(level, covered(true, 1.0), 2);
         let mut picks = LanePicks::default();
         for (index, (hit, _, _, footprint, wants_st)) in rays.iter().enumerate() {
             let cone_width = match lane_footprint(footprint, hit.t) {
@@ -296,19 +284,7 @@ fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
     let materials = lobe_materials();
     let lights = punctual_lights();
     for level in crate::simd::Level::supported() {
-        let mut lanes = WaveLanes {
-            materials: vec![
-                LaneMaterial {
-                    covers: true,
-                    path_covers: true,
-                    textured: false,
-                    opaque_weight: 0.75,
-                };
-                materials.len()
-            ],
-            level: Some(level),
-            ..WaveLanes::default()
-        };
+        let mut lanes = lanes_at(level, covered(false, 0.75), materials.len());
         let mut picks = LanePicks::default();
         let mut hits = Vec::new();
         for index in 0..300u32 {
@@ -438,4 +414,23 @@ fn compare_with_scalar(lanes: &WaveLanes, materials: &[Material], lights: &[Ligh
         }
     }
     lit
+}
+
+/// A material both integrators' lanes cover.
+fn covered(textured: bool, opaque_weight: f32) -> LaneMaterial {
+    LaneMaterial {
+        covers: true,
+        path_covers: true,
+        textured,
+        opaque_weight,
+    }
+}
+
+/// Empty lanes at the vector level `level`, for `count` materials alike.
+fn lanes_at(level: crate::simd::Level, material: LaneMaterial, count: usize) -> WaveLanes {
+    WaveLanes {
+        materials: vec![material; count],
+        level: Some(level),
+        ..WaveLanes::default()
+    }
 }
