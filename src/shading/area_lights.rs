@@ -57,7 +57,6 @@ use glam::{DVec3, Vec2, Vec3};
 use super::bsdf::orthonormal_basis;
 use super::ray_offset::shadow_ray_end;
 use super::spherical_triangle;
-use crate::hit::SurfaceHit;
 use crate::scene::{Material, SceneDescription};
 use crate::texture::Texture;
 
@@ -127,11 +126,12 @@ fn spherical_corners(p: Vec3, triangle: &AreaShape) -> Option<([DVec3; 3], f32)>
         .then_some(([a, b, c], omega))
 }
 
-/// Whether `material`'s emission at `surface` reaches a viewer looking along
-/// `ray_direction`: from the front side, or from either side of a `two_sided` material.
+/// Whether `material`'s emission at a surface with the outward geometric normal
+/// `geometric_normal` reaches a viewer looking along `ray_direction`: from the front side
+/// (`SurfaceHit::is_front_face`), or from either side of a `two_sided` material.
 #[inline]
-pub fn emits_towards(material: &Material, surface: &SurfaceHit, ray_direction: Vec3) -> bool {
-    material.two_sided || surface.is_front_face(ray_direction)
+pub fn emits_towards(material: &Material, geometric_normal: Vec3, ray_direction: Vec3) -> bool {
+    material.two_sided || ray_direction.dot(geometric_normal) < 0.0
 }
 
 /// One emissive triangle or sphere.

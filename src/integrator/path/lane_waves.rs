@@ -285,8 +285,7 @@ fn add_lane_emission(
             st: lanes.st.get(lane),
         },
         emission: material.emission,
-        // `shading::area_lights::emits_towards`.
-        facing: material.two_sided || ray.direction.dot(normal) < 0.0,
+        facing: shading::area_lights::emits_towards(material, normal, ray.direction),
     };
     add_seen_emission(tracer, context, ray, &seen, image, worker);
 }

@@ -304,7 +304,11 @@ fn add_emission(
         st: surface.st,
     };
     let emission = emitter.emission;
-    let facing = shading::area_lights::emits_towards(emitter.material, surface, ray.direction);
+    let facing = shading::area_lights::emits_towards(
+        emitter.material,
+        surface.geometric_normal,
+        ray.direction,
+    );
     let seen = SeenEmission {
         light,
         light_hit,

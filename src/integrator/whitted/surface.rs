@@ -128,11 +128,12 @@ pub(super) fn shade_hit(
 
     // Emission leaves the front side, or both sides of a two-sided material, as the path
     // tracer's area lights do (`shading::area_lights`).
-    let mut radiance = if shading::area_lights::emits_towards(material, surface, ray.direction) {
-        inputs.emission
-    } else {
-        Vec3::ZERO
-    };
+    let mut radiance =
+        if shading::area_lights::emits_towards(material, surface.geometric_normal, ray.direction) {
+            inputs.emission
+        } else {
+            Vec3::ZERO
+        };
     // The index-matched case (the `fresnel` effect is off when every medium has ior 1)
     // reflects nothing but total internal reflection.
     let bsdf = MaterialBsdf::from_surface_inputs(
