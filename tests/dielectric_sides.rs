@@ -89,7 +89,7 @@ fn render_in(dir: &Path, toml: &str) -> (RenderContext, Film) {
         .unwrap_or_else(|e| panic!("scene does not load: {e}"));
     let context = render::prepare(Arc::new(scene), options())
         .unwrap_or_else(|e| panic!("scene does not prepare: {e}"));
-    let result = render::render(&context, &Whitted, &RenderControl::default())
+    let result = render::render(&context, &Whitted::default(), &RenderControl::default())
         .unwrap_or_else(|e| panic!("render failed: {e}"));
     assert!(result.stats.complete, "render incomplete");
     (context, result.film)

@@ -254,7 +254,7 @@ fn render_forced(
     context.force_effects(effects).unwrap();
     let result = conetrace::render::render(
         context,
-        &conetrace::integrator::Whitted,
+        &conetrace::integrator::Whitted::default(),
         &conetrace::render::RenderControl::default(),
     )
     .expect("traversal succeeds");

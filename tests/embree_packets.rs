@@ -920,7 +920,7 @@ fn a_render_whose_alpha_filter_panics_fails_with_the_message() {
         render::prepare_with_textures(scene, render_options(), vec![mask]).expect("prepare");
     let result = render::render(
         &context,
-        &conetrace::integrator::Whitted,
+        &conetrace::integrator::Whitted::default(),
         &RenderControl::default(),
     );
     match result {
@@ -950,7 +950,7 @@ fn a_render_whose_alpha_filter_panics_fails_with_the_message() {
     // the same way.
     assert!(render::render(
         &context,
-        &conetrace::integrator::Whitted,
+        &conetrace::integrator::Whitted::default(),
         &RenderControl::default()
     )
     .is_err());

@@ -430,7 +430,7 @@ bounds = { min = [-5.0, -5.0, 1.2], max = [5.0, 5.0, 3.0] }
     let scene = load(dir.path(), text);
     let tracer = PathTracer::for_settings(&scene.settings);
     let (path, stats) = render_aovs(dir.path(), text, &tracer);
-    let (whitted, _) = render_aovs(dir.path(), text, &conetrace::integrator::Whitted);
+    let (whitted, _) = render_aovs(dir.path(), text, &conetrace::integrator::Whitted::default());
     // Every camera ray scattered in the fog.
     assert!(
         stats.counters.fog_scatter_events >= 144,

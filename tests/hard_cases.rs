@@ -54,8 +54,8 @@ fn options(lod: LodStrategy, filter: FilterMode) -> RenderOptions {
 fn render_in(dir: &Path, toml: &str, options: RenderOptions) -> Result<Film, String> {
     let scene = load_toml_str(toml, dir, "hard.toml").map_err(|e| e.to_string())?;
     let context = render::prepare(Arc::new(scene), options).map_err(|e| e.to_string())?;
-    let result =
-        render::render(&context, &Whitted, &RenderControl::default()).expect("traversal succeeds");
+    let result = render::render(&context, &Whitted::default(), &RenderControl::default())
+        .expect("traversal succeeds");
     assert!(result.stats.complete);
     Ok(result.film)
 }

@@ -153,3 +153,16 @@ fn lanes_keep_the_scalar_path_s_diffuse_bounce_limit() {
         check_every_scene_with("diffuse_bounces 1", tracer, |options| options.max_depth = 3);
     assert!(lane_hits > 0, "no hit took the lanes");
 }
+
+#[test]
+fn lanes_shade_the_hits_fog_lets_pass_as_the_scalar_path() {
+    // Each ray's fog is sampled for the whole wave first; those it lets through reach their
+    // hits in the lanes, the others scatter in the fog by the scalar path.
+    for scene in ["assets/scenes/fog.toml", "assets/scenes/fog_mesh.toml"] {
+        let (lanes, hits) = render_film_with(scene, PathTracer::default(), true, |_| {});
+        let (scalar, scalar_hits) = render_film_with(scene, PathTracer::default(), false, |_| {});
+        assert_eq!(scalar_hits, 0, "{scene}: the scalar render used the lanes");
+        assert_same_bits(scene, "fog", &lanes, &scalar);
+        assert!(hits > 0, "{scene}: no hit behind the fog took the lanes");
+    }
+}

@@ -600,7 +600,7 @@ material = "chrome"
     let tracer = PathTracer::for_settings(&scene.settings);
     assert_eq!(tracer.diffuse_bounces, 0);
     let (path, _) = render_with(scene, &tracer, |_| {});
-    let (whitted, _) = render_with(load(dir.path(), text), &Whitted, |_| {});
+    let (whitted, _) = render_with(load(dir.path(), text), &Whitted::default(), |_| {});
     let (mp, mw) = (mean(&path), mean(&whitted));
     let mut squared = 0.0f64;
     for (p, w) in path.iter().zip(&whitted) {
@@ -1278,7 +1278,7 @@ translate = [0.0, 1.0, 0.0]
         text = text.replace("target = [0.0, 0.0, 0.0]", "target = [0.0, 2.0, 0.0]");
         text = text.replace("up = [0.0, 0.0, -1.0]", "up = [0.0, 0.0, 1.0]");
         let (path, _) = render_with(load(dir.path(), &text), &PathTracer::default(), |_| {});
-        let (whitted, _) = render_with(load(dir.path(), &text), &Whitted, |_| {});
+        let (whitted, _) = render_with(load(dir.path(), &text), &Whitted::default(), |_| {});
         for (name, pixels) in [("path", path), ("whitted", whitted)] {
             let value = mean(&pixels)[0];
             assert!(
@@ -1327,7 +1327,7 @@ scale = {mirror}
     for mirror in ["[1, 1, 1]", "[-1, 1, 1]", "[1, 1, -1]", "[-1, 2, -1]"] {
         let text = scene(mirror);
         let (path, _) = render_with(load(dir.path(), &text), &PathTracer::default(), |_| {});
-        let (whitted, _) = render_with(load(dir.path(), &text), &Whitted, |_| {});
+        let (whitted, _) = render_with(load(dir.path(), &text), &Whitted::default(), |_| {});
         for (name, pixels) in [("path", path), ("whitted", whitted)] {
             let value = mean(&pixels)[0];
             assert!(

@@ -140,7 +140,7 @@ fn render_view(dir: &Path, camera: &str) -> Vec<f32> {
         .unwrap_or_else(|e| panic!("scene does not load: {e}"));
     let context = render::prepare(Arc::new(scene), options())
         .unwrap_or_else(|e| panic!("scene does not prepare: {e}"));
-    let result = render::render(&context, &Whitted, &RenderControl::default())
+    let result = render::render(&context, &Whitted::default(), &RenderControl::default())
         .unwrap_or_else(|e| panic!("render failed: {e}"));
     assert!(result.stats.complete, "render incomplete");
     luminance(&result.film)

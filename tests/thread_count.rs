@@ -42,7 +42,8 @@ fn render_on(path: &Path, threads: usize) -> RenderResult {
             ..RenderOptions::from_settings(&scene.settings)
         };
         let context = render::prepare(Arc::new(scene), options).expect("scene prepares");
-        render::render(&context, &Whitted, &RenderControl::default()).expect("render succeeds")
+        render::render(&context, &Whitted::default(), &RenderControl::default())
+            .expect("render succeeds")
     })
 }
 

@@ -91,7 +91,7 @@ fn check<I: Integrator>(scene: &str, integrator: &I) {
 /// allocate while one measures.
 #[test]
 fn rendering_allocates_nothing_per_tile() {
-    check("default.toml", &Whitted);
-    check("teapot_textured.toml", &Whitted);
+    check("default.toml", &Whitted::default());
+    check("teapot_textured.toml", &Whitted::default());
     check("cornell.toml", &PathTracer::default());
 }

@@ -238,7 +238,8 @@ fn use_effects(context: &mut RenderContext, effects: EffectSet) -> Result<(), Co
 }
 
 fn render_once(context: &RenderContext) -> Result<render::RenderResult, CommandError> {
-    render::render(context, &Whitted, &RenderControl::default()).map_err(crate::cli::render_failed)
+    render::render(context, &Whitted::default(), &RenderControl::default())
+        .map_err(crate::cli::render_failed)
 }
 
 /// Measure every configuration of one scene.

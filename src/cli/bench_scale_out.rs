@@ -84,9 +84,9 @@ fn measure(args: &RenderArgs) -> Result<(Measured, render::RenderOptions), Comma
     pool.install(|| {
         let context = render::prepare(scene.clone(), options.clone())
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
-        let row_costs = estimate_tile_row_costs(&context, &Whitted);
+        let row_costs = estimate_tile_row_costs(&context, &Whitted::default());
         let fixed_seconds = started.elapsed().as_secs_f64();
-        let whole = render::render(&context, &Whitted, &RenderControl::default())
+        let whole = render::render(&context, &Whitted::default(), &RenderControl::default())
             .map_err(crate::cli::render_failed)?;
         let tiles = render::work_tiles(options.width, options.height);
         let mut tile_seconds = Vec::with_capacity(tiles.len());
@@ -100,7 +100,8 @@ fn measure(args: &RenderArgs) -> Result<(Measured, render::RenderOptions), Comma
                 ..RenderControl::default()
             };
             let start = Instant::now();
-            render::render(&context, &Whitted, &control).map_err(crate::cli::render_failed)?;
+            render::render(&context, &Whitted::default(), &control)
+                .map_err(crate::cli::render_failed)?;
             tile_seconds.push(start.elapsed().as_secs_f64());
         }
         let path =

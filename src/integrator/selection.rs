@@ -308,7 +308,7 @@ pub fn select(
 ) -> Result<SelectedIntegrator, VctError> {
     let settings = &context.scene.settings;
     Ok(match kind {
-        IntegratorKind::Whitted => SelectedIntegrator::Whitted(Whitted),
+        IntegratorKind::Whitted => SelectedIntegrator::Whitted(Whitted::default()),
         IntegratorKind::Path => SelectedIntegrator::Path(PathTracer::for_settings(settings)),
         IntegratorKind::Vct => SelectedIntegrator::Vct(Vct::new(build_voxel_scene(
             context,

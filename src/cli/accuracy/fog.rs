@@ -192,14 +192,17 @@ fn measure(
     }
     let mut first = Vec::with_capacity(contexts.len());
     for context in &contexts {
-        first.push(render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?);
+        first.push(
+            render::render(context, &Whitted::default(), &control)
+                .map_err(crate::cli::render_failed)?,
+        );
     }
     let images: Vec<DisplayImage> = first.iter().map(display).collect::<Result<_, _>>()?;
     let mut times = vec![Vec::with_capacity(args.runs); contexts.len()];
     for run in 0..args.runs {
         for (index, context) in contexts.iter().enumerate() {
-            let result =
-                render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?;
+            let result = render::render(context, &Whitted::default(), &control)
+                .map_err(crate::cli::render_failed)?;
             times[index].push(result.stats.seconds);
         }
         say(format!("timed run {}/{} done", run + 1, args.runs));

@@ -310,7 +310,10 @@ fn measure(
             ..setup.base.clone()
         })?;
         let (build_seconds, (first, run_seconds)) = match method {
-            LightingMethod::Whitted => (0.0, timed_renders(&context, &Whitted, args.runs)?),
+            LightingMethod::Whitted => (
+                0.0,
+                timed_renders(&context, &Whitted::default(), args.runs)?,
+            ),
             LightingMethod::Path { .. } => (0.0, timed_renders(&context, &path_tracer, args.runs)?),
             LightingMethod::Vct {
                 resolution,

@@ -359,7 +359,7 @@ fn measure_scene(
     let mut truth_options = options_for(&setup.base, &truth_method);
     truth_options.count_texture_tiles = true;
     truth_options.seed = methods::ground_truth_seed(setup.base.seed);
-    let truth = render::render(&prepare(truth_options)?, &Whitted, &control)
+    let truth = render::render(&prepare(truth_options)?, &Whitted::default(), &control)
         .map_err(crate::cli::render_failed)?;
     say(format!(
         "ground truth ({} spp) in {:.2} s",
@@ -371,7 +371,7 @@ fn measure_scene(
     // (texcolor.A = 1 at one sample per pixel).
     let mut mask_options = options_for(&setup.base, &methods::ground_truth(1));
     mask_options.aovs.texture_footprint = true;
-    let mask_render = render::render(&prepare(mask_options)?, &Whitted, &control)
+    let mask_render = render::render(&prepare(mask_options)?, &Whitted::default(), &control)
         .map_err(crate::cli::render_failed)?;
     let mask: Vec<bool> = mask_render
         .film
@@ -389,15 +389,18 @@ fn measure_scene(
     }
     let mut first: Vec<RenderResult> = Vec::with_capacity(compared.len());
     for context in &mut contexts {
-        first.push(render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?);
+        first.push(
+            render::render(context, &Whitted::default(), &control)
+                .map_err(crate::cli::render_failed)?,
+        );
         context.options.count_texture_tiles = false;
     }
     let runs = args.runs;
     let mut times = vec![Vec::with_capacity(runs); compared.len()];
     for run in 0..runs {
         for (index, context) in contexts.iter().enumerate() {
-            let result =
-                render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?;
+            let result = render::render(context, &Whitted::default(), &control)
+                .map_err(crate::cli::render_failed)?;
             times[index].push(result.stats.seconds);
         }
         say(format!("timed run {}/{runs} done", run + 1));

@@ -287,8 +287,8 @@ fn measure(
     let mask_context =
         render::prepare_with_textures(setup.scene.clone(), mask_options, textures.clone())
             .map_err(|e| CommandError::bad_input(e.to_string()))?;
-    let mask_render =
-        render::render(&mask_context, &Whitted, &control).map_err(crate::cli::render_failed)?;
+    let mask_render = render::render(&mask_context, &Whitted::default(), &control)
+        .map_err(crate::cli::render_failed)?;
 
     // The high-sample exact reference, drawn with another seed.
     let reference_options = RenderOptions {
@@ -302,14 +302,17 @@ fn measure(
         textures.clone(),
     )
     .map_err(|e| CommandError::bad_input(e.to_string()))?;
-    let reference = render::render(&reference_context, &Whitted, &control)
+    let reference = render::render(&reference_context, &Whitted::default(), &control)
         .map_err(crate::cli::render_failed)?;
     let reference = display(&reference)?;
     drop(reference_context);
 
     let mut first = Vec::with_capacity(contexts.len());
     for context in &contexts {
-        first.push(render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?);
+        first.push(
+            render::render(context, &Whitted::default(), &control)
+                .map_err(crate::cli::render_failed)?,
+        );
     }
     let images: Vec<DisplayImage> = first.iter().map(display).collect::<Result<_, _>>()?;
     let mask: Vec<bool> = mask_render
@@ -320,8 +323,8 @@ fn measure(
     let mut times = vec![Vec::with_capacity(args.runs); contexts.len()];
     for run in 0..args.runs {
         for (index, context) in contexts.iter().enumerate() {
-            let result =
-                render::render(context, &Whitted, &control).map_err(crate::cli::render_failed)?;
+            let result = render::render(context, &Whitted::default(), &control)
+                .map_err(crate::cli::render_failed)?;
             times[index].push(result.stats.seconds);
         }
         say(format!("timed run {}/{} done", run + 1, args.runs));

@@ -8,10 +8,10 @@
 //! (`lanes::LaneMaterial::path_covers`: mirrors, glass and emitters included), and its
 //! footprint moves to the hit by its distance alone (not a ray differential). These take
 //! the scalar path (`vertex::shade`), hit by hit: misses; curved and height patches;
-//! normal-mapped materials and emission-textured emitters; ray differentials; every hit
-//! when fog is on; and, in a render that writes the texture-lookup AOVs (`tex`,
-//! `texcolor`, `lod`, `footprint`), the rays of first samples, which record their pixel's
-//! first lookup.
+//! normal-mapped materials and emission-textured emitters; ray differentials; and, in a
+//! render that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`), the
+//! rays of first samples, which record their pixel's first lookup. A ray that fog stops
+//! before its hit makes a medium vertex there instead (`medium`).
 //!
 //! What a lane adds is computed as `vertex::shade` computes it, operation for operation:
 //! the stages give the bits of `SurfaceLookup::surface_hit` and `shading::surface_inputs`,
@@ -38,6 +38,7 @@ use crate::shading::{self, LightHit, MaterialBsdf};
 use crate::simd;
 
 use super::lane_scatter::ScatterLanes;
+use super::medium::Collision;
 use super::vertex::{
     add_seen_emission, queue_continuation, FootprintSpread, HitRecord, SeenEmission, SurfaceSite,
     VertexSamples,
@@ -77,7 +78,7 @@ impl PathLanes {
 pub(super) fn shade_lanes(
     context: &RenderContext,
     path: &mut PathLanes,
-    (rays, hits): (&[PathRay], &[TraceHit]),
+    (rays, hits, collisions): (&[PathRay], &[TraceHit], &[Option<Collision>]),
     image: &TileImage,
     worker: &mut WorkerState,
     enabled: bool,
@@ -86,10 +87,10 @@ pub(super) fn shade_lanes(
     path.lane_of_ray.resize(rays.len(), SCALAR);
     path.lanes.clear();
     path.picks.clear();
-    if !enabled || context.effects.fog {
+    if !enabled {
         return;
     }
-    pick_lanes(context, path, rays, hits, image);
+    pick_lanes(context, path, (rays, hits, collisions), image);
     let lanes = &mut path.lanes;
     if lanes.len() == 0 {
         return;
@@ -141,8 +142,7 @@ fn draw_vertex_samples(path: &mut PathLanes, rays: &[PathRay]) {
 fn pick_lanes(
     context: &RenderContext,
     path: &mut PathLanes,
-    rays: &[PathRay],
-    hits: &[TraceHit],
+    (rays, hits, collisions): (&[PathRay], &[TraceHit], &[Option<Collision>]),
     image: &TileImage,
 ) {
     let effects = &context.effects;
@@ -151,6 +151,10 @@ fn pick_lanes(
     let uv_aov = context.options.aovs.surface;
     for (index, (ray, hit)) in rays.iter().zip(hits).enumerate() {
         if !hit.is_hit() || (ray.first_sample && records_lookups) {
+            continue;
+        }
+        if matches!(collisions.get(index), Some(Some(_))) {
+            // Fog stopped the ray before its hit: a medium vertex (`medium`).
             continue;
         }
         let Some((surface, material)) = LaneSurface::at(&context.surfaces, hit) else {

@@ -21,6 +21,7 @@ use crate::footprint::bsdf_spread_angle;
 use crate::medium::{free_flight, HenyeyGreenstein, Line};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
+use crate::render::tracer::TraceHit;
 use crate::shading;
 
 /// Where a path segment collides with fog.
@@ -34,12 +35,33 @@ pub(super) struct Collision {
     volume: usize,
 }
 
+/// The first collision with fog of each of the wave's rays (`hits` in the same order), or
+/// `None` where it passes, into `collisions`; left empty when the scene has no fog. Every
+/// ray's fog is sampled before any hit is shaded, so the shading lanes take the rays that
+/// pass with their samplers already moved past the fog's dimensions.
+pub(super) fn sample_wave_collisions(
+    context: &RenderContext,
+    rays: &mut [PathRay],
+    hits: &[TraceHit],
+    collisions: &mut Vec<Option<Collision>>,
+    worker: &mut WorkerState,
+) {
+    collisions.clear();
+    if !context.effects.fog {
+        return;
+    }
+    for (ray, hit) in rays.iter_mut().zip(hits) {
+        let t_end = if hit.is_hit() { hit.t } else { f32::INFINITY };
+        collisions.push(sample_collision(context, ray, t_end, worker));
+    }
+}
+
 /// Sample the first collision of `ray` with the scene's fog between its origin and `t_end`
 /// (its hit, or infinity for a ray that escapes); `None` if it passes. Each volume the
 /// segment crosses draws one exponential variate from the path's sampler; the segment
 /// always moves the sampler on by one dimension per volume of the scene, crossed or not, so
 /// that the dimensions of the vertices after it do not depend on which volumes it crossed.
-pub(super) fn sample_collision(
+fn sample_collision(
     context: &RenderContext,
     ray: &mut PathRay,
     t_end: f32,

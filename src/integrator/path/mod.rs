@@ -167,6 +167,8 @@ pub struct PathWaves {
     buffers: WaveBuffers<PathRay>,
     shadows: Vec<ShadowRay>,
     lanes: lane_waves::PathLanes,
+    /// Per ray of the wave being shaded, where fog stopped it (`medium`); empty without fog.
+    collisions: Vec<Option<medium::Collision>>,
 }
 
 /// One sample of every pixel at a time: camera rays are a small share of a path tracer's
@@ -235,7 +237,9 @@ impl WaveIntegrator for PathTracer {
         let mut current = std::mem::take(&mut waves.buffers.rays.current);
         let hits = std::mem::take(&mut waves.buffers.trace_hits);
         let mut lanes = std::mem::take(&mut waves.lanes);
-        let wave = (current.as_slice(), hits.as_slice());
+        let mut collisions = std::mem::take(&mut waves.collisions);
+        medium::sample_wave_collisions(context, &mut current, &hits, &mut collisions, worker);
+        let wave = (current.as_slice(), hits.as_slice(), collisions.as_slice());
         lane_waves::shade_lanes(
             context,
             &mut lanes,
@@ -246,6 +250,10 @@ impl WaveIntegrator for PathTracer {
         );
         lane_scatter::scatter_lanes(self, context, &mut lanes, &mut current, worker);
         for (index, (ray, hit)) in current.iter_mut().zip(&hits).enumerate() {
+            if let Some(Some(collision)) = collisions.get(index) {
+                vertex::scatter_in_fog(self, context, ray, hit, *collision, image, waves, worker);
+                continue;
+            }
             match lanes.lane_of(index) {
                 Some(lane) => lane_waves::finish_lane(
                     self, context, ray, hit, &lanes, lane, image, waves, worker,
@@ -254,6 +262,7 @@ impl WaveIntegrator for PathTracer {
             }
         }
         waves.lanes = lanes;
+        waves.collisions = collisions;
         waves.buffers.rays.current = current;
         waves.buffers.trace_hits = hits;
         trace_shadow_rays(context, waves, image, worker);

@@ -37,7 +37,8 @@ const ROULETTE_AFTER: u32 = 3;
 /// Smallest probability with which roulette ends a path it applies to.
 const ROULETTE_MIN_END: f32 = 0.05;
 
-/// Shade where `ray` ends: the environment for a miss, else the hit surface.
+/// Shade where `ray` ends, once fog on its way has let it pass
+/// (`medium::sample_wave_collisions`): the environment for a miss, else the hit surface.
 pub(super) fn shade(
     tracer: &PathTracer,
     context: &RenderContext,
@@ -47,9 +48,6 @@ pub(super) fn shade(
     waves: &mut PathWaves,
     worker: &mut WorkerState,
 ) {
-    if context.effects.fog && scattered_in_fog(tracer, context, ray, hit, image, waves, worker) {
-        return;
-    }
     if !hit.is_hit() {
         add_escaped_light(tracer, context, ray, image, worker);
         return;
@@ -174,33 +172,27 @@ fn scatter_at_surface(
     continue_by_bsdf(context, ray, &vertex, &u, waves, worker);
 }
 
-/// Fog between the ray's origin and what it meets: a sampled collision makes this a medium
-/// vertex instead (`medium`), and the path is then done here (true); a ray that passes keeps
-/// its throughput (false).
-fn scattered_in_fog(
+/// The vertex of a ray that fog stopped at `collision` before what it meets
+/// (`medium::sample_wave_collisions`): a medium vertex instead (`medium`), unless the ray is
+/// past the last bounce and looked only for emission, which the fog stops here.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn scatter_in_fog(
     tracer: &PathTracer,
     context: &RenderContext,
-    ray: &mut PathRay,
+    ray: &PathRay,
     hit: &TraceHit,
+    collision: medium::Collision,
     image: &mut TileImage,
     waves: &mut PathWaves,
     worker: &mut WorkerState,
-) -> bool {
-    let t_end = if hit.is_hit() { hit.t } else { f32::INFINITY };
-    let camera_footprint = ray.footprint;
-    let Some(collision) = medium::sample_collision(context, ray, t_end, worker) else {
-        return false;
-    };
+) {
     if ray.depth > context.options.max_depth {
-        // A ray past the last bounce only looks for emission, which the fog stops here
-        // (collisions are sampled by the transmittance).
-        return true;
+        return;
     }
     if ray.kind == RayKind::Camera && ray.first_sample && hit.is_hit() {
-        record_hidden_surface_aovs(context, ray, camera_footprint, hit, image, worker);
+        record_hidden_surface_aovs(context, ray, hit, image, worker);
     }
     medium::scatter(tracer, context, *ray, collision, waves, worker);
-    true
 }
 
 /// The environment a ray that left the scene sees. A ray that sees it whole (from the camera
@@ -761,7 +753,6 @@ pub(super) fn bsdf_has_smooth_part(bsdf: &impl Bsdf, wo: Vec3, ns: Vec3) -> bool
 fn record_hidden_surface_aovs(
     context: &RenderContext,
     ray: &PathRay,
-    camera_footprint: Footprint,
     hit: &TraceHit,
     image: &mut TileImage,
     worker: &mut WorkerState,
@@ -777,7 +768,8 @@ fn record_hidden_surface_aovs(
     if image.albedo.is_empty() {
         return;
     }
-    let mut footprint = camera_footprint;
+    // Sampling the collision moved only the sampler on: the footprint is the camera's.
+    let mut footprint = ray.footprint;
     if context.effects.footprints {
         footprint.transfer(ray.direction, &surface);
     }

@@ -5,11 +5,11 @@
 //! material is one the lanes cover (`lanes::LaneMaterial::of`: opaque, not emissive, not
 //! normal-mapped), and the light beyond the shadow rays is Whitted's ambient term. These
 //! take the scalar path (`surface::shade_hit`), hit by hit: misses; curved and height
-//! patches; mirrors,
-//! dielectrics, emitters and normal-mapped materials; rays inside an absorbing medium;
-//! footprints kept as ray differentials at textured materials; first samples of a render
-//! that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`); every hit
-//! when fog is on or the indirect light is voxel cone tracing's.
+//! patches; mirrors, dielectrics, emitters and normal-mapped materials; rays inside an
+//! absorbing medium; footprints kept as ray differentials at textured materials; first
+//! samples of a render that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`,
+//! `footprint`); every hit when the indirect light is voxel cone tracing's. Fog on the way
+//! to a hit is the wave's (`fog::fog_wave_segments`), before either path shades it.
 
 use glam::Vec3;
 
@@ -48,7 +48,7 @@ pub(super) fn pick_lanes(
     waves.lanes.clear();
     waves.picks.clear();
     let effects = &context.effects;
-    if effects.fog || !indirect.is_ambient_environment() {
+    if waves.scalar_only || !indirect.is_ambient_environment() {
         return;
     }
     waves.lanes.prepare(context);

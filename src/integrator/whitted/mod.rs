@@ -60,8 +60,21 @@ use shadow_walk::{trace_shadows, ShadowWalk};
 use surface::{shade_hit, surface_detail};
 
 /// The Whitted integrator.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Whitted;
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Whitted {
+    /// Whether the hits the lanes cover are shaded over a wave's lane arrays (`lane_waves`,
+    /// the default) rather than each by the scalar path. Both give the same bits; the
+    /// choice exists to show it and to time the two.
+    pub shade_in_lanes: bool,
+}
+
+impl Default for Whitted {
+    fn default() -> Self {
+        Whitted {
+            shade_in_lanes: true,
+        }
+    }
+}
 
 /// A ray in flight, with what it carries from the camera.
 #[derive(Clone, Copy, Debug)]
@@ -103,13 +116,21 @@ pub struct Waves {
     lanes: Box<WaveLanes>,
     lane_of_ray: Vec<u32>,
     picks: LanePicks,
+    /// Every hit by the scalar path (`Whitted::shade_in_lanes` off).
+    scalar_only: bool,
+    /// Per ray of the wave being shaded, the fog colour its segment adds to its pixel
+    /// (`fog::fog_wave_segments`); empty without fog.
+    fog_light: Vec<Option<Vec3>>,
 }
 
 impl Integrator for Whitted {
     type ThreadState = Waves;
 
     fn thread_state(&self, _context: &RenderContext) -> Waves {
-        Waves::default()
+        Waves {
+            scalar_only: !self.shade_in_lanes,
+            ..Waves::default()
+        }
     }
 
     fn render_tile(
@@ -222,9 +243,11 @@ fn shade_hits(
     indirect: &dyn IndirectLight,
 ) {
     waves.shadows.clear();
+    fog::fog_wave_segments(context, waves, worker);
     lane_waves::pick_lanes(context, waves, image, worker, indirect);
     lane_waves::shade_lanes(context, waves, worker);
     for index in 0..waves.buffers.rays.current.len() {
+        fog::add_fog_light(waves, index, image);
         let lane = waves.lane_of_ray[index];
         if lane != lane_waves::SCALAR {
             lane_waves::finish_lane(context, waves, index, lane as usize, image);

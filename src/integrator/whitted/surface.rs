@@ -190,8 +190,9 @@ pub(super) fn shade_hit(
     }
 }
 
-/// What `ray` brings to its hit before the hit's own light: the camera hit's AOVs, fog and
-/// absorption on the way, the footprint carried there, and the material's inputs under that
+/// What `ray` brings to its hit before the hit's own light (the fog on the way is the
+/// wave's, `fog::fog_wave_segments`): the camera hit's AOVs, absorption on the way, the
+/// footprint carried there, and the material's inputs under that
 /// footprint (also the camera hit's albedo AOV).
 fn arrive_at_hit(
     context: &RenderContext,
@@ -206,10 +207,6 @@ fn arrive_at_hit(
     let camera_first = ray.kind == RayKind::Camera && ray.first_sample;
     if camera_first {
         write_geometry_aovs(context, image, ray.slot, ray.direction, surface);
-    }
-    // Fog between the ray's origin and the hit (its analytic density, `fog`).
-    if effects.fog {
-        super::fog::fog_ray_segment(context, ray, surface.t, image, worker);
     }
     // Beer's law over the distance travelled inside the medium.
     if effects.absorption && ray.sigma != Vec3::ZERO {
