@@ -178,26 +178,30 @@ fn assert_same_bits(variant: &str, lanes: &Film, scalar: &Film) {
     }
 }
 
+/// A render's name, how it changes the scene's options, and the least share of the camera
+/// rays' count the lanes must shade: every material is normal-mapped or an
+/// emission-textured emitter, so the lanes took no hit before.
+type Variant = (&'static str, fn(&mut RenderOptions), f64);
+
 #[test]
 fn path_lanes_shade_normal_maps_and_emission_textures_with_the_scalar_bits() {
     let dir = temp_dir();
     write_scene_files(dir.path());
-    let variants: [(&str, fn(&mut RenderOptions)); 3] = [
-        ("default", |_| {}),
-        ("every AOV", |o| o.aovs = AovSelection::ALL),
-        ("mip0", |o| o.lod = LodStrategy::Mip0),
+    let variants: [Variant; 3] = [
+        ("default", |_| {}, 0.6),
+        ("mip0", |o| o.lod = LodStrategy::Mip0, 0.6),
+        // First samples record their pixel's first lookup by the scalar path: the lanes
+        // take the second samples and the bounces.
+        ("every AOV", |o| o.aovs = AovSelection::ALL, 0.3),
     ];
-    for (variant, options) in variants {
+    for (variant, options, least_share) in variants {
         let (lanes, stats) = render_path(dir.path(), true, options);
         let (scalar, scalar_stats) = render_path(dir.path(), false, options);
         assert_eq!(scalar_stats.counters.lane_hits, 0, "{variant}");
         assert_same_bits(variant, &lanes, &scalar);
-        // Every material is normal-mapped or an emission-textured emitter: the lanes took
-        // more hits than half the camera rays (most of which hit), where they took none
-        // before.
         let counters = &stats.counters;
         assert!(
-            counters.lane_hits > counters.camera_rays / 2,
+            counters.lane_hits as f64 > least_share * counters.camera_rays as f64,
             "{variant}: {} lane hits of {} camera rays",
             counters.lane_hits,
             counters.camera_rays
