@@ -2,7 +2,8 @@
 //! `render::prepared::SurfaceLookup::surface_hit` does: on triangles, from the
 //! barycentrics, the point with its rounding error bound, the triangle's edges and normals,
 //! the shading normal and the texture coordinates; on spheres, the ray's point projected
-//! onto the sphere, its normal, and the lat-long coordinates with dP/ds, dP/dt.
+//! onto the sphere, its normal, and the lat-long coordinates with dP/ds, dP/dt; and on
+//! triangles of normal-mapped materials, dP/ds and dP/dt (their tangent frame).
 //!
 //! Each triangle loop reads and writes one array per coordinate and has no branch but
 //! selects, so it runs 8 or 16 lanes per instruction at the level `simd::dispatch` picks;
@@ -15,6 +16,7 @@ use glam::{Vec2, Vec3};
 use super::soa::{corner_lanes, corner_lanes_2, normalize_or, select};
 use super::WaveLanes;
 use crate::footprint::lat_long_frame;
+use crate::render::prepared::triangle_position_derivatives;
 use crate::shading::SpawnPoint;
 use crate::simd;
 
@@ -49,6 +51,7 @@ pub(crate) fn interpolate(lanes: &mut WaveLanes) {
     for array in [&mut lanes.sphere_point, &mut lanes.dpds, &mut lanes.dpdt] {
         array.resize(len);
     }
+    triangle_frames(lanes);
     if !spheres.is_empty() {
         simd::run_at(
             lanes.level(),
@@ -140,6 +143,30 @@ fn texture_coordinates(lanes: &mut WaveLanes, len: usize) {
         let st = if has_st[lane] { st } else { Vec2::ZERO };
         s[lane] = st.x;
         t[lane] = st.y;
+    }
+}
+
+/// dP/ds and dP/dt of the triangle lanes whose material is normal-mapped, as
+/// `SurfaceLookup::surface_hit` computes them for its tangent frame: zero where the mesh has
+/// no texture coordinates or their mapping is degenerate. Lane by lane: the degenerate
+/// cases return early, and only normal-mapped materials' runs pay for it.
+fn triangle_frames(lanes: &mut WaveLanes) {
+    for run in 0..lanes.material_runs.len() {
+        let (material, range) = lanes.material_run(run);
+        if range.start >= lanes.spheres_start || !lanes.materials[material as usize].normal_mapped {
+            continue;
+        }
+        for lane in range {
+            let (dpds, dpdt) = if lanes.has_st[lane] {
+                let p = [0, 1, 2].map(|corner| lanes.p[corner].get(lane));
+                let st = [0, 1, 2].map(|corner| lanes.st_vertices[corner].get(lane));
+                triangle_position_derivatives(p, st)
+            } else {
+                (Vec3::ZERO, Vec3::ZERO)
+            };
+            lanes.dpds.set(lane, dpds);
+            lanes.dpdt.set(lane, dpdt);
+        }
     }
 }
 

@@ -11,12 +11,13 @@
 //! 1. [`gather`]: the triangles' vertex positions, normals and texture coordinates, the
 //!    spheres' centres and radii;
 //! 2. [`interpolate`]: the point and its rounding-error bound, the geometric and shading
-//!    normals, texture coordinates, and the triangle's barycentric derivatives or the
-//!    sphere's dP/ds, dP/dt;
+//!    normals, texture coordinates, the triangle's edges, and the sphere's dP/ds, dP/dt
+//!    (the triangle's too where a normal map needs its tangent frame);
 //! 3. [`footprints`]: each textured lane's footprint width at the hit and its texture
 //!    gradients;
 //! 4. [`textures`]: the lookups, each texture binding read for its material's range in one
-//!    loop;
+//!    loop: albedo, metallic, roughness, emission, and the shading normal bent by a normal
+//!    map;
 //! 5. [`lights`]: the punctual lights' samples, one light at a time over all lanes;
 //! 6. [`bsdf`]: the opaque lobe evaluated for every lane and light, one loop per material's
 //!    range, so each loop runs one lobe's code.
@@ -56,39 +57,34 @@ use crate::texture::TextureQuery;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct LaneMaterial {
     /// Whether Whitted's lanes shade this material: an opaque lobe that spawns no ray in
-    /// this render, emits nothing and bends no normal (see [`LaneMaterial::of`]).
+    /// this render and emits nothing (see [`LaneMaterial::of`]). The path tracer's lanes
+    /// take every material: its BSDF, whichever lobes it has, is sampled from the lanes'
+    /// inputs, and its emission added as the scalar path adds it.
     pub covers: bool,
-    /// Whether the path tracer's lanes reconstruct and texture this material's hits: it
-    /// bends no normal and reads no emission texture (see [`LaneMaterial::of`]); its BSDF,
-    /// whichever lobes it has, is sampled from the lanes' inputs, and its emission added as
-    /// the scalar path adds it.
-    pub path_covers: bool,
     /// Whether shading reads a texture (`render::surface_textures::reads_textures`).
     pub textured: bool,
+    /// Whether a normal map bends the shading normal, so the triangle lanes need dP/ds and
+    /// dP/dt (`interpolate`) and stage 4 bends the normal (`textures`).
+    pub normal_mapped: bool,
     /// The opaque lobe's weight, `(1 - mirror) (1 - transmission)` as
     /// `shading::MaterialBsdf` computes it.
     pub opaque_weight: f32,
 }
 
 impl LaneMaterial {
-    /// Normal-mapped materials (their tangent frame needs dP/ds, dP/dt) and emission-textured
-    /// emitters (the lanes read no emission texture) take the scalar path in every
-    /// integrator. Whitted's lanes also leave out every emitter (its emission test needs
-    /// the hit's side), those whose mirror or dielectric lobe spawns rays in this render,
-    /// and an opaque weight of zero (nothing to light).
+    /// Whitted's lanes leave out every emitter (its emission test needs the hit's side),
+    /// those whose mirror or dielectric lobe spawns rays in this render, and an opaque
+    /// weight of zero (nothing to light).
     pub(crate) fn of(context: &RenderContext, material: &Material) -> LaneMaterial {
         let effects = &context.effects;
         let opaque_weight = (1.0 - material.mirror) * (1.0 - material.transmission);
         let spawns = (effects.mirror_reflection && material.mirror > 0.0)
             || (effects.refraction && material.transmission > 0.0);
         let emits = material.emission != Vec3::ZERO;
-        let path_covers =
-            material.normal_texture.is_none() && !(emits && material.emission_texture.is_some());
-        let covers = path_covers && !emits && !spawns && opaque_weight > 0.0;
         LaneMaterial {
-            covers,
-            path_covers,
+            covers: !emits && !spawns && opaque_weight > 0.0,
             textured: crate::render::surface_textures::reads_textures(material),
+            normal_mapped: material.normal_texture.is_some(),
             opaque_weight,
         }
     }
@@ -161,7 +157,8 @@ pub(crate) struct WaveLanes {
     pub edge2: Vec3Lanes,
     /// `edge1 x edge2`, the triangle's unnormalised normal.
     pub area_normal: Vec3Lanes,
-    /// Unit normals, facing outward (geometric) and to the same side (shading).
+    /// Unit normals, facing outward (geometric) and to the same side (shading). Stage 4
+    /// bends the shading normal of normal-mapped lanes (`SurfaceInputs::shading_normal`).
     pub geometric_normal: Vec3Lanes,
     pub shading_normal: Vec3Lanes,
     pub st: Vec2Lanes,
@@ -170,7 +167,9 @@ pub(crate) struct WaveLanes {
     /// `SurfaceHit::spawn_point` projects it.
     pub sphere_point: Vec3Lanes,
     /// Sphere lanes that want texture coordinates: dP/ds and dP/dt of the lat-long
-    /// parameterisation (`footprint::lat_long_frame`).
+    /// parameterisation (`footprint::lat_long_frame`). Triangle lanes of normal-mapped
+    /// materials: the triangle's (`prepared::triangle_position_derivatives`, zero without
+    /// texture coordinates). Other triangle lanes leave them unwritten: nothing reads them.
     pub dpds: Vec3Lanes,
     pub dpdt: Vec3Lanes,
 
@@ -186,7 +185,13 @@ pub(crate) struct WaveLanes {
     pub metallic: Vec<f32>,
     /// Perceptual roughness of metallic-roughness lanes (unused by classic ones).
     pub roughness: Vec<f32>,
-    /// One material run's queries of one texture binding, and their texels.
+    /// Emitted radiance of the lanes of emitters with an emission texture (other lanes
+    /// leave it unwritten: their emission is their material's, see
+    /// [`textures::lane_emission`]).
+    pub emission: Vec3Lanes,
+    /// The lanes one lookup of a texture binding is for (a normal map is read only where
+    /// the hit has a tangent frame), with their queries and texels.
+    pub texture_lanes: Vec<u32>,
     pub texture_queries: Vec<TextureQuery>,
     pub texels: Vec<Vec4>,
 

@@ -1,6 +1,7 @@
 //! The lane stages against the scalar path they replace: stages 1-3 must give the very bits
-//! of `SurfaceLookup::surface_hit` and `Footprint::texture_gradients`, on triangles and on
-//! spheres.
+//! of `SurfaceLookup::surface_hit` and `Footprint::texture_gradients`, stage 4 those of
+//! `shading::surface_inputs` (normal maps and emission textures included), and stages 5-6
+//! those of the lights' samples and the lobes, on triangles and on spheres.
 
 use std::sync::Arc;
 
@@ -12,11 +13,16 @@ use super::gather::{gather_spheres, gather_triangles};
 use super::interpolate::interpolate;
 use super::lights::{sample_lights, shadow_rays};
 use super::picks::{LaneHit, LanePicks, LaneSurface};
+use super::textures::{lane_emission, shading_inputs};
 use super::{LaneMaterial, WaveLanes};
 use crate::footprint::{ConeEnvelope, Footprint, RayCone};
+use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{GeometryRef, SurfaceDetail, SurfaceLookup};
+use crate::render::surface_textures::shading_inputs as shading_inputs_at;
 use crate::render::tracer::TraceHit;
 use crate::scene::{Light, Material, SceneDescription, Sphere, TriangleMesh};
+use crate::shading::surface_inputs::SurfaceInputs;
+use crate::texture::Texture;
 
 /// A small deterministic generator (xorshift), values in [0, 1).
 struct Numbers(u32);
@@ -420,8 +426,8 @@ fn compare_with_scalar(lanes: &WaveLanes, materials: &[Material], lights: &[Ligh
 fn covered(textured: bool, opaque_weight: f32) -> LaneMaterial {
     LaneMaterial {
         covers: true,
-        path_covers: true,
         textured,
+        normal_mapped: false,
         opaque_weight,
     }
 }
@@ -433,4 +439,192 @@ fn lanes_at(level: crate::simd::Level, material: LaneMaterial, count: usize) -> 
         level: Some(level),
         ..WaveLanes::default()
     }
+}
+
+/// [`scene`] with a camera, two textures (random colours, random tangent-space normals)
+/// and both materials normal-mapped: the first a metallic-roughness emitter with base
+/// colour and emission textures (on the mesh with texture coordinates and half the
+/// spheres), the second classic and untextured otherwise (on the mesh without texture
+/// coordinates, whose hits have no tangent frame, and the other spheres).
+fn normal_mapped_scene(numbers: &mut Numbers) -> (SceneDescription, Vec<Arc<Texture>>) {
+    use crate::scene::{
+        CameraDesc, MaterialModel, MetallicRoughnessModel, Projection, TextureBinding, TextureDesc,
+        TextureSource,
+    };
+    let mut scene = scene(numbers);
+    let binding = |texture| {
+        Some(TextureBinding {
+            texture,
+            transform: glam::Affine2::IDENTITY,
+        })
+    };
+    scene.materials = vec![
+        Material {
+            model: MaterialModel::MetallicRoughness(MetallicRoughnessModel::new(0.4, 0.6)),
+            base_color_texture: binding(0),
+            emission: Vec3::new(2.0, 1.0, 0.5),
+            emission_texture: binding(0),
+            normal_texture: binding(1),
+            normal_scale: 1.5,
+            ..Material::default()
+        },
+        Material {
+            normal_texture: binding(1),
+            normal_scale: 0.8,
+            ..Material::default()
+        },
+    ];
+    scene.textures = ["colours", "normals"]
+        .map(|name| TextureDesc {
+            name: name.into(),
+            source: TextureSource::Encoded {
+                label: name.into(),
+                bytes: Arc::new(Vec::new()),
+            },
+            color_space: Some(crate::scene::ColorSpace::Linear),
+            wrap_s: crate::scene::WrapMode::Periodic,
+            wrap_t: crate::scene::WrapMode::Periodic,
+        })
+        .to_vec();
+    scene.camera = Some(CameraDesc {
+        eye: Vec3::new(0.0, 0.0, 50.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        projection: Projection::Pinhole { vfov_degrees: 40.0 },
+    });
+    // The normals' blue channel mostly above 0.5: most texels point out of the surface.
+    let mut texture = |blue_from: f32| {
+        let texels = (0..256)
+            .map(|_| {
+                let blue = blue_from + (1.0 - blue_from) * numbers.next();
+                [numbers.next(), numbers.next(), blue, 1.0]
+            })
+            .collect();
+        Arc::new(Texture::from_rgba_f32(16, 16, texels).expect("a 16x16 texture"))
+    };
+    let textures = vec![texture(0.0), texture(0.4)];
+    (scene, textures)
+}
+
+/// Stage 4 of a normal-mapped emitter and a normal-mapped diffuse material, after stages
+/// 1-3 at every vector level, against the scalar path (`SurfaceLookup::surface_hit`,
+/// `Footprint::texture_gradients`, `surface_textures::shading_inputs`): the same albedo,
+/// metallic, roughness, emission and bent shading normal, bit for bit, from as many texture
+/// lookups.
+#[test]
+fn normal_maps_and_emission_textures_match_the_scalar_path_at_every_level() {
+    let mut numbers = Numbers(0x5bd1_e995);
+    let (scene, textures) = normal_mapped_scene(&mut numbers);
+    let scene = Arc::new(scene);
+    let options = crate::render::RenderOptions::from_settings(&scene.settings);
+    let context = crate::render::prepare_with_textures(scene.clone(), options, textures)
+        .expect("prepare the scene");
+    assert!(context.effects.footprints);
+    let rays = wave(&mut numbers);
+    for level in crate::simd::Level::supported() {
+        let mut lanes = WaveLanes {
+            level: Some(level),
+            ..WaveLanes::default()
+        };
+        lanes.prepare(&context);
+        assert!(lanes
+            .materials
+            .iter()
+            .all(|m| m.normal_mapped && m.textured));
+        let mut picks = LanePicks::default();
+        for (index, (hit, _, _, footprint, _)) in rays.iter().enumerate() {
+            let cone_width = match lane_footprint(footprint, hit.t) {
+                Some(LaneFootprint::Cone(width)) => Some(width),
+                _ => None,
+            };
+            let (surface, material) =
+                LaneSurface::at(&context.surfaces, hit).expect("a lane surface");
+            picks.push(index, material, surface, cone_width);
+        }
+        let mut lane_of_ray = vec![u32::MAX; rays.len()];
+        picks.place(&mut lanes, &mut lane_of_ray, |index, _| {
+            let (hit, origin, direction, _, _) = &rays[index];
+            LaneHit::new(hit, (*origin, *direction), Vec3::ONE, true)
+        });
+        let mut worker = WorkerState::default();
+        gather_triangles(&mut lanes, &scene.meshes);
+        gather_spheres(&mut lanes, &scene.spheres);
+        interpolate(&mut lanes);
+        texture_gradients(&mut lanes, context.options.filter.max_aniso);
+        shading_inputs(&context, &mut lanes, &mut worker);
+        let mut scalar_worker = WorkerState::default();
+        let mut bent = 0;
+        for (index, ray) in rays.iter().enumerate() {
+            let lane = lane_of_ray[index] as usize;
+            let inputs = scalar_inputs(&context, ray, &mut scalar_worker);
+            compare_inputs(&lanes, lane, &inputs, &scene.materials);
+            let unbent =
+                context
+                    .surfaces
+                    .surface_hit(ray.1, ray.2, &ray.0, SurfaceDetail::Geometry);
+            bent += usize::from(inputs.shading_normal != unbent.shading_normal);
+        }
+        assert_eq!(
+            worker.counters.texture_lookups,
+            scalar_worker.counters.texture_lookups
+        );
+        // The normal maps bent most normals on the mesh with texture coordinates and on
+        // the spheres (a steep texel below the surface leaves one alone).
+        assert!(bent > 300, "{level:?}: {bent} normals bent");
+    }
+}
+
+/// The scalar path's shading inputs for `ray` (`texturing::surface_inputs` with the
+/// footprint carried to the hit).
+fn scalar_inputs(
+    context: &RenderContext,
+    (hit, origin, direction, footprint, _): &(TraceHit, Vec3, Vec3, Footprint, bool),
+    worker: &mut WorkerState,
+) -> SurfaceInputs {
+    let detail = context
+        .surfaces
+        .detail_needed(hit, false, context.effects.footprints);
+    let surface = context
+        .surfaces
+        .surface_hit(*origin, *direction, hit, detail);
+    let material = &context.scene.materials[surface.material as usize];
+    let mut moved = *footprint;
+    moved.transfer(*direction, &surface);
+    let max_aniso = context.options.filter.max_aniso;
+    let g = moved.texture_gradients(*direction, &surface, max_aniso);
+    let gradients = [g.dsdx, g.dtdx, g.dsdy, g.dtdy];
+    shading_inputs_at(
+        context,
+        material,
+        &surface,
+        gradients,
+        false,
+        worker,
+        |_, _, _| {},
+    )
+}
+
+/// Lane `lane`'s inputs against the scalar path's `inputs`, bit for bit.
+fn compare_inputs(lanes: &WaveLanes, lane: usize, inputs: &SurfaceInputs, materials: &[Material]) {
+    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+    let material = &materials[lanes.material[lane] as usize];
+    assert_eq!(
+        bits(lanes.albedo.get(lane)),
+        bits(inputs.albedo),
+        "lane {lane}"
+    );
+    assert_eq!(lanes.metallic[lane].to_bits(), inputs.metallic.to_bits());
+    if let Some(roughness) = inputs.roughness {
+        assert_eq!(lanes.roughness[lane].to_bits(), roughness.to_bits());
+    }
+    assert_eq!(
+        bits(lane_emission(lanes, material, lane)),
+        bits(inputs.emission),
+        "lane {lane}"
+    );
+    assert_eq!(
+        bits(lanes.shading_normal.get(lane)),
+        bits(inputs.shading_normal),
+        "lane {lane}"
+    );
 }

@@ -3,15 +3,14 @@
 //! each lane's vertex finished in wave order by queueing the rays those stages set up,
 //! without a `SurfaceHit` record or a per-ray texture lookup.
 //!
-//! A hit takes the lanes when it lies on a triangle mesh or an analytic sphere whose
-//! material bends no normal and reads no emission texture
-//! (`lanes::LaneMaterial::path_covers`: mirrors, glass and emitters included), and its
-//! footprint moves to the hit by its distance alone (not a ray differential). These take
-//! the scalar path (`vertex::shade`), hit by hit: misses; curved and height patches;
-//! normal-mapped materials and emission-textured emitters; ray differentials; and, in a
-//! render that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`), the
-//! rays of first samples, which record their pixel's first lookup. A ray that fog stops
-//! before its hit makes a medium vertex there instead (`medium`).
+//! A hit takes the lanes when it lies on a triangle mesh or an analytic sphere, whatever
+//! its material (mirrors, glass, emitters, normal maps and emission textures included), and
+//! its footprint moves to the hit by its distance alone (not a ray differential). These
+//! take the scalar path (`vertex::shade`), hit by hit: misses; curved and height patches;
+//! ray differentials; and, in a render that writes the texture-lookup AOVs (`tex`,
+//! `texcolor`, `lod`, `footprint`), the rays of first samples, which record their pixel's
+//! first lookup. A ray that fog stops before its hit makes a medium vertex there instead
+//! (`medium`).
 //!
 //! What a lane adds is computed as `vertex::shade` computes it, operation for operation:
 //! the stages give the bits of `SurfaceLookup::surface_hit` and `shading::surface_inputs`,
@@ -25,7 +24,7 @@ use crate::integrator::lanes::footprints::{footprint_at_hit, texture_gradients, 
 use crate::integrator::lanes::gather::{gather_spheres, gather_triangles};
 use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::picks::{LaneHit, LanePicks, LaneSurface};
-use crate::integrator::lanes::textures::shading_inputs;
+use crate::integrator::lanes::textures::{lane_emission, shading_inputs};
 use crate::integrator::lanes::WaveLanes;
 use crate::integrator::wave_integrator::{write_geometry_values, write_material_aovs};
 use crate::render::context::{RenderContext, WorkerState};
@@ -74,7 +73,7 @@ impl PathLanes {
 /// Pick the wave's rays the lanes shade (none unless `enabled`), order them by surface and
 /// material, and run stages 1-4 over them: the triangles' vertex data and the spheres'
 /// centres and radii, the point, normals and texture coordinates, the footprints' texture
-/// gradients, and the texture lookups (albedo, metallic, roughness).
+/// gradients, and the texture lookups (albedo, metallic, roughness, emission, normal maps).
 pub(super) fn shade_lanes(
     context: &RenderContext,
     path: &mut PathLanes,
@@ -161,9 +160,6 @@ fn pick_lanes(
             continue;
         };
         let lane_material = path.lanes.materials[material];
-        if !lane_material.path_covers {
-            continue;
-        }
         let cone_width = match effects.footprints.then(|| ray.footprint.propagated(hit.t)) {
             // A differential's transfer needs the hit record.
             Some(None) => continue,
@@ -261,8 +257,8 @@ pub(super) fn finish_lane(
     queue_continuation(context, ray, spread, side, u_roulette, waves, worker);
 }
 
-/// The emission of `material` (which reads no emission texture) that the ray of lane
-/// `lane` sees, added as `vertex::shade` adds it.
+/// The emission of `material` that the ray of lane `lane` sees (filtered by the ray's
+/// footprint where an emission texture scales it), added as `vertex::shade` adds it.
 fn add_lane_emission(
     tracer: &PathTracer,
     context: &RenderContext,
@@ -288,14 +284,14 @@ fn add_lane_emission(
             normal,
             st: lanes.st.get(lane),
         },
-        emission: material.emission,
+        emission: lane_emission(lanes, material, lane),
         facing: shading::area_lights::emits_towards(material, normal, ray.direction),
     };
     add_seen_emission(tracer, context, ray, &seen, image, worker);
 }
 
 /// The material's shading inputs at lane `lane`, as `shading::surface_inputs` gives them
-/// for a material that bends no normal and reads no emission texture.
+/// (the shading normal bent by the material's normal map, if any, in stage 4).
 #[inline]
 pub(super) fn lane_inputs(material: &Material, lanes: &WaveLanes, lane: usize) -> SurfaceInputs {
     let model = material.model.metallic_roughness();
@@ -305,7 +301,7 @@ pub(super) fn lane_inputs(material: &Material, lanes: &WaveLanes, lane: usize) -
         // Zero for the classic model (`lanes::textures`).
         metallic: lanes.metallic[lane],
         roughness: model.map(|_| lanes.roughness[lane]),
-        emission: material.emission,
+        emission: lane_emission(lanes, material, lane),
         shading_normal: lanes.shading_normal.get(lane),
     }
 }

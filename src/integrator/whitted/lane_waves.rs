@@ -2,14 +2,14 @@
 //! stages run over them, and what each lane adds to the film and the shadow queue.
 //!
 //! A hit takes the lanes when it lies on a triangle mesh or an analytic sphere, its
-//! material is one the lanes cover (`lanes::LaneMaterial::of`: opaque, not emissive, not
-//! normal-mapped), and the light beyond the shadow rays is Whitted's ambient term. These
-//! take the scalar path (`surface::shade_hit`), hit by hit: misses; curved and height
-//! patches; mirrors, dielectrics, emitters and normal-mapped materials; rays inside an
-//! absorbing medium; footprints kept as ray differentials at textured materials; first
-//! samples of a render that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`,
-//! `footprint`); every hit when the indirect light is voxel cone tracing's. Fog on the way
-//! to a hit is the wave's (`fog::fog_wave_segments`), before either path shades it.
+//! material is one the lanes cover (`lanes::LaneMaterial::of`: opaque and not emissive,
+//! normal-mapped or not), and the light beyond the shadow rays is Whitted's ambient term.
+//! These take the scalar path (`surface::shade_hit`), hit by hit: misses; curved and
+//! height patches; mirrors, dielectrics and emitters; rays inside an absorbing medium;
+//! footprints kept as ray differentials at textured materials; first samples of a render
+//! that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`); every hit
+//! when the indirect light is voxel cone tracing's. Fog on the way to a hit is the wave's
+//! (`fog::fog_wave_segments`), before either path shades it.
 
 use glam::Vec3;
 
