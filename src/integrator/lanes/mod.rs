@@ -13,8 +13,8 @@
 //! 2. [`interpolate`]: the point and its rounding-error bound, the geometric and shading
 //!    normals, texture coordinates, and the triangle's barycentric derivatives or the
 //!    sphere's dP/ds, dP/dt;
-//! 3. [`footprints`]: each textured lane's footprint width at the hit and its texture
-//!    gradients;
+//! 3. [`differentials`] and [`footprints`]: each textured lane's footprint at the hit (a
+//!    cone's width, a ray differential transferred there) and its texture gradients;
 //! 4. [`textures`]: the lookups, each texture binding read for its material's range in one
 //!    loop;
 //! 5. [`lights`]: the punctual lights' samples, one light at a time over all lanes;
@@ -35,6 +35,7 @@
 //! lanes; the rest takes the scalar path.
 
 pub(crate) mod bsdf;
+pub(crate) mod differentials;
 pub(crate) mod footprints;
 pub(crate) mod gather;
 pub(crate) mod interpolate;
@@ -45,8 +46,10 @@ pub(crate) mod textures;
 
 use glam::{Vec3, Vec4};
 
+use self::differentials::LaneDifferential;
 use self::soa::{Vec2Lanes, Vec3Lanes};
 
+use crate::footprint::RayDifferential;
 use crate::render::context::RenderContext;
 use crate::scene::Material;
 use crate::simd;
@@ -138,6 +141,9 @@ pub(crate) struct WaveLanes {
     /// The footprint's width at the hit, for a textured material under a cone-like
     /// footprint (`None`: a point sample).
     pub cone_width: Vec<Option<f32>>,
+    /// The ray differential of each lane that carries one, and how it reaches the hit;
+    /// empty when no lane of the wave does.
+    pub differential: Vec<Option<LaneDifferential>>,
 
     // Stage 1.
     pub p: [Vec3Lanes; 3],
@@ -175,6 +181,9 @@ pub(crate) struct WaveLanes {
     pub dpdt: Vec3Lanes,
 
     // Stage 3.
+    /// Each lane's differential at its hit (`differentials::differentials_at_hits`);
+    /// empty when no lane carries one.
+    pub differential_at_hit: Vec<RayDifferential>,
     /// `[ds/dx, dt/dx, ds/dy, dt/dy]`, zero for a point sample.
     pub gradients: Vec<[f32; 4]>,
     /// Textured lanes on triangles without barycentric offsets (degenerate), or on spheres
@@ -265,6 +274,7 @@ impl WaveLanes {
         self.throughput.clear();
         self.wants_st.clear();
         self.cone_width.clear();
+        self.differential.clear();
     }
 
     /// Lay out one lane for each picked hit, `materials` holding their materials and
