@@ -86,10 +86,12 @@ fn path_lanes_give_the_scalar_image_under_ray_differentials_over_bounces() {
             ..lanes
         };
         let (lane_film, lane_hits) = render_with(scene, &lanes, LodStrategy::Differential, 5);
-        let (scalar_film, scalar_hits) =
-            render_with(scene, &scalar, LodStrategy::Differential, 5);
+        let (scalar_film, scalar_hits) = render_with(scene, &scalar, LodStrategy::Differential, 5);
         assert_eq!(scalar_hits, 0, "{scene}: the scalar render used the lanes");
         assert!(lane_hits > 0, "{scene}: no hit took the lanes");
-        assert!(same_bits(&lane_film, &scalar_film), "{scene}: images differ");
+        assert!(
+            same_bits(&lane_film, &scalar_film),
+            "{scene}: images differ"
+        );
     }
 }

@@ -25,6 +25,8 @@
 //! `simd::dispatch` would pick), their loops and everything they call inlined into the
 //! level's function, so they are compiled for AVX2 and AVX-512 as well as the baseline.
 //!
+//! The rays that leave the scene have the environment looked up together ([`misses`]).
+//!
 //! Accumulating into the film (stage 7) is the integrator's: it keeps the order in which
 //! the wave's rays add to their pixels, so the sums are those of the scalar path.
 //!
@@ -40,6 +42,7 @@ pub(crate) mod footprints;
 pub(crate) mod gather;
 pub(crate) mod interpolate;
 pub(crate) mod lights;
+pub(crate) mod misses;
 pub(crate) mod picks;
 pub(crate) mod soa;
 pub(crate) mod textures;

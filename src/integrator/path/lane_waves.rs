@@ -7,11 +7,11 @@
 //! material bends no normal and reads no emission texture
 //! (`lanes::LaneMaterial::path_covers`: mirrors, glass and emitters included); a ray
 //! differential is moved to the hit in the lanes (`lanes::differentials`). These take the
-//! scalar path (`vertex::shade`), hit by hit: misses; curved and height patches;
-//! normal-mapped materials and emission-textured emitters; every hit when fog is on; and,
-//! in a render that writes the texture-lookup AOVs (`tex`,
-//! `texcolor`, `lod`, `footprint`), the rays of first samples, which record their pixel's
-//! first lookup.
+//! scalar path (`vertex::shade`), hit by hit: curved and height patches; normal-mapped
+//! materials and emission-textured emitters; every hit when fog is on; and, in a render
+//! that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`), the rays of
+//! first samples, which record their pixel's first lookup. Misses are looked up together
+//! too (`lanes::misses`, unless fog is on).
 //!
 //! What a lane adds is computed as `vertex::shade` computes it, operation for operation:
 //! the stages give the bits of `SurfaceLookup::surface_hit` and `shading::surface_inputs`,

@@ -9,7 +9,8 @@
 //! medium; first samples of a render that writes the texture-lookup AOVs (`tex`,
 //! `texcolor`, `lod`, `footprint`); every hit when fog is on or the indirect light is voxel
 //! cone tracing's. Ray differentials are transferred to their hits in the lanes
-//! (`lanes::differentials`).
+//! (`lanes::differentials`); misses are looked up together (`lanes::misses`, unless fog is
+//! on).
 
 use glam::Vec3;
 
