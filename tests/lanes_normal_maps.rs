@@ -218,7 +218,8 @@ fn whitted_lanes_shade_normal_mapped_hits() {
     let dir = temp_dir();
     write_scene_files(dir.path());
     let context = context(dir.path(), |_| {});
-    let result = render::render(&context, &Whitted, &RenderControl::default()).expect("render");
+    let result =
+        render::render(&context, &Whitted::default(), &RenderControl::default()).expect("render");
     let counters = &result.stats.counters;
     // Whitted's lanes leave the emitters to the scalar path; the normal-mapped rest is
     // most of the camera's hits.

@@ -57,6 +57,9 @@ pub struct WorkCounters {
     /// Hits reconstructed and textured in structure-of-arrays lanes (`integrator::lanes`),
     /// not each by the scalar path (Whitted and the path tracer).
     pub lane_hits: u64,
+    /// Rays that left the scene whose environment the lanes looked up together
+    /// (`integrator::lanes::misses`), not each by the scalar path.
+    pub lane_misses: u64,
 }
 
 impl WorkCounters {
@@ -95,6 +98,7 @@ impl WorkCounters {
         self.fog_density_samples += other.fog_density_samples;
         self.fog_scatter_events += other.fog_scatter_events;
         self.lane_hits += other.lane_hits;
+        self.lane_misses += other.lane_misses;
     }
 }
 

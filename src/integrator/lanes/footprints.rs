@@ -7,11 +7,13 @@ use std::ops::Range;
 
 use glam::{Vec2, Vec3};
 
+use super::differentials::{differential_axes, LaneDifferential};
 use super::soa::corner_lanes_2;
 use super::WaveLanes;
 use crate::footprint::robust::{unit_direction, unit_normal, unit_or};
 use crate::footprint::{
-    general_st_offset, lat_long_frame, project_cone_to_ellipse, Footprint, TextureGradients,
+    general_st_offset, lat_long_frame, project_cone_to_ellipse, Footprint, RayDifferential,
+    TextureGradients,
 };
 use crate::simd;
 
@@ -23,33 +25,31 @@ pub(crate) enum LaneFootprint {
     /// A cone-like footprint (distance metric, one cone, the two-cone envelope) this wide
     /// at the hit.
     Cone(f32),
+    /// A ray differential, moved to the hit once the lanes hold its normal
+    /// (`differentials::differentials_at_hits`).
+    Differential(LaneDifferential),
 }
 
-/// `footprint` moved `t` along its ray (`Footprint::transfer`) as the lanes take it; `None`
-/// for ray differentials, whose transfer needs the whole hit record (the scalar path's).
+/// `footprint` moved `t` along its ray (`Footprint::propagated`) as the lanes take it: a
+/// cone's width there, or a differential still to be transferred.
 #[inline]
-pub(crate) fn lane_footprint(footprint: &Footprint, t: f32) -> Option<LaneFootprint> {
-    footprint
-        .propagated(t)
-        .and_then(|at_hit| footprint_at_hit(&at_hit))
-}
-
-/// A footprint already moved to its hit (`Footprint::propagated`) as the lanes take it;
-/// `None` for ray differentials.
-#[inline]
-pub(crate) fn footprint_at_hit(footprint: &Footprint) -> Option<LaneFootprint> {
-    match footprint {
-        Footprint::Mip0 => Some(LaneFootprint::Point),
-        Footprint::Distance(f) => Some(LaneFootprint::Cone(f.width())),
-        Footprint::Cone1(c) => Some(LaneFootprint::Cone(c.abs_width())),
-        Footprint::Cone(e) => Some(LaneFootprint::Cone(e.width())),
-        Footprint::Differential(_) => None,
+pub(crate) fn lane_footprint(footprint: &Footprint, t: f32) -> LaneFootprint {
+    match (footprint, footprint.propagated(t)) {
+        (Footprint::Differential(d), _) => {
+            LaneFootprint::Differential(LaneDifferential::Carried(*d))
+        }
+        (_, Some(Footprint::Distance(f))) => LaneFootprint::Cone(f.width()),
+        (_, Some(Footprint::Cone1(c))) => LaneFootprint::Cone(c.abs_width()),
+        (_, Some(Footprint::Cone(e))) => LaneFootprint::Cone(e.width()),
+        _ => LaneFootprint::Point,
     }
 }
 
 /// Texture gradients of every lane into `lanes.gradients`: zero (a point sample) for lanes
-/// with no footprint width (`lanes.cone_width` `None`), or without texture coordinates; otherwise
-/// the projected cone mapped to st, the stretch clamped to `max_aniso`.
+/// without a footprint (`lanes.cone_width` `None` and no differential), or without texture
+/// coordinates; otherwise the footprint's world-space axes mapped to st: a cone's ellipse,
+/// its stretch clamped to `max_aniso`, or a differential's dP/dx, dP/dy at the hit (after
+/// `differentials::differentials_at_hits`; the texture filter clamps their anisotropy).
 ///
 /// One vector loop ([`barycentric_gradients`]) does every lane on a triangle with usable
 /// barycentric offsets, another ([`sphere_gradients`]) every sphere lane; the few on
@@ -58,7 +58,20 @@ pub(crate) fn footprint_at_hit(footprint: &Footprint) -> Option<LaneFootprint> {
 #[inline(never)]
 pub(crate) fn texture_gradients(lanes: &mut WaveLanes, max_aniso: f32) {
     let len = lanes.len();
-    let (triangles, spheres) = lanes.sections();
+    if !lanes.differential.is_empty() {
+        // A render's footprints follow one strategy: every footprint of this wave is a
+        // differential.
+        let carried = std::mem::take(&mut lanes.differential);
+        let at_hit = std::mem::take(&mut lanes.differential_at_hit);
+        let source = DifferentialAxes {
+            carried: &carried[..len],
+            at_hit: &at_hit[..len],
+        };
+        gradients_from(lanes, source);
+        lanes.differential = carried;
+        lanes.differential_at_hit = at_hit;
+        return;
+    }
     if lanes.cone_width[..len].iter().all(Option::is_none) {
         // Point samples only (mip0, or no textured lane): no ellipse is projected.
         super::refill(&mut lanes.gradients, len, [0.0; 4]);
@@ -66,19 +79,34 @@ pub(crate) fn texture_gradients(lanes: &mut WaveLanes, max_aniso: f32) {
     }
     // Out of the lanes while the stage writes them (the allocation goes back at the end).
     let cone_width = std::mem::take(&mut lanes.cone_width);
+    let source = ConeAxes {
+        width: &cone_width[..len],
+        max_aniso,
+    };
+    gradients_from(lanes, source);
+    lanes.cone_width = cone_width;
+}
+
+/// The gradients of every lane, its footprint's axes taken from `source`.
+#[inline(always)]
+fn gradients_from(lanes: &mut WaveLanes, source: impl FootprintAxes) {
+    let len = lanes.len();
+    let (triangles, spheres) = lanes.sections();
     lanes.gradients.resize(len, [0.0; 4]);
     lanes.degenerate.resize(len, false);
     simd::run_at(
         lanes.level(),
         #[inline(always)]
         || {
-            barycentric_gradients(lanes, &cone_width[triangles.clone()], max_aniso);
-            sphere_gradients(lanes, &cone_width, spheres.clone(), max_aniso);
+            barycentric_gradients(lanes, source.slice(triangles.clone()));
+            sphere_gradients(lanes, source.slice(spheres.clone()), spheres.clone());
         },
     );
-    for (lane, width) in cone_width[..len].iter().enumerate() {
+    for lane in 0..len {
         if lanes.degenerate[lane] {
-            let (dpdx, dpdy) = ellipse_axes(lanes, lane, width.unwrap_or(0.0), max_aniso);
+            let d = unit_direction(lanes.direction.get(lane));
+            let n = unit_normal(lanes.geometric_normal.get(lane), d);
+            let (dpdx, dpdy) = source.axes(lane, d, n);
             let g = if triangles.contains(&lane) {
                 triangle_gradients(lanes, lane, dpdx, dpdy)
             } else {
@@ -87,23 +115,91 @@ pub(crate) fn texture_gradients(lanes: &mut WaveLanes, max_aniso: f32) {
             lanes.gradients[lane] = [g.dsdx, g.dtdx, g.dsdy, g.dtdy];
         }
     }
-    lanes.cone_width = cone_width;
 }
 
-/// The world-space axes of lane `lane`'s footprint ellipse.
-#[inline(always)]
-fn ellipse_axes(lanes: &WaveLanes, lane: usize, width: f32, max_aniso: f32) -> (Vec3, Vec3) {
-    let d = unit_direction(lanes.direction.get(lane));
-    let n = unit_normal(lanes.geometric_normal.get(lane), d);
-    project_cone_to_ellipse(width, d, n, max_aniso)
+/// Where the gradient loops take each lane's footprint from: which lanes have one, and its
+/// world-space axes on the tangent plane, given the lane's unit direction `d` and unit
+/// normal `n` facing it.
+trait FootprintAxes: Copy {
+    /// The source's lanes `range` (of the lanes it was made for), indexed from 0.
+    fn slice(self, range: Range<usize>) -> Self;
+    fn len(&self) -> usize;
+    fn has_footprint(&self, lane: usize) -> bool;
+    fn axes(&self, lane: usize, d: Vec3, n: Vec3) -> (Vec3, Vec3);
 }
 
-/// The gradients of every lane whose triangle gives barycentric offsets for the ellipse's
-/// first axis (`triangle_gradients`' first case, without branches), and in
+/// Cone-like footprints: each lane's width at the hit, its circle projected as an ellipse
+/// (`project_cone_to_ellipse`).
+#[derive(Clone, Copy)]
+struct ConeAxes<'a> {
+    width: &'a [Option<f32>],
+    max_aniso: f32,
+}
+
+impl FootprintAxes for ConeAxes<'_> {
+    #[inline(always)]
+    fn slice(self, range: Range<usize>) -> Self {
+        ConeAxes {
+            width: &self.width[range],
+            ..self
+        }
+    }
+
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.width.len()
+    }
+
+    #[inline(always)]
+    fn has_footprint(&self, lane: usize) -> bool {
+        self.width[lane].is_some()
+    }
+
+    #[inline(always)]
+    fn axes(&self, lane: usize, d: Vec3, n: Vec3) -> (Vec3, Vec3) {
+        let width = self.width[lane].unwrap_or(0.0);
+        project_cone_to_ellipse(width, d, n, self.max_aniso)
+    }
+}
+
+/// Ray differentials: each lane's, moved to its hit.
+#[derive(Clone, Copy)]
+struct DifferentialAxes<'a> {
+    carried: &'a [Option<LaneDifferential>],
+    at_hit: &'a [RayDifferential],
+}
+
+impl FootprintAxes for DifferentialAxes<'_> {
+    #[inline(always)]
+    fn slice(self, range: Range<usize>) -> Self {
+        DifferentialAxes {
+            carried: &self.carried[range.clone()],
+            at_hit: &self.at_hit[range],
+        }
+    }
+
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.carried.len()
+    }
+
+    #[inline(always)]
+    fn has_footprint(&self, lane: usize) -> bool {
+        self.carried[lane].is_some()
+    }
+
+    #[inline(always)]
+    fn axes(&self, lane: usize, _d: Vec3, _n: Vec3) -> (Vec3, Vec3) {
+        differential_axes(self.at_hit, lane)
+    }
+}
+
+/// The gradients of every lane whose triangle gives barycentric offsets for the
+/// footprint's first axis (`triangle_gradients`' first case, without branches), and in
 /// `lanes.degenerate` the textured lanes whose triangle does not.
 #[inline(always)]
-fn barycentric_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_aniso: f32) {
-    let len = cone_width.len();
+fn barycentric_gradients(lanes: &mut WaveLanes, source: impl FootprintAxes) {
+    let len = source.len();
     let direction = lanes.direction.lanes(len);
     let normal = lanes.geometric_normal.lanes(len);
     let (e1, e2) = (lanes.edge1.lanes(len), lanes.edge2.lanes(len));
@@ -113,11 +209,10 @@ fn barycentric_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_
     let gradients = &mut lanes.gradients[..len];
     let degenerate = &mut lanes.degenerate[..len];
     for lane in 0..len {
-        let textured = cone_width[lane].is_some() && has_st[lane];
+        let textured = source.has_footprint(lane) && has_st[lane];
         let d = unit_direction(direction.get(lane));
         let n = unit_normal(normal.get(lane), d);
-        let width = cone_width[lane].unwrap_or(0.0);
-        let (dpdx, dpdy) = project_cone_to_ellipse(width, d, n, max_aniso);
+        let (dpdx, dpdy) = source.axes(lane, d, n);
         let frame = BarycentricFrame {
             e1: e1.get(lane),
             e2: e2.get(lane),
@@ -141,17 +236,12 @@ fn barycentric_gradients(lanes: &mut WaveLanes, cone_width: &[Option<f32>], max_
     }
 }
 
-/// The gradients of every sphere lane `spheres` with dP/ds or dP/dt
+/// The gradients of every sphere lane `spheres` (`source` holding their footprints) with
+/// dP/ds or dP/dt
 /// (`footprint::surface_gradients` on a sphere, its first case), and in `lanes.degenerate`
 /// the textured lanes without either.
 #[inline(always)]
-fn sphere_gradients(
-    lanes: &mut WaveLanes,
-    cone_width: &[Option<f32>],
-    spheres: Range<usize>,
-    max_aniso: f32,
-) {
-    let cone_width = &cone_width[spheres.clone()];
+fn sphere_gradients(lanes: &mut WaveLanes, source: impl FootprintAxes, spheres: Range<usize>) {
     let direction = lanes.direction.range(spheres.clone());
     let normal = lanes.geometric_normal.range(spheres.clone());
     let (dpds, dpdt) = (
@@ -161,12 +251,11 @@ fn sphere_gradients(
     let has_st = &lanes.has_st[spheres.clone()];
     let gradients = &mut lanes.gradients[spheres.clone()];
     let degenerate = &mut lanes.degenerate[spheres];
-    for k in 0..cone_width.len() {
-        let textured = cone_width[k].is_some() && has_st[k];
+    for k in 0..source.len() {
+        let textured = source.has_footprint(k) && has_st[k];
         let d = unit_direction(direction.get(k));
         let n = unit_normal(normal.get(k), d);
-        let width = cone_width[k].unwrap_or(0.0);
-        let (dpdx, dpdy) = project_cone_to_ellipse(width, d, n, max_aniso);
+        let (dpdx, dpdy) = source.axes(k, d, n);
         let (dpds, dpdt) = (dpds.get(k), dpdt.get(k));
         let framed = dpds != Vec3::ZERO || dpdt != Vec3::ZERO;
         let g = TextureGradients::from_axes(

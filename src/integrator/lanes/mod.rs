@@ -13,8 +13,8 @@
 //! 2. [`interpolate`]: the point and its rounding-error bound, the geometric and shading
 //!    normals, texture coordinates, the triangle's edges, and the sphere's dP/ds, dP/dt
 //!    (the triangle's too where a normal map needs its tangent frame);
-//! 3. [`footprints`]: each textured lane's footprint width at the hit and its texture
-//!    gradients;
+//! 3. [`differentials`] and [`footprints`]: each textured lane's footprint at the hit (a
+//!    cone's width, a ray differential transferred there) and its texture gradients;
 //! 4. [`textures`]: the lookups, each texture binding read for its material's range in one
 //!    loop: albedo, metallic, roughness, emission, and the shading normal bent by a normal
 //!    map;
@@ -26,6 +26,8 @@
 //! `simd::dispatch` would pick), their loops and everything they call inlined into the
 //! level's function, so they are compiled for AVX2 and AVX-512 as well as the baseline.
 //!
+//! The rays that leave the scene have the environment looked up together ([`misses`]).
+//!
 //! Accumulating into the film (stage 7) is the integrator's: it keeps the order in which
 //! the wave's rays add to their pixels, so the sums are those of the scalar path.
 //!
@@ -36,18 +38,22 @@
 //! lanes; the rest takes the scalar path.
 
 pub(crate) mod bsdf;
+pub(crate) mod differentials;
 pub(crate) mod footprints;
 pub(crate) mod gather;
 pub(crate) mod interpolate;
 pub(crate) mod lights;
+pub(crate) mod misses;
 pub(crate) mod picks;
 pub(crate) mod soa;
 pub(crate) mod textures;
 
 use glam::{Vec3, Vec4};
 
+use self::differentials::LaneDifferential;
 use self::soa::{Vec2Lanes, Vec3Lanes};
 
+use crate::footprint::RayDifferential;
 use crate::render::context::RenderContext;
 use crate::scene::Material;
 use crate::simd;
@@ -134,6 +140,9 @@ pub(crate) struct WaveLanes {
     /// The footprint's width at the hit, for a textured material under a cone-like
     /// footprint (`None`: a point sample).
     pub cone_width: Vec<Option<f32>>,
+    /// The ray differential of each lane that carries one, and how it reaches the hit;
+    /// empty when no lane of the wave does.
+    pub differential: Vec<Option<LaneDifferential>>,
 
     // Stage 1.
     pub p: [Vec3Lanes; 3],
@@ -174,6 +183,9 @@ pub(crate) struct WaveLanes {
     pub dpdt: Vec3Lanes,
 
     // Stage 3.
+    /// Each lane's differential at its hit (`differentials::differentials_at_hits`);
+    /// empty when no lane carries one.
+    pub differential_at_hit: Vec<RayDifferential>,
     /// `[ds/dx, dt/dx, ds/dy, dt/dy]`, zero for a point sample.
     pub gradients: Vec<[f32; 4]>,
     /// Textured lanes on triangles without barycentric offsets (degenerate), or on spheres
@@ -270,6 +282,7 @@ impl WaveLanes {
         self.throughput.clear();
         self.wants_st.clear();
         self.cone_width.clear();
+        self.differential.clear();
     }
 
     /// Lay out one lane for each picked hit, `materials` holding their materials and

@@ -6,6 +6,8 @@
 
 use glam::Vec3;
 
+use super::differentials::LaneDifferential;
+use super::footprints::LaneFootprint;
 use super::{LaneMaterial, WaveLanes};
 use crate::render::prepared::{GeometryRef, SurfaceLookup};
 use crate::render::tracer::TraceHit;
@@ -89,6 +91,9 @@ pub(crate) struct LanePicks {
     /// The footprint's width at the hit, for a textured material under a cone-like
     /// footprint (`None`: a point sample).
     cone_width: Vec<Option<f32>>,
+    /// The picks that carry a ray differential (index among the picks) and how it reaches
+    /// the hit: few waves have any, and the others copy nothing for them.
+    differentials: Vec<(u32, LaneDifferential)>,
 }
 
 impl LanePicks {
@@ -98,21 +103,32 @@ impl LanePicks {
         self.mesh.clear();
         self.on_sphere.clear();
         self.cone_width.clear();
+        self.differentials.clear();
     }
 
     pub(crate) fn len(&self) -> usize {
         self.ray.len()
     }
 
-    /// Pick the wave's ray `ray`, whose hit lies on `surface` of material `material`.
+    /// Pick the wave's ray `ray`, whose hit lies on `surface` of material `material`, with
+    /// its footprint at the hit (`Point` for a lane that reads no texture through it).
     #[inline]
     pub(crate) fn push(
         &mut self,
         ray: usize,
         material: usize,
         surface: LaneSurface,
-        cone_width: Option<f32>,
+        footprint: LaneFootprint,
     ) {
+        let (cone_width, differential) = match footprint {
+            LaneFootprint::Point => (None, None),
+            LaneFootprint::Cone(width) => (Some(width), None),
+            LaneFootprint::Differential(differential) => (None, Some(differential)),
+        };
+        if let Some(differential) = differential {
+            self.differentials
+                .push((self.ray.len() as u32, differential));
+        }
         self.ray.push(ray as u32);
         self.material.push(material as u32);
         let (mesh, on_sphere) = match surface {
@@ -160,6 +176,13 @@ impl LanePicks {
             lanes.wants_st[lane] = wants_st;
             lanes.cone_width[lane] = self.cone_width[k];
         }
+        lanes.differential.clear();
+        if !self.differentials.is_empty() {
+            lanes.differential.resize(self.ray.len(), None);
+            for &(k, differential) in &self.differentials {
+                lanes.differential[lanes.lane_of_pick[k as usize] as usize] = Some(differential);
+            }
+        }
     }
 }
 
@@ -181,7 +204,7 @@ mod tests {
             } else {
                 LaneSurface::Mesh(9)
             };
-            picks.push(ray, material, surface, Some(ray as f32));
+            picks.push(ray, material, surface, LaneFootprint::Cone(ray as f32));
         }
         let mut lane_of_ray = vec![u32::MAX; 7];
         picks.place(&mut lanes, &mut lane_of_ray, |ray, _| LaneHit {

@@ -1,13 +1,15 @@
 //! The lane stages against the scalar path they replace: stages 1-3 must give the very bits
-//! of `SurfaceLookup::surface_hit` and `Footprint::texture_gradients`, stage 4 those of
-//! `shading::surface_inputs` (normal maps and emission textures included), and stages 5-6
-//! those of the lights' samples and the lobes, on triangles and on spheres.
+//! of `SurfaceLookup::surface_hit`, `Footprint::transfer` and `Footprint::texture_gradients`
+//! (under cones and ray differentials), stage 4 those of `shading::surface_inputs` (normal
+//! maps and emission textures included), and stages 5-6 those of the lights' samples and the
+//! lobes, on triangles and on spheres.
 
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
 use super::bsdf::{eval_lights, incident_normals};
+use super::differentials::differentials_at_hits;
 use super::footprints::{lane_footprint, texture_gradients, LaneFootprint};
 use super::gather::{gather_spheres, gather_triangles};
 use super::interpolate::interpolate;
@@ -15,7 +17,7 @@ use super::lights::{sample_lights, shadow_rays};
 use super::picks::{LaneHit, LanePicks, LaneSurface};
 use super::textures::{lane_emission, shading_inputs};
 use super::{LaneMaterial, WaveLanes};
-use crate::footprint::{ConeEnvelope, Footprint, RayCone};
+use crate::footprint::{ConeEnvelope, Footprint, RayCone, RayDifferential};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{GeometryRef, SurfaceDetail, SurfaceLookup};
 use crate::render::surface_textures::shading_inputs as shading_inputs_at;
@@ -144,18 +146,70 @@ fn wave(numbers: &mut Numbers) -> Vec<(TraceHit, Vec3, Vec3, Footprint, bool)> {
 fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit_at_every_level() {
     let mut numbers = Numbers(0x9e37_79b9);
     let scene = Arc::new(scene(&mut numbers));
-    let lookup = SurfaceLookup::new(scene.clone(), GEOMETRIES.to_vec());
     let rays = wave(&mut numbers);
+    check_stages_1_to_3(
+        &scene,
+        &rays,
+        |footprint, t, wants_st| match lane_footprint(footprint, t) {
+            LaneFootprint::Cone(width) if wants_st => LaneFootprint::Cone(width),
+            _ => LaneFootprint::Point,
+        },
+    );
+}
+
+#[test]
+fn ray_differentials_move_to_their_hits_and_give_the_scalar_path_s_gradients_at_every_level() {
+    let mut numbers = Numbers(0x2545_f491);
+    let scene = Arc::new(scene(&mut numbers));
+    // The wave's footprints as differentials: from a point (camera rays), parallel, and
+    // spreading after a bounce; a few zero.
+    let rays: Vec<_> = wave(&mut numbers)
+        .into_iter()
+        .enumerate()
+        .map(|(index, (hit, origin, direction, _, wants_st))| {
+            let scale = [0.0, 1.0e-3, 0.05, 2.0][index % 4];
+            let differential = RayDifferential::new(
+                numbers.vec3(scale),
+                numbers.vec3(scale),
+                numbers.vec3(scale * 0.1),
+                numbers.vec3(scale * 0.1),
+            );
+            let footprint = Footprint::Differential(differential);
+            (hit, origin, direction, footprint, wants_st)
+        })
+        .collect();
+    // Every lane carries its differential, textured or not, as the path tracer's do.
+    check_stages_1_to_3(&scene, &rays, |footprint, t, _| {
+        lane_footprint(footprint, t)
+    });
+}
+
+/// Stages 1-3 over the wave `rays` on `scene` at every level, each ray's footprint taken
+/// as `lane_footprint(footprint, t, wants_st)` gives it, against the scalar path.
+fn check_stages_1_to_3(
+    scene: &Arc<SceneDescription>,
+    rays: &[(TraceHit, Vec3, Vec3, Footprint, bool)],
+    lane_footprint: impl Fn(&Footprint, f32, bool) -> LaneFootprint,
+) {
+    let lookup = SurfaceLookup::new(scene.clone(), GEOMETRIES.to_vec());
+    // Read only by lanes whose differential the camera replaces, which these are not.
+    let camera = crate::camera::Camera::new(
+        &crate::scene::CameraDesc {
+            eye: Vec3::ZERO,
+            target: Vec3::NEG_Z,
+            up: Vec3::Y,
+            projection: crate::scene::Projection::Pinhole { vfov_degrees: 50.0 },
+        },
+        64,
+        64,
+    );
     for level in crate::simd::Level::supported() {
         let mut lanes = lanes_at(level, covered(true, 1.0), 2);
         let mut picks = LanePicks::default();
         for (index, (hit, _, _, footprint, wants_st)) in rays.iter().enumerate() {
-            let cone_width = match lane_footprint(footprint, hit.t) {
-                Some(LaneFootprint::Cone(width)) if *wants_st => Some(width),
-                _ => None,
-            };
             let (surface, material) = LaneSurface::at(&lookup, hit).expect("a lane surface");
-            picks.push(index, material, surface, cone_width);
+            let footprint = lane_footprint(footprint, hit.t, *wants_st);
+            picks.push(index, material, surface, footprint);
         }
         let mut lane_of_ray = vec![u32::MAX; rays.len()];
         picks.place(&mut lanes, &mut lane_of_ray, |index, _| {
@@ -165,6 +219,7 @@ fn interpolation_and_gradients_match_the_scalar_path_bit_for_bit_at_every_level(
         gather_triangles(&mut lanes, &scene.meshes);
         gather_spheres(&mut lanes, &scene.spheres);
         interpolate(&mut lanes);
+        differentials_at_hits(&mut lanes, &camera, 1);
         texture_gradients(&mut lanes, 16.0);
         for (index, ray) in rays.iter().enumerate() {
             compare_surface(&lookup, &lanes, lane_of_ray[index] as usize, ray);
@@ -222,6 +277,13 @@ fn compare_surface(
     );
     let mut moved = *footprint;
     moved.transfer(*direction, &surface);
+    if let Footprint::Differential(expected) = moved {
+        let at_hit = lanes.differential_at_hit[lane];
+        let bits = |d: RayDifferential| {
+            [d.dpdx, d.dpdy, d.dddx, d.dddy].map(|v| v.to_array().map(f32::to_bits))
+        };
+        assert_eq!(bits(at_hit), bits(expected), "lane {lane}");
+    }
     let g = moved.texture_gradients(*direction, &surface, 16.0);
     let expected = if *wants_st {
         [g.dsdx, g.dtdx, g.dsdy, g.dtdy].map(f32::to_bits)
@@ -315,7 +377,12 @@ fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
                 GeometryRef::Mesh(mesh) => LaneSurface::Mesh(mesh),
                 _ => LaneSurface::Sphere,
             };
-            picks.push(index as usize, material as usize, surface, None);
+            picks.push(
+                index as usize,
+                material as usize,
+                surface,
+                LaneFootprint::Point,
+            );
             let origin = numbers.vec3(30.0);
             hits.push(LaneHit::new(&hit, (origin, direction), throughput, false));
         }
@@ -533,13 +600,10 @@ fn normal_maps_and_emission_textures_match_the_scalar_path_at_every_level() {
             .all(|m| m.normal_mapped && m.textured));
         let mut picks = LanePicks::default();
         for (index, (hit, _, _, footprint, _)) in rays.iter().enumerate() {
-            let cone_width = match lane_footprint(footprint, hit.t) {
-                Some(LaneFootprint::Cone(width)) => Some(width),
-                _ => None,
-            };
+            let footprint = lane_footprint(footprint, hit.t);
             let (surface, material) =
                 LaneSurface::at(&context.surfaces, hit).expect("a lane surface");
-            picks.push(index, material, surface, cone_width);
+            picks.push(index, material, surface, footprint);
         }
         let mut lane_of_ray = vec![u32::MAX; rays.len()];
         picks.place(&mut lanes, &mut lane_of_ray, |index, _| {

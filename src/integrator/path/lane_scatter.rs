@@ -15,6 +15,7 @@ use glam::Vec3;
 
 use super::lane_waves::PathLanes;
 use super::{lane_bsdf, lane_lights, PathRay, PathTracer};
+use crate::footprint::{Footprint, RayDifferential};
 use crate::integrator::lanes::soa::Vec3Lanes;
 use crate::integrator::lanes::{bsdf::incident_normals, refill};
 use crate::integrator::trace_wave::ShadowRay;
@@ -175,7 +176,8 @@ fn arrive_at_hits(
     let max_depth = context.options.max_depth;
     for lane in 0..lanes.len() {
         let ray = &mut rays[lanes.wave_index[lane] as usize];
-        arrive_at_hit(context, ray, lanes.t[lane], worker);
+        let differential = lanes.differential_at_hit.get(lane).copied();
+        arrive_at_hit(context, ray, (lanes.t[lane], differential), worker);
         lanes.throughput.set(lane, ray.throughput);
         scatter.sigma.set(lane, ray.sigma);
         let active = ray.depth <= max_depth;
@@ -191,9 +193,15 @@ fn arrive_at_hits(
 }
 
 /// Beer's law over the distance `t` travelled inside the ray's medium, and the ray's
-/// footprint moved to its hit (`vertex::shade`'s absorption and footprint steps).
+/// footprint moved to its hit (`vertex::shade`'s absorption and footprint steps): a ray
+/// differential is the lane's at the hit (`lanes::differentials`).
 #[inline]
-fn arrive_at_hit(context: &RenderContext, ray: &mut PathRay, t: f32, worker: &mut WorkerState) {
+fn arrive_at_hit(
+    context: &RenderContext,
+    ray: &mut PathRay,
+    (t, differential): (f32, Option<RayDifferential>),
+    worker: &mut WorkerState,
+) {
     let effects = &context.effects;
     if effects.absorption && ray.sigma != Vec3::ZERO {
         ray.throughput *= shading::transmittance(ray.sigma, t);
@@ -201,9 +209,9 @@ fn arrive_at_hit(context: &RenderContext, ray: &mut PathRay, t: f32, worker: &mu
     }
     if effects.footprints {
         worker.counters.footprint_updates += 1;
-        // `pick_lanes` leaves differentials, the one footprint without this, to the
-        // scalar path.
-        if let Some(at_hit) = ray.footprint.propagated(t) {
+        // `pick_lanes` gives every differential its lane's.
+        let at_hit = (ray.footprint.propagated(t)).or(differential.map(Footprint::Differential));
+        if let Some(at_hit) = at_hit {
             ray.footprint = at_hit;
         }
     }

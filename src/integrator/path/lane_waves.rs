@@ -4,13 +4,13 @@
 //! without a `SurfaceHit` record or a per-ray texture lookup.
 //!
 //! A hit takes the lanes when it lies on a triangle mesh or an analytic sphere, whatever
-//! its material (mirrors, glass, emitters, normal maps and emission textures included), and
-//! its footprint moves to the hit by its distance alone (not a ray differential). These
-//! take the scalar path (`vertex::shade`), hit by hit: misses; curved and height patches;
-//! ray differentials; and, in a render that writes the texture-lookup AOVs (`tex`,
-//! `texcolor`, `lod`, `footprint`), the rays of first samples, which record their pixel's
-//! first lookup. A ray that fog stops before its hit makes a medium vertex there instead
-//! (`medium`).
+//! its material (mirrors, glass, emitters, normal maps and emission textures included); a
+//! ray differential is moved to the hit in the lanes (`lanes::differentials`). These take
+//! the scalar path (`vertex::shade`), hit by hit: curved and height patches; and, in a
+//! render that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`), the
+//! rays of first samples, which record their pixel's first lookup. Misses are looked up
+//! together too (`lanes::misses`, unless fog is on). A ray that fog stops before its hit
+//! makes a medium vertex there instead (`medium`).
 //!
 //! What a lane adds is computed as `vertex::shade` computes it, operation for operation:
 //! the stages give the bits of `SurfaceLookup::surface_hit` and `shading::surface_inputs`,
@@ -20,7 +20,8 @@
 //! for bit those of the scalar path.
 
 use crate::film::TileImage;
-use crate::integrator::lanes::footprints::{footprint_at_hit, texture_gradients, LaneFootprint};
+use crate::integrator::lanes::differentials::{differentials_at_hits, LaneDifferential};
+use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, LaneFootprint};
 use crate::integrator::lanes::gather::{gather_spheres, gather_triangles};
 use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::picks::{LaneHit, LanePicks, LaneSurface};
@@ -98,6 +99,7 @@ pub(super) fn shade_lanes(
     gather_triangles(lanes, &context.surfaces.scene.meshes);
     gather_spheres(lanes, &context.surfaces.scene.spheres);
     interpolate(lanes);
+    differentials_at_hits(lanes, &context.camera, context.options.spp);
     texture_gradients(lanes, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
     draw_vertex_samples(path, rays);
@@ -160,16 +162,21 @@ fn pick_lanes(
             continue;
         };
         let lane_material = path.lanes.materials[material];
-        let cone_width = match effects.footprints.then(|| ray.footprint.propagated(hit.t)) {
-            // A differential's transfer needs the hit record.
-            Some(None) => continue,
-            Some(Some(at_hit)) if lane_material.textured => match footprint_at_hit(&at_hit) {
-                Some(LaneFootprint::Cone(width)) => Some(width),
-                _ => None,
-            },
-            _ => None,
+        let footprint = if effects.footprints {
+            lane_footprint(&ray.footprint, hit.t)
+        } else {
+            LaneFootprint::Point
         };
-        path.picks.push(index, material, surface, cone_width);
+        let footprint = match footprint {
+            // Every differential moves to its hit in the lanes, textured or not: the path
+            // carries it on (`lane_scatter::arrive_at_hits`).
+            LaneFootprint::Differential(_) if ray.approximate_footprint => {
+                LaneFootprint::Differential(LaneDifferential::FromCamera)
+            }
+            LaneFootprint::Cone(_) if !lane_material.textured => LaneFootprint::Point,
+            footprint => footprint,
+        };
+        path.picks.push(index, material, surface, footprint);
     }
     path.picks
         .place(&mut path.lanes, &mut path.lane_of_ray, |index, material| {

@@ -44,7 +44,8 @@
 //! textured together, wave by wave (`lane_waves`), their lights sampled and their BSDFs
 //! evaluated and sampled over the lane arrays, one lobe's code per material
 //! (`lane_scatter`), before the wave's vertices are finished in its order; the same bits
-//! as the scalar path's.
+//! as the scalar path's. The wave's misses read the environment together
+//! (`lanes::misses`, `look_up_wave_misses`) and add it in the same order.
 //!
 //! Files: `vertex` (what a hit adds and where the path goes next), `lane_waves` (the hits
 //! reconstructed and textured in lanes, and the walk that queues their rays),
@@ -68,10 +69,12 @@ use glam::Vec3;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
 use crate::integrator::camera_sample::CameraRay;
+use crate::integrator::lanes::misses::{look_up_misses, Escape, MissLanes};
 use crate::integrator::trace_wave::WaveRay;
 use crate::integrator::wave_integrator::{add_radiance, render_waves, WaveBuffers, WaveIntegrator};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
+use crate::render::tracer::TraceHit;
 use crate::render::Integrator;
 use crate::sampler::PixelSampler;
 
@@ -169,6 +172,9 @@ pub struct PathWaves {
     lanes: lane_waves::PathLanes,
     /// Per ray of the wave being shaded, where fog stopped it (`medium`); empty without fog.
     collisions: Vec<Option<medium::Collision>>,
+    /// The current wave's misses, their environment radiance looked up together
+    /// (`lanes::misses`).
+    misses: MissLanes,
 }
 
 /// One sample of every pixel at a time: camera rays are a small share of a path tracer's
@@ -249,16 +255,20 @@ impl WaveIntegrator for PathTracer {
             self.shade_in_lanes,
         );
         lane_scatter::scatter_lanes(self, context, &mut lanes, &mut current, worker);
+        let enabled = self.shade_in_lanes;
+        let wave = (current.as_slice(), hits.as_slice());
+        look_up_wave_misses(context, &mut waves.misses, wave, worker, enabled);
         for (index, (ray, hit)) in current.iter_mut().zip(&hits).enumerate() {
             if let Some(Some(collision)) = collisions.get(index) {
                 vertex::scatter_in_fog(self, context, ray, hit, *collision, image, waves, worker);
-                continue;
-            }
-            match lanes.lane_of(index) {
-                Some(lane) => lane_waves::finish_lane(
+            } else if let Some(lane) = lanes.lane_of(index) {
+                lane_waves::finish_lane(
                     self, context, ray, hit, &lanes, lane, image, waves, worker,
-                ),
-                None => vertex::shade(self, context, ray, hit, image, waves, worker),
+                );
+            } else if let Some(radiance) = waves.misses.radiance_of(index) {
+                vertex::add_escaped_radiance(self, context, ray, radiance, image);
+            } else {
+                vertex::shade(self, context, ray, hit, image, waves, worker);
             }
         }
         waves.lanes = lanes;
@@ -287,4 +297,31 @@ impl Integrator for PathTracer {
     ) -> bool {
         render_waves(self, context, tile, image, worker, waves, stop)
     }
+}
+
+/// The environment along the wave's misses, looked up together (`lanes::misses`), unless
+/// the lanes are off or fog is on (a ray through fog may scatter before it escapes, which
+/// `vertex::shade` decides ray by ray). A miss reads what `vertex::add_escaped_light`
+/// reads: through its footprint when it sees the environment whole (from the camera, or
+/// through a delta lobe), as a light when a non-delta lobe sampled it.
+fn look_up_wave_misses(
+    context: &RenderContext,
+    misses: &mut MissLanes,
+    (rays, hits): (&[PathRay], &[TraceHit]),
+    worker: &mut WorkerState,
+    enabled: bool,
+) {
+    let takes = enabled && !context.effects.fog;
+    let escapes = rays
+        .iter()
+        .zip(hits)
+        .enumerate()
+        .filter(|(_, (_, hit))| takes && !hit.is_hit())
+        .map(|(index, (ray, _))| Escape {
+            ray: index,
+            direction: ray.direction,
+            footprint: &ray.footprint,
+            as_light: ray.bsdf_pdf.is_some(),
+        });
+    look_up_misses(context, misses, rays.len(), escapes, worker);
 }

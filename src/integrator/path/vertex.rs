@@ -207,18 +207,33 @@ fn add_escaped_light(
     image: &mut TileImage,
     worker: &mut WorkerState,
 ) {
-    let lights = &context.lights;
-    let environment = LightRef::Environment;
     let escape = LightHit::escaping(ray.direction);
     let radiance = if ray.bsdf_pdf.is_some() {
-        lights.le(
-            environment,
+        context.lights.le(
+            LightRef::Environment,
             &escape,
             &mut ContextEmission { context, worker },
         )
     } else {
         environment_lookup(context, ray.direction, &ray.footprint, worker)
     };
+    add_escaped_radiance(tracer, context, ray, radiance, image);
+}
+
+/// The environment's radiance `radiance` along an escaping ray (as
+/// [`add_escaped_light`] reads it) added to the ray's pixel, weighted against light
+/// sampling for a ray a non-delta lobe sampled. The scalar path's step and the misses
+/// looked up together (`lanes::misses`).
+pub(super) fn add_escaped_radiance(
+    tracer: &PathTracer,
+    context: &RenderContext,
+    ray: &PathRay,
+    radiance: Vec3,
+    image: &mut TileImage,
+) {
+    let lights = &context.lights;
+    let environment = LightRef::Environment;
+    let escape = LightHit::escaping(ray.direction);
     let weight = found_light_weight(tracer, ray, lights.pmf(environment), || {
         lights.pdf_li(environment, ray.from, &escape)
     });

@@ -4,12 +4,13 @@
 //! A hit takes the lanes when it lies on a triangle mesh or an analytic sphere, its
 //! material is one the lanes cover (`lanes::LaneMaterial::of`: opaque and not emissive,
 //! normal-mapped or not), and the light beyond the shadow rays is Whitted's ambient term.
-//! These take the scalar path (`surface::shade_hit`), hit by hit: misses; curved and
-//! height patches; mirrors, dielectrics and emitters; rays inside an absorbing medium;
-//! footprints kept as ray differentials at textured materials; first samples of a render
-//! that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`); every hit
-//! when the indirect light is voxel cone tracing's. Fog on the way to a hit is the wave's
-//! (`fog::fog_wave_segments`), before either path shades it.
+//! These take the scalar path (`surface::shade_hit`), hit by hit: curved and height
+//! patches; mirrors, dielectrics and emitters; rays inside an absorbing medium; first
+//! samples of a render that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`,
+//! `footprint`); every hit when the indirect light is voxel cone tracing's. Ray
+//! differentials are transferred to their hits in the lanes (`lanes::differentials`);
+//! misses are looked up together (`lanes::misses`, unless fog is on). Fog on the way to a
+//! hit is the wave's (`fog::fog_wave_segments`), before either path shades it.
 
 use glam::Vec3;
 
@@ -17,6 +18,7 @@ use super::surface::{AmbientEnvironment, IndirectLight};
 use super::{add_radiance, Waves};
 use crate::film::TileImage;
 use crate::integrator::lanes::bsdf::{eval_lights, incident_normals};
+use crate::integrator::lanes::differentials::differentials_at_hits;
 use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, LaneFootprint};
 use crate::integrator::lanes::gather::{gather_spheres, gather_triangles};
 use crate::integrator::lanes::interpolate::interpolate;
@@ -69,17 +71,12 @@ pub(super) fn pick_lanes(
         if !lane_material.covers {
             continue;
         }
-        let cone_width = if effects.footprints && lane_material.textured {
-            match lane_footprint(&ray.footprint, hit.t) {
-                // A ray differential: the scalar path shades it.
-                None => continue,
-                Some(LaneFootprint::Point) => None,
-                Some(LaneFootprint::Cone(width)) => Some(width),
-            }
+        let footprint = if effects.footprints && lane_material.textured {
+            lane_footprint(&ray.footprint, hit.t)
         } else {
-            None
+            LaneFootprint::Point
         };
-        waves.picks.push(index, material, surface, cone_width);
+        waves.picks.push(index, material, surface, footprint);
     }
     let uv_aov = context.options.aovs.surface;
     let (rays, hits) = (&waves.buffers.rays.current, &waves.buffers.trace_hits);
@@ -109,6 +106,7 @@ pub(super) fn shade_lanes(context: &RenderContext, waves: &mut Waves, worker: &m
     gather_triangles(lanes, &context.surfaces.scene.meshes);
     gather_spheres(lanes, &context.surfaces.scene.spheres);
     interpolate(lanes);
+    differentials_at_hits(lanes, &context.camera, context.options.spp);
     texture_gradients(lanes, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
     if context.effects.shadows {

@@ -44,6 +44,7 @@ use glam::Vec3;
 use crate::film::{PixelRect, TileImage};
 use crate::footprint::Footprint;
 use crate::integrator::camera_sample::{CameraRay, MAX_SAMPLES_IN_FLIGHT};
+use crate::integrator::lanes::misses::{look_up_misses, Escape, MissLanes};
 use crate::integrator::lanes::picks::LanePicks;
 use crate::integrator::lanes::WaveLanes;
 use crate::integrator::trace_wave::WaveRay;
@@ -121,6 +122,9 @@ pub struct Waves {
     /// Per ray of the wave being shaded, the fog colour its segment adds to its pixel
     /// (`fog::fog_wave_segments`); empty without fog.
     fog_light: Vec<Option<Vec3>>,
+    /// The current wave's misses, their environment radiance looked up together
+    /// (`lanes::misses`).
+    misses: MissLanes,
 }
 
 impl Integrator for Whitted {
@@ -246,6 +250,7 @@ fn shade_hits(
     fog::fog_wave_segments(context, waves, worker);
     lane_waves::pick_lanes(context, waves, image, worker, indirect);
     lane_waves::shade_lanes(context, waves, worker);
+    look_up_wave_misses(context, waves, worker);
     for index in 0..waves.buffers.rays.current.len() {
         fog::add_fog_light(waves, index, image);
         let lane = waves.lane_of_ray[index];
@@ -256,7 +261,10 @@ fn shade_hits(
         let ray = waves.buffers.rays.current[index];
         let hit = &waves.buffers.trace_hits[index];
         if !hit.is_hit() {
-            shade_miss(context, &ray, image, worker);
+            match waves.misses.radiance_of(index) {
+                Some(radiance) => add_radiance(image, ray.slot, ray.throughput * radiance),
+                None => shade_miss(context, &ray, image, worker),
+            }
             continue;
         }
         let detail = surface_detail(context, &ray, hit);
@@ -265,4 +273,24 @@ fn shade_hits(
             .surface_hit(ray.origin, ray.direction, hit, detail);
         shade_hit(context, ray, &surface, image, waves, worker, indirect);
     }
+}
+
+/// The environment along the wave's misses, looked up together (`lanes::misses`), unless
+/// fog is on: a miss's light is then fogged on its way out, ray by ray
+/// (`lights::shade_miss`).
+fn look_up_wave_misses(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerState) {
+    let (rays, hits) = (&waves.buffers.rays.current, &waves.buffers.trace_hits);
+    let takes = !waves.scalar_only && !context.effects.fog;
+    let escapes = rays
+        .iter()
+        .zip(hits)
+        .enumerate()
+        .filter(|(_, (_, hit))| takes && !hit.is_hit())
+        .map(|(index, (ray, _))| Escape {
+            ray: index,
+            direction: ray.direction,
+            footprint: &ray.footprint,
+            as_light: false,
+        });
+    look_up_misses(context, &mut waves.misses, rays.len(), escapes, worker);
 }

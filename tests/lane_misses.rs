@@ -1,0 +1,110 @@
+//! Rays that leave the scene, their environment looked up together (`integrator::lanes::
+//! misses`): Whitted and the path tracer take a wave's misses there unless fog is on, and
+//! the path tracer's image is its scalar path's, bit for bit, with a lat-long sky and a
+//! constant colour, under cones and ray differentials, BSDF-sampled rays weighted against
+//! light sampling of the sky.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use conetrace::film::{AovSelection, Film};
+use conetrace::footprint::LodStrategy;
+use conetrace::integrator::{PathTracer, Whitted};
+use conetrace::render::stats::WorkCounters;
+use conetrace::render::{self, Integrator, RenderControl, RenderOptions};
+use conetrace::scene::load::load_scene;
+
+/// Scenes with sky around them: a lat-long map (lit by it as a light in the path tracer)
+/// and a constant colour.
+const SKY_SCENES: [&str; 4] = [
+    "assets/scenes/default.toml",
+    "assets/scenes/bench/env_lit_textured.toml",
+    "assets/scenes/teapot_mirror.toml",
+    "assets/scenes/fp_magnifier.toml",
+];
+
+/// The film of `scene` rendered small by `integrator` with footprints `lod` and every AOV,
+/// and the render's counters.
+fn render_with<I: Integrator>(
+    scene: &str,
+    integrator: &I,
+    lod: LodStrategy,
+) -> (Film, WorkCounters) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
+    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut options = RenderOptions::from_settings(&scene.settings);
+    options.width = 40;
+    options.height = 30;
+    options.spp = 2;
+    options.lod = lod;
+    options.aovs = AovSelection::ALL;
+    let context = render::prepare(Arc::new(scene), options).expect("prepare");
+    let result = render::render(&context, integrator, &RenderControl::default()).expect("render");
+    (result.film, result.stats.counters)
+}
+
+/// Whether the two films have the same bits in every channel.
+fn same_bits(a: &Film, b: &Film) -> bool {
+    let names = a.channel_names();
+    names == b.channel_names()
+        && names.iter().all(|name| {
+            let (x, y) = (a.channel(name), b.channel(name));
+            x.zip(y).is_some_and(|(x, y)| {
+                x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits())
+            })
+        })
+}
+
+#[test]
+fn whitted_looks_up_the_environment_of_its_misses_together() {
+    for scene in SKY_SCENES {
+        let (_, counters) = render_with(scene, &Whitted::default(), LodStrategy::Cone);
+        assert!(counters.lane_misses > 0, "{scene}: no miss took the lanes");
+    }
+}
+
+#[test]
+fn path_lanes_give_the_scalar_image_of_misses_bit_for_bit() {
+    for lod in [LodStrategy::Cone, LodStrategy::Differential] {
+        for scene in SKY_SCENES {
+            let lanes = PathTracer::default();
+            let scalar = PathTracer {
+                shade_in_lanes: false,
+                ..lanes
+            };
+            let (lane_film, lane_counters) = render_with(scene, &lanes, lod);
+            let (scalar_film, scalar_counters) = render_with(scene, &scalar, lod);
+            assert!(
+                lane_counters.lane_misses > 0,
+                "{scene}: no miss took the lanes"
+            );
+            assert_eq!(
+                scalar_counters.lane_misses, 0,
+                "{scene}: the scalar render used them"
+            );
+            // Every lookup is counted once, whichever path made it.
+            assert_eq!(
+                lane_counters.texture_lookups, scalar_counters.texture_lookups,
+                "{scene} ({lod:?})"
+            );
+            assert!(
+                same_bits(&lane_film, &scalar_film),
+                "{scene} ({lod:?}): images differ"
+            );
+        }
+    }
+}
+
+#[test]
+fn fog_leaves_misses_to_the_scalar_path() {
+    // A miss through fog may scatter before it escapes, which the scalar path decides.
+    let (_, counters) = render_with(
+        "assets/scenes/fog.toml",
+        &Whitted::default(),
+        LodStrategy::Cone,
+    );
+    assert_eq!(counters.lane_misses, 0);
+    let tracer = PathTracer::default();
+    let (_, counters) = render_with("assets/scenes/fog.toml", &tracer, LodStrategy::Cone);
+    assert_eq!(counters.lane_misses, 0);
+}
