@@ -2,14 +2,13 @@
 //! shaded in lanes (`integrator::lanes::differentials` transfers it to the hit) wherever a
 //! hit under cones is, in Whitted and in the path tracer, and gives the scalar path's image.
 
-use std::path::Path;
-use std::sync::Arc;
+mod common;
 
+use common::{assert_same_bits, render_small};
 use conetrace::film::Film;
 use conetrace::footprint::LodStrategy;
 use conetrace::integrator::{PathTracer, Whitted};
-use conetrace::render::{self, Integrator, RenderControl, RenderOptions};
-use conetrace::scene::load::load_scene;
+use conetrace::render::Integrator;
 
 /// Textured scenes, on meshes and on spheres, whose first hits the lanes cover.
 const TEXTURED_SCENES: [&str; 3] = [
@@ -26,29 +25,11 @@ fn render_with<I: Integrator>(
     lod: LodStrategy,
     max_depth: u32,
 ) -> (Film, u64) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
-    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut options = RenderOptions::from_settings(&scene.settings);
-    options.width = 40;
-    options.height = 30;
-    options.spp = 2;
-    options.lod = lod;
-    options.max_depth = max_depth;
-    let context = render::prepare(Arc::new(scene), options).expect("prepare");
-    let result = render::render(&context, integrator, &RenderControl::default()).expect("render");
-    (result.film, result.stats.counters.lane_hits)
-}
-
-/// Whether the two films have the same bits in every channel.
-fn same_bits(a: &Film, b: &Film) -> bool {
-    let names = a.channel_names();
-    names == b.channel_names()
-        && names.iter().all(|name| {
-            let (x, y) = (a.channel(name), b.channel(name));
-            x.zip(y).is_some_and(|(x, y)| {
-                x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits())
-            })
-        })
+    let (film, counters) = render_small(scene, integrator, |options| {
+        options.lod = lod;
+        options.max_depth = max_depth;
+    });
+    (film, counters.lane_hits)
 }
 
 #[test]
@@ -90,9 +71,6 @@ fn path_lanes_give_the_scalar_image_under_ray_differentials_over_bounces() {
         let (scalar_film, scalar_hits) = render_with(scene, &scalar, LodStrategy::Differential, 5);
         assert_eq!(scalar_hits, 0, "{scene}: the scalar render used the lanes");
         assert!(lane_hits > 0, "{scene}: no hit took the lanes");
-        assert!(
-            same_bits(&lane_film, &scalar_film),
-            "{scene}: images differ"
-        );
+        assert_same_bits(scene, &lane_film, &scalar_film);
     }
 }

@@ -4,15 +4,14 @@
 //! constant colour, under cones and ray differentials, BSDF-sampled rays weighted against
 //! light sampling of the sky.
 
-use std::path::Path;
-use std::sync::Arc;
+mod common;
 
+use common::{assert_same_bits, render_small};
 use conetrace::film::{AovSelection, Film};
 use conetrace::footprint::LodStrategy;
 use conetrace::integrator::{PathTracer, Whitted};
 use conetrace::render::stats::WorkCounters;
-use conetrace::render::{self, Integrator, RenderControl, RenderOptions};
-use conetrace::scene::load::load_scene;
+use conetrace::render::Integrator;
 
 /// Scenes with sky around them: a lat-long map (lit by it as a light in the path tracer)
 /// and a constant colour.
@@ -30,29 +29,10 @@ fn render_with<I: Integrator>(
     integrator: &I,
     lod: LodStrategy,
 ) -> (Film, WorkCounters) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
-    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut options = RenderOptions::from_settings(&scene.settings);
-    options.width = 40;
-    options.height = 30;
-    options.spp = 2;
-    options.lod = lod;
-    options.aovs = AovSelection::ALL;
-    let context = render::prepare(Arc::new(scene), options).expect("prepare");
-    let result = render::render(&context, integrator, &RenderControl::default()).expect("render");
-    (result.film, result.stats.counters)
-}
-
-/// Whether the two films have the same bits in every channel.
-fn same_bits(a: &Film, b: &Film) -> bool {
-    let names = a.channel_names();
-    names == b.channel_names()
-        && names.iter().all(|name| {
-            let (x, y) = (a.channel(name), b.channel(name));
-            x.zip(y).is_some_and(|(x, y)| {
-                x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits())
-            })
-        })
+    render_small(scene, integrator, |options| {
+        options.lod = lod;
+        options.aovs = AovSelection::ALL;
+    })
 }
 
 #[test]
@@ -87,10 +67,7 @@ fn path_lanes_give_the_scalar_image_of_misses_bit_for_bit() {
                 lane_counters.texture_lookups, scalar_counters.texture_lookups,
                 "{scene} ({lod:?})"
             );
-            assert!(
-                same_bits(&lane_film, &scalar_film),
-                "{scene} ({lod:?}): images differ"
-            );
+            assert_same_bits(&format!("{scene} ({lod:?})"), &lane_film, &scalar_film);
         }
     }
 }

@@ -160,24 +160,6 @@ fn render_path(
     (result.film, result.stats)
 }
 
-/// Every channel of the two films, compared bit for bit.
-fn assert_same_bits(variant: &str, lanes: &Film, scalar: &Film) {
-    let names = scalar.channel_names();
-    assert_eq!(lanes.channel_names(), names, "{variant}");
-    for name in &names {
-        let (a, b) = (lanes.channel(name).unwrap(), scalar.channel(name).unwrap());
-        let differing = a
-            .iter()
-            .zip(b)
-            .filter(|(x, y)| x.to_bits() != y.to_bits())
-            .count();
-        assert_eq!(
-            differing, 0,
-            "{variant}: {differing} values of {name} differ"
-        );
-    }
-}
-
 /// A render's name, how it changes the scene's options, and the least share of the camera
 /// rays' count the lanes must shade: every material is normal-mapped or an
 /// emission-textured emitter, so the lanes took no hit before.

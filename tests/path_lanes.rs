@@ -2,14 +2,13 @@
 //! path: shipped scenes give the same image and AOVs, bit for bit, under the default
 //! footprints, with every AOV, and with ray differentials.
 
-use std::path::Path;
-use std::sync::Arc;
+mod common;
 
+use common::{assert_same_bits, render_small};
 use conetrace::film::{AovSelection, Film};
 use conetrace::footprint::LodStrategy;
 use conetrace::integrator::path::{LightStrategy, PathTracer};
-use conetrace::render::{self, RenderControl, RenderOptions};
-use conetrace::scene::load::load_scene;
+use conetrace::render::RenderOptions;
 
 /// Scenes with textured, untextured, metallic-roughness, mirror and glass materials (a
 /// glass lens mesh, whose hits the lanes shade with the whole mixture of lobes), on meshes
@@ -38,40 +37,12 @@ fn render_film_with(
     in_lanes: bool,
     options: impl Fn(&mut RenderOptions),
 ) -> (Film, u64) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
-    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut render_options = RenderOptions::from_settings(&scene.settings);
-    render_options.width = 40;
-    render_options.height = 30;
-    render_options.spp = 2;
-    options(&mut render_options);
-    let context = render::prepare(Arc::new(scene), render_options).expect("prepare");
     let tracer = PathTracer {
         shade_in_lanes: in_lanes,
         ..tracer
     };
-    let result = render::render(&context, &tracer, &RenderControl::default()).expect("render");
-    (result.film, result.stats.counters.lane_hits)
-}
-
-/// Every channel of the two films, compared bit for bit; panics naming the first that
-/// differs.
-fn assert_same_bits(scene: &str, variant: &str, lanes: &Film, scalar: &Film) {
-    let names = scalar.channel_names();
-    assert_eq!(lanes.channel_names(), names, "{scene} ({variant})");
-    for name in &names {
-        let a = lanes.channel(name).expect("channel");
-        let b = scalar.channel(name).expect("channel");
-        let differing = a
-            .iter()
-            .zip(b)
-            .filter(|(x, y)| x.to_bits() != y.to_bits())
-            .count();
-        assert_eq!(
-            differing, 0,
-            "{scene} ({variant}): {differing} values of {name} differ"
-        );
-    }
+    let (film, counters) = render_small(scene, &tracer, options);
+    (film, counters.lane_hits)
 }
 
 /// Renders every scene both ways and compares them; returns how many hits the lanes shaded
@@ -91,7 +62,7 @@ fn check_every_scene_with(
         let (lanes, hits) = render_film_with(scene, tracer, true, &options);
         let (scalar, scalar_hits) = render_film_with(scene, tracer, false, &options);
         assert_eq!(scalar_hits, 0, "{scene}: the scalar render used the lanes");
-        assert_same_bits(scene, variant, &lanes, &scalar);
+        assert_same_bits(&format!("{scene} ({variant})"), &lanes, &scalar);
         lane_hits += hits;
     }
     lane_hits
@@ -162,7 +133,7 @@ fn lanes_shade_the_hits_fog_lets_pass_as_the_scalar_path() {
         let (lanes, hits) = render_film_with(scene, PathTracer::default(), true, |_| {});
         let (scalar, scalar_hits) = render_film_with(scene, PathTracer::default(), false, |_| {});
         assert_eq!(scalar_hits, 0, "{scene}: the scalar render used the lanes");
-        assert_same_bits(scene, "fog", &lanes, &scalar);
+        assert_same_bits(&format!("{scene} (fog)"), &lanes, &scalar);
         assert!(hits > 0, "{scene}: no hit behind the fog took the lanes");
     }
 }

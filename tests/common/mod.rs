@@ -236,3 +236,47 @@ pub fn base64(bytes: &[u8]) -> String {
     }
     out
 }
+
+/// A shipped scene (`scene`, relative to the repository) rendered small by `integrator`:
+/// 40x30 at 2 spp, then `options` applied to the scene's own; its film and work counters.
+pub fn render_small<I: conetrace::render::Integrator>(
+    scene: &str,
+    integrator: &I,
+    options: impl Fn(&mut conetrace::render::RenderOptions),
+) -> (
+    conetrace::film::Film,
+    conetrace::render::stats::WorkCounters,
+) {
+    use conetrace::render::{self, RenderControl, RenderOptions};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
+    let scene = conetrace::scene::load::load_scene(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut render_options = RenderOptions::from_settings(&scene.settings);
+    render_options.width = 40;
+    render_options.height = 30;
+    render_options.spp = 2;
+    options(&mut render_options);
+    let context = render::prepare(std::sync::Arc::new(scene), render_options).expect("prepare");
+    let result = render::render(&context, integrator, &RenderControl::default()).expect("render");
+    (result.film, result.stats.counters)
+}
+
+/// Every channel of the two films, compared bit for bit; panics naming `what` and the first
+/// channel that differs.
+pub fn assert_same_bits(what: &str, a: &conetrace::film::Film, b: &conetrace::film::Film) {
+    let names = b.channel_names();
+    assert_eq!(a.channel_names(), names, "{what}");
+    for name in &names {
+        let (x, y) = (
+            a.channel(name).expect("channel"),
+            b.channel(name).expect("channel"),
+        );
+        assert_eq!(x.len(), y.len(), "{what}: {name}");
+        let differing = x
+            .iter()
+            .zip(y)
+            .filter(|(p, q)| p.to_bits() != q.to_bits())
+            .count();
+        assert_eq!(differing, 0, "{what}: {differing} values of {name} differ");
+    }
+}
