@@ -10,6 +10,7 @@ use glam::{Vec3, Vec4};
 
 use crate::footprint::{direction_to_lat_long, Footprint};
 use crate::render::context::{RenderContext, WorkerState};
+use crate::render::tracer::TraceHit;
 use crate::scene::Environment;
 use crate::texture::{FilterMode, FilterOptions, TextureQuery};
 
@@ -69,41 +70,49 @@ impl MissLanes {
     }
 }
 
-/// A ray of the wave that left the scene: its index in the wave, its unit direction, its
-/// footprint, and whether it finds the environment as a light (a ray a non-delta lobe
-/// sampled, which reads the nearest level-0 texel as light sampling does) rather than
-/// seeing it whole through its footprint.
+/// What a miss of the wave needs for its lookup: its unit direction, its footprint, and
+/// whether it finds the environment as a light (a ray a non-delta lobe sampled, which reads
+/// the nearest level-0 texel as light sampling does) rather than seeing it whole through
+/// its footprint.
 pub(crate) struct Escape<'a> {
-    pub ray: usize,
     pub direction: Vec3,
     pub footprint: &'a Footprint,
     pub as_light: bool,
 }
 
-/// Take the `escapes` of a wave of `rays` rays into `misses` and look up the environment
-/// along all of them.
+/// Take the misses among a wave's `rays` (`hits` in the same order) into `misses`, none
+/// unless `takes`, and look up the environment along all of them; `escape` tells what a
+/// miss's ray needs for its lookup.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
-pub(crate) fn look_up_misses<'a>(
+pub(crate) fn look_up_misses<'a, R>(
     context: &RenderContext,
     misses: &mut MissLanes,
-    rays: usize,
-    escapes: impl Iterator<Item = Escape<'a>>,
+    (rays, hits): (&'a [R], &[TraceHit]),
+    takes: bool,
+    escape: impl Fn(&'a R) -> Escape<'a>,
     worker: &mut WorkerState,
 ) {
-    misses.clear(rays);
+    misses.clear(rays.len());
+    if !takes {
+        return;
+    }
     // `texturing::environment_lookup`: a constant colour reads no texture, so no
     // footprint gradients either.
     let filtered = context.effects.footprints
         && matches!(context.scene.environment, Environment::LatLong { .. });
-    for escape in escapes {
+    for (index, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+        if hit.is_hit() {
+            continue;
+        }
+        let escape = escape(ray);
         let gradients = if filtered && !escape.as_light {
             let g = escape.footprint.environment_gradients(escape.direction);
             [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
         } else {
             [0.0; 4]
         };
-        misses.push(escape.ray, escape.direction, escape.as_light, gradients);
+        misses.push(index, escape.direction, escape.as_light, gradients);
     }
     if misses.len() > 0 {
         worker.counters.lane_misses += misses.len() as u64;

@@ -304,24 +304,18 @@ impl Integrator for PathTracer {
 /// `vertex::shade` decides ray by ray). A miss reads what `vertex::add_escaped_light`
 /// reads: through its footprint when it sees the environment whole (from the camera, or
 /// through a delta lobe), as a light when a non-delta lobe sampled it.
-fn look_up_wave_misses(
+fn look_up_wave_misses<'a>(
     context: &RenderContext,
     misses: &mut MissLanes,
-    (rays, hits): (&[PathRay], &[TraceHit]),
+    (rays, hits): (&'a [PathRay], &[TraceHit]),
     worker: &mut WorkerState,
     enabled: bool,
 ) {
     let takes = enabled && !context.effects.fog;
-    let escapes = rays
-        .iter()
-        .zip(hits)
-        .enumerate()
-        .filter(|(_, (_, hit))| takes && !hit.is_hit())
-        .map(|(index, (ray, _))| Escape {
-            ray: index,
-            direction: ray.direction,
-            footprint: &ray.footprint,
-            as_light: ray.bsdf_pdf.is_some(),
-        });
-    look_up_misses(context, misses, rays.len(), escapes, worker);
+    let escape = |ray: &'a PathRay| Escape {
+        direction: ray.direction,
+        footprint: &ray.footprint,
+        as_light: ray.bsdf_pdf.is_some(),
+    };
+    look_up_misses(context, misses, (rays, hits), takes, escape, worker);
 }

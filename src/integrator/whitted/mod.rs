@@ -278,19 +278,24 @@ fn shade_hits(
 /// The environment along the wave's misses, looked up together (`lanes::misses`), unless
 /// fog is on: a miss's light is then fogged on its way out, ray by ray
 /// (`lights::shade_miss`).
-fn look_up_wave_misses(context: &RenderContext, waves: &mut Waves, worker: &mut WorkerState) {
+fn look_up_wave_misses<'a>(
+    context: &RenderContext,
+    waves: &'a mut Waves,
+    worker: &mut WorkerState,
+) {
     let (rays, hits) = (&waves.buffers.rays.current, &waves.buffers.trace_hits);
     let takes = !waves.scalar_only && !context.effects.fog;
-    let escapes = rays
-        .iter()
-        .zip(hits)
-        .enumerate()
-        .filter(|(_, (_, hit))| takes && !hit.is_hit())
-        .map(|(index, (ray, _))| Escape {
-            ray: index,
-            direction: ray.direction,
-            footprint: &ray.footprint,
-            as_light: false,
-        });
-    look_up_misses(context, &mut waves.misses, rays.len(), escapes, worker);
+    let miss = |ray: &'a PathRay| Escape {
+        direction: ray.direction,
+        footprint: &ray.footprint,
+        as_light: false,
+    };
+    look_up_misses(
+        context,
+        &mut waves.misses,
+        (rays, hits),
+        takes,
+        miss,
+        worker,
+    );
 }
