@@ -52,6 +52,7 @@ pub use gradients::{
 };
 pub use normal_derivatives::shading_normal_derivative;
 pub use packed_cone::PackedCone;
+pub use patch_surface::curved_st_offset;
 pub use ray_cone::RayCone;
 pub use ray_differential::{normalized_derivative, RayDifferential};
 pub use strategy::{LodStrategy, UnknownLodStrategy};

@@ -147,15 +147,60 @@ impl UserGeometry for HeightPatchGeometry {
 }
 
 /// The surface at a hit on `patch` (the trace hit's u, v are the patch's).
+pub fn patch_surface_hit(patch: &BezierPatch, hit: &TraceHit, texturing: bool) -> SurfaceHit {
+    let point = patch_surface_point(patch, (hit.u, hit.v), texturing);
+    SurfaceHit {
+        t: hit.t,
+        position: point.spawn.position,
+        geometric_normal: point.normal,
+        shading_normal: point.normal,
+        barycentric: Vec2::new(hit.u, hit.v),
+        st: point.st,
+        dpds: point.dpds,
+        dpdt: point.dpdt,
+        material: patch.material as u32,
+        patch: Patch::Curved {
+            frame: point.frame,
+            dstdu: point.dstdu,
+            dstdv: point.dstdv,
+            error: point.spawn.error,
+        },
+    }
+}
+
+/// What a patch gives at a hit's (u, v), field by field: the makings of its
+/// [`SurfaceHit`], which the shading lanes store one array per field instead.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PatchSurfacePoint {
+    /// The point and the bound on its rounding error.
+    pub spawn: SpawnPoint,
+    /// Unit normal `P_u x P_v` (geometric and shading).
+    pub normal: Vec3,
+    /// Texture coordinates and dP/ds, dP/dt (zero unless `texturing`).
+    pub st: Vec2,
+    pub dpds: Vec3,
+    pub dpdt: Vec3,
+    /// The exact derivatives footprints read (`Patch::Curved`).
+    pub frame: CurvedFrame,
+    pub dstdu: Vec2,
+    pub dstdv: Vec2,
+}
+
+/// The surface of `patch` at `(u, v)` (a hit's, as the intersector reported them), with
+/// texture coordinates and dP/ds, dP/dt when `texturing`.
 ///
 /// The position is the patch evaluated in f64 at the f32 (u, v) the hit reports, so it lies
 /// on the surface up to its rounding to f32; its error bound is that rounding plus the
 /// intersector slack of `crate::shading::ray_offset`, on the magnitude of the control points.
-pub fn patch_surface_hit(patch: &BezierPatch, hit: &TraceHit, texturing: bool) -> SurfaceHit {
+#[inline]
+pub(crate) fn patch_surface_point(
+    patch: &BezierPatch,
+    (u, v): (f32, f32),
+    texturing: bool,
+) -> PatchSurfacePoint {
     let control = control_f64(&patch.control);
-    let (u, v) = (f64::from(hit.u), f64::from(hit.v));
-    let point = evaluate(&control, u, v);
-    let normal = geometric_normal(&control, u, v)
+    let point = evaluate(&control, f64::from(u), f64::from(v));
+    let normal = geometric_normal(&control, f64::from(u), f64::from(v))
         .try_normalize()
         .unwrap_or(DVec3::Y)
         .as_vec3();
@@ -163,35 +208,28 @@ pub fn patch_surface_hit(patch: &BezierPatch, hit: &TraceHit, texturing: bool) -
     let spawn = SpawnPoint::on_curved_patch(point.position, magnitude);
     let dpdu = point.dpdu.as_vec3();
     let dpdv = point.dpdv.as_vec3();
-    let (st, dstdu, dstdv) = patch.st(hit.u, hit.v);
+    let (st, dstdu, dstdv) = patch.st(u, v);
     let (st, dpds, dpdt) = if texturing {
         let (dpds, dpdt) = position_st_derivatives(dpdu, dpdv, dstdu, dstdv);
         (st, dpds, dpdt)
     } else {
         (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
     };
-    SurfaceHit {
-        t: hit.t,
-        position: spawn.position,
-        geometric_normal: normal,
-        shading_normal: normal,
-        barycentric: Vec2::new(hit.u, hit.v),
+    PatchSurfacePoint {
+        spawn,
+        normal,
         st,
         dpds,
         dpdt,
-        material: patch.material as u32,
-        patch: Patch::Curved {
-            frame: CurvedFrame {
-                dpdu,
-                dpdv,
-                d2pdu2: point.d2pdu2.as_vec3(),
-                d2pdudv: point.d2pdudv.as_vec3(),
-                d2pdv2: point.d2pdv2.as_vec3(),
-            },
-            dstdu,
-            dstdv,
-            error: spawn.error,
+        frame: CurvedFrame {
+            dpdu,
+            dpdv,
+            d2pdu2: point.d2pdu2.as_vec3(),
+            d2pdudv: point.d2pdudv.as_vec3(),
+            d2pdv2: point.d2pdv2.as_vec3(),
         },
+        dstdu,
+        dstdv,
     }
 }
 

@@ -1,15 +1,17 @@
 //! Stage 3: footprints at the hits and the texture gradients they give, for the lanes that
 //! read a texture (`footprint::Footprint::texture_gradients` over lane arrays: the cone's
 //! circle projected onto the tangent plane as an ellipse, whose axes map to st through the
-//! triangle's barycentric derivatives, or on spheres through dP/ds and dP/dt).
+//! triangle's barycentric derivatives, on spheres through dP/ds and dP/dt, on patches
+//! through the patch's own derivatives).
 
 use std::ops::Range;
 
 use glam::{Vec2, Vec3};
 
 use super::differentials::{differential_axes, LaneDifferential};
+use super::patches::{derivatives, patch_st_axes};
 use super::soa::corner_lanes_2;
-use super::WaveLanes;
+use super::{LaneSections, WaveLanes};
 use crate::footprint::robust::{unit_direction, unit_normal, unit_or};
 use crate::footprint::{
     general_st_offset, lat_long_frame, project_cone_to_ellipse, Footprint, RayDifferential,
@@ -53,7 +55,8 @@ pub(crate) fn lane_footprint(footprint: &Footprint, t: f32) -> LaneFootprint {
 ///
 /// One vector loop ([`barycentric_gradients`]) does every lane on a triangle with usable
 /// barycentric offsets, another ([`sphere_gradients`]) every sphere lane; the few on
-/// degenerate triangles are done again, lane by lane, through dP/ds and dP/dt.
+/// degenerate triangles are done again, lane by lane, through dP/ds and dP/dt. Patch lanes
+/// take theirs lane by lane ([`patch_gradients`]).
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn texture_gradients(lanes: &mut WaveLanes, max_aniso: f32) {
@@ -91,7 +94,11 @@ pub(crate) fn texture_gradients(lanes: &mut WaveLanes, max_aniso: f32) {
 #[inline(always)]
 fn gradients_from(lanes: &mut WaveLanes, source: impl FootprintAxes) {
     let len = lanes.len();
-    let (triangles, spheres) = lanes.sections();
+    let LaneSections {
+        triangles,
+        spheres,
+        patches,
+    } = lanes.sections();
     lanes.gradients.resize(len, [0.0; 4]);
     lanes.degenerate.resize(len, false);
     simd::run_at(
@@ -102,6 +109,7 @@ fn gradients_from(lanes: &mut WaveLanes, source: impl FootprintAxes) {
             sphere_gradients(lanes, source.slice(spheres.clone()), spheres.clone());
         },
     );
+    patch_gradients(lanes, source.slice(patches.clone()), patches);
     for lane in 0..len {
         if lanes.degenerate[lane] {
             let d = unit_direction(lanes.direction.get(lane));
@@ -268,6 +276,26 @@ fn sphere_gradients(lanes: &mut WaveLanes, source: impl FootprintAxes, spheres: 
             [0.0; 4]
         };
         degenerate[k] = textured && !framed;
+    }
+}
+
+/// The gradients of every patch lane `patches` (`source` holding their footprints) with
+/// texture coordinates: the footprint's axes mapped to st through the patch's derivatives
+/// at the hit (`footprint::surface_gradients` on a curved patch). A patch always has them,
+/// so no lane is left to the degenerate case.
+fn patch_gradients(lanes: &mut WaveLanes, source: impl FootprintAxes, patches: Range<usize>) {
+    for (k, lane) in patches.enumerate() {
+        lanes.degenerate[lane] = false;
+        lanes.gradients[lane] = if source.has_footprint(k) && lanes.has_st[lane] {
+            let d = unit_direction(lanes.direction.get(lane));
+            let n = unit_normal(lanes.geometric_normal.get(lane), d);
+            let (dpdx, dpdy) = source.axes(k, d, n);
+            let [ddx, ddy] = patch_st_axes(derivatives(lanes, lane), dpdx, dpdy);
+            let g = TextureGradients::from_axes(ddx, ddy);
+            [g.dsdx, g.dtdx, g.dsdy, g.dtdy]
+        } else {
+            [0.0; 4]
+        };
     }
 }
 

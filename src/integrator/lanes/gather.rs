@@ -16,7 +16,7 @@ pub(crate) fn gather_triangles(lanes: &mut WaveLanes, meshes: &[TriangleMesh]) {
         array.refill(len);
     }
     refill(&mut lanes.has_st, len, false);
-    for lane in lanes.sections().0 {
+    for lane in lanes.sections().triangles {
         let mesh = &meshes[lanes.mesh[lane] as usize];
         let corners = mesh.triangles[lanes.primitive[lane] as usize].map(|i| i as usize);
         for (corner, &i) in corners.iter().enumerate() {
@@ -38,7 +38,7 @@ fn gather_texture_coordinates(lanes: &mut WaveLanes, meshes: &[TriangleMesh]) {
     for array in &mut lanes.st_vertices {
         array.refill(len);
     }
-    for lane in lanes.sections().0 {
+    for lane in lanes.sections().triangles {
         if !lanes.has_st[lane] {
             continue;
         }
@@ -60,7 +60,7 @@ pub(crate) fn gather_spheres(lanes: &mut WaveLanes, spheres: &[Sphere]) {
     lanes.center.resize(len);
     lanes.radius.resize(len, 0.0);
     lanes.has_st.resize(len, false);
-    for lane in lanes.sections().1 {
+    for lane in lanes.sections().spheres {
         let sphere = &spheres[lanes.primitive[lane] as usize];
         lanes.center.set(lane, sphere.center);
         lanes.radius[lane] = sphere.radius;

@@ -14,7 +14,7 @@ use std::ops::Range;
 use glam::{Vec2, Vec3};
 
 use super::soa::{corner_lanes, corner_lanes_2, normalize_or, select};
-use super::WaveLanes;
+use super::{LaneSections, WaveLanes};
 use crate::footprint::lat_long_frame;
 use crate::render::prepared::triangle_position_derivatives;
 use crate::shading::SpawnPoint;
@@ -25,7 +25,9 @@ use crate::simd;
 #[inline(never)]
 pub(crate) fn interpolate(lanes: &mut WaveLanes) {
     let len = lanes.len();
-    let (triangles, spheres) = lanes.sections();
+    let LaneSections {
+        triangles, spheres, ..
+    } = lanes.sections();
     for array in [
         &mut lanes.position,
         &mut lanes.error,

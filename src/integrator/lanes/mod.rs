@@ -1,18 +1,20 @@
-//! Shading a wave's hits on triangles and analytic spheres together, stage by stage, over
-//! lane arrays (structure of arrays, one array per coordinate): each stage is a plain loop
+//! Shading a wave's hits on triangles, analytic spheres and curved patches together, stage
+//! by stage, over lane arrays (structure of arrays, one array per coordinate): each stage is a plain loop
 //! over slices that reads the arrays the stages before it wrote, so no per-ray record
 //! (`SurfaceHit` with its `Patch`, `SurfaceInputs`, `MaterialBsdf`) is built or copied
 //! between stages, and the arrays live in the per-thread state, reused from wave to wave.
 //!
-//! The lanes are placed in two sections, the triangle lanes and then the sphere lanes
-//! (from [`WaveLanes::spheres_start`]), each ordered by material
+//! The lanes are placed in three sections ([`LaneSections`]): the triangle lanes, the
+//! sphere lanes, then the lanes on curved and height patches, each ordered by material
 //! ([`picks::LanePicks::place`]), so a material's lanes on one kind of surface are one range
 //! of every array and stages 1-3 run one loop per kind. The stages, in order:
 //! 1. [`gather`]: the triangles' vertex positions, normals and texture coordinates, the
 //!    spheres' centres and radii;
 //! 2. [`interpolate`]: the point and its rounding-error bound, the geometric and shading
 //!    normals, texture coordinates, the triangle's edges, and the sphere's dP/ds, dP/dt
-//!    (the triangle's too where a normal map needs its tangent frame);
+//!    (the triangle's too where a normal map needs its tangent frame); and [`patches`]:
+//!    stages 1 and 2 in one on patches, each lane's patch evaluated at its (u, v) in double
+//!    precision, with the exact derivatives its footprint reads;
 //! 3. [`differentials`] and [`footprints`]: each textured lane's footprint at the hit (a
 //!    cone's width, a ray differential transferred there) and its texture gradients;
 //! 4. [`textures`]: the lookups, each texture binding read for its material's range in one
@@ -44,6 +46,7 @@ pub(crate) mod gather;
 pub(crate) mod interpolate;
 pub(crate) mod lights;
 pub(crate) mod misses;
+pub(crate) mod patches;
 pub(crate) mod picks;
 pub(crate) mod soa;
 pub(crate) mod textures;
@@ -51,6 +54,7 @@ pub(crate) mod textures;
 use glam::{Vec3, Vec4};
 
 use self::differentials::LaneDifferential;
+use self::patches::PatchDerivatives;
 use self::soa::{Vec2Lanes, Vec3Lanes};
 
 use crate::footprint::RayDifferential;
@@ -117,10 +121,14 @@ pub(crate) struct WaveLanes {
     pub material: Vec<u32>,
     /// The mesh (index into `SceneDescription::meshes`) of each triangle lane.
     pub mesh: Vec<u32>,
+    /// Whether a patch lane's patch is a height patch (index into
+    /// `SceneDescription::height_patches`) rather than a curved one (into `patches`).
+    pub height_patch: Vec<bool>,
     /// The triangle of the lane's mesh, or the sphere (index into
-    /// `SceneDescription::spheres`).
+    /// `SceneDescription::spheres`), or the patch.
     pub primitive: Vec<u32>,
-    /// Barycentrics as the intersector reported them (triangle lanes).
+    /// Barycentrics as the intersector reported them (triangle lanes), or the patch's
+    /// (u, v).
     pub u: Vec<f32>,
     pub v: Vec<f32>,
     /// Hit distance along the ray, as the intersector reported it.
@@ -129,9 +137,11 @@ pub(crate) struct WaveLanes {
     pub origin: Vec3Lanes,
     /// Unit ray direction.
     pub direction: Vec3Lanes,
-    /// Lanes `spheres_start..len()` lie on spheres, those before it on triangles: each
-    /// section ordered by material, so stages 1-3 run one straight loop per kind of surface.
+    /// Lanes `spheres_start..patches_start` lie on spheres, those before them on triangles,
+    /// those after them on patches ([`LaneSections`]): each section ordered by material, so
+    /// stages 1-3 run one straight loop per kind of surface.
     pub spheres_start: usize,
+    pub patches_start: usize,
     /// Whether the lane needs texture coordinates (its material reads a texture, or the
     /// uv AOV is written from it).
     pub wants_st: Vec<bool>,
@@ -179,8 +189,12 @@ pub(crate) struct WaveLanes {
     /// parameterisation (`footprint::lat_long_frame`). Triangle lanes of normal-mapped
     /// materials: the triangle's (`prepared::triangle_position_derivatives`, zero without
     /// texture coordinates). Other triangle lanes leave them unwritten: nothing reads them.
+    /// Patch lanes that want texture coordinates: the patch's (zero elsewhere).
     pub dpds: Vec3Lanes,
     pub dpdt: Vec3Lanes,
+    /// Patch lanes, from `patches_start`: the patch's exact derivatives at the hit, which
+    /// their footprints map to st (`footprint::curved_st_offset`).
+    pub patch_derivatives: Vec<PatchDerivatives>,
 
     // Stage 3.
     /// Each lane's differential at its hit (`differentials::differentials_at_hits`);
@@ -279,6 +293,7 @@ impl WaveLanes {
         self.origin.clear();
         self.direction.clear();
         self.spheres_start = 0;
+        self.patches_start = 0;
         self.throughput.clear();
         self.wants_st.clear();
         self.cone_width.clear();
@@ -286,18 +301,18 @@ impl WaveLanes {
     }
 
     /// Lay out one lane for each picked hit, `materials` holding their materials and
-    /// `on_sphere` whether they lie on a sphere, in the wave's order: the triangle lanes
-    /// first and then the sphere lanes (from `spheres_start`), each section ordered by
+    /// `sections` the section of their surface ([`LaneSections`]: 0 triangles, 1 spheres,
+    /// 2 patches), in the wave's order: one section after the other, each ordered by
     /// material (stably), the runs recorded in `material_runs`, and `lane_of_pick[k]` set
     /// to the lane of the `k`-th picked hit, for [`picks::LanePicks::place`] to fill.
-    fn lay_out_by_material(&mut self, materials: &[u32], on_sphere: &[bool]) {
+    fn lay_out_by_material(&mut self, materials: &[u32], sections: &[u32]) {
         let scene_materials = self.materials.len();
         self.section_keys.clear();
         self.section_keys.extend(
             materials
                 .iter()
-                .zip(on_sphere)
-                .map(|(&m, &sphere)| m + if sphere { scene_materials as u32 } else { 0 }),
+                .zip(sections)
+                .map(|(&m, &section)| m + section * scene_materials as u32),
         );
         count_material_runs(
             &mut self.material_counts,
@@ -305,7 +320,8 @@ impl WaveLanes {
             scene_materials,
             &self.section_keys,
         );
-        self.spheres_start = on_sphere.iter().filter(|&&sphere| !sphere).count();
+        self.spheres_start = sections.iter().filter(|&&section| section == 0).count();
+        self.patches_start = sections.iter().filter(|&&section| section <= 1).count();
         self.lane_of_pick.clear();
         self.lane_of_pick
             .extend(self.section_keys.iter().map(|&key| {
@@ -329,28 +345,33 @@ impl WaveLanes {
         self.direction.resize(len);
         self.throughput.resize(len);
         self.wants_st.resize(len, false);
+        self.height_patch.resize(len, false);
         self.cone_width.resize(len, None);
     }
 
-    /// The lanes on triangles and the lanes on spheres.
+    /// The lanes of each kind of surface.
     #[inline]
-    pub(crate) fn sections(&self) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
-        (0..self.spheres_start, self.spheres_start..self.len())
+    pub(crate) fn sections(&self) -> LaneSections {
+        LaneSections {
+            triangles: 0..self.spheres_start,
+            spheres: self.spheres_start..self.patches_start,
+            patches: self.patches_start..self.len(),
+        }
     }
 
     /// The point on the surface at lane `lane` (`SurfaceHit::position`): the spawn point's
-    /// on triangles, the first projection of the ray's point on spheres.
+    /// on triangles and patches, the first projection of the ray's point on spheres.
     #[inline]
     pub(crate) fn surface_point(&self, lane: usize) -> Vec3 {
-        if lane < self.spheres_start {
-            self.position.get(lane)
-        } else {
+        if (self.spheres_start..self.patches_start).contains(&lane) {
             self.sphere_point.get(lane)
+        } else {
+            self.position.get(lane)
         }
     }
 
     /// Run `run` of the ordered lanes: its material and its range of lanes (a material
-    /// with lanes on both kinds of surface has a run in each section).
+    /// with lanes on several kinds of surface has a run in each section).
     pub(crate) fn material_run(&self, run: usize) -> (u32, std::ops::Range<usize>) {
         let start = match run {
             0 => 0,
@@ -362,8 +383,8 @@ impl WaveLanes {
 }
 
 /// The `(material, end)` runs of lanes with section keys `keys` (a material, plus
-/// `scene_materials` on spheres) once ordered by key into `runs`, and in `counts` (one per
-/// key) where each key's first lane goes.
+/// `scene_materials` times the section) once ordered by key into `runs`, and in `counts`
+/// (one per key) where each key's first lane goes.
 fn count_material_runs(
     counts: &mut Vec<usize>,
     runs: &mut Vec<(u32, usize)>,
@@ -371,7 +392,7 @@ fn count_material_runs(
     keys: &[u32],
 ) {
     counts.clear();
-    counts.resize(2 * scene_materials, 0);
+    counts.resize(LaneSections::COUNT * scene_materials, 0);
     for &key in keys {
         counts[key as usize] += 1;
     }
@@ -385,6 +406,20 @@ fn count_material_runs(
         }
         *count = start;
     }
+}
+
+/// The lanes of a wave by the kind of surface they lie on, one range after the other.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct LaneSections {
+    pub triangles: std::ops::Range<usize>,
+    pub spheres: std::ops::Range<usize>,
+    /// Curved and height patches.
+    pub patches: std::ops::Range<usize>,
+}
+
+impl LaneSections {
+    /// How many sections there are.
+    const COUNT: usize = 3;
 }
 
 /// `buffer` cleared and filled with `len` copies of `value`, reusing its allocation.

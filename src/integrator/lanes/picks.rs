@@ -1,6 +1,6 @@
 //! The hits of a wave an integrator hands to the lanes: picked in the wave's order, then
-//! each placed straight at its lane, the triangle lanes before the sphere lanes and each
-//! section ordered by material (a counting sort, stable: the lanes of one material keep the
+//! each placed straight at its lane, in one section per kind of surface (triangles, spheres,
+//! then curved and height patches) and each section ordered by material (a counting sort, stable: the lanes of one material keep the
 //! wave's order). Placing each hit once costs nothing, where pushing the lanes and then
 //! permuting them copies every array again.
 
@@ -19,23 +19,38 @@ pub(crate) enum LaneSurface {
     Mesh(usize),
     /// One of the scene's analytic spheres.
     Sphere,
+    /// One of the scene's curved (Bezier) patches.
+    CurvedPatch,
+    /// One of the scene's height patches (traced by marching, shaded as the same surface
+    /// made a Bezier patch).
+    HeightPatch,
 }
 
 impl LaneSurface {
-    /// The surface `hit` lies on and its material, if the lanes reconstruct hits on it
-    /// (triangles and spheres; curved and height patches take the scalar path).
+    /// The surface `hit` lies on and its material.
     #[inline]
-    pub(crate) fn at(surfaces: &SurfaceLookup, hit: &TraceHit) -> Option<(LaneSurface, usize)> {
+    pub(crate) fn at(surfaces: &SurfaceLookup, hit: &TraceHit) -> (LaneSurface, usize) {
         let scene = &surfaces.scene;
+        let primitive = hit.primitive as usize;
         match surfaces.geometries[hit.geometry as usize] {
-            GeometryRef::Mesh(index) => {
-                Some((LaneSurface::Mesh(index), scene.meshes[index].material))
-            }
-            GeometryRef::Spheres => Some((
-                LaneSurface::Sphere,
-                scene.spheres[hit.primitive as usize].material,
-            )),
-            GeometryRef::Patches | GeometryRef::HeightPatches => None,
+            GeometryRef::Mesh(index) => (LaneSurface::Mesh(index), scene.meshes[index].material),
+            GeometryRef::Spheres => (LaneSurface::Sphere, scene.spheres[primitive].material),
+            GeometryRef::Patches => (LaneSurface::CurvedPatch, scene.patches[primitive].material),
+            GeometryRef::HeightPatches => (
+                LaneSurface::HeightPatch,
+                scene.height_patches[primitive].material,
+            ),
+        }
+    }
+
+    /// The section of the lanes this kind of surface is placed in
+    /// ([`super::LaneSections`]).
+    #[inline]
+    fn section(self) -> u32 {
+        match self {
+            LaneSurface::Mesh(_) => 0,
+            LaneSurface::Sphere => 1,
+            LaneSurface::CurvedPatch | LaneSurface::HeightPatch => 2,
         }
     }
 }
@@ -85,9 +100,12 @@ impl LaneHit {
 pub(crate) struct LanePicks {
     ray: Vec<u32>,
     material: Vec<u32>,
-    /// The mesh of a triangle hit (zero for a sphere's).
+    /// The mesh of a triangle hit (zero on other surfaces).
     mesh: Vec<u32>,
-    on_sphere: Vec<bool>,
+    /// The lanes' section of the hit's surface (`LaneSurface::section`).
+    section: Vec<u32>,
+    /// Whether the hit lies on a height patch.
+    height_patch: Vec<bool>,
     /// The footprint's width at the hit, for a textured material under a cone-like
     /// footprint (`None`: a point sample).
     cone_width: Vec<Option<f32>>,
@@ -101,7 +119,8 @@ impl LanePicks {
         self.ray.clear();
         self.material.clear();
         self.mesh.clear();
-        self.on_sphere.clear();
+        self.section.clear();
+        self.height_patch.clear();
         self.cone_width.clear();
         self.differentials.clear();
     }
@@ -131,18 +150,18 @@ impl LanePicks {
         }
         self.ray.push(ray as u32);
         self.material.push(material as u32);
-        let (mesh, on_sphere) = match surface {
-            LaneSurface::Mesh(mesh) => (mesh as u32, false),
-            LaneSurface::Sphere => (0, true),
+        let mesh = match surface {
+            LaneSurface::Mesh(mesh) => mesh as u32,
+            _ => 0,
         };
         self.mesh.push(mesh);
-        self.on_sphere.push(on_sphere);
+        self.section.push(surface.section());
+        self.height_patch.push(surface == LaneSurface::HeightPatch);
         self.cone_width.push(cone_width);
     }
 
-    /// Lay the picks out in `lanes`, triangles then spheres, each ordered by material with
-    /// the runs recorded in
-    /// `lanes.material_runs`; each lane filled from `hit(ray, material)` for its ray and
+    /// Lay the picks out in `lanes`, triangles, spheres then patches, each ordered by
+    /// material with the runs recorded in `lanes.material_runs`; each lane filled from `hit(ray, material)` for its ray and
     /// the ray's material, and `lane_of_ray[ray]` set to its lane.
     pub(crate) fn place(
         &self,
@@ -150,7 +169,7 @@ impl LanePicks {
         lane_of_ray: &mut [u32],
         mut hit: impl FnMut(usize, LaneMaterial) -> LaneHit,
     ) {
-        lanes.lay_out_by_material(&self.material, &self.on_sphere);
+        lanes.lay_out_by_material(&self.material, &self.section);
         for (k, &ray) in self.ray.iter().enumerate() {
             let lane = lanes.lane_of_pick[k] as usize;
             lane_of_ray[ray as usize] = lane as u32;
@@ -166,6 +185,7 @@ impl LanePicks {
             lanes.wave_index[lane] = ray;
             lanes.material[lane] = self.material[k];
             lanes.mesh[lane] = self.mesh[k];
+            lanes.height_patch[lane] = self.height_patch[k];
             lanes.primitive[lane] = primitive;
             lanes.u[lane] = u;
             lanes.v[lane] = v;
@@ -191,22 +211,35 @@ mod tests {
     use super::*;
 
     #[test]
-    fn placing_puts_triangles_before_spheres_orders_each_by_material_stably_and_maps_rays() {
+    fn placing_puts_triangles_spheres_and_patches_in_turn_orders_each_by_material_stably_and_maps_rays(
+    ) {
         let mut lanes = WaveLanes {
             materials: vec![LaneMaterial::default(); 4],
             ..WaveLanes::default()
         };
         let mut picks = LanePicks::default();
-        // Rays 0..7 of which 2 is not picked; 3 and 5 hit spheres.
-        for (ray, material) in [(0, 3), (1, 1), (3, 3), (4, 0), (5, 1), (6, 3)] {
-            let surface = if ray == 3 || ray == 5 {
-                LaneSurface::Sphere
-            } else {
-                LaneSurface::Mesh(9)
+        // Rays 0..10 of which 2 is not picked; 3 and 5 hit spheres, 7 and 9 height patches,
+        // 8 a curved patch.
+        for (ray, material) in [
+            (9, 2),
+            (0, 3),
+            (1, 1),
+            (3, 3),
+            (4, 0),
+            (5, 1),
+            (6, 3),
+            (7, 2),
+            (8, 0),
+        ] {
+            let surface = match ray {
+                3 | 5 => LaneSurface::Sphere,
+                7 | 9 => LaneSurface::HeightPatch,
+                8 => LaneSurface::CurvedPatch,
+                _ => LaneSurface::Mesh(9),
             };
             picks.push(ray, material, surface, LaneFootprint::Cone(ray as f32));
         }
-        let mut lane_of_ray = vec![u32::MAX; 7];
+        let mut lane_of_ray = vec![u32::MAX; 10];
         picks.place(&mut lanes, &mut lane_of_ray, |ray, _| LaneHit {
             primitive: 100 + ray as u32,
             uv: (ray as f32, 0.5),
@@ -216,23 +249,55 @@ mod tests {
             throughput: Vec3::splat(ray as f32),
             wants_st: ray % 2 == 0,
         });
-        assert_eq!(lanes.wave_index, [4, 1, 0, 6, 5, 3]);
-        assert_eq!(lanes.material, [0, 1, 3, 3, 1, 3]);
-        assert_eq!(lanes.mesh, [9, 9, 9, 9, 0, 0]);
-        assert_eq!(lanes.spheres_start, 4);
-        assert_eq!(lanes.primitive, [104, 101, 100, 106, 105, 103]);
-        assert_eq!(lanes.u, [4.0, 1.0, 0.0, 6.0, 5.0, 3.0]);
-        assert_eq!(lanes.origin.y, [-4.0, -1.0, -0.0, -6.0, -5.0, -3.0]);
-        assert_eq!(lanes.throughput.x, [4.0, 1.0, 0.0, 6.0, 5.0, 3.0]);
-        assert_eq!(lanes.wants_st, [true, false, true, true, false, false]);
-        assert_eq!(lanes.cone_width, [4.0, 1.0, 0.0, 6.0, 5.0, 3.0].map(Some));
-        assert_eq!(lane_of_ray, [2, 1, u32::MAX, 5, 0, 4, 3]);
+        assert_eq!(lanes.wave_index, [4, 1, 0, 6, 5, 3, 8, 9, 7]);
+        assert_eq!(lanes.material, [0, 1, 3, 3, 1, 3, 0, 2, 2]);
+        assert_eq!(lanes.mesh, [9, 9, 9, 9, 0, 0, 0, 0, 0]);
+        let height = [false, false, false, false, false, false, false, true, true];
+        assert_eq!(lanes.height_patch, height);
+        assert_eq!(
+            lanes.sections(),
+            super::super::LaneSections {
+                triangles: 0..4,
+                spheres: 4..6,
+                patches: 6..9,
+            }
+        );
+        assert_eq!(
+            lanes.primitive,
+            [104, 101, 100, 106, 105, 103, 108, 109, 107]
+        );
+        assert_eq!(lanes.u, [4.0, 1.0, 0.0, 6.0, 5.0, 3.0, 8.0, 9.0, 7.0]);
+        assert_eq!(
+            lanes.origin.y,
+            [-4.0, -1.0, -0.0, -6.0, -5.0, -3.0, -8.0, -9.0, -7.0]
+        );
+        assert_eq!(
+            lanes.throughput.x,
+            [4.0, 1.0, 0.0, 6.0, 5.0, 3.0, 8.0, 9.0, 7.0]
+        );
+        assert_eq!(
+            lanes.wants_st,
+            [true, false, true, true, false, false, true, false, false]
+        );
+        assert_eq!(
+            lanes.cone_width,
+            [4.0, 1.0, 0.0, 6.0, 5.0, 3.0, 8.0, 9.0, 7.0].map(Some)
+        );
+        assert_eq!(lane_of_ray, [2, 1, u32::MAX, 5, 0, 4, 3, 8, 6, 7]);
         let runs: Vec<_> = (0..lanes.material_runs.len())
             .map(|run| lanes.material_run(run))
             .collect();
         assert_eq!(
             runs,
-            [(0, 0..1), (1, 1..2), (3, 2..4), (1, 4..5), (3, 5..6)]
+            [
+                (0, 0..1),
+                (1, 1..2),
+                (3, 2..4),
+                (1, 4..5),
+                (3, 5..6),
+                (0, 6..7),
+                (2, 7..9)
+            ]
         );
     }
 }

@@ -2,7 +2,7 @@
 //! of `SurfaceLookup::surface_hit`, `Footprint::transfer` and `Footprint::texture_gradients`
 //! (under cones and ray differentials), stage 4 those of `shading::surface_inputs` (normal
 //! maps and emission textures included), and stages 5-6 those of the lights' samples and the
-//! lobes, on triangles and on spheres.
+//! lobes, on triangles, spheres and curved and height patches.
 
 use std::sync::Arc;
 
@@ -14,6 +14,7 @@ use super::footprints::{lane_footprint, texture_gradients, LaneFootprint};
 use super::gather::{gather_spheres, gather_triangles};
 use super::interpolate::interpolate;
 use super::lights::{sample_lights, shadow_rays};
+use super::patches::evaluate_patches;
 use super::picks::{LaneHit, LanePicks, LaneSurface};
 use super::textures::{lane_emission, shading_inputs};
 use super::{LaneMaterial, WaveLanes};
@@ -22,6 +23,8 @@ use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{GeometryRef, SurfaceDetail, SurfaceLookup};
 use crate::render::surface_textures::shading_inputs as shading_inputs_at;
 use crate::render::tracer::TraceHit;
+use crate::scene::patch::height::HeightPatch;
+use crate::scene::patch::BezierPatch;
 use crate::scene::{Light, Material, SceneDescription, Sphere, TriangleMesh};
 use crate::shading::surface_inputs::SurfaceInputs;
 use crate::texture::Texture;
@@ -45,7 +48,9 @@ impl Numbers {
 /// Two meshes of 64 triangles each: one with normals (some pointing away from the face) and
 /// texture coordinates, one with neither; the first mesh's triangle 0 is degenerate
 /// (collinear), the second's texture coordinates are missing. And 16 spheres of both
-/// materials, of radii from 0.01 to 100, some far from the origin.
+/// materials, of radii from 0.01 to 100, some far from the origin; 8 curved patches, bumpy
+/// over a square, half with corner texture coordinates, two with an edge collapsed to a
+/// point (as the teapot's lid); 4 height patches.
 fn scene(numbers: &mut Numbers) -> SceneDescription {
     let mut textured = TriangleMesh {
         name: "textured".into(),
@@ -89,34 +94,76 @@ fn scene(numbers: &mut Numbers) -> SceneDescription {
                 material: i % 2,
             })
             .collect(),
+        patches: (0..8).map(|i| bumpy_patch(numbers, i)).collect(),
+        height_patches: (0..4)
+            .map(|i| HeightPatch {
+                min: Vec2::new(-3.0, -2.0) + Vec2::splat(i as f32),
+                max: Vec2::new(3.0, 5.0) + Vec2::splat(i as f32),
+                heights: std::array::from_fn(|_| 2.0 * numbers.next() - 1.0),
+                material: i % 2,
+                march_step: 0.01,
+            })
+            .collect(),
         ..SceneDescription::default()
     }
 }
 
-/// The geometries of [`scene`]: its two meshes, then its spheres.
-const GEOMETRIES: [GeometryRef; 3] = [
+/// Curved patch `i` of [`scene`]: control points on a square of side 4, moved up and down
+/// at random; corner texture coordinates on odd patches; the first row collapsed to one
+/// point on patches 2 and 5.
+fn bumpy_patch(numbers: &mut Numbers, i: usize) -> BezierPatch {
+    let offset = Vec3::new(5.0 * i as f32, 0.0, -3.0);
+    let mut control: [Vec3; 16] = std::array::from_fn(|k| {
+        let (a, b) = ((k % 4) as f32, (k / 4) as f32);
+        offset + Vec3::new(a * 1.3, 2.0 * numbers.next() - 1.0, b * 1.3)
+    });
+    if i == 2 || i == 5 {
+        for k in 1..4 {
+            control[k] = control[0];
+        }
+    }
+    BezierPatch {
+        control,
+        corner_st: (i % 2 == 1).then(|| {
+            [
+                Vec2::new(0.1, 0.2),
+                Vec2::new(2.0, 0.1),
+                Vec2::new(0.3, 1.5),
+                Vec2::new(1.8, 3.0 * numbers.next()),
+            ]
+        }),
+        material: i % 2,
+    }
+}
+
+/// The geometries of [`scene`]: its two meshes, then its spheres, curved patches and
+/// height patches.
+const GEOMETRIES: [GeometryRef; 5] = [
     GeometryRef::Mesh(0),
     GeometryRef::Mesh(1),
     GeometryRef::Spheres,
+    GeometryRef::Patches,
+    GeometryRef::HeightPatches,
 ];
 
 /// A wave of hits on [`scene`]: per ray, its hit, origin, direction, footprint and whether
-/// it wants texture coordinates. Triangles and spheres alternate with the two materials,
-/// and a fifth of the sphere hits want no texture coordinates.
+/// it wants texture coordinates. Triangles, spheres and patches take turns, with the two
+/// materials, and a seventh of the hits on spheres and patches want no texture coordinates.
 fn wave(numbers: &mut Numbers) -> Vec<(TraceHit, Vec3, Vec3, Footprint, bool)> {
-    (0..768u32)
+    (0..1280u32)
         .map(|index| {
             let (u, v) = (numbers.next(), numbers.next());
-            let (u, v) = if u + v > 1.0 {
+            let geometry = index % 5;
+            let (u, v) = if u + v > 1.0 && geometry < 3 {
                 (1.0 - u, 1.0 - v)
             } else {
                 (u, v)
             };
-            let geometry = index % 3;
-            let primitive = if geometry == 2 {
-                (index / 3) % 16
-            } else {
-                (index / 2) % 64
+            let primitive = match geometry {
+                0 | 1 => (index / 5) % 64,
+                2 => (index / 5) % 16,
+                3 => (index / 5) % 8,
+                _ => (index / 5) % 4,
             };
             let hit = TraceHit {
                 u,
@@ -136,7 +183,7 @@ fn wave(numbers: &mut Numbers) -> Vec<(TraceHit, Vec3, Vec3, Footprint, bool)> {
                 )),
                 _ => Footprint::Mip0,
             };
-            let wants_st = geometry != 2 || index % 5 != 0;
+            let wants_st = geometry < 2 || index % 7 != 0;
             (hit, origin, direction, footprint, wants_st)
         })
         .collect()
@@ -207,7 +254,7 @@ fn check_stages_1_to_3(
         let mut lanes = lanes_at(level, covered(true, 1.0), 2);
         let mut picks = LanePicks::default();
         for (index, (hit, _, _, footprint, wants_st)) in rays.iter().enumerate() {
-            let (surface, material) = LaneSurface::at(&lookup, hit).expect("a lane surface");
+            let (surface, material) = LaneSurface::at(&lookup, hit);
             let footprint = lane_footprint(footprint, hit.t, *wants_st);
             picks.push(index, material, surface, footprint);
         }
@@ -219,13 +266,18 @@ fn check_stages_1_to_3(
         gather_triangles(&mut lanes, &scene.meshes);
         gather_spheres(&mut lanes, &scene.spheres);
         interpolate(&mut lanes);
+        evaluate_patches(&mut lanes, &scene.patches, &scene.height_patches);
         differentials_at_hits(&mut lanes, &camera, 1);
         texture_gradients(&mut lanes, 16.0);
         for (index, ray) in rays.iter().enumerate() {
             compare_surface(&lookup, &lanes, lane_of_ray[index] as usize, ray);
         }
         // The cases the comparison is meant to cover did occur.
-        let (triangles, spheres) = lanes.sections();
+        let super::LaneSections {
+            triangles,
+            spheres,
+            patches,
+        } = lanes.sections();
         let filtered = |lanes_of: std::ops::Range<usize>| {
             lanes_of
                 .filter(|&lane| lanes.gradients[lane] != [0.0; 4])
@@ -233,9 +285,14 @@ fn check_stages_1_to_3(
         };
         assert!(filtered(triangles.clone()) > 100, "{level:?}");
         assert!(filtered(spheres.clone()) > 100, "{level:?}");
+        assert!(filtered(patches.clone()) > 200, "{level:?}");
         assert_eq!(triangles.len(), 512);
+        assert_eq!(patches.len(), 512);
+        assert!(lanes.height_patch[patches.clone()].iter().any(|&h| h));
+        assert!(lanes.height_patch[patches.clone()].iter().any(|&h| !h));
         assert!(lanes.has_st[triangles].iter().filter(|&&s| !s).count() == 256);
         assert!(lanes.has_st[spheres].iter().any(|&s| !s));
+        assert!(lanes.has_st[patches].iter().any(|&s| !s));
     }
 }
 
@@ -396,7 +453,7 @@ fn lights_bsdf_and_shadow_rays_match_the_scalar_path_at_every_level() {
         gather_triangles(&mut lanes, &scene.meshes);
         gather_spheres(&mut lanes, &scene.spheres);
         interpolate(&mut lanes);
-        assert_eq!(lanes.sections().1.len(), 100);
+        assert_eq!(lanes.sections().spheres.len(), 100);
         let len = lanes.len();
         lanes.albedo.resize(len);
         lanes.metallic.resize(len, 0.0);
@@ -601,8 +658,7 @@ fn normal_maps_and_emission_textures_match_the_scalar_path_at_every_level() {
         let mut picks = LanePicks::default();
         for (index, (hit, _, _, footprint, _)) in rays.iter().enumerate() {
             let footprint = lane_footprint(footprint, hit.t);
-            let (surface, material) =
-                LaneSurface::at(&context.surfaces, hit).expect("a lane surface");
+            let (surface, material) = LaneSurface::at(&context.surfaces, hit);
             picks.push(index, material, surface, footprint);
         }
         let mut lane_of_ray = vec![u32::MAX; rays.len()];
@@ -614,6 +670,7 @@ fn normal_maps_and_emission_textures_match_the_scalar_path_at_every_level() {
         gather_triangles(&mut lanes, &scene.meshes);
         gather_spheres(&mut lanes, &scene.spheres);
         interpolate(&mut lanes);
+        evaluate_patches(&mut lanes, &scene.patches, &scene.height_patches);
         texture_gradients(&mut lanes, context.options.filter.max_aniso);
         shading_inputs(&context, &mut lanes, &mut worker);
         let mut scalar_worker = WorkerState::default();

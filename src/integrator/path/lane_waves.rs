@@ -3,12 +3,12 @@
 //! each lane's vertex finished in wave order by queueing the rays those stages set up,
 //! without a `SurfaceHit` record or a per-ray texture lookup.
 //!
-//! A hit takes the lanes when it lies on a triangle mesh or an analytic sphere, whatever
-//! its material (mirrors, glass, emitters, normal maps and emission textures included); a
-//! ray differential is moved to the hit in the lanes (`lanes::differentials`). These take
-//! the scalar path (`vertex::shade`), hit by hit: curved and height patches; and, in a
-//! render that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`), the
-//! rays of first samples, which record their pixel's first lookup. Misses are looked up
+//! A hit takes the lanes whatever it lies on (triangles, analytic spheres, curved and height
+//! patches) and whatever its material (mirrors, glass, emitters, normal maps and emission
+//! textures included); a ray differential is moved to the hit in the lanes
+//! (`lanes::differentials`). In a render that writes the texture-lookup AOVs (`tex`,
+//! `texcolor`, `lod`, `footprint`), the rays of first samples take the scalar path
+//! (`vertex::shade`): they record their pixel's first lookup. Misses are looked up
 //! together too (`lanes::misses`, unless fog is on). A ray that fog stops before its hit
 //! makes a medium vertex there instead (`medium`).
 //!
@@ -24,6 +24,7 @@ use crate::integrator::lanes::differentials::{differentials_at_hits, LaneDiffere
 use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, LaneFootprint};
 use crate::integrator::lanes::gather::{gather_spheres, gather_triangles};
 use crate::integrator::lanes::interpolate::interpolate;
+use crate::integrator::lanes::patches::evaluate_patches;
 use crate::integrator::lanes::picks::{LaneHit, LanePicks, LaneSurface};
 use crate::integrator::lanes::textures::{lane_emission, shading_inputs};
 use crate::integrator::lanes::WaveLanes;
@@ -73,8 +74,9 @@ impl PathLanes {
 
 /// Pick the wave's rays the lanes shade (none unless `enabled`), order them by surface and
 /// material, and run stages 1-4 over them: the triangles' vertex data and the spheres'
-/// centres and radii, the point, normals and texture coordinates, the footprints' texture
-/// gradients, and the texture lookups (albedo, metallic, roughness, emission, normal maps).
+/// centres and radii, the point, normals and texture coordinates (the patches evaluated),
+/// the footprints' texture gradients, and the texture lookups (albedo, metallic, roughness,
+/// emission, normal maps).
 pub(super) fn shade_lanes(
     context: &RenderContext,
     path: &mut PathLanes,
@@ -96,9 +98,11 @@ pub(super) fn shade_lanes(
         return;
     }
     worker.counters.lane_hits += lanes.len() as u64;
-    gather_triangles(lanes, &context.surfaces.scene.meshes);
-    gather_spheres(lanes, &context.surfaces.scene.spheres);
+    let scene = &context.surfaces.scene;
+    gather_triangles(lanes, &scene.meshes);
+    gather_spheres(lanes, &scene.spheres);
     interpolate(lanes);
+    evaluate_patches(lanes, &scene.patches, &scene.height_patches);
     differentials_at_hits(lanes, &context.camera, context.options.spp);
     texture_gradients(lanes, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
@@ -158,9 +162,7 @@ fn pick_lanes(
             // Fog stopped the ray before its hit: a medium vertex (`medium`).
             continue;
         }
-        let Some((surface, material)) = LaneSurface::at(&context.surfaces, hit) else {
-            continue;
-        };
+        let (surface, material) = LaneSurface::at(&context.surfaces, hit);
         let lane_material = path.lanes.materials[material];
         let footprint = if effects.footprints {
             lane_footprint(&ray.footprint, hit.t)
@@ -277,10 +279,14 @@ fn add_lane_emission(
 ) {
     let area = &context.lights.area;
     let primitive = lanes.primitive[lane];
-    let light = if lane < lanes.spheres_start {
+    let sections = lanes.sections();
+    // Patches are not sampled as lights: their emission is seen, never aimed at.
+    let light = if sections.triangles.contains(&lane) {
         area.mesh_light(lanes.mesh[lane] as usize, primitive)
-    } else {
+    } else if sections.spheres.contains(&lane) {
         area.sphere_light(primitive as usize)
+    } else {
+        None
     };
     let normal = lanes.geometric_normal.get(lane);
     let seen = SeenEmission {

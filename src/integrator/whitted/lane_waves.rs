@@ -1,11 +1,11 @@
 //! Whitted's waves shaded in lanes (`integrator::lanes`): which hits take the lanes, the
 //! stages run over them, and what each lane adds to the film and the shadow queue.
 //!
-//! A hit takes the lanes when it lies on a triangle mesh or an analytic sphere, its
-//! material is one the lanes cover (`lanes::LaneMaterial::of`: opaque and not emissive,
-//! normal-mapped or not), and the light beyond the shadow rays is Whitted's ambient term.
-//! These take the scalar path (`surface::shade_hit`), hit by hit: curved and height
-//! patches; mirrors, dielectrics and emitters; rays inside an absorbing medium; first
+//! A hit takes the lanes, whatever surface it lies on (triangles, analytic spheres, curved
+//! and height patches), when its material is one the lanes cover (`lanes::LaneMaterial::of`:
+//! opaque and not emissive, normal-mapped or not), and the light beyond the shadow rays is
+//! Whitted's ambient term. These take the scalar path (`surface::shade_hit`), hit by hit:
+//! mirrors, dielectrics and emitters; rays inside an absorbing medium; first
 //! samples of a render that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`,
 //! `footprint`); every hit when the indirect light is voxel cone tracing's. Ray
 //! differentials are transferred to their hits in the lanes (`lanes::differentials`);
@@ -23,6 +23,7 @@ use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, La
 use crate::integrator::lanes::gather::{gather_spheres, gather_triangles};
 use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::lights::{sample_lights, shadow_rays};
+use crate::integrator::lanes::patches::evaluate_patches;
 use crate::integrator::lanes::picks::{LaneHit, LaneSurface};
 use crate::integrator::lanes::textures::shading_inputs;
 use crate::integrator::trace_wave::ShadowRay;
@@ -64,9 +65,7 @@ pub(super) fn pick_lanes(
         {
             continue;
         }
-        let Some((surface, material)) = LaneSurface::at(&context.surfaces, hit) else {
-            continue;
-        };
+        let (surface, material) = LaneSurface::at(&context.surfaces, hit);
         let lane_material = waves.lanes.materials[material];
         if !lane_material.covers {
             continue;
@@ -103,9 +102,11 @@ pub(super) fn shade_lanes(context: &RenderContext, waves: &mut Waves, worker: &m
         return;
     }
     let scene = &context.scene;
-    gather_triangles(lanes, &context.surfaces.scene.meshes);
-    gather_spheres(lanes, &context.surfaces.scene.spheres);
+    let surfaces = &context.surfaces.scene;
+    gather_triangles(lanes, &surfaces.meshes);
+    gather_spheres(lanes, &surfaces.spheres);
     interpolate(lanes);
+    evaluate_patches(lanes, &surfaces.patches, &surfaces.height_patches);
     differentials_at_hits(lanes, &context.camera, context.options.spp);
     texture_gradients(lanes, context.options.filter.max_aniso);
     shading_inputs(context, lanes, worker);
