@@ -2,7 +2,7 @@
 //! the material's shading inputs under a ray's footprint (filling the first-lookup AOVs of its
 //! pixel) and the environment's radiance in a direction.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::film::TileImage;
 use crate::footprint::Footprint;
@@ -11,8 +11,9 @@ use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::{environment_light_radiance, environment_radiance, SurfaceDetail};
 use crate::render::surface_textures;
 use crate::render::tracer::TraceHit;
-use crate::scene::Material;
+use crate::scene::{Material, TextureBinding};
 use crate::shading::surface_inputs::{SurfaceInputs, TextureSlot};
+use crate::texture::TextureQuery;
 
 /// The ray a lookup is made for: its direction and footprint (already at the hit), its
 /// pixel in the tile, and whether it belongs to the pixel's first sample (which writes
@@ -68,9 +69,7 @@ pub(crate) fn surface_inputs(
     } else {
         [0.0; 4]
     };
-    // Only a first sample records, and its slot is its pixel.
-    let pixel = ray.slot as usize;
-    let record = ray.first_sample && !image.lookup_done.is_empty() && !image.lookup_done[pixel];
+    let record = records_first_lookup(image, ray.first_sample, ray.slot);
     let mut base_color_lookup = None;
     let inputs = surface_textures::shading_inputs(
         context,
@@ -85,23 +84,46 @@ pub(crate) fn surface_inputs(
             }
         },
     );
-    if let (true, Some((query, texel)), Some(binding)) =
+    if let (true, Some(lookup), Some(binding)) =
         (record, base_color_lookup, &material.base_color_texture)
     {
-        image.lookup_done[pixel] = true;
-        if !image.tex.is_empty() {
-            image.tex[pixel] = [
-                query.s, query.t, query.dsdx, query.dtdx, query.dsdy, query.dtdy,
-            ];
-            image.texcolor[pixel] = [texel.x, texel.y, texel.z, 1.0];
-        }
-        if !image.lod.is_empty() {
-            let filter = &context.texture_filters[binding.texture];
-            image.lod[pixel] = context.textures[binding.texture].lod(&query, filter);
-            image.footprint[pixel] = ray.footprint.width();
-        }
+        record_first_lookup(context, image, ray.slot, binding, lookup, ray.footprint);
     }
     inputs
+}
+
+/// Whether a hit of a ray of sample slot `slot` records its pixel's first lookup: the render
+/// writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`, `footprint`), the ray belongs
+/// to its pixel's first sample (whose slot is its pixel), and no earlier hit of that sample
+/// recorded one.
+#[inline]
+pub(crate) fn records_first_lookup(image: &TileImage, first_sample: bool, slot: u32) -> bool {
+    first_sample && !image.lookup_done.is_empty() && !image.lookup_done[slot as usize]
+}
+
+/// The texture-lookup AOVs of the pixel `pixel` from its first sample's base-colour lookup
+/// `(query, texel)` through `binding`, made under `footprint` (at the hit).
+pub(crate) fn record_first_lookup(
+    context: &RenderContext,
+    image: &mut TileImage,
+    pixel: u32,
+    binding: &TextureBinding,
+    (query, texel): (TextureQuery, Vec4),
+    footprint: &Footprint,
+) {
+    let pixel = pixel as usize;
+    image.lookup_done[pixel] = true;
+    if !image.tex.is_empty() {
+        image.tex[pixel] = [
+            query.s, query.t, query.dsdx, query.dtdx, query.dsdy, query.dtdy,
+        ];
+        image.texcolor[pixel] = [texel.x, texel.y, texel.z, 1.0];
+    }
+    if !image.lod.is_empty() {
+        let filter = &context.texture_filters[binding.texture];
+        image.lod[pixel] = context.textures[binding.texture].lod(&query, filter);
+        image.footprint[pixel] = footprint.width();
+    }
 }
 
 /// The environment's radiance in `direction`, filtered by `footprint`'s spread.

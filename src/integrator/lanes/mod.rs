@@ -220,6 +220,13 @@ pub(crate) struct WaveLanes {
     pub texture_lanes: Vec<u32>,
     pub texture_queries: Vec<TextureQuery>,
     pub texels: Vec<Vec4>,
+    /// Whether stage 4 keeps each lane's base-colour lookup, for a render that writes the
+    /// texture-lookup AOVs (set by the integrator as it picks the lanes).
+    pub keeps_base_color_lookups: bool,
+    /// When kept: each lane's base-colour lookup, its query and texel (`None` where the
+    /// lane's material has no base-colour texture), which the integrator records as its
+    /// pixel's first lookup in the wave's order.
+    pub base_color_lookups: Vec<Option<(TextureQuery, Vec4)>>,
 
     // Stage 5.
     /// Per light and lane (light-major): unit direction to the light and its irradiance

@@ -31,6 +31,9 @@ pub(crate) fn shading_inputs(
     lanes.metallic.resize(len, 0.0);
     lanes.roughness.resize(len, 0.0);
     lanes.emission.resize(len);
+    if lanes.keeps_base_color_lookups {
+        super::refill(&mut lanes.base_color_lookups, len, None);
+    }
     for run in 0..lanes.material_runs.len() {
         let (material, range) = lanes.material_run(run);
         let material = &context.scene.materials[material as usize];
@@ -86,6 +89,11 @@ fn look_up(
     sample_binding_batch(context, binding, &queries, worker, &mut texels);
     for (&lane, &texel) in at.iter().zip(&texels) {
         apply_texel(lanes, lane as usize, channel, material, texel);
+    }
+    if channel == Channel::BaseColor && lanes.keeps_base_color_lookups {
+        for ((&lane, &query), &texel) in at.iter().zip(&queries).zip(&texels) {
+            lanes.base_color_lookups[lane as usize] = Some((query, texel));
+        }
     }
     lanes.texture_lanes = at;
     lanes.texture_queries = queries;

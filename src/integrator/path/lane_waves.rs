@@ -7,8 +7,8 @@
 //! patches) and whatever its material (mirrors, glass, emitters, normal maps and emission
 //! textures included); a ray differential is moved to the hit in the lanes
 //! (`lanes::differentials`). In a render that writes the texture-lookup AOVs (`tex`,
-//! `texcolor`, `lod`, `footprint`), the rays of first samples take the scalar path
-//! (`vertex::shade`): they record their pixel's first lookup. Misses are looked up
+//! `texcolor`, `lod`, `footprint`), stage 4 keeps the lanes' base-colour lookups, and each
+//! first sample's records its pixel's first lookup in the wave's order ([`finish_lane`]). Misses are looked up
 //! together too (`lanes::misses`, unless fog is on). A ray that fog stops before its hit
 //! makes a medium vertex there instead (`medium`).
 //!
@@ -28,6 +28,7 @@ use crate::integrator::lanes::patches::evaluate_patches;
 use crate::integrator::lanes::picks::{LaneHit, LanePicks, LaneSurface};
 use crate::integrator::lanes::textures::{lane_emission, shading_inputs};
 use crate::integrator::lanes::WaveLanes;
+use crate::integrator::texturing::{record_first_lookup, records_first_lookup};
 use crate::integrator::wave_integrator::{write_geometry_values, write_material_aovs};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
@@ -152,10 +153,10 @@ fn pick_lanes(
 ) {
     let effects = &context.effects;
     path.lanes.prepare(context);
-    let records_lookups = !image.lookup_done.is_empty();
+    path.lanes.keeps_base_color_lookups = !image.lookup_done.is_empty();
     let uv_aov = context.options.aovs.surface;
     for (index, (ray, hit)) in rays.iter().zip(hits).enumerate() {
-        if !hit.is_hit() || (ray.first_sample && records_lookups) {
+        if !hit.is_hit() {
             continue;
         }
         if matches!(collisions.get(index), Some(Some(_))) {
@@ -214,6 +215,13 @@ pub(super) fn finish_lane(
         let (t, normal) = (lanes.t[lane], lanes.shading_normal.get(lane));
         write_geometry_values(context, image, ray.slot, ray.direction, t, normal, st);
         write_material_aovs(image, ray.slot, &lane_inputs(material, lanes, lane));
+    }
+    if records_first_lookup(image, ray.first_sample, ray.slot) {
+        let lookup = lanes.base_color_lookups[lane];
+        if let (Some(binding), Some(lookup)) = (&material.base_color_texture, lookup) {
+            // `lane_scatter::arrive_at_hits` moved the ray's footprint to the hit.
+            record_first_lookup(context, image, ray.slot, binding, lookup, &ray.footprint);
+        }
     }
     if shading::material_features::emits(material) {
         add_lane_emission(tracer, context, ray, (lanes, lane), material, image, worker);

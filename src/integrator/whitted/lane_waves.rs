@@ -5,18 +5,20 @@
 //! and height patches), when its material is one the lanes cover (`lanes::LaneMaterial::of`:
 //! opaque and not emissive, normal-mapped or not), and the light beyond the shadow rays is
 //! Whitted's ambient term. These take the scalar path (`surface::shade_hit`), hit by hit:
-//! mirrors, dielectrics and emitters; rays inside an absorbing medium; first
-//! samples of a render that writes the texture-lookup AOVs (`tex`, `texcolor`, `lod`,
-//! `footprint`); every hit when the indirect light is voxel cone tracing's. Ray
-//! differentials are transferred to their hits in the lanes (`lanes::differentials`);
-//! misses are looked up together (`lanes::misses`, unless fog is on). Fog on the way to a
-//! hit is the wave's (`fog::fog_wave_segments`), before either path shades it.
+//! mirrors, dielectrics and emitters; rays inside an absorbing medium; every hit when the
+//! indirect light is voxel cone tracing's. Ray differentials are transferred to their hits
+//! in the lanes (`lanes::differentials`); misses are looked up together (`lanes::misses`,
+//! unless fog is on). A render that writes the texture-lookup AOVs (`tex`, `texcolor`,
+//! `lod`, `footprint`) records each pixel's first lookup from the lanes' base-colour
+//! lookups, in the wave's order. Fog on the way to a hit is the wave's
+//! (`fog::fog_wave_segments`), before either path shades it.
 
 use glam::Vec3;
 
 use super::surface::{AmbientEnvironment, IndirectLight};
 use super::{add_radiance, Waves};
 use crate::film::TileImage;
+use crate::footprint::Footprint;
 use crate::integrator::lanes::bsdf::{eval_lights, incident_normals};
 use crate::integrator::lanes::differentials::differentials_at_hits;
 use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, LaneFootprint};
@@ -26,6 +28,7 @@ use crate::integrator::lanes::lights::{sample_lights, shadow_rays};
 use crate::integrator::lanes::patches::evaluate_patches;
 use crate::integrator::lanes::picks::{LaneHit, LaneSurface};
 use crate::integrator::lanes::textures::shading_inputs;
+use crate::integrator::texturing::{record_first_lookup, records_first_lookup};
 use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
@@ -55,14 +58,11 @@ pub(super) fn pick_lanes(
         return;
     }
     waves.lanes.prepare(context);
-    let records_lookups = !image.lookup_done.is_empty();
+    waves.lanes.keeps_base_color_lookups = !image.lookup_done.is_empty();
     for index in 0..rays {
         let ray = &waves.buffers.rays.current[index];
         let hit = &waves.buffers.trace_hits[index];
-        if !hit.is_hit()
-            || (ray.first_sample && records_lookups)
-            || (effects.absorption && ray.sigma != Vec3::ZERO)
-        {
+        if !hit.is_hit() || (effects.absorption && ray.sigma != Vec3::ZERO) {
             continue;
         }
         let (surface, material) = LaneSurface::at(&context.surfaces, hit);
@@ -149,12 +149,46 @@ pub(super) fn finish_lane(
     if ray.kind == RayKind::Camera && ray.first_sample {
         write_surface_aovs(context, waves, index, lane, image);
     }
+    record_lane_lookup(context, waves, index, lane, image);
     let lanes = &waves.lanes;
     let ray = &waves.buffers.rays.current[index];
     let material = lanes.materials[lanes.material[lane] as usize];
     let ambient =
         AmbientEnvironment::radiance(context, material.opaque_weight, lanes.albedo.get(lane));
     add_radiance(image, ray.slot, ray.throughput * (Vec3::ZERO + ambient));
+}
+
+/// The pixel's first lookup, from the base-colour lookup of lane `lane` (of the wave's ray
+/// `index`) if its ray records it (`texturing::records_first_lookup`), under the ray's
+/// footprint moved to the hit, as `surface::shade_hit` records it.
+fn record_lane_lookup(
+    context: &RenderContext,
+    waves: &Waves,
+    index: usize,
+    lane: usize,
+    image: &mut TileImage,
+) {
+    let ray = &waves.buffers.rays.current[index];
+    if !records_first_lookup(image, ray.first_sample, ray.slot) {
+        return;
+    }
+    let lanes = &waves.lanes;
+    let material = &context.scene.materials[lanes.material[lane] as usize];
+    let (Some(binding), Some(lookup)) =
+        (&material.base_color_texture, lanes.base_color_lookups[lane])
+    else {
+        return;
+    };
+    let footprint = if context.effects.footprints {
+        // A lane of a textured material carries its footprint: a cone's moves along the
+        // ray, a differential's is the lane's at the hit.
+        ray.footprint
+            .propagated(lanes.t[lane])
+            .unwrap_or_else(|| Footprint::Differential(lanes.differential_at_hit[lane]))
+    } else {
+        ray.footprint
+    };
+    record_first_lookup(context, image, ray.slot, binding, lookup, &footprint);
 }
 
 /// The camera hit's depth, normal, uv and albedo AOVs of a pixel's first sample (whose slot
