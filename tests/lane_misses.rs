@@ -1,8 +1,8 @@
 //! Rays that leave the scene, their environment looked up together (`integrator::lanes::
-//! misses`): Whitted and the path tracer take a wave's misses there unless fog is on, and
-//! the path tracer's image is its scalar path's, bit for bit, with a lat-long sky and a
-//! constant colour, under cones and ray differentials, BSDF-sampled rays weighted against
-//! light sampling of the sky.
+//! misses`): Whitted and the path tracer take a wave's misses there, fog or not, and the
+//! images are their scalar paths', bit for bit, with a lat-long sky and a constant colour,
+//! under cones and ray differentials, BSDF-sampled rays weighted against light sampling of
+//! the sky, and fog on the misses' way out.
 
 mod common;
 
@@ -72,16 +72,47 @@ fn path_lanes_give_the_scalar_image_of_misses_bit_for_bit() {
     }
 }
 
+/// Scenes with fog: over a ground in front of spheres, and bounded by a mesh.
+const FOG_SCENES: [&str; 2] = ["assets/scenes/fog.toml", "assets/scenes/fog_mesh.toml"];
+
 #[test]
-fn fog_leaves_misses_to_the_scalar_path() {
-    // A miss through fog may scatter before it escapes, which the scalar path decides.
+fn misses_through_fog_take_the_lanes_with_the_scalar_path_s_bits() {
+    for scene in FOG_SCENES {
+        // Whitted fogs each miss's way out as it adds the miss's light, in the wave's order.
+        let (film, counters) = render_with(scene, &Whitted::default(), LodStrategy::Cone);
+        let scalar = Whitted {
+            shade_in_lanes: false,
+        };
+        let (scalar_film, _) = render_with(scene, &scalar, LodStrategy::Cone);
+        assert_same_bits(&format!("{scene} (Whitted)"), &film, &scalar_film);
+        assert!(counters.lane_misses > 0, "{scene}: no miss took the lanes");
+        // The path tracer's rays that fog lets escape are misses; those it stops scatter.
+        let tracer = PathTracer::default();
+        let scalar = PathTracer {
+            shade_in_lanes: false,
+            ..tracer
+        };
+        let (film, counters) = render_with(scene, &tracer, LodStrategy::Cone);
+        let (scalar_film, _) = render_with(scene, &scalar, LodStrategy::Cone);
+        assert_same_bits(&format!("{scene} (path)"), &film, &scalar_film);
+        assert!(counters.lane_misses > 0, "{scene}: no miss took the lanes");
+        assert!(
+            counters.fog_scatter_events > 0,
+            "{scene}: nothing scattered"
+        );
+    }
+}
+
+#[test]
+fn every_whitted_ray_through_fog_over_opaque_surfaces_takes_the_lanes() {
+    // Opaque materials only: each camera ray's hit or miss is the lanes'.
     let (_, counters) = render_with(
         "assets/scenes/fog.toml",
         &Whitted::default(),
         LodStrategy::Cone,
     );
-    assert_eq!(counters.lane_misses, 0);
-    let tracer = PathTracer::default();
-    let (_, counters) = render_with("assets/scenes/fog.toml", &tracer, LodStrategy::Cone);
-    assert_eq!(counters.lane_misses, 0);
+    assert_eq!(
+        counters.lane_hits + counters.lane_misses,
+        counters.camera_rays
+    );
 }

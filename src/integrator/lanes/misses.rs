@@ -81,8 +81,9 @@ pub(crate) struct Escape<'a> {
 }
 
 /// Take the misses among a wave's `rays` (`hits` in the same order) into `misses`, none
-/// unless `takes`, and look up the environment along all of them; `escape` tells what a
-/// miss's ray needs for its lookup.
+/// unless `takes`, and look up the environment along all of them; `escape(index, ray)`
+/// tells what the miss of the wave's ray `index` needs for its lookup, or `None` to leave
+/// it to the integrator's scalar path.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn look_up_misses<'a, R>(
@@ -90,7 +91,7 @@ pub(crate) fn look_up_misses<'a, R>(
     misses: &mut MissLanes,
     (rays, hits): (&'a [R], &[TraceHit]),
     takes: bool,
-    escape: impl Fn(&'a R) -> Escape<'a>,
+    escape: impl Fn(usize, &'a R) -> Option<Escape<'a>>,
     worker: &mut WorkerState,
 ) {
     misses.clear(rays.len());
@@ -105,7 +106,9 @@ pub(crate) fn look_up_misses<'a, R>(
         if hit.is_hit() {
             continue;
         }
-        let escape = escape(ray);
+        let Some(escape) = escape(index, ray) else {
+            continue;
+        };
         let gradients = if filtered && !escape.as_light {
             let g = escape.footprint.environment_gradients(escape.direction);
             [g.dsdx, g.dtdx, g.dsdy, g.dtdy]

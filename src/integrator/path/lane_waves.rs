@@ -8,9 +8,9 @@
 //! textures included); a ray differential is moved to the hit in the lanes
 //! (`lanes::differentials`). In a render that writes the texture-lookup AOVs (`tex`,
 //! `texcolor`, `lod`, `footprint`), stage 4 keeps the lanes' base-colour lookups, and each
-//! first sample's records its pixel's first lookup in the wave's order ([`finish_lane`]). Misses are looked up
-//! together too (`lanes::misses`, unless fog is on). A ray that fog stops before its hit
-//! makes a medium vertex there instead (`medium`).
+//! first sample's records its pixel's first lookup in the wave's order ([`finish_lane`]).
+//! Misses are looked up together too (`lanes::misses`). A ray that fog stops before its
+//! hit, or before it escapes, makes a medium vertex there instead (`medium`).
 //!
 //! What a lane adds is computed as `vertex::shade` computes it, operation for operation:
 //! the stages give the bits of `SurfaceLookup::surface_hit` and `shading::surface_inputs`,

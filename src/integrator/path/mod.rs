@@ -256,7 +256,7 @@ impl WaveIntegrator for PathTracer {
         );
         lane_scatter::scatter_lanes(self, context, &mut lanes, &mut current, worker);
         let enabled = self.shade_in_lanes;
-        let wave = (current.as_slice(), hits.as_slice());
+        let wave = (current.as_slice(), hits.as_slice(), collisions.as_slice());
         look_up_wave_misses(context, &mut waves.misses, wave, worker, enabled);
         for (index, (ray, hit)) in current.iter_mut().zip(&hits).enumerate() {
             if let Some(Some(collision)) = collisions.get(index) {
@@ -300,22 +300,25 @@ impl Integrator for PathTracer {
 }
 
 /// The environment along the wave's misses, looked up together (`lanes::misses`), unless
-/// the lanes are off or fog is on (a ray through fog may scatter before it escapes, which
-/// `vertex::shade` decides ray by ray). A miss reads what `vertex::add_escaped_light`
-/// reads: through its footprint when it sees the environment whole (from the camera, or
-/// through a delta lobe), as a light when a non-delta lobe sampled it.
+/// the lanes are off; a ray that fog stopped before it could escape (`collisions`, from
+/// `medium::sample_wave_collisions`) scatters in the fog instead. A miss reads what
+/// `vertex::add_escaped_light` reads: through its footprint when it sees the environment
+/// whole (from the camera, or through a delta lobe), as a light when a non-delta lobe
+/// sampled it.
 fn look_up_wave_misses<'a>(
     context: &RenderContext,
     misses: &mut MissLanes,
-    (rays, hits): (&'a [PathRay], &[TraceHit]),
+    (rays, hits, collisions): (&'a [PathRay], &[TraceHit], &[Option<medium::Collision>]),
     worker: &mut WorkerState,
     enabled: bool,
 ) {
-    let takes = enabled && !context.effects.fog;
-    let escape = |ray: &'a PathRay| Escape {
-        direction: ray.direction,
-        footprint: &ray.footprint,
-        as_light: ray.bsdf_pdf.is_some(),
+    let escape = |index: usize, ray: &'a PathRay| {
+        let stopped = matches!(collisions.get(index), Some(Some(_)));
+        (!stopped).then_some(Escape {
+            direction: ray.direction,
+            footprint: &ray.footprint,
+            as_light: ray.bsdf_pdf.is_some(),
+        })
     };
-    look_up_misses(context, misses, (rays, hits), takes, escape, worker);
+    look_up_misses(context, misses, (rays, hits), enabled, escape, worker);
 }

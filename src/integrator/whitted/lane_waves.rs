@@ -7,8 +7,8 @@
 //! Whitted's ambient term. These take the scalar path (`surface::shade_hit`), hit by hit:
 //! mirrors, dielectrics and emitters; rays inside an absorbing medium; every hit when the
 //! indirect light is voxel cone tracing's. Ray differentials are transferred to their hits
-//! in the lanes (`lanes::differentials`); misses are looked up together (`lanes::misses`,
-//! unless fog is on). A render that writes the texture-lookup AOVs (`tex`, `texcolor`,
+//! in the lanes (`lanes::differentials`); misses are looked up together (`lanes::misses`),
+//! and fogged on their way out as their light is added. A render that writes the texture-lookup AOVs (`tex`, `texcolor`,
 //! `lod`, `footprint`) records each pixel's first lookup from the lanes' base-colour
 //! lookups, in the wave's order. Fog on the way to a hit is the wave's
 //! (`fog::fog_wave_segments`), before either path shades it.

@@ -18,8 +18,19 @@ pub(super) fn shade_miss(
     worker: &mut WorkerState,
 ) {
     let radiance = environment_lookup(context, ray.direction, &ray.footprint, worker);
-    let effects = &context.effects;
-    if effects.fog {
+    add_miss_light(context, ray, radiance, image, worker);
+}
+
+/// The environment's radiance `radiance` along the escaping `ray` (as [`shade_miss`] looks
+/// it up) added to its pixel, with the fog on its way out.
+pub(super) fn add_miss_light(
+    context: &RenderContext,
+    ray: &PathRay,
+    radiance: Vec3,
+    image: &mut TileImage,
+    worker: &mut WorkerState,
+) {
+    if context.effects.fog {
         // Fogged up to the last volume's exit: an escaping ray's depth to infinity.
         let mut fogged = *ray;
         super::fog::fog_ray_segment(context, &mut fogged, f32::INFINITY, image, worker);

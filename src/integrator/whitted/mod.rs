@@ -56,7 +56,7 @@ use crate::render::Integrator;
 pub(crate) use surface::{AmbientEnvironment, IndirectLight, IndirectQuery};
 
 use crate::integrator::trace_wave::ShadowRay;
-use lights::shade_miss;
+use lights::{add_miss_light, shade_miss};
 use shadow_walk::{trace_shadows, ShadowWalk};
 use surface::{shade_hit, surface_detail};
 
@@ -262,7 +262,7 @@ fn shade_hits(
         let hit = &waves.buffers.trace_hits[index];
         if !hit.is_hit() {
             match waves.misses.radiance_of(index) {
-                Some(radiance) => add_radiance(image, ray.slot, ray.throughput * radiance),
+                Some(radiance) => add_miss_light(context, &ray, radiance, image, worker),
                 None => shade_miss(context, &ray, image, worker),
             }
             continue;
@@ -275,20 +275,22 @@ fn shade_hits(
     }
 }
 
-/// The environment along the wave's misses, looked up together (`lanes::misses`), unless
-/// fog is on: a miss's light is then fogged on its way out, ray by ray
-/// (`lights::shade_miss`).
+/// The environment along the wave's misses, looked up together (`lanes::misses`); fog
+/// on a miss's way out is added ray by ray as the walk adds its light
+/// (`lights::add_miss_light`).
 fn look_up_wave_misses<'a>(
     context: &RenderContext,
     waves: &'a mut Waves,
     worker: &mut WorkerState,
 ) {
     let (rays, hits) = (&waves.buffers.rays.current, &waves.buffers.trace_hits);
-    let takes = !waves.scalar_only && !context.effects.fog;
-    let miss = |ray: &'a PathRay| Escape {
-        direction: ray.direction,
-        footprint: &ray.footprint,
-        as_light: false,
+    let takes = !waves.scalar_only;
+    let miss = |_, ray: &'a PathRay| {
+        Some(Escape {
+            direction: ray.direction,
+            footprint: &ray.footprint,
+            as_light: false,
+        })
     };
     look_up_misses(
         context,
