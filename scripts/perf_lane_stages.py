@@ -33,9 +33,12 @@ def kernel_stage(start, size):
     return "?"
 
 RULES = [
+    # Our intersectors, which Embree calls for curved and height patches and spheres: traversal.
+    ("our intersectors (patches, spheres)", ["scene::patch::", "PatchGeometry", "HeightPatchGeometry", "SphereGeometry",
+                                             "embree::user_geometry"]),
     ("picking and ordering lanes", ["lane_waves::pick_lanes", "LanePicks::place", "lay_out_by_material", "LaneSurface"]),
     ("1 gather", ["lanes::gather"]),
-    ("2 interpolate", ["lanes::interpolate", "surface_hit", "spawn_point", "on_triangle", "on_sphere", "lat_long_frame",
+    ("2 interpolate", ["lanes::interpolate", "lanes::patches", "patch_surface_point", "surface_hit", "spawn_point", "on_triangle", "on_sphere", "lat_long_frame",
                        "SurfaceLookup"]),
     ("3 footprints", ["lanes::footprints", "texture_gradients", "project_cone", "footprint::"]),
     ("4 textures (lookups and filter)", ["lanes::textures", "texture::", "surface_textures", "sample_binding", "surface_inputs", "mip"]),
@@ -97,10 +100,10 @@ for f in files:
         totals[stage(ip, sym, off, dso)] += 1
 runs = len(files)
 ns = lambda n: n / freq / runs / per_run * 1e9
-order = ["camera rays", "Embree", "picking and ordering lanes", "1 gather", "2 interpolate", "3 footprints",
+order = ["camera rays", "Embree", "our intersectors (patches, spheres)", "picking and ordering lanes", "1 gather", "2 interpolate", "3 footprints",
          "4 textures (lookups and filter)", "vertex samples (path lanes)", "5 lights and shadow rays", "6 BSDF", "7 film and integrator loop"]
 for label in order + sorted(set(totals) - set(order)):
     print(f"| {label} | {ns(totals[label]):.1f} |")
-shading = sum(totals[l] for l in order[2:])
+shading = sum(totals[l] for l in order[3:])
 print(f"| shading (picking, stages 1-7) | {ns(shading):.1f} |")
 print(f"| total process | {ns(sum(totals.values())):.1f} |  ({sum(totals.values())} samples, {runs} runs)")
