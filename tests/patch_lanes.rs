@@ -21,8 +21,11 @@ const SCENES: [&str; 3] = [
     "assets/scenes/height_patch.toml",
 ];
 
+/// A change to a scene's render options.
+type Variant = Box<dyn Fn(&mut RenderOptions)>;
+
 /// The footprints and AOVs the scenes are compared under.
-fn variants() -> [(&'static str, Box<dyn Fn(&mut RenderOptions)>); 4] {
+fn variants() -> [(&'static str, Variant); 4] {
     [
         ("default", Box::new(|_| {})),
         (
