@@ -26,7 +26,9 @@ use super::aniso_lanes::{Lanes, ProbeBlocks, PROBE_LANES};
 use super::image_load::{sniff_format, ImageFormat};
 use super::micro_cache::{self, ThreadTiles};
 use super::mip_pyramid::{MipLevel, MipPyramid};
-use super::texels::{with_demand_kind, FlatTexels, TexelSource, Texels, TileKind, TileWork};
+use super::texels::{
+    ByteKind, FlatTexels, FloatKind, HalfKind, TexelSource, Texels, TileKind, TileWork,
+};
 use super::tiff_tile_reader::TiffTileReader;
 use super::tile_cache::{FileTally, LevelTiles, TextureCacheStats, TileCache};
 use super::tile_layout::TileLayout;
@@ -266,9 +268,17 @@ impl DemandLevel {
     /// read).
     pub(crate) fn texel_at_index(&self, index: usize) -> Vec4 {
         let (x, y) = self.layout.coordinates_of(index);
-        with_demand_kind!(self, |Kind| micro_cache::with_thread_tiles(|tiles| {
-            DemandTexels::<Kind>::new(self, tiles).texel_at(self.layout, x, y)
-        }))
+        micro_cache::with_thread_tiles(|tiles| match self.kind {
+            Texels::Half(_) => {
+                DemandTexels::<HalfKind>::new(self, tiles).texel_at(self.layout, x, y)
+            }
+            Texels::Byte { .. } => {
+                DemandTexels::<ByteKind>::new(self, tiles).texel_at(self.layout, x, y)
+            }
+            Texels::Float(_) | Texels::OnDemand(_) => {
+                DemandTexels::<FloatKind>::new(self, tiles).texel_at(self.layout, x, y)
+            }
+        })
     }
 
     /// `read` of the texels of tile (`tile_x`, `tile_y`), fetched through the thread's

@@ -44,29 +44,17 @@ pub(crate) fn byte_table(color_space: ColorSpace) -> &'static [f32; 256] {
 /// kind: one match, and `$body` compiled once per kind. A demand-loaded level fetches its
 /// tiles through `$tiles`, the lookup's [`ThreadTiles`](super::micro_cache::ThreadTiles)
 /// found once by its caller; without `$tiles`, `$body` runs inside the thread's micro-cache
-/// access, found here (for readers outside a lookup, such as `MipLevel::texel`, and for the
-/// single fetch of `closest` and `bilinear`). A demand-loaded level's tiles all have the
-/// level's storage kind: it is picked here once ([`with_demand_kind`]), so that a fetch
-/// reads its tile without a dispatch on the kind, and before the micro-cache access, so
-/// that each kind's access holds one copy of `$body` and stays inline.
+/// access, found here (for readers outside a lookup, such as `MipLevel::texel`).
 macro_rules! with_texel_source {
     ($texels:expr, |$source:ident| $body:expr) => {{
-        #[allow(unused_imports)]
-        use $crate::texture::texels::TexelSource;
         match $texels {
-            $crate::texture::texels::Texels::OnDemand(level) => {
-                $crate::texture::texels::with_demand_kind!(level, |DemandKind| {
-                    $crate::texture::micro_cache::with_thread_tiles(
-                        #[inline(always)]
-                        |tiles| {
-                            let $source =
-                                $crate::texture::demand_tiles::DemandTexels::<DemandKind>::new(
-                                    level, tiles,
-                                );
-                            $body
-                        },
-                    )
-                })
+            texels @ $crate::texture::texels::Texels::OnDemand(_) => {
+                $crate::texture::micro_cache::with_thread_tiles(
+                    #[inline(always)]
+                    |tiles| {
+                        $crate::texture::texels::with_texel_source!(texels, tiles, |$source| $body)
+                    },
+                )
             }
             texels => $crate::texture::texels::with_texel_source!(
                 texels,
@@ -93,42 +81,33 @@ macro_rules! with_texel_source {
                 let $source = ByteTexels::new(texels, *colour);
                 $body
             }
-            Texels::OnDemand(level) => {
-                $crate::texture::texels::with_demand_kind!(level, |DemandKind| {
-                    let $source = $crate::texture::demand_tiles::DemandTexels::<DemandKind>::new(
-                        level, $tiles,
-                    );
+            // A demand-loaded level's tiles all have the level's storage kind: picked here
+            // once, so that a fetch reads its tile without a dispatch on the kind. (A level
+            // is never of kind `OnDemand`; that arm only completes the match.)
+            Texels::OnDemand(level) => match level.kind() {
+                Texels::Half(_) => {
+                    let $source = $crate::texture::demand_tiles::DemandTexels::<
+                        $crate::texture::texels::HalfKind,
+                    >::new(level, $tiles);
                     $body
-                })
-            }
+                }
+                Texels::Byte { .. } => {
+                    let $source = $crate::texture::demand_tiles::DemandTexels::<
+                        $crate::texture::texels::ByteKind,
+                    >::new(level, $tiles);
+                    $body
+                }
+                Texels::Float(_) | Texels::OnDemand(_) => {
+                    let $source = $crate::texture::demand_tiles::DemandTexels::<
+                        $crate::texture::texels::FloatKind,
+                    >::new(level, $tiles);
+                    $body
+                }
+            },
         }
     }};
 }
 pub(crate) use with_texel_source;
-
-/// Evaluates `$body` with the type `$kind` naming the [`TileKind`] of the tiles of the
-/// demand-loaded level `$level`. (A level is never of kind `OnDemand`; that arm only
-/// completes the match.)
-macro_rules! with_demand_kind {
-    ($level:expr, |$kind:ident| $body:expr) => {{
-        match $level.kind() {
-            $crate::texture::texels::Texels::Half(_) => {
-                type $kind = $crate::texture::texels::HalfKind;
-                $body
-            }
-            $crate::texture::texels::Texels::Byte { .. } => {
-                type $kind = $crate::texture::texels::ByteKind;
-                $body
-            }
-            $crate::texture::texels::Texels::Float(_)
-            | $crate::texture::texels::Texels::OnDemand(_) => {
-                type $kind = $crate::texture::texels::FloatKind;
-                $body
-            }
-        }
-    }};
-}
-pub(crate) use with_demand_kind;
 
 /// A level's texels, RGBA, in the source's precision. Decoders produce them row-major with
 /// t = 0 first; a [`super::MipLevel`] holds them in the tile order of its `TileLayout`.
