@@ -26,9 +26,7 @@ use super::aniso_lanes::{Lanes, ProbeBlocks, PROBE_LANES};
 use super::image_load::{sniff_format, ImageFormat};
 use super::micro_cache::{self, ThreadTiles};
 use super::mip_pyramid::{MipLevel, MipPyramid};
-use super::texels::{
-    ByteKind, FlatTexels, FloatKind, HalfKind, TexelSource, Texels, TileKind, TileWork,
-};
+use super::texels::{ByteTexels, FloatTexels, HalfTexels, TexelSource, Texels, TileWork};
 use super::tiff_tile_reader::TiffTileReader;
 use super::tile_cache::{FileTally, LevelTiles, TextureCacheStats, TileCache};
 use super::tile_layout::TileLayout;
@@ -268,16 +266,8 @@ impl DemandLevel {
     /// read).
     pub(crate) fn texel_at_index(&self, index: usize) -> Vec4 {
         let (x, y) = self.layout.coordinates_of(index);
-        micro_cache::with_thread_tiles(|tiles| match self.kind {
-            Texels::Half(_) => {
-                DemandTexels::<HalfKind>::new(self, tiles).texel_at(self.layout, x, y)
-            }
-            Texels::Byte { .. } => {
-                DemandTexels::<ByteKind>::new(self, tiles).texel_at(self.layout, x, y)
-            }
-            Texels::Float(_) | Texels::OnDemand(_) => {
-                DemandTexels::<FloatKind>::new(self, tiles).texel_at(self.layout, x, y)
-            }
+        micro_cache::with_thread_tiles(|tiles| {
+            DemandTexels::new(self, tiles).texel_at(self.layout, x, y)
         })
     }
 
@@ -420,39 +410,26 @@ impl DemandLevel {
     }
 }
 
-/// The filters' view of a demand-loaded level during one lookup: the level, whose tiles
-/// hold texels of kind `K`, and the thread's micro-cache, found once for the lookup.
+/// The filters' view of a demand-loaded level during one lookup: the level and the
+/// thread's micro-cache, found once for the lookup.
 #[derive(Clone, Copy)]
-pub(crate) struct DemandTexels<'a, K> {
+pub(crate) struct DemandTexels<'a> {
     level: &'a DemandLevel,
     tiles: ThreadTiles<'a>,
-    kind: K,
 }
 
-impl<'a, K: TileKind> DemandTexels<'a, K> {
-    /// `level`, whose storage kind is `K`'s, read through `tiles`.
+impl<'a> DemandTexels<'a> {
     #[inline(always)]
-    pub(crate) fn new(level: &'a DemandLevel, tiles: ThreadTiles<'a>) -> Self
-    where
-        K: Default,
-    {
-        DemandTexels {
-            level,
-            tiles,
-            kind: K::default(),
-        }
+    pub(crate) fn new(level: &'a DemandLevel, tiles: ThreadTiles<'a>) -> Self {
+        DemandTexels { level, tiles }
     }
 }
 
-impl<'a, K: TileKind> TexelSource<'a> for DemandTexels<'a, K> {
+impl<'a> TexelSource<'a> for DemandTexels<'a> {
     #[inline(always)]
     fn view(self, texels: &'a Texels) -> Option<Self> {
         match texels {
-            Texels::OnDemand(level) if K::of(&level.kind).is_some() => Some(DemandTexels {
-                level,
-                tiles: self.tiles,
-                kind: self.kind,
-            }),
+            Texels::OnDemand(level) => Some(DemandTexels::new(level, self.tiles)),
             _ => None,
         }
     }
@@ -466,7 +443,7 @@ impl<'a, K: TileKind> TexelSource<'a> for DemandTexels<'a, K> {
                 tile_x,
                 tile_y,
                 #[inline(always)]
-                move |tile| K::of(tile).map(|texels| texels.texel(offset)),
+                move |tile| Some(tile.resident_texel(offset)),
             )
             .unwrap_or(Vec4::ZERO)
     }
@@ -503,7 +480,6 @@ impl<'a, K: TileKind> TexelSource<'a> for DemandTexels<'a, K> {
                 tile as usize,
                 #[inline(always)]
                 |texels| {
-                    let texels = K::of(texels)?;
                     let mut serve = |l: usize, value: Option<Vec4>| {
                         if let Some(value) = value {
                             values[l] = value;
@@ -514,7 +490,7 @@ impl<'a, K: TileKind> TexelSource<'a> for DemandTexels<'a, K> {
                     #[allow(clippy::needless_range_loop)]
                     for l in lane..PROBE_LANES {
                         if in_this_tile[l] {
-                            serve(l, blocks.value_in_tile(texels, l));
+                            serve(l, value_in_tile(blocks, texels, l));
                         }
                     }
                     Some(())
@@ -545,8 +521,7 @@ impl<'a, K: TileKind> TexelSource<'a> for DemandTexels<'a, K> {
                 tile_y,
                 #[inline(always)]
                 |tile| {
-                    let tile = K::of(tile)?;
-                    let texel = |k: usize| tile.texel(offsets[k]);
+                    let texel = |k: usize| tile.resident_texel(offsets[k]);
                     let inside = offsets.iter().all(|&k| k < tile.len());
                     inside.then(|| [texel(0), texel(1), texel(2), texel(3)])
                 },
@@ -575,7 +550,14 @@ impl<'a, K: TileKind> TexelSource<'a> for DemandTexels<'a, K> {
             tile_x,
             tile_y,
             #[inline(always)]
-            move |tile| K::of(tile).map(|texels| work.run(texels, 0)),
+            move |tile| match tile {
+                Texels::Float(t) => Some(work.run(FloatTexels(t), 0)),
+                Texels::Half(t) => Some(work.run(HalfTexels(t), 0)),
+                Texels::Byte { texels, colour, .. } => {
+                    Some(work.run(ByteTexels::new(texels, colour), 0))
+                }
+                Texels::OnDemand(_) => None,
+            },
         )
     }
 
@@ -595,10 +577,23 @@ impl<'a, K: TileKind> TexelSource<'a> for DemandTexels<'a, K> {
                 // Inline: out of line, every fetch paid a call and a result returned
                 // through memory (a quarter of `bench textures`' cached bilinear time).
                 #[inline(always)]
-                move |tile| K::of(tile)?.bilinear_quad(offset, stride, blend),
+                move |tile| tile.quad(offset, stride, blend),
             ),
             None => Some(self.four_texels(layout, x, y, blend)),
         }
+    }
+}
+
+/// [`ProbeBlocks::value_in_tile`] of lane `lane` read from `tile` in its storage kind.
+#[inline(always)]
+fn value_in_tile(blocks: &ProbeBlocks, tile: &Texels, lane: usize) -> Option<Vec4> {
+    match tile {
+        Texels::Float(t) => blocks.value_in_tile(FloatTexels(t), lane),
+        Texels::Half(t) => blocks.value_in_tile(HalfTexels(t), lane),
+        Texels::Byte { texels, colour, .. } => {
+            blocks.value_in_tile(ByteTexels::new(texels, colour), lane)
+        }
+        Texels::OnDemand(_) => None,
     }
 }
 

@@ -235,9 +235,9 @@ fn ewa_on_level<'a, S: TexelSource<'a>, O: TexelObserver>(
         None => ellipse.weighted_sum(
             |ty| wrap_texel(ty, level.height, wrap.1),
             |tx, row| {
-                let (ix, iy) = (wrap_texel(tx, level.width, wrap.0)?, row?);
-                obs.touch(level_index, ix, iy);
-                Some(texels.texel_at(layout, ix, iy))
+            let (ix, iy) = (wrap_texel(tx, level.width, wrap.0)?, row?);
+            obs.touch(level_index, ix, iy);
+            Some(texels.texel_at(layout, ix, iy))
             },
         ),
     };

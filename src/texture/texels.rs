@@ -81,29 +81,10 @@ macro_rules! with_texel_source {
                 let $source = ByteTexels::new(texels, *colour);
                 $body
             }
-            // A demand-loaded level's tiles all have the level's storage kind: picked here
-            // once, so that a fetch reads its tile without a dispatch on the kind. (A level
-            // is never of kind `OnDemand`; that arm only completes the match.)
-            Texels::OnDemand(level) => match level.kind() {
-                Texels::Half(_) => {
-                    let $source = $crate::texture::demand_tiles::DemandTexels::<
-                        $crate::texture::texels::HalfKind,
-                    >::new(level, $tiles);
-                    $body
-                }
-                Texels::Byte { .. } => {
-                    let $source = $crate::texture::demand_tiles::DemandTexels::<
-                        $crate::texture::texels::ByteKind,
-                    >::new(level, $tiles);
-                    $body
-                }
-                Texels::Float(_) | Texels::OnDemand(_) => {
-                    let $source = $crate::texture::demand_tiles::DemandTexels::<
-                        $crate::texture::texels::FloatKind,
-                    >::new(level, $tiles);
-                    $body
-                }
-            },
+            Texels::OnDemand(level) => {
+                let $source = $crate::texture::demand_tiles::DemandTexels::new(level, $tiles);
+                $body
+            }
         }
     }};
 }
@@ -204,6 +185,38 @@ impl Texels {
             Texels::Half(t) => HalfTexels(t).texel(index),
             Texels::Byte { texels, colour, .. } => ByteTexels::new(texels, colour).texel(index),
             Texels::OnDemand(level) => level.texel_at_index(index),
+        }
+    }
+
+    /// Linear RGBA of texel `index` of a resident buffer (a tile; in range); zero for an
+    /// on-demand level, which no tile is. Small enough to inline into every fetch, unlike
+    /// [`Texels::get`].
+    #[inline(always)]
+    pub(crate) fn resident_texel(&self, index: usize) -> Vec4 {
+        match self {
+            Texels::Float(t) => FloatTexels(t).texel(index),
+            Texels::Half(t) => HalfTexels(t).texel(index),
+            Texels::Byte { texels, colour, .. } => ByteTexels::new(texels, colour).texel(index),
+            Texels::OnDemand(_) => Vec4::ZERO,
+        }
+    }
+
+    /// Texels `k`, `k + 1`, `k + row` and `k + row + 1` (a bilinear footprint), or `None`
+    /// when they are not all inside: one storage dispatch and one bounds check for four.
+    #[inline(always)]
+    pub(crate) fn quad<R>(
+        &self,
+        k: usize,
+        row: usize,
+        blend: impl FnOnce(Vec4, Vec4, Vec4, Vec4) -> R,
+    ) -> Option<R> {
+        match self {
+            Texels::Float(t) => FloatTexels(t).bilinear_quad(k, row, blend),
+            Texels::Half(t) => HalfTexels(t).bilinear_quad(k, row, blend),
+            Texels::Byte { texels, colour, .. } => {
+                ByteTexels::new(texels, colour).bilinear_quad(k, row, blend)
+            }
+            Texels::OnDemand(_) => None,
         }
     }
 
@@ -394,56 +407,6 @@ pub(crate) trait TexelSource<'a>: Copy {
             self.texel_at(layout, x, y + 1),
             self.texel_at(layout, x + 1, y + 1),
         )
-    }
-}
-
-/// A storage kind of resident texels, named without a borrow: what a demand-loaded level's
-/// tiles hold, so that reading a tile is one check of its kind (always the level's) rather
-/// than a dispatch over every kind.
-pub(crate) trait TileKind: Copy {
-    /// The kind's view of a tile's texels.
-    type View<'t>: FlatTexels<'t>;
-
-    /// The texels of `tile` when they are of this kind.
-    fn of(tile: &Texels) -> Option<Self::View<'_>>;
-}
-
-/// Marks [`FloatTexels`] as a [`TileKind`].
-#[derive(Clone, Copy, Default)]
-pub(crate) struct FloatKind;
-
-/// Marks [`HalfTexels`] as a [`TileKind`].
-#[derive(Clone, Copy, Default)]
-pub(crate) struct HalfKind;
-
-/// Marks [`ByteTexels`] as a [`TileKind`].
-#[derive(Clone, Copy, Default)]
-pub(crate) struct ByteKind;
-
-impl TileKind for FloatKind {
-    type View<'t> = FloatTexels<'t>;
-
-    #[inline(always)]
-    fn of(tile: &Texels) -> Option<FloatTexels<'_>> {
-        <FloatTexels<'_> as FlatTexels<'_>>::view(tile)
-    }
-}
-
-impl TileKind for HalfKind {
-    type View<'t> = HalfTexels<'t>;
-
-    #[inline(always)]
-    fn of(tile: &Texels) -> Option<HalfTexels<'_>> {
-        <HalfTexels<'_> as FlatTexels<'_>>::view(tile)
-    }
-}
-
-impl TileKind for ByteKind {
-    type View<'t> = ByteTexels<'t>;
-
-    #[inline(always)]
-    fn of(tile: &Texels) -> Option<ByteTexels<'_>> {
-        <ByteTexels<'_> as FlatTexels<'_>>::view(tile)
     }
 }
 
@@ -783,32 +746,20 @@ mod tests {
         );
     }
 
-    /// `texels`' block of `k`, `k + 1`, `k + row`, `k + row + 1` read as tile kind `K`.
-    fn quad_as<K: TileKind>(texels: &Texels, k: usize, row: usize) -> Option<[Vec4; 4]> {
-        K::of(texels)?.bilinear_quad(k, row, |a, b, c, d| [a, b, c, d])
-    }
-
-    fn quad_reads_a_two_by_two_block<K: TileKind>(texels: &Texels) {
-        let q = quad_as::<K>(texels, 1, 3).unwrap();
-        assert_eq!(q, [1, 2, 4, 5].map(|k| texels.get(k)));
-        assert!(q[0].x > 0.1 && q[0].x < 0.15 && q[3].x > 0.6 && q[3].x < 0.65);
-        assert!(quad_as::<K>(texels, 2, 3).is_none());
-        assert!(quad_as::<K>(texels, usize::MAX - 1, 3).is_none());
-    }
-
     #[test]
-    fn each_tile_kind_reads_a_two_by_two_block_of_its_own_kind_only() {
+    fn quad_reads_a_two_by_two_block_of_every_kind() {
         let values: Vec<[f32; 4]> = (0..6).map(|i| [i as f32 / 8.0, 0.0, 0.0, 1.0]).collect();
         let float = Texels::Float(values.clone());
-        let bytes = Texels::bytes(vec![], ColorSpace::Linear)
-            .same_kind_from(&values, "t")
-            .unwrap();
-        let half = Texels::Half(vec![]).same_kind_from(&values, "t").unwrap();
-        quad_reads_a_two_by_two_block::<FloatKind>(&float);
-        quad_reads_a_two_by_two_block::<ByteKind>(&bytes);
-        quad_reads_a_two_by_two_block::<HalfKind>(&half);
-        assert!(FloatKind::of(&half).is_none() && HalfKind::of(&bytes).is_none());
-        assert!(ByteKind::of(&float).is_none());
+        for texels in [
+            float.clone(),
+            float.same_kind_from(&values, "t").unwrap(),
+            Texels::Half(vec![]).same_kind_from(&values, "t").unwrap(),
+        ] {
+            let q = texels.quad(1, 3, |a, b, c, d| [a, b, c, d]).unwrap();
+            assert_eq!(q.map(|v| v.x), [1.0 / 8.0, 2.0 / 8.0, 4.0 / 8.0, 5.0 / 8.0]);
+            assert!(texels.quad(2, 3, |a, _, _, _| a).is_none());
+            assert!(texels.quad(usize::MAX - 1, 3, |a, _, _, _| a).is_none());
+        }
     }
 
     #[test]
