@@ -701,9 +701,10 @@ mod tests {
     }
 
     /// Anisotropic lookups of many probes (read in lanes, one tile fetch per tile a step's
-    /// blocks lie in) and wrapped bilinear footprints (one fetch for four texels sharing a
-    /// tile) give the bits and the recorded tiles of the resident levels, for 8-bit, half and
-    /// f32 files, every wrap mode, under the default cap and a cap of 3 tiles.
+    /// blocks lie in), wrapped bilinear footprints (one fetch for four texels sharing a
+    /// tile) and EWA footprints (one fetch for an ellipse inside a tile) give the bits and
+    /// the recorded tiles of the resident levels, for 8-bit, half and f32 files, every wrap
+    /// mode, under the default cap and a cap of 3 tiles.
     #[test]
     fn many_probes_and_wrapped_footprints_read_by_tile_equal_the_resident_levels() {
         let wraps = [
@@ -725,7 +726,7 @@ mod tests {
                         / (1u64 << 24) as f32
                 };
                 for k in 0..600 {
-                    let filter = [FilterMode::Aniso, FilterMode::Trilinear][k % 2];
+                    let filter = [FilterMode::Aniso, FilterMode::Trilinear, FilterMode::Ewa][k % 3];
                     let opts = FilterOptions {
                         filter,
                         wrap_s: wraps[k % 4],

@@ -235,9 +235,9 @@ fn ewa_on_level<'a, S: TexelSource<'a>, O: TexelObserver>(
         None => ellipse.weighted_sum(
             |ty| wrap_texel(ty, level.height, wrap.1),
             |tx, row| {
-            let (ix, iy) = (wrap_texel(tx, level.width, wrap.0)?, row?);
-            obs.touch(level_index, ix, iy);
-            Some(texels.texel_at(layout, ix, iy))
+                let (ix, iy) = (wrap_texel(tx, level.width, wrap.0)?, row?);
+                obs.touch(level_index, ix, iy);
+                Some(texels.texel_at(layout, ix, iy))
             },
         ),
     };
@@ -257,8 +257,97 @@ fn ewa_on_level<'a, S: TexelSource<'a>, O: TexelObserver>(
 
 #[cfg(test)]
 mod tests {
+    use std::sync::Arc;
+
+    use super::super::tiff_tile_reader::tests::maketx;
     use super::super::tiles::NoTextureTiles;
+    use super::super::{ColorSpace, Texture, TileCache};
     use super::*;
+
+    /// Every texel read, in order.
+    #[derive(Default)]
+    struct Touches(Vec<(usize, usize, usize)>);
+
+    impl TexelObserver for Touches {
+        fn touch(&mut self, level: usize, x: usize, y: usize) {
+            self.0.push((level, x, y));
+        }
+    }
+
+    /// Boxes of random ellipses over `level` whose box lies in one tile: the sum read from
+    /// that tile alone has the bits and the touched texels of the texel-by-texel sum. The
+    /// boxes jump between tiles, so a demand-loaded level under a small cap reads each from
+    /// a tile fetched, replaced and evicted in between. How many boxes lay in one tile.
+    fn one_tile_sums_equal_texel_by_texel_sums(level: &MipLevel, seed: u64) -> usize {
+        let mut state = seed;
+        let mut next =
+            || (crate::test_rng::xorshift64_star(&mut state) >> 40) as f32 / (1u64 << 24) as f32;
+        let layout = level.layout();
+        let mut in_one_tile = 0;
+        for _ in 0..3000 {
+            let (x, y) = (
+                next() * level.width as f32 - 0.5,
+                next() * level.height as f32 - 0.5,
+            );
+            let (nx, ny) = (1 + (next() * 12.0) as usize, 1 + (next() * 12.0) as usize);
+            let ellipse = EllipseBox {
+                x,
+                y,
+                a: 0.2 + next(),
+                b: next() - 0.5,
+                c: 0.2 + next(),
+                x0: (x - nx as f32 / 2.0).ceil(),
+                y0: (y - ny as f32 / 2.0).ceil(),
+                nx,
+                ny,
+            };
+            let Some((tile_x, tile_y)) = ellipse.tile(level) else {
+                continue;
+            };
+            in_one_tile += 1;
+            let (mut fast_touches, mut slow_touches) = (Touches::default(), Touches::default());
+            let fast = with_texel_source!(&level.texels, |texels| {
+                let mut work = OneTileSum {
+                    ellipse: &ellipse,
+                    layout,
+                    level_index: 0,
+                    obs: &mut fast_touches,
+                };
+                texels.with_tile_texels(layout, tile_x, tile_y, &mut work)
+            })
+            .unwrap();
+            let slow = with_texel_source!(&level.texels, |texels| ellipse.weighted_sum(
+                |ty| wrap_texel(ty, level.height, WrapMode::Black),
+                |tx, row| {
+                    let (ix, iy) = (wrap_texel(tx, level.width, WrapMode::Black)?, row?);
+                    slow_touches.touch(0, ix, iy);
+                    Some(texels.texel_at(layout, ix, iy))
+                }
+            ));
+            let bits = |(v, w): (Vec4, f32)| (v.to_array().map(f32::to_bits), w.to_bits());
+            assert_eq!(bits(fast), bits(slow), "{x} {y} {nx}x{ny}");
+            assert_eq!(fast_touches.0, slow_touches.0);
+        }
+        in_one_tile
+    }
+
+    #[test]
+    fn an_ellipse_in_one_tile_read_from_the_tile_equals_the_texel_by_texel_sum() {
+        let dir = tempfile::tempdir().unwrap();
+        for kind in [&[][..], &["-d", "half"], &["-d", "float"]] {
+            let tx = maketx(dir.path(), 300, 200, kind);
+            let whole = Texture::from_file_whole(&tx, ColorSpace::Srgb).unwrap();
+            // Level 0 is 5x4 tiles; the cap holds 2 f32 tiles and more 8-bit ones.
+            let cache = Arc::new(TileCache::new(2 * 64 * 64 * 16));
+            let demand = Texture::from_file_in(&tx, ColorSpace::Srgb, &cache).unwrap();
+            for texture in [&whole, &demand] {
+                let n = one_tile_sums_equal_texel_by_texel_sums(&texture.pyramid().levels[0], 7);
+                assert!(n > 1000, "{kind:?}: {n} boxes in one tile");
+            }
+            assert!(demand.cache_stats().unwrap().tiles_evicted > 0);
+            assert!(demand.tile_failure().is_none());
+        }
+    }
 
     #[test]
     fn constant_texture_is_reproduced() {
