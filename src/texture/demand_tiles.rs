@@ -26,7 +26,7 @@ use super::aniso_lanes::{Lanes, ProbeBlocks, PROBE_LANES};
 use super::image_load::{sniff_format, ImageFormat};
 use super::micro_cache::{self, ThreadTiles};
 use super::mip_pyramid::{MipLevel, MipPyramid};
-use super::texels::{ByteTexels, FloatTexels, HalfTexels, TexelSource, Texels};
+use super::texels::{ByteTexels, FloatTexels, HalfTexels, TexelSource, Texels, TileWork};
 use super::tiff_tile_reader::TiffTileReader;
 use super::tile_cache::{FileTally, LevelTiles, TextureCacheStats, TileCache};
 use super::tile_layout::TileLayout;
@@ -106,8 +106,9 @@ impl DemandFile {
 /// One level of a demand-loaded texture.
 pub struct DemandLevel {
     file: Arc<DemandFile>,
-    /// Process-unique: the micro-cache's key.
-    id: u64,
+    /// The micro-cache key of the level's first tile, from its process-unique id
+    /// (`micro_cache::level_key_base`).
+    key_base: Option<u64>,
     level: usize,
     layout: TileLayout,
     tiles_x: usize,
@@ -217,14 +218,16 @@ pub(crate) fn open(
         .enumerate()
         .map(|(level, &(width, height))| {
             let layout = TileLayout::new(width, height);
-            let tiles = LevelTiles::new(layout.tiles_x() * layout.tiles_y(), file.tally.clone());
+            let tile_count = layout.tiles_x() * layout.tiles_y();
+            let tiles = LevelTiles::new(tile_count, file.tally.clone());
+            let id = NEXT_LEVEL_ID.fetch_add(1, Ordering::Relaxed);
             let demand = DemandLevel {
                 file: file.clone(),
-                id: NEXT_LEVEL_ID.fetch_add(1, Ordering::Relaxed),
+                key_base: micro_cache::level_key_base(id, tile_count),
                 level,
                 layout,
                 tiles_x: layout.tiles_x(),
-                tile_count: layout.tiles_x() * layout.tiles_y(),
+                tile_count,
                 texel_count: width as usize * height as usize,
                 kind: kind.clone(),
                 tiles: Arc::new(tiles),
@@ -283,7 +286,9 @@ impl DemandLevel {
         if tile_x >= self.tiles_x || index >= self.tile_count {
             return None;
         }
-        tiles.with_tile(self.id, index, || self.fetch(index, tile_x, tile_y), read)
+        // `move`: the miss path's arguments stay in registers on the hit path.
+        let fetch = move || self.fetch(index, tile_x, tile_y);
+        tiles.with_tile(self.key_base, index, fetch, read)
     }
 
     /// [`DemandLevel::with_tile`] of the tile numbered `index` (row of tiles times tiles
@@ -298,8 +303,8 @@ impl DemandLevel {
         if index >= self.tile_count {
             return None;
         }
-        let fetch = || self.fetch(index, index % self.tiles_x, index / self.tiles_x);
-        tiles.with_tile(self.id, index, fetch, read)
+        let fetch = move || self.fetch(index, index % self.tiles_x, index / self.tiles_x);
+        tiles.with_tile(self.key_base, index, fetch, read)
     }
 
     /// A micro-cache miss: the tile from its slot, or else from the file.
@@ -438,7 +443,7 @@ impl<'a> TexelSource<'a> for DemandTexels<'a> {
                 tile_x,
                 tile_y,
                 #[inline(always)]
-                |tile| Some(tile.resident_texel(offset)),
+                move |tile| Some(tile.resident_texel(offset)),
             )
             .unwrap_or(Vec4::ZERO)
     }
@@ -533,6 +538,30 @@ impl<'a> TexelSource<'a> for DemandTexels<'a> {
     }
 
     #[inline(always)]
+    fn with_tile_texels<W: TileWork>(
+        self,
+        _layout: TileLayout,
+        tile_x: usize,
+        tile_y: usize,
+        work: &mut W,
+    ) -> Option<W::Output> {
+        self.level.with_tile(
+            self.tiles,
+            tile_x,
+            tile_y,
+            #[inline(always)]
+            move |tile| match tile {
+                Texels::Float(t) => Some(work.run(FloatTexels(t), 0)),
+                Texels::Half(t) => Some(work.run(HalfTexels(t), 0)),
+                Texels::Byte { texels, colour, .. } => {
+                    Some(work.run(ByteTexels::new(texels, colour), 0))
+                }
+                Texels::OnDemand(_) => None,
+            },
+        )
+    }
+
+    #[inline(always)]
     fn bilinear_block<R>(
         self,
         layout: TileLayout,
@@ -548,7 +577,7 @@ impl<'a> TexelSource<'a> for DemandTexels<'a> {
                 // Inline: out of line, every fetch paid a call and a result returned
                 // through memory (a quarter of `bench textures`' cached bilinear time).
                 #[inline(always)]
-                |tile| tile.quad(offset, stride, blend),
+                move |tile| tile.quad(offset, stride, blend),
             ),
             None => Some(self.four_texels(layout, x, y, blend)),
         }
@@ -672,9 +701,10 @@ mod tests {
     }
 
     /// Anisotropic lookups of many probes (read in lanes, one tile fetch per tile a step's
-    /// blocks lie in) and wrapped bilinear footprints (one fetch for four texels sharing a
-    /// tile) give the bits and the recorded tiles of the resident levels, for 8-bit, half and
-    /// f32 files, every wrap mode, under the default cap and a cap of 3 tiles.
+    /// blocks lie in), wrapped bilinear footprints (one fetch for four texels sharing a
+    /// tile) and EWA footprints (one fetch for an ellipse inside a tile) give the bits and
+    /// the recorded tiles of the resident levels, for 8-bit, half and f32 files, every wrap
+    /// mode, under the default cap and a cap of 3 tiles.
     #[test]
     fn many_probes_and_wrapped_footprints_read_by_tile_equal_the_resident_levels() {
         let wraps = [
@@ -696,7 +726,7 @@ mod tests {
                         / (1u64 << 24) as f32
                 };
                 for k in 0..600 {
-                    let filter = [FilterMode::Aniso, FilterMode::Trilinear][k % 2];
+                    let filter = [FilterMode::Aniso, FilterMode::Trilinear, FilterMode::Ewa][k % 3];
                     let opts = FilterOptions {
                         filter,
                         wrap_s: wraps[k % 4],

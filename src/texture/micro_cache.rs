@@ -38,6 +38,14 @@ fn key_of(level: u64, index: usize) -> Option<u64> {
     (level < 1 << 31 && (index as u64) < 1 << 32).then_some(level << 32 | index as u64)
 }
 
+/// The keys of the tiles of a level with id `level` and `tile_count` tiles, decided once
+/// when the level is opened rather than at every fetch: tile `index`'s key is the returned
+/// base with `index` in its low bits. `None` when some tile's key cannot be packed (see
+/// [`key_of`]): the level's fetches then bypass the micro-cache.
+pub(crate) fn level_key_base(level: u64, tile_count: usize) -> Option<u64> {
+    key_of(level, tile_count.saturating_sub(1)).map(|_| level << 32)
+}
+
 /// The entries as parallel arrays: the hit path scans `keys` (one cache line), bumps a
 /// plain counter and reads the tile, with no atomic operation and no reference count.
 struct MicroCache {
@@ -162,22 +170,24 @@ impl ThreadTiles<'_> {
         ThreadTiles(None)
     }
 
-    /// `read` of tile `index` of the level with id `level`: from the micro-cache (the
-    /// tiles of the last fetches first), or else from `fetch` (the shared cache or the
-    /// file), kept for the next fetches. `None` when `fetch` finds no tile (it cannot be
-    /// read) or `read` gives none. (`read` returns an `Option` itself: an
+    /// `read` of tile `index` of a level whose tiles' keys start at `key_base` (from
+    /// [`level_key_base`]; `index` is below the level's tile count): from the micro-cache
+    /// (the tiles of the last fetches first), or else from `fetch` (the shared cache or
+    /// the file), kept for the next fetches. `None` when `fetch` finds no tile (it cannot
+    /// be read) or `read` gives none. (`read` returns an `Option` itself: an
     /// `Option<Option<_>>` to flatten went through memory on every fetch.)
     #[inline(always)]
     pub(crate) fn with_tile<R>(
         self,
-        level: u64,
+        key_base: Option<u64>,
         index: usize,
         fetch: impl FnOnce() -> Option<(Arc<Texels>, Arc<FileTally>)>,
         read: impl FnOnce(&Texels) -> Option<R>,
     ) -> Option<R> {
-        let Some(key) = key_of(level, index) else {
+        let Some(base) = key_base else {
             return fetch().and_then(|(tile, _)| read(&tile));
         };
+        let key = base | index as u64;
         if let Some(mut micro) = self.0.and_then(|cell| cell.try_borrow_mut().ok()) {
             if let Some(at) = micro.find(key) {
                 micro.hits[at] += 1;
@@ -242,7 +252,8 @@ mod tests {
         fetch: impl FnOnce() -> Option<(Arc<Texels>, Arc<FileTally>)>,
         read: impl FnOnce(&Texels) -> R,
     ) -> Option<R> {
-        with_thread_tiles(|tiles| tiles.with_tile(level, index, fetch, |tile| Some(read(tile))))
+        let base = level_key_base(level, index + 1);
+        with_thread_tiles(|tiles| tiles.with_tile(base, index, fetch, |tile| Some(read(tile))))
     }
 
     #[test]
@@ -294,7 +305,8 @@ mod tests {
                         // the entries the last fetches used), then tile 0 again, twice.
                         for index in [0, 0].into_iter().chain(1..=MICRO_TILES).chain([0, 0]) {
                             let fetch = || Some((tile(value(index)), tally.clone()));
-                            let v = tiles.with_tile(level, index, fetch, |t| Some(t.get(0).x));
+                            let base = level_key_base(level, MICRO_TILES + 1);
+                            let v = tiles.with_tile(base, index, fetch, |t| Some(t.get(0).x));
                             assert_eq!(v, Some(f32::from(value(index)) / 255.0), "{index}");
                         }
                     });
@@ -318,6 +330,9 @@ mod tests {
         assert_eq!(key_of(1 << 31, 0), None);
         assert_eq!(key_of(3, 1 << 32), None);
         assert_eq!(key_of(3, 2), Some(3 << 32 | 2));
+        assert_eq!(level_key_base(3, 1 << 32), Some(3 << 32));
+        assert_eq!(level_key_base(3, (1 << 32) + 1), None);
+        assert_eq!(level_key_base(1 << 31, 1), None);
         std::thread::scope(|scope| {
             scope
                 .spawn(|| {

@@ -380,6 +380,17 @@ pub(crate) trait TexelSource<'a>: Copy {
         ]
     }
 
+    /// `work` run on the texels of tile (`tile_x`, `tile_y`) of a level tiled by `layout`:
+    /// one fetch of the tile, and one storage dispatch, for a footprint that lies in it.
+    /// `None` when the tile cannot be read (`work` has not run).
+    fn with_tile_texels<W: TileWork>(
+        self,
+        layout: TileLayout,
+        tile_x: usize,
+        tile_y: usize,
+        work: &mut W,
+    ) -> Option<W::Output>;
+
     /// [`TexelSource::bilinear_block`] across a tile edge (about 1 block in 32): four
     /// fetches.
     #[inline(always)]
@@ -397,6 +408,19 @@ pub(crate) trait TexelSource<'a>: Copy {
             self.texel_at(layout, x + 1, y + 1),
         )
     }
+}
+
+/// Reads of many texels of one tile, compiled once per storage kind: a filter whose
+/// footprint lies in one tile fetches the tile once for all of them
+/// ([`TexelSource::with_tile_texels`]) instead of once per texel.
+pub(crate) trait TileWork {
+    /// What the work gives.
+    type Output;
+
+    /// The work on a tile whose texels are those of `texels` from index `start` on: texel
+    /// (x, y) of the tile is `texels.texel(start + offset)`, with `offset` from
+    /// [`TileLayout::locate`].
+    fn run<'t, T: FlatTexels<'t>>(&mut self, texels: T, start: usize) -> Self::Output;
 }
 
 /// A resident kind is its own tile source: every tile lies in the one buffer.
@@ -435,6 +459,17 @@ macro_rules! resident_texel_source {
             fn texel_at(self, layout: TileLayout, x: usize, y: usize) -> Vec4 {
                 let (tile_x, tile_y, offset) = layout.locate(x, y);
                 self.texel(layout.tile_start(tile_x, tile_y) + offset)
+            }
+
+            #[inline(always)]
+            fn with_tile_texels<W: TileWork>(
+                self,
+                layout: TileLayout,
+                tile_x: usize,
+                tile_y: usize,
+                work: &mut W,
+            ) -> Option<W::Output> {
+                Some(work.run(self, layout.tile_start(tile_x, tile_y)))
             }
 
             #[inline(always)]
