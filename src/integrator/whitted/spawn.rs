@@ -1,5 +1,9 @@
 //! Secondary rays leaving a hit: queued for the next wave with the parent's throughput
 //! times their weight, from the hit's spawn point, unless too weak to matter (seed 001).
+//! Their footprints read the hit record ([`HitSurface`]), which the shading lanes make only
+//! when a footprint needs it.
+
+use std::cell::OnceCell;
 
 use glam::Vec3;
 
@@ -8,7 +12,38 @@ use crate::footprint::Footprint;
 use crate::hit::SurfaceHit;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
+use crate::render::tracer::TraceHit;
 use crate::shading::SpawnPoint;
+
+/// The hit record a secondary ray's footprint reads (a cone's curvature, a differential's
+/// normal and its derivatives): the scalar path's, or, for a hit shaded in lanes
+/// (`lane_waves`), made from its trace hit the first time a footprint asks, as the scalar
+/// path makes it, so a mirror or a boundary under a point-sampled or distance footprint
+/// never makes one.
+pub(super) enum HitSurface<'a> {
+    Made(&'a SurfaceHit),
+    Deferred {
+        /// The hit of `ray`, the wave's ray as traced.
+        hit: &'a TraceHit,
+        ray: &'a PathRay,
+        record: OnceCell<SurfaceHit>,
+    },
+}
+
+impl HitSurface<'_> {
+    /// The hit record, made as `whitted::shade_hits` makes it for the scalar path.
+    pub(super) fn record(&self, context: &RenderContext) -> &SurfaceHit {
+        match self {
+            HitSurface::Made(surface) => surface,
+            HitSurface::Deferred { hit, ray, record } => record.get_or_init(|| {
+                let detail = super::surface::surface_detail(context, ray, hit);
+                context
+                    .surfaces
+                    .surface_hit(ray.origin, ray.direction, hit, detail)
+            }),
+        }
+    }
+}
 
 /// Spawns the secondary rays of one hit.
 pub(super) struct Spawner<'a> {
@@ -59,7 +94,7 @@ impl Spawner<'_> {
     pub(super) fn spawn_reflection(
         &self,
         context: &RenderContext,
-        surface: &SurfaceHit,
+        surface: &HitSurface,
         reflected: Vec3,
         ng: Vec3,
         weight: f32,
@@ -67,8 +102,7 @@ impl Spawner<'_> {
         worker: &mut WorkerState,
     ) {
         let ray = self.parent;
-        let footprint =
-            footprint_reflect(context.effects.footprints, ray, surface, reflected, worker);
+        let footprint = footprint_reflect(context, ray, surface, reflected, worker);
         self.spawn(
             waves,
             worker,
@@ -82,18 +116,22 @@ impl Spawner<'_> {
     }
 }
 
+/// The footprint of `ray` (moved to its hit) mirrored into `reflected`: the distance
+/// metric and point samples read nothing of the surface, so they need no hit record.
 #[inline]
-pub(super) fn footprint_reflect(
-    enabled: bool,
+fn footprint_reflect(
+    context: &RenderContext,
     ray: &PathRay,
-    surface: &SurfaceHit,
+    surface: &HitSurface,
     reflected: Vec3,
     worker: &mut WorkerState,
 ) -> Footprint {
-    if enabled {
-        worker.counters.footprint_updates += 1;
-        ray.footprint.reflect(ray.direction, surface, reflected)
-    } else {
-        ray.footprint
+    if !context.effects.footprints {
+        return ray.footprint;
+    }
+    worker.counters.footprint_updates += 1;
+    match ray.footprint {
+        Footprint::Mip0 | Footprint::Distance(_) => ray.footprint,
+        footprint => footprint.reflect(ray.direction, surface.record(context), reflected),
     }
 }
