@@ -6,7 +6,6 @@ use glam::Vec3;
 
 use super::spawn::{HitSurface, Spawner};
 use super::{PathRay, Waves};
-use crate::footprint::Footprint;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::shading::material_bsdf::Weighted;
@@ -32,16 +31,13 @@ pub(super) fn scatter_dielectric(
     if let Some(refracted) = split.refracted {
         let footprint = if effects.footprints {
             worker.counters.footprint_updates += 1;
-            match ray.footprint {
-                // Read nothing of the surface: no hit record.
-                Footprint::Mip0 | Footprint::Distance(_) => ray.footprint,
-                footprint => footprint.refract(
-                    ray.direction,
-                    surface.record(context),
-                    boundary.eta,
-                    refracted,
-                ),
-            }
+            ray.footprint.refract_with(
+                ray.direction,
+                boundary.eta,
+                refracted,
+                || surface.curvature(context, ray.direction),
+                || surface.record(context),
+            )
         } else {
             ray.footprint
         };

@@ -27,7 +27,7 @@ use super::spawn::{HitSurface, Spawner};
 use super::surface::{AmbientEnvironment, IndirectLight};
 use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
-use crate::footprint::Footprint;
+use crate::footprint::{sphere_curvature, triangle_curvature, Footprint};
 use crate::integrator::lanes::bsdf::{eval_lights, incident_normals};
 use crate::integrator::lanes::differentials::differentials_at_hits;
 use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, LaneFootprint};
@@ -36,6 +36,7 @@ use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::lights::{sample_lights, shadow_rays};
 use crate::integrator::lanes::picks::{LaneHit, LaneSurface};
 use crate::integrator::lanes::textures::{lane_emission, lane_inputs, shading_inputs};
+use crate::integrator::lanes::WaveLanes;
 use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
@@ -235,6 +236,8 @@ fn spawn_lane_rays(
     let surface = HitSurface::Deferred {
         hit: &hit,
         ray: &traced,
+        curvature: lane_curvature(lanes, lane),
+        geometric_normal: lanes.geometric_normal.get(lane),
         record: OnceCell::new(),
     };
     let mut ray = traced;
@@ -263,6 +266,32 @@ fn spawn_lane_rays(
     if let Some(boundary) = lobes.boundary.filter(|_| effects.refraction) {
         let surface = (&surface, material_index);
         scatter_dielectric(context, &ray, surface, boundary, &spawner, waves, worker);
+    }
+}
+
+/// The curvature of lane `lane`'s surface from its stage-1 arrays, as
+/// `footprint::curvature_at` computes it before signing it for the arriving side: a
+/// triangle's from its vertex normals (zero where the mesh has none, which
+/// `triangle_curvature` takes as flat, as `curvature_at` takes a missing normal), a
+/// sphere's from its radius.
+fn lane_curvature(lanes: &WaveLanes, lane: usize) -> Option<f32> {
+    let (triangles, spheres) = lanes.sections();
+    if triangles.contains(&lane) {
+        let p = [
+            lanes.p[0].get(lane),
+            lanes.p[1].get(lane),
+            lanes.p[2].get(lane),
+        ];
+        let n = [
+            lanes.n[0].get(lane),
+            lanes.n[1].get(lane),
+            lanes.n[2].get(lane),
+        ];
+        Some(triangle_curvature(p, n))
+    } else if spheres.contains(&lane) {
+        Some(sphere_curvature(lanes.radius[lane]))
+    } else {
+        None
     }
 }
 

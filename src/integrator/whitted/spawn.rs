@@ -8,24 +8,28 @@ use std::cell::OnceCell;
 use glam::Vec3;
 
 use super::{PathRay, Waves};
-use crate::footprint::Footprint;
+use crate::footprint::{curvature_at, Footprint};
 use crate::hit::SurfaceHit;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
 use crate::shading::SpawnPoint;
 
-/// The hit record a secondary ray's footprint reads (a cone's curvature, a differential's
-/// normal and its derivatives): the scalar path's, or, for a hit shaded in lanes
-/// (`lane_waves`), made from its trace hit the first time a footprint asks, as the scalar
-/// path makes it, so a mirror or a boundary under a point-sampled or distance footprint
-/// never makes one.
+/// What a secondary ray's footprint reads of its hit (a cone's curvature, a differential's
+/// normal and its derivatives): the scalar path's hit record, or, for a hit shaded in lanes
+/// (`lane_waves`), the curvature the lanes know, and a record made from the trace hit the
+/// first time a footprint asks, as the scalar path makes it.
 pub(super) enum HitSurface<'a> {
     Made(&'a SurfaceHit),
     Deferred {
         /// The hit of `ray`, the wave's ray as traced.
         hit: &'a TraceHit,
         ray: &'a PathRay,
+        /// The surface's curvature as `footprint::curvature_at` computes it before signing
+        /// it for the arriving side (`None`: from the record), and the unit geometric
+        /// normal, facing outward, that signs it.
+        curvature: Option<f32>,
+        geometric_normal: Vec3,
         record: OnceCell<SurfaceHit>,
     },
 }
@@ -35,12 +39,33 @@ impl HitSurface<'_> {
     pub(super) fn record(&self, context: &RenderContext) -> &SurfaceHit {
         match self {
             HitSurface::Made(surface) => surface,
-            HitSurface::Deferred { hit, ray, record } => record.get_or_init(|| {
+            HitSurface::Deferred {
+                hit, ray, record, ..
+            } => record.get_or_init(|| {
                 let detail = super::surface::surface_detail(context, ray, hit);
                 context
                     .surfaces
                     .surface_hit(ray.origin, ray.direction, hit, detail)
             }),
+        }
+    }
+
+    /// The curvature seen by a ray along `direction` (`footprint::curvature_at`).
+    pub(super) fn curvature(&self, context: &RenderContext, direction: Vec3) -> f32 {
+        match self {
+            HitSurface::Deferred {
+                curvature: Some(k),
+                geometric_normal,
+                ..
+            } => {
+                // `SurfaceHit::is_front_face`.
+                if direction.dot(*geometric_normal) < 0.0 {
+                    *k
+                } else {
+                    -*k
+                }
+            }
+            _ => curvature_at(self.record(context), direction),
         }
     }
 }
@@ -116,8 +141,7 @@ impl Spawner<'_> {
     }
 }
 
-/// The footprint of `ray` (moved to its hit) mirrored into `reflected`: the distance
-/// metric and point samples read nothing of the surface, so they need no hit record.
+/// The footprint of `ray` (moved to its hit) mirrored into `reflected`.
 #[inline]
 fn footprint_reflect(
     context: &RenderContext,
@@ -130,8 +154,10 @@ fn footprint_reflect(
         return ray.footprint;
     }
     worker.counters.footprint_updates += 1;
-    match ray.footprint {
-        Footprint::Mip0 | Footprint::Distance(_) => ray.footprint,
-        footprint => footprint.reflect(ray.direction, surface.record(context), reflected),
-    }
+    ray.footprint.reflect_with(
+        ray.direction,
+        reflected,
+        || surface.curvature(context, ray.direction),
+        || surface.record(context),
+    )
 }
