@@ -233,12 +233,13 @@ fn spawn_lane_rays(
     let material = &context.scene.materials[material_index as usize];
     let traced = waves.buffers.rays.current[index];
     let hit = waves.buffers.trace_hits[index];
+    let record = OnceCell::new();
     let surface = HitSurface::Deferred {
         hit: &hit,
         ray: &traced,
         curvature: lane_curvature(lanes, lane),
         geometric_normal: lanes.geometric_normal.get(lane),
-        record: OnceCell::new(),
+        record: &record,
     };
     let mut ray = traced;
     ray.throughput = lanes.throughput.get(lane);

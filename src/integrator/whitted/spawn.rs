@@ -30,7 +30,8 @@ pub(super) enum HitSurface<'a> {
         /// normal, facing outward, that signs it.
         curvature: Option<f32>,
         geometric_normal: Vec3,
-        record: OnceCell<SurfaceHit>,
+        /// The record once made (held by the caller, so the enum stays small).
+        record: &'a OnceCell<SurfaceHit>,
     },
 }
 
