@@ -129,11 +129,25 @@ impl Footprint {
     /// The distance metric is unchanged.
     #[inline]
     pub fn reflect(&self, dir: Vec3, hit: &SurfaceHit, reflected: Vec3) -> Footprint {
+        self.reflect_with(dir, reflected, || curvature_at(hit, dir), || hit)
+    }
+
+    /// [`Self::reflect`] reading of the hit only what the strategy needs: cones ask
+    /// `curvature` for [`curvature_at`]'s value, differentials `hit` for the record, the
+    /// others nothing (the shading lanes know a cone's curvature without a record).
+    #[inline]
+    pub fn reflect_with<'a>(
+        &self,
+        dir: Vec3,
+        reflected: Vec3,
+        curvature: impl FnOnce() -> f32,
+        hit: impl FnOnce() -> &'a SurfaceHit,
+    ) -> Footprint {
         match self {
             Footprint::Mip0 | Footprint::Distance(_) => *self,
-            Footprint::Cone1(c) => Footprint::Cone1(c.reflect(curvature_at(hit, dir))),
-            Footprint::Cone(e) => Footprint::Cone(e.reflect(curvature_at(hit, dir))),
-            Footprint::Differential(d) => Footprint::Differential(d.reflect(dir, hit, reflected)),
+            Footprint::Cone1(c) => Footprint::Cone1(c.reflect(curvature())),
+            Footprint::Cone(e) => Footprint::Cone(e.reflect(curvature())),
+            Footprint::Differential(d) => Footprint::Differential(d.reflect(dir, hit(), reflected)),
         }
     }
 
@@ -143,12 +157,26 @@ impl Footprint {
     /// internal reflection). The distance metric is unchanged.
     #[inline]
     pub fn refract(&self, dir: Vec3, hit: &SurfaceHit, eta: f32, refracted: Vec3) -> Footprint {
+        self.refract_with(dir, eta, refracted, || curvature_at(hit, dir), || hit)
+    }
+
+    /// [`Self::refract`] reading of the hit only what the strategy needs, as
+    /// [`Self::reflect_with`].
+    #[inline]
+    pub fn refract_with<'a>(
+        &self,
+        dir: Vec3,
+        eta: f32,
+        refracted: Vec3,
+        curvature: impl FnOnce() -> f32,
+        hit: impl FnOnce() -> &'a SurfaceHit,
+    ) -> Footprint {
         match self {
             Footprint::Mip0 | Footprint::Distance(_) => *self,
-            Footprint::Cone1(c) => Footprint::Cone1(c.refract(curvature_at(hit, dir), eta)),
-            Footprint::Cone(e) => Footprint::Cone(e.refract(curvature_at(hit, dir), eta)),
+            Footprint::Cone1(c) => Footprint::Cone1(c.refract(curvature(), eta)),
+            Footprint::Cone(e) => Footprint::Cone(e.refract(curvature(), eta)),
             Footprint::Differential(d) => {
-                Footprint::Differential(d.refract(dir, hit, eta, refracted))
+                Footprint::Differential(d.refract(dir, hit(), eta, refracted))
             }
         }
     }

@@ -36,8 +36,7 @@
 //! The arithmetic is the scalar path's (`render::prepared::SurfaceLookup::surface_hit`,
 //! `footprint::Footprint::texture_gradients`, `shading::surface_inputs`, the lobes' `eval`),
 //! operation for operation, so images are bit for bit the same at every level. Which hits
-//! and materials the lanes cover is [`LaneMaterial::covers`] and the integrator's choice of
-//! lanes; the rest takes the scalar path.
+//! the lanes cover is the integrator's choice of lanes; the rest takes the scalar path.
 
 pub(crate) mod bsdf;
 pub(crate) mod differentials;
@@ -66,11 +65,10 @@ use crate::texture::TextureQuery;
 /// What the lanes need to know of a material, computed once per render.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct LaneMaterial {
-    /// Whether Whitted's lanes shade this material: an opaque lobe that spawns no ray in
-    /// this render and emits nothing (see [`LaneMaterial::of`]). The path tracer's lanes
-    /// take every material: its BSDF, whichever lobes it has, is sampled from the lanes'
-    /// inputs, and its emission added as the scalar path adds it.
-    pub covers: bool,
+    /// Whether Whitted's waves spawn rays at this material: its mirror lobe reflects or its
+    /// dielectric boundary refracts and reflects in this render (see [`LaneMaterial::of`]),
+    /// so a lane of it builds the material's BSDF for those rays.
+    pub spawns: bool,
     /// Whether shading reads a texture (`render::surface_textures::reads_textures`).
     pub textured: bool,
     /// Whether a normal map bends the shading normal, so the triangle lanes need dP/ds and
@@ -82,17 +80,16 @@ pub(crate) struct LaneMaterial {
 }
 
 impl LaneMaterial {
-    /// Whitted's lanes leave out every emitter (its emission test needs the hit's side),
-    /// those whose mirror or dielectric lobe spawns rays in this render, and an opaque
-    /// weight of zero (nothing to light).
+    /// What the lanes need of `material` in `context`'s render. A material spawns rays where
+    /// `shading::MaterialBsdf::whitted_lobes` gives it a mirror or a dielectric boundary
+    /// (a positive weight) that the render's effects keep.
     pub(crate) fn of(context: &RenderContext, material: &Material) -> LaneMaterial {
         let effects = &context.effects;
         let opaque_weight = (1.0 - material.mirror) * (1.0 - material.transmission);
         let spawns = (effects.mirror_reflection && material.mirror > 0.0)
             || (effects.refraction && material.transmission > 0.0);
-        let emits = material.emission != Vec3::ZERO;
         LaneMaterial {
-            covers: !emits && !spawns && opaque_weight > 0.0,
+            spawns,
             textured: crate::render::surface_textures::reads_textures(material),
             normal_mapped: material.normal_texture.is_some(),
             opaque_weight,

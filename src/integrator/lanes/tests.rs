@@ -549,7 +549,7 @@ fn compare_with_scalar(lanes: &WaveLanes, materials: &[Material], lights: &[Ligh
 /// A material both integrators' lanes cover.
 fn covered(textured: bool, opaque_weight: f32) -> LaneMaterial {
     LaneMaterial {
-        covers: true,
+        spawns: false,
         textured,
         normal_mapped: false,
         opaque_weight,

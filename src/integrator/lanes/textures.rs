@@ -15,7 +15,7 @@ use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::binding_query;
 use crate::render::surface_textures::sample_binding_batch;
 use crate::scene::{Material, TextureBinding};
-use crate::shading::surface_inputs::perturb_normal;
+use crate::shading::surface_inputs::{perturb_normal, SurfaceInputs};
 
 /// Albedo, metallic, roughness and the emission of emission-textured emitters of every
 /// lane, and the shading normals bent by normal maps (the lanes ordered by material).
@@ -204,5 +204,21 @@ pub(crate) fn lane_emission(lanes: &WaveLanes, material: &Material, lane: usize)
         lanes.emission.get(lane)
     } else {
         material.emission
+    }
+}
+
+/// The material's shading inputs at lane `lane`, as `shading::surface_inputs` gives them
+/// (the shading normal bent by the material's normal map, if any, in stage 4).
+#[inline]
+pub(crate) fn lane_inputs(material: &Material, lanes: &WaveLanes, lane: usize) -> SurfaceInputs {
+    let model = material.model.metallic_roughness();
+    SurfaceInputs {
+        albedo: lanes.albedo.get(lane),
+        alpha: material.alpha,
+        // Zero for the classic model (`shading_inputs`).
+        metallic: lanes.metallic[lane],
+        roughness: model.map(|_| lanes.roughness[lane]),
+        emission: lane_emission(lanes, material, lane),
+        shading_normal: lanes.shading_normal.get(lane),
     }
 }

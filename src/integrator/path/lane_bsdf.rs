@@ -16,10 +16,11 @@ use std::ops::Range;
 use glam::Vec3;
 
 use super::lane_scatter::{LaneContinuation, ScatterLanes};
-use super::lane_waves::{lane_inputs, PathLanes};
+use super::lane_waves::PathLanes;
 use super::next_event::{delta_contribution, weighted_contribution};
 use super::vertex::{bsdf_has_smooth_part, medium_beyond, VertexSamples};
 use super::{LightStrategy, PathTracer};
+use crate::integrator::lanes::textures::lane_inputs;
 use crate::integrator::lanes::WaveLanes;
 use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};

@@ -26,7 +26,7 @@ use crate::integrator::lanes::gather::{gather_spheres, gather_triangles};
 use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::patches::evaluate_patches;
 use crate::integrator::lanes::picks::{LaneHit, LanePicks, LaneSurface};
-use crate::integrator::lanes::textures::{lane_emission, shading_inputs};
+use crate::integrator::lanes::textures::{lane_emission, lane_inputs, shading_inputs};
 use crate::integrator::lanes::WaveLanes;
 use crate::integrator::texturing::{record_first_lookup, records_first_lookup};
 use crate::integrator::wave_integrator::{write_geometry_values, write_material_aovs};
@@ -35,7 +35,6 @@ use crate::render::stats::RayKind;
 use crate::render::tracer::TraceHit;
 use crate::sampler::PixelSampler;
 use crate::scene::Material;
-use crate::shading::surface_inputs::SurfaceInputs;
 use crate::shading::{self, LightHit, MaterialBsdf};
 use crate::simd;
 
@@ -309,20 +308,4 @@ fn add_lane_emission(
         facing: shading::area_lights::emits_towards(material, normal, ray.direction),
     };
     add_seen_emission(tracer, context, ray, &seen, image, worker);
-}
-
-/// The material's shading inputs at lane `lane`, as `shading::surface_inputs` gives them
-/// (the shading normal bent by the material's normal map, if any, in stage 4).
-#[inline]
-pub(super) fn lane_inputs(material: &Material, lanes: &WaveLanes, lane: usize) -> SurfaceInputs {
-    let model = material.model.metallic_roughness();
-    SurfaceInputs {
-        albedo: lanes.albedo.get(lane),
-        alpha: material.alpha,
-        // Zero for the classic model (`lanes::textures`).
-        metallic: lanes.metallic[lane],
-        roughness: model.map(|_| lanes.roughness[lane]),
-        emission: lane_emission(lanes, material, lane),
-        shading_normal: lanes.shading_normal.get(lane),
-    }
 }

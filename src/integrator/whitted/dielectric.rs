@@ -4,20 +4,20 @@
 
 use glam::Vec3;
 
-use super::spawn::Spawner;
+use super::spawn::{HitSurface, Spawner};
 use super::{PathRay, Waves};
-use crate::hit::SurfaceHit;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::stats::RayKind;
 use crate::shading::material_bsdf::Weighted;
 use crate::shading::{self, SmoothDielectric};
 
-/// Spawn the refracted and reflected rays of `ray` at a transmissive `surface` (the
-/// material's smooth boundary, with its weight: the material's transmission).
+/// Spawn the refracted and reflected rays of `ray` at a transmissive `surface` of the
+/// material `material` (the material's smooth boundary, with its weight: the material's
+/// transmission).
 pub(super) fn scatter_dielectric(
     context: &RenderContext,
     ray: &PathRay,
-    surface: &SurfaceHit,
+    (surface, material): (&HitSurface, u32),
     boundary: Weighted<SmoothDielectric>,
     spawner: &Spawner,
     waves: &mut Waves,
@@ -31,14 +31,19 @@ pub(super) fn scatter_dielectric(
     if let Some(refracted) = split.refracted {
         let footprint = if effects.footprints {
             worker.counters.footprint_updates += 1;
-            ray.footprint
-                .refract(ray.direction, surface, boundary.eta, refracted)
+            ray.footprint.refract_with(
+                ray.direction,
+                boundary.eta,
+                refracted,
+                || surface.curvature(context, ray.direction),
+                || surface.record(context),
+            )
         } else {
             ray.footprint
         };
         // Entering the material: its medium; leaving: back outside.
         let sigma = if boundary.entering {
-            context.materials.sigma[surface.material as usize]
+            context.materials.sigma[material as usize]
         } else {
             Vec3::ZERO
         };

@@ -255,7 +255,7 @@ fn shade_hits(
         fog::add_fog_light(waves, index, image);
         let lane = waves.lane_of_ray[index];
         if lane != lane_waves::SCALAR {
-            lane_waves::finish_lane(context, waves, index, lane as usize, image);
+            lane_waves::finish_lane(context, waves, (index, lane as usize), image, worker);
             continue;
         }
         let ray = waves.buffers.rays.current[index];

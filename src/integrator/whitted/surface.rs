@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::dielectric::scatter_dielectric;
 use super::lights::queue_shadow_rays;
-use super::spawn::Spawner;
+use super::spawn::{HitSurface, Spawner};
 use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::hit::SurfaceHit;
@@ -180,10 +180,11 @@ pub(super) fn shade_hit(
         spawn,
         min_throughput: options.min_throughput,
     };
+    let surface = (&HitSurface::Made(surface), surface.material);
     if let Some(mirror) = mirror {
         let reflected = mirror.lobe.direction(-ray.direction);
         let weight = mirror.weight;
-        spawner.spawn_reflection(context, surface, reflected, ng, weight, waves, worker);
+        spawner.spawn_reflection(context, surface.0, reflected, ng, weight, waves, worker);
     }
     if let Some(boundary) = boundary {
         scatter_dielectric(context, &ray, surface, boundary, &spawner, waves, worker);
