@@ -104,8 +104,8 @@ fn misses_through_fog_take_the_lanes_with_the_scalar_path_s_bits() {
 }
 
 #[test]
-fn every_whitted_ray_through_fog_over_opaque_surfaces_takes_the_lanes() {
-    // Opaque materials only: each camera ray's hit or miss is the lanes'.
+fn every_whitted_ray_through_fog_takes_the_lanes() {
+    // Each camera, reflection and refraction ray's hit or miss is the lanes'.
     let (_, counters) = render_with(
         "assets/scenes/fog.toml",
         &Whitted::default(),
@@ -113,6 +113,6 @@ fn every_whitted_ray_through_fog_over_opaque_surfaces_takes_the_lanes() {
     );
     assert_eq!(
         counters.lane_hits + counters.lane_misses,
-        counters.camera_rays
+        counters.camera_rays + counters.reflection_rays + counters.refraction_rays
     );
 }

@@ -7,6 +7,7 @@
 //! The loops read and write one array per coordinate and run at the level
 //! `simd::dispatch` picks, with the scalar functions' operations in their order.
 
+use super::LaneArray;
 use std::ops::Range;
 
 use glam::Vec3;
@@ -52,7 +53,7 @@ pub(crate) fn incident_normals(lanes: &mut WaveLanes) {
 pub(crate) fn eval_lights(lanes: &mut WaveLanes, materials: &[Material], lights: usize) {
     let len = lanes.len();
     lanes.contribution.resize(len * lights);
-    lanes.lit.resize(len * lights, false);
+    lanes.lit.resize_lanes(len * lights, false);
     simd::run_at(
         lanes.level(),
         #[inline(always)]

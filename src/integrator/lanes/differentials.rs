@@ -7,6 +7,7 @@
 //! `interpolate` and before the texture gradients (`footprints::texture_gradients`), which
 //! then project the differential's dP/dx, dP/dy onto st as they project a cone's ellipse.
 
+use super::LaneArray;
 use glam::Vec3;
 
 use super::WaveLanes;
@@ -39,7 +40,7 @@ pub(crate) fn differentials_at_hits(lanes: &mut WaveLanes, camera: &Camera, spp:
     }
     lanes
         .differential_at_hit
-        .resize(len, RayDifferential::default());
+        .resize_lanes(len, RayDifferential::default());
     for lane in 0..len {
         let Some(differential) = lanes.differential[lane] else {
             continue;

@@ -4,6 +4,7 @@
 //! triangle's barycentric derivatives, on spheres through dP/ds and dP/dt, on patches
 //! through the patch's own derivatives).
 
+use super::LaneArray;
 use std::ops::Range;
 
 use glam::{Vec2, Vec3};
@@ -99,8 +100,8 @@ fn gradients_from(lanes: &mut WaveLanes, source: impl FootprintAxes) {
         spheres,
         patches,
     } = lanes.sections();
-    lanes.gradients.resize(len, [0.0; 4]);
-    lanes.degenerate.resize(len, false);
+    lanes.gradients.resize_lanes(len, [0.0; 4]);
+    lanes.degenerate.resize_lanes(len, false);
     simd::run_at(
         lanes.level(),
         #[inline(always)]

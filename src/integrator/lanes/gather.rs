@@ -2,6 +2,7 @@
 //! lane's sphere, gathered into lane arrays (one array per coordinate). Indexed loads from
 //! the scene: the one stage that cannot be a straight vector loop.
 
+use super::LaneArray;
 use super::{refill, WaveLanes};
 use crate::scene::{Sphere, TriangleMesh};
 
@@ -58,8 +59,8 @@ fn gather_texture_coordinates(lanes: &mut WaveLanes, meshes: &[TriangleMesh]) {
 pub(crate) fn gather_spheres(lanes: &mut WaveLanes, spheres: &[Sphere]) {
     let len = lanes.len();
     lanes.center.resize(len);
-    lanes.radius.resize(len, 0.0);
-    lanes.has_st.resize(len, false);
+    lanes.radius.resize_lanes(len, 0.0);
+    lanes.has_st.resize_lanes(len, false);
     for lane in lanes.sections().spheres {
         let sphere = &spheres[lanes.primitive[lane] as usize];
         lanes.center.set(lane, sphere.center);

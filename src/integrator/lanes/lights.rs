@@ -5,6 +5,7 @@
 //! The loops read and write one array per coordinate and run at the level
 //! `simd::dispatch` picks, with the scalar functions' operations in their order.
 
+use super::LaneArray;
 use glam::Vec3;
 
 use super::soa::Vec3Slices;
@@ -85,7 +86,7 @@ pub(crate) fn shadow_rays(lanes: &mut WaveLanes, lights: &[Light]) {
     let len = lanes.len();
     lanes.shadow_origin.resize(len);
     lanes.shadow_direction.resize(len * lights.len());
-    lanes.shadow_tfar.resize(len * lights.len(), 0.0);
+    lanes.shadow_tfar.resize_lanes(len * lights.len(), 0.0);
     simd::run_at(
         lanes.level(),
         #[inline(always)]

@@ -6,6 +6,7 @@
 //! What a miss adds to its pixel stays the integrator's, added in the wave's order, so film
 //! sums are those of the scalar path.
 
+use super::LaneArray;
 use glam::{Vec3, Vec4};
 
 use crate::footprint::{direction_to_lat_long, Footprint};
@@ -42,7 +43,7 @@ impl MissLanes {
     /// Forget the previous wave's misses; the wave has `rays` rays.
     fn clear(&mut self, rays: usize) {
         self.miss_of_ray.clear();
-        self.miss_of_ray.resize(rays, NOT_A_MISS);
+        self.miss_of_ray.resize_lanes(rays, NOT_A_MISS);
         self.direction.clear();
         self.as_light.clear();
         self.gradients.clear();
@@ -132,9 +133,9 @@ fn environment_radiances(
     let len = misses.len();
     misses.radiance.clear();
     match &context.scene.environment {
-        Environment::Color(c) => misses.radiance.resize(len, *c),
+        Environment::Color(c) => misses.radiance.resize_lanes(len, *c),
         Environment::LatLong { texture, intensity } => {
-            misses.radiance.resize(len, Vec3::ZERO);
+            misses.radiance.resize_lanes(len, Vec3::ZERO);
             worker.counters.texture_lookups += len as u64;
             let filtered = context.texture_filters[*texture];
             let closest = FilterOptions {
@@ -199,7 +200,7 @@ fn look_up_batch(
         }
     }));
     texels.clear();
-    texels.resize(queries.len(), Vec4::ZERO);
+    texels.resize_lanes(queries.len(), Vec4::ZERO);
     match context.external_textures.as_deref() {
         Some(external) => {
             for (query, texel) in queries.iter().zip(texels.iter_mut()) {

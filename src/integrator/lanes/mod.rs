@@ -340,17 +340,17 @@ impl WaveLanes {
             &mut self.mesh,
             &mut self.primitive,
         ] {
-            values.resize(len, 0);
+            values.resize_lanes(len, 0);
         }
         for values in [&mut self.u, &mut self.v, &mut self.t] {
-            values.resize(len, 0.0);
+            values.resize_lanes(len, 0.0);
         }
         self.origin.resize(len);
         self.direction.resize(len);
         self.throughput.resize(len);
-        self.wants_st.resize(len, false);
-        self.height_patch.resize(len, false);
-        self.cone_width.resize(len, None);
+        self.wants_st.resize_lanes(len, false);
+        self.height_patch.resize_lanes(len, false);
+        self.cone_width.resize_lanes(len, None);
     }
 
     /// The lanes of each kind of surface.
@@ -426,11 +426,34 @@ impl LaneSections {
     const COUNT: usize = 3;
 }
 
+/// Lanes a lane array makes room for when it first grows: a whole camera wave (a work tile
+/// of 16 x 16 pixels with 16 samples in flight), so that a render's arrays take their size
+/// in one step, whichever tile's wave is the largest, and grow again only for larger
+/// secondary waves (by powers of two).
+const WAVE_LANES: usize = 16 * 16 * 16;
+
+/// Resizing a lane array with room for [`WAVE_LANES`] at least.
+pub(crate) trait LaneArray<T> {
+    /// `Vec::resize`, growing the capacity to a power of two of at least [`WAVE_LANES`].
+    fn resize_lanes(&mut self, len: usize, value: T);
+}
+
+impl<T: Clone> LaneArray<T> for Vec<T> {
+    #[inline]
+    fn resize_lanes(&mut self, len: usize, value: T) {
+        if self.capacity() < len {
+            let room = len.next_power_of_two().max(WAVE_LANES);
+            self.reserve_exact(room - self.len());
+        }
+        self.resize(len, value);
+    }
+}
+
 /// `buffer` cleared and filled with `len` copies of `value`, reusing its allocation.
 #[inline]
 pub(crate) fn refill<T: Copy>(buffer: &mut Vec<T>, len: usize, value: T) {
     buffer.clear();
-    buffer.resize(len, value);
+    buffer.resize_lanes(len, value);
 }
 
 #[cfg(test)]

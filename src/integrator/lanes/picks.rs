@@ -4,6 +4,7 @@
 //! wave's order). Placing each hit once costs nothing, where pushing the lanes and then
 //! permuting them copies every array again.
 
+use super::LaneArray;
 use glam::Vec3;
 
 use super::differentials::LaneDifferential;
@@ -198,7 +199,7 @@ impl LanePicks {
         }
         lanes.differential.clear();
         if !self.differentials.is_empty() {
-            lanes.differential.resize(self.ray.len(), None);
+            lanes.differential.resize_lanes(self.ray.len(), None);
             for &(k, differential) in &self.differentials {
                 lanes.differential[lanes.lane_of_pick[k as usize] as usize] = Some(differential);
             }

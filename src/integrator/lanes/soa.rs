@@ -2,6 +2,7 @@
 //! consecutive floats of each coordinate and the compiler can run 8 or 16 lanes per
 //! instruction (`crate::simd::dispatch`).
 
+use super::LaneArray;
 use glam::{Vec2, Vec3};
 
 /// One 3-vector per lane: `x[lane]`, `y[lane]`, `z[lane]`.
@@ -30,7 +31,7 @@ impl Vec3Lanes {
     /// before is left where it is not overwritten by the resize).
     pub(crate) fn resize(&mut self, len: usize) {
         for coordinate in [&mut self.x, &mut self.y, &mut self.z] {
-            coordinate.resize(len, 0.0);
+            coordinate.resize_lanes(len, 0.0);
         }
     }
 
@@ -176,8 +177,8 @@ impl Vec2Lanes {
 
     /// Resized to `len` lanes, for a stage that writes every lane.
     pub(crate) fn resize(&mut self, len: usize) {
-        self.x.resize(len, 0.0);
-        self.y.resize(len, 0.0);
+        self.x.resize_lanes(len, 0.0);
+        self.y.resize_lanes(len, 0.0);
     }
 
     /// The first `len` lanes as slices of exactly that length.

@@ -6,6 +6,7 @@
 //! the emitted radiance, and the normal map's texel into the shading normal
 //! (`shading::surface_inputs::perturb_normal`).
 
+use super::LaneArray;
 use std::ops::Range;
 
 use glam::{Vec3, Vec4};
@@ -28,8 +29,8 @@ pub(crate) fn shading_inputs(
 ) {
     let len = lanes.len();
     lanes.albedo.resize(len);
-    lanes.metallic.resize(len, 0.0);
-    lanes.roughness.resize(len, 0.0);
+    lanes.metallic.resize_lanes(len, 0.0);
+    lanes.roughness.resize_lanes(len, 0.0);
     lanes.emission.resize(len);
     if lanes.keeps_base_color_lookups {
         super::refill(&mut lanes.base_color_lookups, len, None);
@@ -85,7 +86,7 @@ fn look_up(
         )
     }));
     texels.clear();
-    texels.resize(queries.len(), Vec4::ZERO);
+    texels.resize_lanes(queries.len(), Vec4::ZERO);
     sample_binding_batch(context, binding, &queries, worker, &mut texels);
     for (&lane, &texel) in at.iter().zip(&texels) {
         apply_texel(lanes, lane as usize, channel, material, texel);

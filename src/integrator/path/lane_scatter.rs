@@ -11,6 +11,7 @@
 //! path's bits. Side effects (counters, texture-tile marks of emission lookups) are sums
 //! and sets, which the order of the lanes does not change.
 
+use crate::integrator::lanes::LaneArray;
 use glam::Vec3;
 
 use super::lane_waves::PathLanes;
@@ -119,7 +120,7 @@ impl ScatterLanes {
             &mut self.disk_cos,
             &mut self.disk_sin,
         ] {
-            values.resize(len, 0.0);
+            values.resize_lanes(len, 0.0);
         }
         for vectors in [
             &mut self.sigma,
@@ -131,7 +132,7 @@ impl ScatterLanes {
         ] {
             vectors.resize(len);
         }
-        self.light.resize(len, LightRef::Environment);
+        self.light.resize_lanes(len, LightRef::Environment);
         refill(&mut self.shadow, len, None);
         refill(&mut self.next, len, None);
     }

@@ -27,6 +27,7 @@ use crate::integrator::lanes::interpolate::interpolate;
 use crate::integrator::lanes::patches::evaluate_patches;
 use crate::integrator::lanes::picks::{LaneHit, LanePicks, LaneSurface};
 use crate::integrator::lanes::textures::{lane_emission, lane_inputs, shading_inputs};
+use crate::integrator::lanes::LaneArray;
 use crate::integrator::lanes::WaveLanes;
 use crate::integrator::texturing::{record_first_lookup, records_first_lookup};
 use crate::integrator::wave_integrator::{write_geometry_values, write_material_aovs};
@@ -86,7 +87,7 @@ pub(super) fn shade_lanes(
     enabled: bool,
 ) {
     path.lane_of_ray.clear();
-    path.lane_of_ray.resize(rays.len(), SCALAR);
+    path.lane_of_ray.resize_lanes(rays.len(), SCALAR);
     path.lanes.clear();
     path.picks.clear();
     if !enabled {

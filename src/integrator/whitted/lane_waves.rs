@@ -19,6 +19,7 @@
 //! hit record their footprints read (a cone's curvature, a differential's normal
 //! derivatives) is made only when one asks (`spawn::HitSurface`).
 
+use crate::integrator::lanes::LaneArray;
 use glam::Vec3;
 
 use std::cell::OnceCell;
@@ -61,7 +62,7 @@ pub(super) fn pick_lanes(
 ) {
     let rays = waves.buffers.rays.current.len();
     waves.lane_of_ray.clear();
-    waves.lane_of_ray.resize(rays, SCALAR);
+    waves.lane_of_ray.resize_lanes(rays, SCALAR);
     waves.lanes.clear();
     waves.picks.clear();
     let effects = &context.effects;
