@@ -7,13 +7,12 @@
 //! The loops read and write one array per coordinate and run at the level
 //! `simd::dispatch` picks, with the scalar functions' operations in their order.
 
-use super::LaneArray;
 use std::ops::Range;
 
 use glam::Vec3;
 
 use super::soa::{Vec3Slices, Vec3SlicesMut};
-use super::WaveLanes;
+use super::{LaneArray, WaveLanes};
 use crate::scene::{Material, MaterialModel};
 use crate::shading::{Bsdf, MetallicRoughnessBsdf, OpaqueBsdf};
 use crate::simd;

@@ -7,10 +7,9 @@
 //! `interpolate` and before the texture gradients (`footprints::texture_gradients`), which
 //! then project the differential's dP/dx, dP/dy onto st as they project a cone's ellipse.
 
-use super::LaneArray;
 use glam::Vec3;
 
-use super::WaveLanes;
+use super::{LaneArray, WaveLanes};
 use crate::camera::Camera;
 use crate::footprint::RayDifferential;
 

@@ -4,7 +4,6 @@
 //! triangle's barycentric derivatives, on spheres through dP/ds and dP/dt, on patches
 //! through the patch's own derivatives).
 
-use super::LaneArray;
 use std::ops::Range;
 
 use glam::{Vec2, Vec3};
@@ -12,7 +11,7 @@ use glam::{Vec2, Vec3};
 use super::differentials::{differential_axes, LaneDifferential};
 use super::patches::{derivatives, patch_st_axes};
 use super::soa::corner_lanes_2;
-use super::{LaneSections, WaveLanes};
+use super::{LaneArray, LaneSections, WaveLanes};
 use crate::footprint::robust::{unit_direction, unit_normal, unit_or};
 use crate::footprint::{
     general_st_offset, lat_long_frame, project_cone_to_ellipse, Footprint, RayDifferential,

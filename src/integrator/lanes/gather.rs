@@ -2,8 +2,7 @@
 //! lane's sphere, gathered into lane arrays (one array per coordinate). Indexed loads from
 //! the scene: the one stage that cannot be a straight vector loop.
 
-use super::LaneArray;
-use super::{refill, WaveLanes};
+use super::{refill, LaneArray, WaveLanes};
 use crate::scene::{Sphere, TriangleMesh};
 
 /// Gather every triangle lane's triangle: positions always, vertex normals (zero where the

@@ -5,11 +5,10 @@
 //! The loops read and write one array per coordinate and run at the level
 //! `simd::dispatch` picks, with the scalar functions' operations in their order.
 
-use super::LaneArray;
 use glam::Vec3;
 
 use super::soa::Vec3Slices;
-use super::WaveLanes;
+use super::{LaneArray, WaveLanes};
 use crate::scene::Light;
 use crate::shading::{self, SpawnPoint};
 use crate::simd;

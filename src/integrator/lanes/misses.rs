@@ -6,9 +6,9 @@
 //! What a miss adds to its pixel stays the integrator's, added in the wave's order, so film
 //! sums are those of the scalar path.
 
-use super::LaneArray;
 use glam::{Vec3, Vec4};
 
+use super::LaneArray;
 use crate::footprint::{direction_to_lat_long, Footprint};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::tracer::TraceHit;

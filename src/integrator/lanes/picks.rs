@@ -4,12 +4,11 @@
 //! wave's order). Placing each hit once costs nothing, where pushing the lanes and then
 //! permuting them copies every array again.
 
-use super::LaneArray;
 use glam::Vec3;
 
 use super::differentials::LaneDifferential;
 use super::footprints::LaneFootprint;
-use super::{LaneMaterial, WaveLanes};
+use super::{LaneArray, LaneMaterial, WaveLanes};
 use crate::render::prepared::{GeometryRef, SurfaceLookup};
 use crate::render::tracer::TraceHit;
 

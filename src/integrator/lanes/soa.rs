@@ -2,8 +2,9 @@
 //! consecutive floats of each coordinate and the compiler can run 8 or 16 lanes per
 //! instruction (`crate::simd::dispatch`).
 
-use super::LaneArray;
 use glam::{Vec2, Vec3};
+
+use super::LaneArray;
 
 /// One 3-vector per lane: `x[lane]`, `y[lane]`, `z[lane]`.
 #[derive(Clone, Debug, Default, PartialEq)]

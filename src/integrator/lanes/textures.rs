@@ -6,12 +6,11 @@
 //! the emitted radiance, and the normal map's texel into the shading normal
 //! (`shading::surface_inputs::perturb_normal`).
 
-use super::LaneArray;
 use std::ops::Range;
 
 use glam::{Vec3, Vec4};
 
-use super::WaveLanes;
+use super::{LaneArray, WaveLanes};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::prepared::binding_query;
 use crate::render::surface_textures::sample_binding_batch;

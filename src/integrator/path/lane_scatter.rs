@@ -11,14 +11,13 @@
 //! path's bits. Side effects (counters, texture-tile marks of emission lookups) are sums
 //! and sets, which the order of the lanes does not change.
 
-use crate::integrator::lanes::LaneArray;
 use glam::Vec3;
 
 use super::lane_waves::PathLanes;
 use super::{lane_bsdf, lane_lights, PathRay, PathTracer};
 use crate::footprint::{Footprint, RayDifferential};
 use crate::integrator::lanes::soa::Vec3Lanes;
-use crate::integrator::lanes::{bsdf::incident_normals, refill};
+use crate::integrator::lanes::{bsdf::incident_normals, refill, LaneArray};
 use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
 use crate::shading::{self, BsdfSample, LightRef, SpawnPoint};

@@ -19,7 +19,6 @@
 //! hit record their footprints read (a cone's curvature, a differential's normal
 //! derivatives) is made only when one asks (`spawn::HitSurface`).
 
-use crate::integrator::lanes::LaneArray;
 use glam::Vec3;
 
 use std::cell::OnceCell;
@@ -30,6 +29,7 @@ use super::surface::{AmbientEnvironment, IndirectLight};
 use super::{add_radiance, PathRay, Waves};
 use crate::film::TileImage;
 use crate::footprint::{sphere_curvature, triangle_curvature, Footprint};
+use crate::hit::SurfaceHit;
 use crate::integrator::lanes::bsdf::{eval_lights, incident_normals};
 use crate::integrator::lanes::differentials::differentials_at_hits;
 use crate::integrator::lanes::footprints::{lane_footprint, texture_gradients, LaneFootprint};
@@ -39,7 +39,7 @@ use crate::integrator::lanes::lights::{sample_lights, shadow_rays};
 use crate::integrator::lanes::patches::evaluate_patches;
 use crate::integrator::lanes::picks::{LaneHit, LaneSurface};
 use crate::integrator::lanes::textures::{lane_emission, lane_inputs, shading_inputs};
-use crate::integrator::lanes::{LaneSections, WaveLanes};
+use crate::integrator::lanes::{LaneArray, LaneSections, WaveLanes};
 use crate::integrator::texturing::{record_first_lookup, records_first_lookup};
 use crate::integrator::trace_wave::ShadowRay;
 use crate::render::context::{RenderContext, WorkerState};
@@ -238,17 +238,22 @@ fn spawn_lane_rays(
     let material = &context.scene.materials[material_index as usize];
     let traced = waves.buffers.rays.current[index];
     let hit = waves.buffers.trace_hits[index];
+    // Only cones read the curvature (`Footprint::reflect_with`): no other footprint pays
+    // for it.
+    let cone = matches!(traced.footprint, Footprint::Cone1(_) | Footprint::Cone(_));
     let record = OnceCell::new();
     let surface = HitSurface::Deferred {
         hit: &hit,
         ray: &traced,
-        curvature: lane_curvature(lanes, lane),
+        curvature: (effects.footprints && cone)
+            .then(|| lane_curvature(lanes, lane))
+            .flatten(),
         geometric_normal: lanes.geometric_normal.get(lane),
         record: &record,
     };
     let mut ray = traced;
     ray.throughput = lanes.throughput.get(lane);
-    ray.footprint = footprint_at_hit(context, &traced, &surface, lanes.t[lane]);
+    ray.footprint = footprint_at_hit(context, &traced, (lanes, lane), || surface.record(context));
     let inputs = lane_inputs(material, lanes, lane);
     let fresnel = effects.fresnel.then_some(context.options.fresnel);
     let outward = lanes.geometric_normal.get(lane);
@@ -303,22 +308,27 @@ fn lane_curvature(lanes: &WaveLanes, lane: usize) -> Option<f32> {
     }
 }
 
-/// The footprint of `ray` moved to its hit at distance `t` (`Footprint::transfer`): a
-/// cone-like footprint by its distance alone, a differential onto the hit record.
-fn footprint_at_hit(
+/// The footprint of `ray` moved to its hit at lane `lane` (`Footprint::transfer`): a
+/// cone-like footprint by its distance alone; a differential as the lanes transferred it
+/// (`lanes::differentials`, for the lanes that carry one), else onto the hit `record`.
+fn footprint_at_hit<'a>(
     context: &RenderContext,
     ray: &PathRay,
-    surface: &HitSurface,
-    t: f32,
+    (lanes, lane): (&WaveLanes, usize),
+    record: impl FnOnce() -> &'a SurfaceHit,
 ) -> Footprint {
     if !context.effects.footprints {
         return ray.footprint;
     }
-    ray.footprint.propagated(t).unwrap_or_else(|| {
-        let mut footprint = ray.footprint;
-        footprint.transfer(ray.direction, surface.record(context));
-        footprint
-    })
+    if let Some(at_hit) = ray.footprint.propagated(lanes.t[lane]) {
+        return at_hit;
+    }
+    if lanes.differential.get(lane).is_some_and(Option::is_some) {
+        return Footprint::Differential(lanes.differential_at_hit[lane]);
+    }
+    let mut footprint = ray.footprint;
+    footprint.transfer(ray.direction, record());
+    footprint
 }
 
 /// The pixel's first lookup, from the base-colour lookup of lane `lane` (of the wave's ray
@@ -342,15 +352,16 @@ fn record_lane_lookup(
     else {
         return;
     };
-    let footprint = if context.effects.footprints {
-        // A lane of a textured material carries its footprint: a cone's moves along the
-        // ray, a differential's is the lane's at the hit.
-        ray.footprint
-            .propagated(lanes.t[lane])
-            .unwrap_or_else(|| Footprint::Differential(lanes.differential_at_hit[lane]))
-    } else {
-        ray.footprint
+    // A lane of a textured material carries its differential: the record is not made.
+    let record = OnceCell::new();
+    let surface = HitSurface::Deferred {
+        hit: &waves.buffers.trace_hits[index],
+        ray,
+        curvature: None,
+        geometric_normal: lanes.geometric_normal.get(lane),
+        record: &record,
     };
+    let footprint = footprint_at_hit(context, ray, (lanes, lane), || surface.record(context));
     record_first_lookup(context, image, ray.slot, binding, lookup, &footprint);
 }
 
