@@ -78,6 +78,48 @@ pub struct BenchTexturesArgs {
     /// Time by the wall clock instead of the thread's CPU time (both sides).
     #[arg(long)]
     pub wall_clock: bool,
+    /// Queries per `Texture::sample_batch` call in the batched columns, as the shading
+    /// lanes look up a texture once per material run of a wave (the default: a 16x16
+    /// tile's camera hits at 1 spp). 0 skips the batched columns.
+    #[arg(long, default_value_t = 256)]
+    pub batch: usize,
+}
+
+/// How a timed pass makes its lookups.
+#[derive(Clone, Copy, PartialEq)]
+enum Calls {
+    /// `Texture::sample` per query: the scalar shading path's and the C API's lookups.
+    Single,
+    /// `Texture::sample_batch` per this many queries: the shading lanes' lookups, the
+    /// filter, storage kind and micro-cache found once per call.
+    Batched(usize),
+}
+
+/// Every query of `queries` looked up once through `calls`; the sum of the results.
+#[inline(never)]
+fn look_up_all(
+    tex: &Texture,
+    queries: &[TextureQuery],
+    opts: &FilterOptions,
+    calls: Calls,
+    out: &mut Vec<glam::Vec4>,
+) -> glam::Vec4 {
+    let mut acc = glam::Vec4::ZERO;
+    match calls {
+        Calls::Single => {
+            for q in queries {
+                acc += tex.sample(black_box(q), opts);
+            }
+        }
+        Calls::Batched(size) => {
+            for chunk in queries.chunks(size.max(1)) {
+                out.resize(chunk.len(), glam::Vec4::ZERO);
+                tex.sample_batch(black_box(chunk), opts, None, out);
+                acc += out.iter().copied().sum::<glam::Vec4>();
+            }
+        }
+    }
+    acc
 }
 
 /// A stopwatch on the wall clock or on the calling thread's CPU time.
@@ -197,6 +239,8 @@ struct Row {
 struct CachedRun {
     per_sec: f64,
     resident_per_sec: f64,
+    /// The two rates of lookups made in batches (`--batch`), timed after the single ones.
+    batched: Option<(f64, f64)>,
     micro_hit_rate: f64,
     tiles_loaded: u64,
 }
@@ -284,11 +328,7 @@ const ALTERNATIONS: u32 = 8;
 /// One untimed pass over the query set (it opens the files and fills the caches, as OIIO's
 /// side does).
 fn warm(tex: &Texture, queries: &[TextureQuery], opts: &FilterOptions) {
-    let mut acc = glam::Vec4::ZERO;
-    for q in queries {
-        acc += tex.sample(black_box(q), opts);
-    }
-    black_box(acc);
+    black_box(look_up_all(tex, queries, opts, Calls::Single, &mut Vec::new()));
 }
 
 /// Lookups made and time taken repeating the query set for at least `min_time` (at least
@@ -297,16 +337,16 @@ fn time_lookups(
     tex: &Texture,
     queries: &[TextureQuery],
     opts: &FilterOptions,
+    calls: Calls,
     min_time: Duration,
     wall: bool,
 ) -> (usize, Duration) {
     let mut acc = glam::Vec4::ZERO;
     let mut done = 0usize;
+    let mut out = Vec::new();
     let start = Clock::start(wall);
     loop {
-        for q in queries {
-            acc += tex.sample(black_box(q), opts);
-        }
+        acc += look_up_all(tex, queries, opts, calls, &mut out);
         done += queries.len();
         if start.elapsed() >= min_time {
             break;
@@ -316,8 +356,8 @@ fn time_lookups(
     (done, start.elapsed())
 }
 
-/// Lookups per second on one thread of `resident` and of `cached`, after one untimed pass
-/// each: the two are timed in alternating slices of `min_time / ALTERNATIONS` until each
+/// Lookups per second on one thread of `resident` and of `cached`, made through `calls`,
+/// after one untimed pass each: the two are timed in alternating slices of `min_time / ALTERNATIONS` until each
 /// has had `min_time`, so a change of load during the row weighs on both. A side whose
 /// passes take longer than that (a cap that evicts) simply takes fewer slices.
 fn measure_alternating(
@@ -325,6 +365,7 @@ fn measure_alternating(
     cached: &Texture,
     queries: &[TextureQuery],
     opts: &FilterOptions,
+    calls: Calls,
     min_time: Duration,
     wall: bool,
 ) -> (f64, f64) {
@@ -335,7 +376,7 @@ fn measure_alternating(
     while totals.iter().any(|&(_, time)| time < min_time) {
         for (total, tex) in totals.iter_mut().zip([resident, cached]) {
             if total.1 < min_time {
-                let (done, time) = time_lookups(tex, queries, opts, slice, wall);
+                let (done, time) = time_lookups(tex, queries, opts, calls, slice, wall);
                 total.0 += done;
                 total.1 += time;
             }
@@ -346,13 +387,16 @@ fn measure_alternating(
 }
 
 /// [`measure_alternating`] of `resident` and of `tx` demand-loaded into a fresh cache of
-/// `cap` bytes, with the micro-cache hit rate and the tiles read over the whole run.
+/// `cap` bytes, single lookups and then, unless `batch` is 0, batches of `batch`; with the
+/// micro-cache hit rate and the tiles read over the whole run.
+#[allow(clippy::too_many_arguments)]
 fn measure_cached(
     resident: &Texture,
     tx: &Path,
     cap: u64,
     queries: &[TextureQuery],
     opts: &FilterOptions,
+    batch: usize,
     min_time: Duration,
     wall: bool,
 ) -> Result<CachedRun, String> {
@@ -365,7 +409,11 @@ fn measure_cached(
         ));
     }
     let (resident_per_sec, per_sec) =
-        measure_alternating(resident, &tex, queries, opts, min_time, wall);
+        measure_alternating(resident, &tex, queries, opts, Calls::Single, min_time, wall);
+    let batched = (batch > 0).then(|| {
+        let calls = Calls::Batched(batch);
+        measure_alternating(resident, &tex, queries, opts, calls, min_time, wall)
+    });
     crate::texture::flush_micro_caches();
     if let Some(failure) = tex.tile_failure() {
         return Err(failure.to_string());
@@ -374,6 +422,7 @@ fn measure_cached(
     Ok(CachedRun {
         per_sec,
         resident_per_sec,
+        batched,
         micro_hit_rate: stats.micro_cache_hit_rate(),
         tiles_loaded: stats.tiles_loaded,
     })
@@ -572,6 +621,7 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
                     cap,
                     &queries,
                     &opts,
+                    args.batch,
                     min_time,
                     args.wall_clock,
                 )?;
@@ -618,13 +668,17 @@ fn print_header(
         "Texture {} made into a 64x64-tiled .tx by maketx ({}x{}, {} levels), one thread, {} queries per set, \
          max aniso {}, rates per second of {clock}. \"resident\": the .tx decoded whole; \"cached\": the same \
          .tx read tile by tile into a fresh cache of the row's cap (micro-cache hits and tiles loaded over the \
-         whole timed run); each row times the two in alternating slices.",
+         whole timed run); each row times the two in alternating slices. \"single\": one `Texture::sample` \
+         call per lookup (the scalar shading path, the C API); \"batched\": one `Texture::sample_batch` call \
+         per {} queries (the shading lanes, one call per material run of a wave{}).",
         source.display(),
         tex.width(),
         tex.height(),
         tex.level_count(),
         args.queries,
         args.max_aniso,
+        args.batch,
+        if args.batch == 0 { "; not measured: --batch 0" } else { "" },
     );
     if let Some((e, b)) = overhead {
         let mut seen: Vec<String> = Vec::new();
@@ -655,10 +709,11 @@ fn print_header(
 
 fn print_table(rows: &[Row], overhead: Option<(f64, f64)>) {
     println!(
-        "| filter | queries | cap | resident (M/s) | cached (M/s) | cached / resident | micro-cache hits | tiles loaded \
+        "| filter | queries | cap | single: resident (M/s) | cached (M/s) | cached / resident \
+         | batched: resident (M/s) | cached (M/s) | cached / resident | micro-cache hits | tiles loaded \
          | OIIO raw (M/s) | OIIO net (M/s) | OIIO C++ est. (M/s) | cached / C++ est. |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in rows {
         let oiio = match (r.oiio_raw_ns, overhead) {
             (Some(ns), Some((e, b))) => {
@@ -674,8 +729,17 @@ fn print_table(rows: &[Row], overhead: Option<(f64, f64)>) {
             }
             _ => "- | - | - | -".to_string(),
         };
+        let batched = match r.cached.batched {
+            Some((resident, cached)) => format!(
+                "{:.2} | {:.2} | {:.2}",
+                resident / 1e6,
+                cached / 1e6,
+                cached / resident
+            ),
+            None => "- | - | -".to_string(),
+        };
         println!(
-            "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.1} % | {} | {} |",
+            "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {batched} | {:.1} % | {} | {} |",
             r.filter,
             r.set.name(),
             crate::render::memory::Bytes(r.cap),
