@@ -46,7 +46,8 @@ pub(crate) fn incident_normals(lanes: &mut WaveLanes) {
 
 /// What each light delivers through each lane's opaque lobe if nothing blocks it,
 /// `throughput * weight * f(wo, wi) * cos * irradiance`, into `contribution`, and whether it
-/// is positive into `lit` (light-major, as `sample_lights` wrote the samples).
+/// is positive into `lit` (light-major, as `sample_lights` wrote the samples). The lanes of
+/// a material without an opaque lobe are unlit, their contribution left as it was.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn eval_lights(lanes: &mut WaveLanes, materials: &[Material], lights: usize) {
@@ -61,8 +62,14 @@ pub(crate) fn eval_lights(lanes: &mut WaveLanes, materials: &[Material], lights:
                 let (material, range) = lanes.material_run(run);
                 let weight = lanes.materials[material as usize].opaque_weight;
                 for light in 0..lights {
-                    let model = &materials[material as usize].model;
-                    eval_run(lanes, model, range.clone(), weight, light);
+                    if weight > 0.0 {
+                        let model = &materials[material as usize].model;
+                        eval_run(lanes, model, range.clone(), weight, light);
+                    } else {
+                        // No opaque lobe: no light reflected, nothing sampled to evaluate.
+                        let in_light = light * len + range.start..light * len + range.end;
+                        lanes.lit[in_light].fill(false);
+                    }
                 }
             }
         },

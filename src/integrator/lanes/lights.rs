@@ -5,6 +5,8 @@
 //! The loops read and write one array per coordinate and run at the level
 //! `simd::dispatch` picks, with the scalar functions' operations in their order.
 
+use std::ops::Range;
+
 use glam::Vec3;
 
 use super::soa::Vec3Slices;
@@ -13,8 +15,10 @@ use crate::scene::Light;
 use crate::shading::{self, SpawnPoint};
 use crate::simd;
 
-/// Every light's direction and irradiance scale at every lane's point, light-major
-/// (`lanes.light_direction.x[light * lanes + lane]`).
+/// Every light's direction and irradiance scale at the point of every lane with an opaque
+/// lobe, light-major (`lanes.light_direction.x[light * lanes + lane]`). The lanes of a
+/// material without one (a perfect mirror, clear glass) reflect no light towards the
+/// viewer: their entries are left as they were, and `bsdf::eval_lights` leaves them unlit.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn sample_lights(lanes: &mut WaveLanes, lights: &[Light]) {
@@ -26,19 +30,24 @@ pub(crate) fn sample_lights(lanes: &mut WaveLanes, lights: &[Light]) {
         #[inline(always)]
         || {
             for (index, light) in lights.iter().enumerate() {
-                sample_light(lanes, light, index * len);
+                for run in 0..lanes.material_runs.len() {
+                    let (material, range) = lanes.material_run(run);
+                    if lanes.materials[material as usize].opaque_weight > 0.0 {
+                        sample_light(lanes, light, index * len, range);
+                    }
+                }
             }
         },
     );
 }
 
-/// One light at every lane, into the per-light arrays starting at `first`. Point lights,
-/// the common case, get a loop of their own, without the match on the light's kind.
+/// One light at the lanes `range`, into the per-light arrays starting at `first`. Point
+/// lights, the common case, get a loop of their own, without the match on the light's kind.
 #[inline(always)]
-fn sample_light(lanes: &mut WaveLanes, light: &Light, first: usize) {
-    let len = lanes.len();
-    let position = lanes.position.lanes(len);
-    let range = first..first + len;
+fn sample_light(lanes: &mut WaveLanes, light: &Light, first: usize, lanes_range: Range<usize>) {
+    let len = lanes_range.len();
+    let position = lanes.position.range(lanes_range.clone());
+    let range = first + lanes_range.start..first + lanes_range.end;
     let [dx, dy, dz] = [
         &mut lanes.light_direction.x[range.clone()],
         &mut lanes.light_direction.y[range.clone()],
@@ -78,7 +87,8 @@ fn sample_light(lanes: &mut WaveLanes, light: &Light, first: usize) {
 
 /// The shadow rays of the lit lanes and lights (after [`super::bsdf::eval_lights`]): their
 /// origins per lane, and per lane and light the direction and far end into
-/// `shadow_direction` and `shadow_tfar`; a lane whose ray has no direction is unlit.
+/// `shadow_direction` and `shadow_tfar`; a lane whose ray has no direction is unlit. The
+/// lanes of a material without an opaque lobe, unlit, get no segment.
 // Not inlined: one call per wave, and `perf` attributes each stage's time to it.
 #[inline(never)]
 pub(crate) fn shadow_rays(lanes: &mut WaveLanes, lights: &[Light]) {
@@ -92,7 +102,12 @@ pub(crate) fn shadow_rays(lanes: &mut WaveLanes, lights: &[Light]) {
         || {
             shadow_origins(lanes);
             for (index, light) in lights.iter().enumerate() {
-                shadow_segments(lanes, light, index * len);
+                for run in 0..lanes.material_runs.len() {
+                    let (material, range) = lanes.material_run(run);
+                    if lanes.materials[material as usize].opaque_weight > 0.0 {
+                        shadow_segments(lanes, light, index * len, range);
+                    }
+                }
             }
         },
     );
@@ -115,13 +130,14 @@ fn shadow_origins(lanes: &mut WaveLanes) {
     }
 }
 
-/// The segments towards one light of the lanes it lights, per-light arrays from `first`.
+/// The segments towards one light of the lanes `lanes_range` it lights, per-light arrays
+/// from `first`.
 #[inline(always)]
-fn shadow_segments(lanes: &mut WaveLanes, light: &Light, first: usize) {
-    let len = lanes.len();
+fn shadow_segments(lanes: &mut WaveLanes, light: &Light, first: usize, lanes_range: Range<usize>) {
+    let len = lanes_range.len();
     let target = shading::light_position(light).map(|p| (p.as_dvec3(), 0.0));
-    let origin: Vec3Slices = lanes.shadow_origin.lanes(len);
-    let range = first..first + len;
+    let origin: Vec3Slices = lanes.shadow_origin.range(lanes_range.clone());
+    let range = first + lanes_range.start..first + lanes_range.end;
     let to_light = Vec3Slices {
         x: &lanes.light_direction.x[range.clone()],
         y: &lanes.light_direction.y[range.clone()],
