@@ -328,7 +328,13 @@ const ALTERNATIONS: u32 = 8;
 /// One untimed pass over the query set (it opens the files and fills the caches, as OIIO's
 /// side does).
 fn warm(tex: &Texture, queries: &[TextureQuery], opts: &FilterOptions) {
-    black_box(look_up_all(tex, queries, opts, Calls::Single, &mut Vec::new()));
+    black_box(look_up_all(
+        tex,
+        queries,
+        opts,
+        Calls::Single,
+        &mut Vec::new(),
+    ));
 }
 
 /// Lookups made and time taken repeating the query set for at least `min_time` (at least
