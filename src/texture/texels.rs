@@ -245,7 +245,7 @@ impl Texels {
                 let srgb = *color_space == ColorSpace::Srgb;
                 let mut out = try_texel_vec(values.len(), label)?;
                 out.extend(values.iter().map(|v| {
-                    let colour = |c: f32| quantise_byte(if srgb { linear_to_srgb(c) } else { c });
+                    let colour = |c: f32| if srgb { srgb_byte(c) } else { quantise_byte(c) };
                     [
                         colour(v[0]),
                         colour(v[1]),
@@ -677,6 +677,38 @@ fn linear_to_srgb(c: f32) -> f32 {
     }
 }
 
+/// A linear value encoded as an sRGB byte: `quantise_byte(linear_to_srgb(c))`, with the
+/// same result for every input, found among the 255 inputs where that byte steps up instead
+/// of by a `powf` per channel (a mip level of an 8-bit sRGB texture encodes every texel).
+/// The encoding never decreases as `c` grows (a test checks every input where `powf` is
+/// used), so the byte is the number of steps at or below `c`.
+fn srgb_byte(c: f32) -> u8 {
+    static STEPS: LazyLock<[f32; 255]> = LazyLock::new(srgb_byte_steps);
+    if c.is_nan() {
+        return quantise_byte(linear_to_srgb(c));
+    }
+    STEPS.partition_point(|&step| step <= c) as u8
+}
+
+/// For each byte 1 to 255, the least input `c` in (0, 1] whose sRGB byte reaches it, by
+/// bisection over the positive floats, which order as their bits do.
+fn srgb_byte_steps() -> [f32; 255] {
+    let byte = |bits: u32| quantise_byte(linear_to_srgb(f32::from_bits(bits)));
+    std::array::from_fn(|k| {
+        let target = k as u8 + 1;
+        let (mut below, mut at) = (0u32, 1.0f32.to_bits());
+        while at - below > 1 {
+            let middle = below + (at - below) / 2;
+            if byte(middle) >= target {
+                at = middle;
+            } else {
+                below = middle;
+            }
+        }
+        f32::from_bits(at)
+    })
+}
+
 /// An empty vector with room for `len` texels, or [`TextureError::OutOfMemory`] naming
 /// `label` when that much cannot be allocated.
 pub(crate) fn try_texel_vec<T>(len: usize, label: &str) -> Result<Vec<T>, TextureError> {
@@ -692,6 +724,43 @@ pub(crate) fn try_texel_vec<T>(len: usize, label: &str) -> Result<Vec<T>, Textur
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The table's byte equals the computed one for every float from the end of the linear
+    /// segment to 1 (the `powf` branch, about 70 million inputs: the encoding must not
+    /// decrease there), across the linear segment by steps, and at the special values.
+    #[test]
+    fn srgb_byte_equals_the_encoding_for_every_input_where_powf_is_used() {
+        let exact = |c: f32| quantise_byte(linear_to_srgb(c));
+        let first = 0.0031308f32.to_bits();
+        let last = 1.0f32.to_bits() + 4096;
+        let mut bits = first - 4096;
+        while bits <= last {
+            let c = f32::from_bits(bits);
+            assert_eq!(srgb_byte(c), exact(c), "{c:e} ({bits:#x})");
+            bits += 1;
+        }
+        for bits in (0..first).step_by(997) {
+            let c = f32::from_bits(bits);
+            assert_eq!(srgb_byte(c), exact(c), "{c:e}");
+            assert_eq!(srgb_byte(-c), exact(-c), "{:e}", -c);
+        }
+        for c in [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MAX,
+            f32::MIN,
+            -0.0,
+            2.5,
+            1e20,
+        ] {
+            assert_eq!(srgb_byte(c), exact(c), "{c}");
+        }
+        let steps = srgb_byte_steps();
+        assert!(steps.windows(2).all(|w| w[0] < w[1]), "steps increase");
+        assert_eq!(exact(steps[0]), 1);
+        assert_eq!(exact(steps[254]), 255);
+    }
 
     #[test]
     fn byte_fetch_equals_the_decoded_f32_value() {
