@@ -402,8 +402,12 @@ fn triangle_normal_and_barycentrics_follow_embree() {
 /// Two parallel unit quads: a front one at z = 0 (prims 0 and 1, geometry 0) and a back one
 /// at z = -1 (geometry 1). Rays go down -z from z = 1.
 fn two_quads(filter: Option<conetrace::embree::AlphaFilter>) -> CommittedScene {
-    let device = Device::new().expect("device");
-    let mut builder = SceneBuilder::new(&device).expect("builder");
+    two_quads_on(&Device::new().expect("device"), filter)
+}
+
+/// [`two_quads`] on `device`.
+fn two_quads_on(device: &Device, filter: Option<conetrace::embree::AlphaFilter>) -> CommittedScene {
+    let mut builder = SceneBuilder::new(device).expect("builder");
     let quad = |z: f32| {
         vec![
             Vec3::new(0.0, 0.0, z),
@@ -597,14 +601,34 @@ fn filters_see_each_lanes_payload() {
     }
 }
 
+/// On the machine's own device, and on devices whose native packets are 8 and 4 lanes wide
+/// (a 16-lane packet traced in parts, whose panics add up to the whole packet's count).
 #[test]
 fn a_panicking_filter_is_reported_and_rejects_the_hit() {
-    let scene = two_quads(Some(Arc::new(|c: &FilterCandidate| {
-        if c.prim_id == 0 {
-            panic!("alpha texture lookup failed");
-        }
-        true
-    })));
+    let native = Device::new().expect("device");
+    for (config, device) in [
+        ("native", native),
+        ("isa=avx2", Device::with_config("isa=avx2").expect("device")),
+        (
+            "isa=sse4.2",
+            Device::with_config("isa=sse4.2").expect("device"),
+        ),
+    ] {
+        eprintln!("{config}: {} lanes", device.packet_width());
+        panicking_filter_on(&device);
+    }
+}
+
+fn panicking_filter_on(device: &Device) {
+    let scene = two_quads_on(
+        device,
+        Some(Arc::new(|c: &FilterCandidate| {
+            if c.prim_id == 0 {
+                panic!("alpha texture lookup failed");
+            }
+            true
+        })),
+    );
     let rays: Vec<Ray> = (0..16).map(quad_ray).collect();
 
     let err = scene

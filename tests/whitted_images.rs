@@ -2,7 +2,8 @@
 //! assets/scenes/ and the built-in default scene is rendered small (64x36, 1 spp, every AOV),
 //! with its own effects and with every effect forced on, and every channel is compared bit
 //! for bit with the reference EXRs in tests/data/whitted_images/ (rendered by
-//! `regenerate.sh` there, with the same options, from the code the references stand for).
+//! `regenerate.sh` there, with the same options, from the code the references stand for;
+//! one set per width of Embree's native packets, see [`reference_dir`]).
 //!
 //! A second set renders every scene with 4 samples per pixel and only the default AOVs (Z, N,
 //! albedo, uv), the scene's own effects: there the hits of later samples, and the first
@@ -39,6 +40,25 @@ const OPTIONS: [&str; 14] = [
 
 fn manifest_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The references for this machine's Embree. Its kernels for 16-lane packets (AVX-512) and
+/// for 8-lane ones (AVX2) can place a hit differently in the last bits of its distance and
+/// barycentrics, so each width has its own set, rendered on a machine of that width:
+/// tests/data/whitted_images/ for 16 lanes, its width8/ for 8.
+fn reference_dir() -> PathBuf {
+    let width = conetrace::embree::Device::new()
+        .expect("Embree device")
+        .packet_width();
+    let root = manifest_dir().join("tests/data/whitted_images");
+    match width {
+        16 => root,
+        8 => root.join("width8"),
+        _ => panic!(
+            "no reference images for an Embree device of {width}-lane packets: render a set \
+             with tests/data/whitted_images/regenerate.sh"
+        ),
+    }
 }
 
 /// Every scene file under assets/scenes/, as (reference name, path), sorted.
@@ -158,7 +178,7 @@ fn differences(reference: &ExrImage, rendered: &ExrImage) -> Vec<String> {
 #[test]
 fn every_shipped_scene_renders_bit_for_bit_as_its_reference() {
     let dir = temp_dir();
-    let references = manifest_dir().join("tests/data/whitted_images");
+    let references = reference_dir();
     let mut cases: Vec<(String, Option<PathBuf>)> = vec![("builtin_default".to_string(), None)];
     cases.extend(shipped_scenes().into_iter().map(|(n, p)| (n, Some(p))));
     assert!(cases.len() > 10, "found only {} scenes", cases.len());
@@ -200,7 +220,7 @@ fn every_shipped_scene_renders_bit_for_bit_as_its_reference() {
 #[test]
 fn every_shipped_scene_renders_its_sample_waves_bit_for_bit() {
     let dir = temp_dir();
-    let references = manifest_dir().join("tests/data/whitted_images");
+    let references = reference_dir();
     let mut options = SAMPLE_WAVE_OPTIONS.to_vec();
     options.push("whitted");
     let mut failures = Vec::new();

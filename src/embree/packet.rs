@@ -440,9 +440,7 @@ impl CommittedScene {
             part.copy_lanes(0, packet, start, M);
             let result = self.trace_native(&mut part, options, occlusion);
             packet.copy_lanes(start, &part, 0, M);
-            if first_error.is_ok() {
-                first_error = result;
-            }
+            first_error = merge_part_errors(first_error, result);
         }
         first_error
     }
@@ -504,6 +502,31 @@ impl<const N: usize> RayPacket<N> {
         for (level, &id) in hit.instID.iter().enumerate() {
             self.rows[INST_ID + level][lane] = id;
         }
+    }
+}
+
+/// The error of a packet traced in parts from the error so far and the next part's: the
+/// first error, except that panics of filters add up, so the count is the whole packet's
+/// as an unsplit trace reports it.
+fn merge_part_errors(
+    so_far: Result<(), EmbreeError>,
+    next: Result<(), EmbreeError>,
+) -> Result<(), EmbreeError> {
+    match (so_far, next) {
+        (Ok(()), next) => next,
+        (
+            Err(EmbreeError::FilterPanicked {
+                geom_id,
+                count,
+                message,
+            }),
+            Err(EmbreeError::FilterPanicked { count: more, .. }),
+        ) => Err(EmbreeError::FilterPanicked {
+            geom_id,
+            count: count.saturating_add(more),
+            message,
+        }),
+        (so_far, _) => so_far,
     }
 }
 

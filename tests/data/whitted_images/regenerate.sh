@@ -7,12 +7,17 @@
 # default AOVs, the scene's own effects (`NAME.spp4.exr`, where hits are shaded in lanes).
 # The options must match tests/whitted_images.rs.
 #
-# Usage: tests/data/whitted_images/regenerate.sh [path/to/conetrace]
+# Usage: tests/data/whitted_images/regenerate.sh [path/to/conetrace [OUT]]
 # Run it from the repository root with the binary of the code whose images are the
 # reference (e.g. a build of the commit before a refactoring), then commit the EXRs.
+# Embree's kernels for 16-lane packets (AVX-512) and 8-lane ones (AVX2) can differ in a
+# hit's last bits, so each width has its own set: run it on a machine of each width, with
+# OUT tests/data/whitted_images (the default) where Embree traces 16 lanes natively and
+# tests/data/whitted_images/width8 where it traces 8 (a CPU with AVX2 but not AVX-512).
 set -eu
 bin=${1:-target/debug/conetrace}
-out=tests/data/whitted_images
+out=${2:-tests/data/whitted_images}
+mkdir -p "$out"
 render() {
     name=$1
     shift
