@@ -31,8 +31,7 @@ pub(crate) fn sample_lights(lanes: &mut WaveLanes, lights: &[Light]) {
         || {
             for (index, light) in lights.iter().enumerate() {
                 for run in 0..lanes.material_runs.len() {
-                    let (material, range) = lanes.material_run(run);
-                    if lanes.materials[material as usize].opaque_weight > 0.0 {
+                    if let Some(range) = lanes.opaque_run(run) {
                         sample_light(lanes, light, index * len, range);
                     }
                 }
@@ -103,8 +102,7 @@ pub(crate) fn shadow_rays(lanes: &mut WaveLanes, lights: &[Light]) {
             shadow_origins(lanes);
             for (index, light) in lights.iter().enumerate() {
                 for run in 0..lanes.material_runs.len() {
-                    let (material, range) = lanes.material_run(run);
-                    if lanes.materials[material as usize].opaque_weight > 0.0 {
+                    if let Some(range) = lanes.opaque_run(run) {
                         shadow_segments(lanes, light, index * len, range);
                     }
                 }

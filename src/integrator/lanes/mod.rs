@@ -384,6 +384,13 @@ impl WaveLanes {
         let (material, end) = self.material_runs[run];
         (material, start..end)
     }
+
+    /// The lanes of material run `run` if its material has an opaque lobe (of positive
+    /// weight): the lanes that punctual lights can light.
+    pub(crate) fn opaque_run(&self, run: usize) -> Option<std::ops::Range<usize>> {
+        let (material, range) = self.material_run(run);
+        (self.materials[material as usize].opaque_weight > 0.0).then_some(range)
+    }
 }
 
 /// The `(material, end)` runs of lanes with section keys `keys` (a material, plus
