@@ -141,27 +141,96 @@ pub(crate) fn for_each_camera_ray(
     tile: PixelRect,
     run: &SampleRun,
     image_width: u32,
-    mut emit: impl FnMut(CameraRay),
+    emit: impl FnMut(CameraRay),
 ) {
-    let tile_pixels = tile.area() as u32;
-    let mut block = CameraBlock::default();
-    for (x, y) in block_order(tile) {
-        let pixel = y * tile.width + x;
-        for sample in run.traced.clone() {
+    camera_rays(context, tile, run, image_width).emit_packets(usize::MAX, emit);
+}
+
+/// The camera rays of `tile` for `run`, in the order of [`for_each_camera_ray`], made a
+/// few packets at a time ([`CameraRays::emit_packets`]): a wave integrator makes each camera
+/// wave's rays where the wave is traced, rather than making the whole run's up front and
+/// copying each wave's out.
+pub(crate) fn camera_rays<'a>(
+    context: &'a RenderContext,
+    tile: PixelRect,
+    run: &'a SampleRun,
+    image_width: u32,
+) -> CameraRays<'a, impl Iterator<Item = (u32, u32)>> {
+    CameraRays {
+        context,
+        tile,
+        run,
+        image_width,
+        pixels: block_order(tile),
+        pixel: None,
+        sample: run.traced.end,
+        block: CameraBlock::default(),
+    }
+}
+
+/// Where [`camera_rays`] has got to in a tile's run of samples.
+pub(crate) struct CameraRays<'a, P> {
+    context: &'a RenderContext,
+    tile: PixelRect,
+    run: &'a SampleRun,
+    image_width: u32,
+    /// The tile's pixels in block order, and the one whose samples are being made.
+    pixels: P,
+    pixel: Option<(u32, u32)>,
+    /// The next sample of `pixel` (`run.traced.end` once its samples are made).
+    sample: u32,
+    block: CameraBlock,
+}
+
+impl<P: Iterator<Item = (u32, u32)>> CameraRays<'_, P> {
+    /// Emits whole packets of the run's next camera rays until at least `rays` have been
+    /// emitted, or the run's last (possibly partial) packet; returns how many it emitted
+    /// (0 once the run is done). With `rays` a multiple of 16 every call but the last
+    /// emits exactly `rays`, so packets are cut as a single call cuts them.
+    pub fn emit_packets(&mut self, rays: usize, mut emit: impl FnMut(CameraRay)) -> usize {
+        let tile_pixels = self.tile.area() as u32;
+        let mut emitted = 0;
+        loop {
+            if self.sample == self.run.traced.end {
+                match self.pixels.next() {
+                    Some(pixel) => {
+                        self.pixel = Some(pixel);
+                        self.sample = self.run.traced.start;
+                    }
+                    None => {
+                        self.pixel = None;
+                        if self.block.len > 0 {
+                            emitted += self.block.len;
+                            self.block.emit(self.context, self.image_width, &mut emit);
+                        }
+                        return emitted;
+                    }
+                }
+            }
+            let Some((x, y)) = self.pixel else {
+                return emitted;
+            };
+            let (block, sample) = (&mut self.block, self.sample);
             let lane = block.len;
-            block.x[lane] = tile.x0 + x;
-            block.y[lane] = tile.y0 + y;
+            block.x[lane] = self.tile.x0 + x;
+            block.y[lane] = self.tile.y0 + y;
             block.index[lane] = sample;
-            block.kept[lane] = run.kept.contains(&sample);
-            block.slot[lane] = sample_slot(pixel, sample - run.traced.start, tile_pixels);
+            block.kept[lane] = self.run.kept.contains(&sample);
+            block.slot[lane] = sample_slot(
+                y * self.tile.width + x,
+                sample - self.run.traced.start,
+                tile_pixels,
+            );
             block.len += 1;
+            self.sample += 1;
             if block.len == PACKET {
-                block.emit(context, image_width, &mut emit);
+                block.emit(self.context, self.image_width, &mut emit);
+                emitted += PACKET;
+                if emitted >= rays {
+                    return emitted;
+                }
             }
         }
-    }
-    if block.len > 0 {
-        block.emit(context, image_width, &mut emit);
     }
 }
 
@@ -423,5 +492,69 @@ mod tests {
         assert_eq!(sample_slot(5, 4, 256), 5 + 4 * 256);
         assert_eq!(slot_place(sample_slot(255, 15, 256), 256), 15);
         assert_eq!(slot_place(sample_slot(3, 0, 256), 256), 0);
+    }
+
+    /// A run's camera rays made a few packets at a time (as the wave integrators make each
+    /// camera wave's) are the rays one call makes, bit for bit and in the same packets, on
+    /// a tile whose 4x4 blocks are cut at its edges, for runs of 1, 2 and 16 samples with
+    /// some samples not kept.
+    #[test]
+    fn camera_rays_made_a_few_packets_at_a_time_are_the_rays_of_one_call() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/assets/scenes/teapot_textured.toml"
+        );
+        let scene = crate::scene::load::load_scene(std::path::Path::new(path))
+            .expect("load the shipped textured teapot");
+        let mut options = crate::render::RenderOptions::from_settings(&scene.settings);
+        options.spp = 32;
+        let context =
+            crate::render::prepare(std::sync::Arc::new(scene), options).expect("prepare it");
+        assert!(context.effects.footprints);
+        let tile = PixelRect {
+            x0: 19,
+            y0: 5,
+            width: 13,
+            height: 7,
+        };
+        let runs = [
+            SampleRun {
+                traced: 0..1,
+                kept: 0..1,
+            },
+            SampleRun {
+                traced: 2..4,
+                kept: 3..4,
+            },
+            SampleRun {
+                traced: 16..32,
+                kept: 20..23,
+            },
+        ];
+        let width = context.options.width;
+        for run in &runs {
+            let mut whole = Vec::new();
+            for_each_camera_ray(&context, tile, run, width, |ray| {
+                whole.push(format!("{ray:?}"))
+            });
+            assert_eq!(whole.len(), tile.area() * run.len());
+            for chunk in [16, 48, 256] {
+                let mut rays = camera_rays(&context, tile, run, width);
+                let (mut parts, mut calls) = (Vec::new(), Vec::new());
+                loop {
+                    let made = rays.emit_packets(chunk, |ray| parts.push(format!("{ray:?}")));
+                    if made == 0 {
+                        break;
+                    }
+                    calls.push(made);
+                }
+                assert_eq!(parts, whole, "{chunk} rays a call, run {run:?}");
+                // Every call but the last makes exactly `chunk` rays: whole packets.
+                let (last, full) = calls.split_last().expect("at least one call");
+                assert!(full.iter().all(|&made| made == chunk), "{calls:?}");
+                assert!(*last <= chunk && *last > 0, "{calls:?}");
+                assert_eq!(rays.emit_packets(chunk, |_| panic!("no ray is left")), 0);
+            }
+        }
     }
 }

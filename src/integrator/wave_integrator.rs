@@ -11,8 +11,9 @@
 //! queues the next wave's rays and delivers its shadow rays).
 //!
 //! ```text
-//! for run in sample_runs:                 camera rays -> buffers.rays.camera
-//!     for wave in run_waves:              trace (packets / stream) -> buffers.trace_hits
+//! for run in sample_runs:
+//!     for wave in run_waves:              camera wave: its rays -> buffers.rays.current
+//!                                         trace (packets / stream) -> buffers.trace_hits
 //!         integrator.shade_wave           film += radiance; next wave; shadow rays
 //!     film.add_samples_in_flight
 //! ```
@@ -23,11 +24,9 @@ use glam::Vec3;
 
 use crate::film::{PixelRect, TileImage};
 use crate::hit::SurfaceHit;
-use crate::integrator::camera_sample::{
-    for_each_camera_ray, sample_runs, slot_place, CameraRay, SampleRun,
-};
+use crate::integrator::camera_sample::{camera_rays, sample_runs, slot_place, CameraRay};
 use crate::integrator::trace_wave::{shadow_trace_rays, ShadowRay, WaveRay};
-use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues};
+use crate::integrator::wave_order::{run_waves, trace_current, Wave, WaveQueues, CAMERA_WAVE_RAYS};
 use crate::render::context::{RenderContext, WorkerState};
 use crate::render::integrator::stop_requested;
 use crate::render::stats::{RayKind, WorkCounters};
@@ -156,13 +155,25 @@ pub(crate) fn render_waves<I: WaveIntegrator>(
         }
         image.begin_samples(run.len());
         I::buffers(state).in_flight = run.len();
-        start_camera_rays::<I>(context, tile, &run, state, worker);
+        count_camera_rays::<I>(tile_pixels, run.kept.len(), worker);
+        let mut camera = camera_rays(context, tile, &run, options.width);
         // Camera waves, then each sample's rays on their own (`wave_order`).
         run_waves(
             state,
             |state| &mut I::buffers(state).rays,
             run.len(),
             |ray| slot_place(I::slot(ray), tile_pixels) as usize,
+            |state| {
+                let rays = &mut I::buffers(state).rays;
+                let (current, kept) = (&mut rays.current, &mut rays.kept);
+                current.clear();
+                kept.clear();
+                let made = camera.emit_packets(CAMERA_WAVE_RAYS, |ray| {
+                    kept.push(ray.kept);
+                    current.push(I::camera_ray(ray));
+                });
+                made > 0
+            },
             |state, wave| {
                 trace_wave::<I>(context, I::buffers(state), &wave, worker);
                 integrator.shade_wave(context, state, image, worker);
@@ -183,25 +194,14 @@ pub(crate) fn render_waves<I: WaveIntegrator>(
     true
 }
 
-/// The camera rays of `run`'s samples for `tile`, in packet order, into
-/// `buffers.rays.camera`, and whether the render keeps each into `buffers.rays.kept`;
-/// the kept ones are counted.
-fn start_camera_rays<I: WaveIntegrator>(
-    context: &RenderContext,
-    tile: PixelRect,
-    run: &SampleRun,
-    state: &mut I::State,
+/// Counts the camera rays the render keeps of a run for a tile (`kept_samples` of each
+/// of its `tile_pixels` pixels), and with them the paths of an integrator that counts them.
+fn count_camera_rays<I: WaveIntegrator>(
+    tile_pixels: u32,
+    kept_samples: usize,
     worker: &mut WorkerState,
 ) {
-    let rays = &mut I::buffers(state).rays;
-    let (camera, kept) = (&mut rays.camera, &mut rays.kept);
-    camera.clear();
-    kept.clear();
-    for_each_camera_ray(context, tile, run, context.options.width, |ray| {
-        kept.push(ray.kept);
-        camera.push(I::camera_ray(ray));
-    });
-    let camera_rays = kept.iter().filter(|&&k| k).count() as u64;
+    let camera_rays = u64::from(tile_pixels) * kept_samples as u64;
     worker.counters.count_rays(RayKind::Camera, camera_rays);
     if I::COUNTS_PATHS {
         worker.counters.paths += camera_rays;
@@ -216,7 +216,7 @@ fn trace_wave<I: WaveIntegrator>(
     wave: &Wave,
     worker: &mut WorkerState,
 ) {
-    buffers.camera_wave = matches!(wave, Wave::Camera(_));
+    buffers.camera_wave = *wave == Wave::Camera;
     trace_current(
         context,
         &mut buffers.rays,

@@ -12,8 +12,6 @@
 //! the packet; grouped this way, no stream depends on which other samples are in flight,
 //! and a render split by sample range adds up to the whole render bit for bit.
 
-use std::ops::Range;
-
 use crate::integrator::trace_wave::{trace_wave, WaveRay};
 use crate::render::stats::WorkCounters;
 use crate::render::tracer::{TraceHit, TraceRay};
@@ -24,11 +22,10 @@ pub(crate) const CAMERA_WAVE_RAYS: usize = 256;
 
 /// The queues of rays a wave integrator keeps for a tile, reused from tile to tile.
 pub(crate) struct WaveQueues<R> {
-    /// The run's camera rays, in packet order, and whether the render keeps each.
-    pub camera: Vec<R>,
-    pub kept: Vec<bool>,
-    /// The wave being traced and the rays it spawns.
+    /// The wave being traced and the rays it spawns; for a camera wave, whether the render
+    /// keeps each of its rays.
     pub current: Vec<R>,
+    pub kept: Vec<bool>,
     pub next: Vec<R>,
     /// What the camera waves spawned, the order that groups it by sample, and where each
     /// group ends in that order.
@@ -40,9 +37,8 @@ pub(crate) struct WaveQueues<R> {
 impl<R> Default for WaveQueues<R> {
     fn default() -> Self {
         WaveQueues {
-            camera: Vec::new(),
-            kept: Vec::new(),
             current: Vec::new(),
+            kept: Vec::new(),
             next: Vec::new(),
             pending: Vec::new(),
             order: Vec::new(),
@@ -54,9 +50,9 @@ impl<R> Default for WaveQueues<R> {
 /// Which wave [`run_waves`] asks for.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) enum Wave {
-    /// Camera rays `camera[range]`: trace them as packets, drop the hits of the rays the
-    /// render does not keep ([`drop_unkept`] with `kept[range]`), shade.
-    Camera(Range<usize>),
+    /// Camera rays, made into `current` with `kept`: trace them as packets, drop the rays
+    /// the render does not keep and their hits ([`drop_unkept`]), shade.
+    Camera,
     /// Rays of one sample leaving surfaces: trace them as one incoherent stream, shade.
     Scattered,
 }
@@ -73,39 +69,31 @@ pub(crate) fn trace_current<R>(
     hits: &mut Vec<TraceHit>,
     counters: &mut WorkCounters,
 ) {
-    let camera = matches!(wave, Wave::Camera(_));
+    let camera = *wave == Wave::Camera;
     let rays = queues.current.iter().map(wave_ray);
     trace_wave(context, rays, camera, trace_rays, hits, counters);
-    if let Wave::Camera(range) = wave {
-        drop_unkept(&mut queues.current, hits, &queues.kept[range.clone()]);
+    if camera {
+        drop_unkept(&mut queues.current, hits, &queues.kept);
     }
 }
 
-/// Runs the waves of one sample run. `queues(state)` gives the state's queues, with its
-/// camera rays and `kept` filled; `place` tells which of the `places` samples in flight a
-/// ray belongs to; `wave(state, kind)` traces and shades `current`, pushing the rays that
-/// continue onto `next`.
+/// Runs the waves of one sample run. `queues(state)` gives the state's queues;
+/// `camera_wave(state)` makes the run's next [`CAMERA_WAVE_RAYS`] camera rays (fewer at the
+/// end) into `current` and `kept`, and says whether it made any; `place` tells which of the
+/// `places` samples in flight a ray belongs to; `wave(state, kind)` traces and shades
+/// `current`, pushing the rays that continue onto `next`.
 pub(crate) fn run_waves<S, R: Copy>(
     state: &mut S,
     queues: impl Fn(&mut S) -> &mut WaveQueues<R>,
     places: usize,
     place: impl Fn(&R) -> usize,
+    mut camera_wave: impl FnMut(&mut S) -> bool,
     mut wave: impl FnMut(&mut S, Wave),
 ) {
-    let count = queues(state).camera.len();
     // The camera waves' continuing rays pile up in `next`.
     queues(state).next.clear();
-    for start in (0..count).step_by(CAMERA_WAVE_RAYS) {
-        let range = start..(start + CAMERA_WAVE_RAYS).min(count);
-        let q = queues(state);
-        if range.len() == count {
-            // One camera wave: its rays move instead of being copied.
-            std::mem::swap(&mut q.current, &mut q.camera);
-        } else {
-            q.current.clear();
-            q.current.extend_from_slice(&q.camera[range.clone()]);
-        }
-        wave(state, Wave::Camera(range));
+    while camera_wave(state) {
+        wave(state, Wave::Camera);
     }
     let q = queues(state);
     if places == 1 {
