@@ -77,6 +77,9 @@ pub(crate) struct LaneMaterial {
     /// The opaque lobe's weight, `(1 - mirror) (1 - transmission)` as
     /// `shading::MaterialBsdf` computes it.
     pub opaque_weight: f32,
+    /// Whether the material emits light (a nonzero `emission`): a hit on any other adds no
+    /// emitted light, so its side and its emission are not looked at.
+    pub emits: bool,
 }
 
 impl LaneMaterial {
@@ -93,6 +96,7 @@ impl LaneMaterial {
             textured: crate::render::surface_textures::reads_textures(material),
             normal_mapped: material.normal_texture.is_some(),
             opaque_weight,
+            emits: material.emission != glam::Vec3::ZERO,
         }
     }
 }

@@ -577,6 +577,7 @@ fn covered(textured: bool, opaque_weight: f32) -> LaneMaterial {
         textured,
         normal_mapped: false,
         opaque_weight,
+        emits: false,
     }
 }
 

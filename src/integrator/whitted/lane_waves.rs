@@ -208,14 +208,16 @@ fn add_lane_radiance(
     let ray = &waves.buffers.rays.current[index];
     let lanes = &waves.lanes;
     let material_index = lanes.material[lane] as usize;
-    let material = &context.scene.materials[material_index];
-    let normal = lanes.geometric_normal.get(lane);
-    let mut radiance = if shading::area_lights::emits_towards(material, normal, ray.direction) {
-        lane_emission(lanes, material, lane)
-    } else {
-        Vec3::ZERO
-    };
-    let weight = lanes.materials[material_index].opaque_weight;
+    let lane_material = lanes.materials[material_index];
+    let mut radiance = Vec3::ZERO;
+    if lane_material.emits {
+        let material = &context.scene.materials[material_index];
+        let normal = lanes.geometric_normal.get(lane);
+        if shading::area_lights::emits_towards(material, normal, ray.direction) {
+            radiance = lane_emission(lanes, material, lane);
+        }
+    }
+    let weight = lane_material.opaque_weight;
     if weight > 0.0 {
         radiance += AmbientEnvironment::radiance(context, weight, lanes.albedo.get(lane));
     }
