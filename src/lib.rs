@@ -30,6 +30,7 @@ pub mod scene;
 pub mod shading;
 #[allow(unsafe_code)]
 pub mod simd;
+pub mod srgb;
 #[cfg(test)]
 mod test_rng;
 pub mod texture;

@@ -56,6 +56,6 @@ pub use error::OutputError;
 pub use exr_input::read_exr;
 pub use exr_output::{stage_exr, write_exr, ExrAttributes};
 pub use film::{Film, FilmLayout, FilmTile, PixelRect};
-pub use png_output::{display_value, linear_to_srgb, stage_png, tonemap_to_srgb8, write_png};
+pub use png_output::{display_value, stage_png, tonemap_to_srgb8, write_png};
 pub use regions::{BandRegions, FilmBand, FilmRegion};
 pub use tile_image::{block_order, AovSelection, TileImage};

@@ -19,24 +19,22 @@ use super::channels::Layer;
 use super::error::OutputError;
 use super::film::Film;
 use crate::scene::ToneMap;
-
-/// The sRGB transfer function (linear to encoded), exact piecewise form, for `x` in [0, 1].
-#[inline]
-pub fn linear_to_srgb(x: f32) -> f32 {
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
+use crate::srgb::{linear_to_srgb, srgb_byte};
 
 /// One linear radiance value to its display value in [0, 1]: exposure scale, tone map and
 /// the sRGB transfer function. Negative values and NaN give 0.
 #[inline]
 pub fn display_value(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> f32 {
+    linear_to_srgb(tone_mapped(linear, tonemap, exposure_scale))
+}
+
+/// One linear radiance value scaled by the exposure and tone mapped into [0, 1], before
+/// the sRGB encoding. Negative values and NaN give 0.
+#[inline]
+fn tone_mapped(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> f32 {
     let x = linear * exposure_scale;
     let x = if x > 0.0 { x } else { 0.0 }; // also maps NaN to 0
-    let mapped = match tonemap {
+    match tonemap {
         ToneMap::Clamp => x.min(1.0),
         ToneMap::Reinhard => {
             if x.is_finite() {
@@ -45,14 +43,15 @@ pub fn display_value(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> f32 
                 1.0
             }
         }
-    };
-    linear_to_srgb(mapped)
+    }
 }
 
-/// One linear radiance value to an 8-bit sRGB code: [`display_value`], then rounding.
+/// One linear radiance value to an 8-bit sRGB code: the exposure and the tone map of
+/// [`display_value`], then the nearest byte of its sRGB encoding (`srgb::srgb_byte`, the
+/// same byte without a `powf`).
 #[inline]
 pub fn tonemap_to_srgb8(linear: f32, tonemap: ToneMap, exposure_scale: f32) -> u8 {
-    (display_value(linear, tonemap, exposure_scale) * 255.0 + 0.5).clamp(0.0, 255.0) as u8
+    srgb_byte(tone_mapped(linear, tonemap, exposure_scale))
 }
 
 /// Writes the film's colour layer to `path` as 8-bit sRGB PNG (atomically; the parent
@@ -145,11 +144,7 @@ mod tests {
         assert_eq!(code(0.0), 0);
         // The end of the linear segment: 12.92 * 0.0031308 = 0.040450 -> 10.31.
         assert_eq!(code(0.003_130_8), 10);
-        assert!((linear_to_srgb(0.003_130_8) - 0.040_45).abs() < 1e-5);
-        // Both pieces meet there (the curve is continuous).
-        assert!((linear_to_srgb(0.003_130_9) - linear_to_srgb(0.003_130_8)).abs() < 1e-5);
         // 1.055 * 0.5^(1/2.4) - 0.055 = 0.735357 -> 187.52.
-        assert!((linear_to_srgb(0.5) - 0.735_357).abs() < 1e-5);
         assert_eq!(code(0.5), 188);
         assert_eq!(code(1.0), 255);
         assert_eq!(code(1.5), 255);
@@ -157,6 +152,31 @@ mod tests {
         assert_eq!(code(f32::INFINITY), 255);
         assert_eq!(code(-1.0), 0);
         assert_eq!(code(f32::NAN), 0);
+    }
+
+    /// The PNG's byte is the display value rounded to the nearest code, for both tone maps
+    /// and several exposures, over radiances from 1e-6 to 1e4 and the special values.
+    #[test]
+    fn srgb_codes_are_the_rounded_display_values() {
+        let mut radiances = vec![0.0f32, -0.0, -1.0, f32::NAN, f32::INFINITY, f32::MAX];
+        let mut x = 1e-6f32;
+        while x < 1e4 {
+            radiances.push(x);
+            x *= 1.0007;
+        }
+        for tonemap in [ToneMap::Clamp, ToneMap::Reinhard] {
+            for scale in [0.25f32, 1.0, 3.0] {
+                for &linear in &radiances {
+                    let display = display_value(linear, tonemap, scale);
+                    let rounded = (display * 255.0 + 0.5).clamp(0.0, 255.0) as u8;
+                    assert_eq!(
+                        tonemap_to_srgb8(linear, tonemap, scale),
+                        rounded,
+                        "{linear:e} x {scale}, {tonemap:?}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -21,6 +21,7 @@ use image::DynamicImage;
 use super::mip_pyramid::MipLevel;
 use super::texels::{try_texel_vec, Texels};
 use super::{tiled_tiff, ColorSpace, TextureError};
+use crate::srgb::srgb_to_linear;
 
 /// The image formats textures are read from, told apart by their first 8 bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -61,16 +62,6 @@ pub(crate) fn decode(
         None => Err(TextureError::UnknownFormat {
             label: label.to_string(),
         }),
-    }
-}
-
-/// sRGB transfer function inverse (IEC 61966-2-1).
-#[inline]
-pub(super) fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
     }
 }
 

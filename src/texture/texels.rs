@@ -19,10 +19,10 @@ use half::f16;
 
 use super::aniso_lanes::{lanes, Lanes, ProbeBlocks};
 use super::demand_tiles::DemandLevel;
-use super::image_load::srgb_to_linear;
 use super::micro_cache::ThreadTiles;
 use super::tile_layout::TileLayout;
 use super::{ColorSpace, TextureError};
+use crate::srgb::{nearest_byte, srgb_byte, srgb_to_linear};
 
 /// Decoded value of each byte: byte / 255 (linear data and alpha).
 static LINEAR_BYTES: LazyLock<[f32; 256]> =
@@ -245,13 +245,8 @@ impl Texels {
                 let srgb = *color_space == ColorSpace::Srgb;
                 let mut out = try_texel_vec(values.len(), label)?;
                 out.extend(values.iter().map(|v| {
-                    let colour = |c: f32| if srgb { srgb_byte(c) } else { quantise_byte(c) };
-                    [
-                        colour(v[0]),
-                        colour(v[1]),
-                        colour(v[2]),
-                        quantise_byte(v[3]),
-                    ]
+                    let colour = |c: f32| if srgb { srgb_byte(c) } else { nearest_byte(c) };
+                    [colour(v[0]), colour(v[1]), colour(v[2]), nearest_byte(v[3])]
                 }));
                 Texels::bytes(out, *color_space)
             }
@@ -663,52 +658,6 @@ fn half_texel(t: &[f16; 4]) -> Vec4 {
     Vec4::from_array(wide)
 }
 
-/// A value in [0, 1] as the nearest byte, ties upward; outside [0, 1] clamped.
-fn quantise_byte(v: f32) -> u8 {
-    (v * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
-}
-
-/// sRGB encoding (IEC 61966-2-1), the inverse of [`srgb_to_linear`].
-fn linear_to_srgb(c: f32) -> f32 {
-    if c <= 0.0031308 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// A linear value encoded as an sRGB byte: `quantise_byte(linear_to_srgb(c))`, with the
-/// same result for every input, found among the 255 inputs where that byte steps up instead
-/// of by a `powf` per channel (a mip level of an 8-bit sRGB texture encodes every texel).
-/// The encoding never decreases as `c` grows (a test checks every input where `powf` is
-/// used), so the byte is the number of steps at or below `c`.
-fn srgb_byte(c: f32) -> u8 {
-    static STEPS: LazyLock<[f32; 255]> = LazyLock::new(srgb_byte_steps);
-    if c.is_nan() {
-        return quantise_byte(linear_to_srgb(c));
-    }
-    STEPS.partition_point(|&step| step <= c) as u8
-}
-
-/// For each byte 1 to 255, the least input `c` in (0, 1] whose sRGB byte reaches it, by
-/// bisection over the positive floats, which order as their bits do.
-fn srgb_byte_steps() -> [f32; 255] {
-    let byte = |bits: u32| quantise_byte(linear_to_srgb(f32::from_bits(bits)));
-    std::array::from_fn(|k| {
-        let target = k as u8 + 1;
-        let (mut below, mut at) = (0u32, 1.0f32.to_bits());
-        while at - below > 1 {
-            let middle = below + (at - below) / 2;
-            if byte(middle) >= target {
-                at = middle;
-            } else {
-                below = middle;
-            }
-        }
-        f32::from_bits(at)
-    })
-}
-
 /// An empty vector with room for `len` texels, or [`TextureError::OutOfMemory`] naming
 /// `label` when that much cannot be allocated.
 pub(crate) fn try_texel_vec<T>(len: usize, label: &str) -> Result<Vec<T>, TextureError> {
@@ -724,43 +673,6 @@ pub(crate) fn try_texel_vec<T>(len: usize, label: &str) -> Result<Vec<T>, Textur
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The table's byte equals the computed one for every float from the end of the linear
-    /// segment to 1 (the `powf` branch, about 70 million inputs: the encoding must not
-    /// decrease there), across the linear segment by steps, and at the special values.
-    #[test]
-    fn srgb_byte_equals_the_encoding_for_every_input_where_powf_is_used() {
-        let exact = |c: f32| quantise_byte(linear_to_srgb(c));
-        let first = 0.0031308f32.to_bits();
-        let last = 1.0f32.to_bits() + 4096;
-        let mut bits = first - 4096;
-        while bits <= last {
-            let c = f32::from_bits(bits);
-            assert_eq!(srgb_byte(c), exact(c), "{c:e} ({bits:#x})");
-            bits += 1;
-        }
-        for bits in (0..first).step_by(997) {
-            let c = f32::from_bits(bits);
-            assert_eq!(srgb_byte(c), exact(c), "{c:e}");
-            assert_eq!(srgb_byte(-c), exact(-c), "{:e}", -c);
-        }
-        for c in [
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::MAX,
-            f32::MIN,
-            -0.0,
-            2.5,
-            1e20,
-        ] {
-            assert_eq!(srgb_byte(c), exact(c), "{c}");
-        }
-        let steps = srgb_byte_steps();
-        assert!(steps.windows(2).all(|w| w[0] < w[1]), "steps increase");
-        assert_eq!(exact(steps[0]), 1);
-        assert_eq!(exact(steps[254]), 255);
-    }
 
     #[test]
     fn byte_fetch_equals_the_decoded_f32_value() {

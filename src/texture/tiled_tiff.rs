@@ -28,10 +28,10 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 use tiff::ColorType;
 
-use super::image_load::srgb_to_linear;
 use super::mip_pyramid::MipLevel;
 use super::texels::Texels;
 use super::{ColorSpace, TextureError};
+use crate::srgb::srgb_to_linear;
 
 /// Largest decoded level accepted, in bytes of stored samples: a 16384x16384 RGBA
 /// float level. The `tiff` crate's default (256 MiB) would refuse ordinary 8k float
