@@ -162,7 +162,7 @@ pub(crate) fn camera_rays<'a>(
         run,
         image_width,
         pixels: block_order(tile),
-        pixel: None,
+        pixel: (0, 0),
         sample: run.traced.end,
         block: CameraBlock::default(),
     }
@@ -174,9 +174,10 @@ pub(crate) struct CameraRays<'a, P> {
     tile: PixelRect,
     run: &'a SampleRun,
     image_width: u32,
-    /// The tile's pixels in block order, and the one whose samples are being made.
+    /// The tile's pixels in block order, and the one whose samples are being made (read
+    /// only while `sample` is below `run.traced.end`).
     pixels: P,
-    pixel: Option<(u32, u32)>,
+    pixel: (u32, u32),
     /// The next sample of `pixel` (`run.traced.end` once its samples are made).
     sample: u32,
     block: CameraBlock,
@@ -194,11 +195,10 @@ impl<P: Iterator<Item = (u32, u32)>> CameraRays<'_, P> {
             if self.sample == self.run.traced.end {
                 match self.pixels.next() {
                     Some(pixel) => {
-                        self.pixel = Some(pixel);
+                        self.pixel = pixel;
                         self.sample = self.run.traced.start;
                     }
                     None => {
-                        self.pixel = None;
                         if self.block.len > 0 {
                             emitted += self.block.len;
                             self.block.emit(self.context, self.image_width, &mut emit);
@@ -207,9 +207,7 @@ impl<P: Iterator<Item = (u32, u32)>> CameraRays<'_, P> {
                     }
                 }
             }
-            let Some((x, y)) = self.pixel else {
-                return emitted;
-            };
+            let (x, y) = self.pixel;
             let (block, sample) = (&mut self.block, self.sample);
             let lane = block.len;
             block.x[lane] = self.tile.x0 + x;
