@@ -190,49 +190,65 @@ fn probes<'a, S: TexelSource<'a>, O: TexelObserver>(
             0.5 * a + 0.5 * b
         }
         _ if n <= MAX_STACK_PROBES => {
+            // The sum is a local of this loop, not of a closure the probes are handed to:
+            // captured by reference, it was kept in memory, and every probe waited for the
+            // previous one's store.
             let mut acc = Vec4::ZERO;
-            each_probe(level, texels, m, q, line, wrap, obs, |i, v| {
-                acc += weights[i] * v
-            });
+            let addressable = aniso_lanes::addressable(level);
+            for first in (0..n).step_by(PROBE_LANES) {
+                let (values, count) =
+                    probe_step(level, texels, addressable, m, q, line, wrap, obs, first);
+                for (w, v) in weights[first..first + count].iter().zip(&values) {
+                    acc += *w * *v;
+                }
+            }
             acc / wsum
         }
         _ => {
             // Very high anisotropy limits: weights computed on the fly.
             let mut acc = Vec4::ZERO;
             let mut wsum = 0.0f32;
-            each_probe(level, texels, m, q, line, wrap, obs, |i, v| {
-                let p = 2.0 * (i as f32 + 0.5) * inv_n - 1.0;
-                let x = p * gauss_scale;
-                let w = (-2.0 * x * x).exp();
-                wsum += w;
-                acc += w * v;
-            });
+            let addressable = aniso_lanes::addressable(level);
+            for first in (0..n).step_by(PROBE_LANES) {
+                let (values, count) =
+                    probe_step(level, texels, addressable, m, q, line, wrap, obs, first);
+                for (lane, v) in values[..count].iter().enumerate() {
+                    let p = 2.0 * ((first + lane) as f32 + 0.5) * inv_n - 1.0;
+                    let x = p * gauss_scale;
+                    let w = (-2.0 * x * x).exp();
+                    wsum += w;
+                    acc += w * *v;
+                }
+            }
             acc / wsum
         }
     }
 }
 
-/// Calls `visit(i, value)` with the bilinear value of each probe i of `line` on one
-/// level, in probe order (the order the weighted sum must keep to give the same bits).
-/// The probes are addressed [`PROBE_LANES`] at a time by [`aniso_lanes::probe_blocks`],
-/// wrapped blocks and blocks across tile edges included, and read by the level's texels
-/// ([`TexelSource::block_values`]: a resident level from its buffer, a demand-loaded one
-/// with one fetch per tile the step's blocks lie in). A probe they leave (more than a period
-/// outside a repeating level whose side is not a power of two, 2^22 texels away, or on a
-/// demand-loaded level across a tile edge) goes through [`bilinear_from`]. Observers are
-/// told of the same texels in the same order either way.
+/// The bilinear values of probes `first..first + count` of `line` on one level (count =
+/// [`PROBE_LANES`], or fewer at the end of the line), which the caller sums in probe order
+/// (the order that gives the same bits). An [`aniso_lanes::addressable`] level's probes are
+/// addressed together by [`aniso_lanes::probe_blocks`], wrapped blocks and blocks across
+/// tile edges included, and read by the level's texels ([`TexelSource::block_values`]: a
+/// resident level from its buffer, a demand-loaded one with one fetch per tile the step's
+/// blocks lie in). A probe they leave (more than a period outside a repeating level whose
+/// side is not a power of two, 2^22 texels away, or on a demand-loaded level across a tile
+/// edge) goes through [`bilinear_from`]. Observers are told of the same texels in the same
+/// order either way.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn each_probe<'a, S: TexelSource<'a>, O: TexelObserver>(
+fn probe_step<'a, S: TexelSource<'a>, O: TexelObserver>(
     level: &'a MipLevel,
     texels: S,
+    addressable: bool,
     m: usize,
     q: &TextureQuery,
     line: &ProbeLine,
     wrap: (WrapMode, WrapMode),
     obs: &mut O,
-    mut visit: impl FnMut(usize, Vec4),
-) {
+    first: usize,
+) -> ([Vec4; PROBE_LANES], usize) {
+    let count = PROBE_LANES.min(line.n - first);
     let scalar = |i: usize, obs: &mut O| {
         let p = 2.0 * (i as f32 + 0.5) * line.inv_n - 1.0;
         bilinear_from(
@@ -245,33 +261,33 @@ fn each_probe<'a, S: TexelSource<'a>, O: TexelObserver>(
             obs,
         )
     };
-    if !aniso_lanes::addressable(level) {
-        return (0..line.n).for_each(|i| visit(i, scalar(i, obs)));
-    }
-    let len = texels.lane_buffer_len();
-    for first in (0..line.n).step_by(PROBE_LANES) {
-        let step = ProbeStep {
-            first,
-            count: line.n,
-            s: q.s,
-            t: q.t,
-            ds: line.ds,
-            dt: line.dt,
-            inv_n: line.inv_n,
-        };
-        let blocks = aniso_lanes::probe_blocks(level, len, &step, wrap);
-        let (values, served) = texels.block_values(&blocks);
-        for i in first..line.n.min(first + PROBE_LANES) {
-            let lane = i - first;
-            let value = if served[lane] {
-                blocks.each_texel_read(lane, |x, y| obs.touch(m, x, y));
-                values[lane]
-            } else {
-                scalar(i, obs)
-            };
-            visit(i, value);
+    let mut values = [Vec4::ZERO; PROBE_LANES];
+    if !addressable {
+        for (lane, value) in values[..count].iter_mut().enumerate() {
+            *value = scalar(first + lane, obs);
         }
+        return (values, count);
     }
+    let step = ProbeStep {
+        first,
+        count: line.n,
+        s: q.s,
+        t: q.t,
+        ds: line.ds,
+        dt: line.dt,
+        inv_n: line.inv_n,
+    };
+    let blocks = aniso_lanes::probe_blocks(level, texels.lane_buffer_len(), &step, wrap);
+    let (block_values, served) = texels.block_values(&blocks);
+    for (lane, value) in values[..count].iter_mut().enumerate() {
+        *value = if served[lane] {
+            blocks.each_texel_read(lane, |x, y| obs.touch(m, x, y));
+            block_values[lane]
+        } else {
+            scalar(first + lane, obs)
+        };
+    }
+    (values, count)
 }
 
 /// [`probes`] for the rare level whose storage kind differs from level 0's.
@@ -475,7 +491,7 @@ mod tests {
         MipPyramid { levels }
     }
 
-    /// On every level of `pyramid` the probes of `q` read by [`each_probe`] at every vector
+    /// On every level of `pyramid` the probes of `q` read by [`probe_step`] at every vector
     /// level have the bits and the texel reads of `bilinear_from` at each probe's position.
     fn probes_match_the_scalar_probe(
         pyramid: &MipPyramid,
@@ -504,10 +520,24 @@ mod tests {
                         vector_level,
                         #[inline(always)]
                         || {
-                            each_probe(level, texels, m, q, &line, wrap, &mut log, |i, v| {
-                                assert_eq!(i, lanes.len() / 4);
-                                lanes.extend(v.to_array().map(f32::to_bits));
-                            })
+                            let addressable = aniso_lanes::addressable(level);
+                            for first in (0..n).step_by(PROBE_LANES) {
+                                let (values, count) = probe_step(
+                                    level,
+                                    texels,
+                                    addressable,
+                                    m,
+                                    q,
+                                    &line,
+                                    wrap,
+                                    &mut log,
+                                    first,
+                                );
+                                assert_eq!(count, PROBE_LANES.min(n - first));
+                                for v in &values[..count] {
+                                    lanes.extend(v.to_array().map(f32::to_bits));
+                                }
+                            }
                         },
                     );
                     assert_eq!(lanes, scalar, "{vector_level:?} level {m} n {n} {q:?}");

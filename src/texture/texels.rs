@@ -24,9 +24,21 @@ use super::tile_layout::TileLayout;
 use super::{ColorSpace, TextureError};
 use crate::srgb::{nearest_byte, srgb_byte, srgb_to_linear};
 
-/// Decoded value of each byte: byte / 255 (linear data and alpha).
-static LINEAR_BYTES: LazyLock<[f32; 256]> =
-    LazyLock::new(|| std::array::from_fn(|i| i as f32 / 255.0));
+/// Decoded value of each byte: byte / 255 (linear data and alpha). Evaluated at compile
+/// time: a lazily built table is checked for initialisation at every use, and the alpha
+/// table is found anew for every level a lookup reads.
+static LINEAR_BYTES: [f32; 256] = linear_bytes();
+
+/// byte / 255 for every byte, correctly rounded as at run time.
+const fn linear_bytes() -> [f32; 256] {
+    let mut table = [0.0f32; 256];
+    let mut i = 0;
+    while i < 256 {
+        table[i] = i as f32 / 255.0;
+        i += 1;
+    }
+    table
+}
 
 /// Decoded value of each byte of sRGB-encoded colour.
 static SRGB_BYTES: LazyLock<[f32; 256]> =
@@ -673,6 +685,14 @@ pub(crate) fn try_texel_vec<T>(len: usize, label: &str) -> Result<Vec<T>, Textur
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_compile_time_byte_table_is_the_run_time_division() {
+        for (byte, &value) in LINEAR_BYTES.iter().enumerate() {
+            let divided = std::hint::black_box(byte as f32) / std::hint::black_box(255.0f32);
+            assert_eq!(value.to_bits(), divided.to_bits(), "byte {byte}");
+        }
+    }
 
     #[test]
     fn byte_fetch_equals_the_decoded_f32_value() {
