@@ -281,7 +281,7 @@ fn probe_step<'a, S: TexelSource<'a>, O: TexelObserver>(
     let (block_values, served) = texels.block_values(&blocks);
     for (lane, value) in values[..count].iter_mut().enumerate() {
         *value = if served[lane] {
-            blocks.each_texel_read(lane, |x, y| obs.touch(m, x, y));
+            blocks.touch_texels_read(lane, m, obs);
             block_values[lane]
         } else {
             scalar(first + lane, obs)

@@ -25,7 +25,7 @@ use glam::Vec4;
 
 use super::mip_pyramid::MipLevel;
 use super::texels::FlatTexels;
-use super::tiles::TEXTURE_TILE_SIZE;
+use super::tiles::{TexelObserver, TEXTURE_TILE_SIZE};
 use super::WrapMode;
 
 /// Probes computed per step: one AVX2 register of f32, half an AVX-512 one.
@@ -160,21 +160,26 @@ impl ProbeBlocks {
         top * (1.0 - ft) + bottom * ft
     }
 
-    /// Calls `touch(x, y)` for each texel served probe `first + lane` read, in the order the
-    /// scalar probe reads them (row by row, left to right; a texel outside under a black
-    /// wrap is not read).
+    /// Tells `obs` of the texels served probe `first + lane` read on mip level `level`,
+    /// in the order the scalar probe reads them (row by row, left to right; a texel outside
+    /// under a black wrap is not read).
     #[inline(always)]
-    pub(crate) fn each_texel_read(&self, lane: usize, mut touch: impl FnMut(usize, usize)) {
-        for r in 0..2 {
-            for c in 0..2 {
-                if self.rows.inside[r][lane] & self.columns.inside[c][lane] {
-                    touch(
-                        self.columns.texel[c][lane] as usize,
-                        self.rows.texel[r][lane] as usize,
-                    );
-                }
-            }
-        }
+    pub(crate) fn touch_texels_read<O: TexelObserver>(
+        &self,
+        lane: usize,
+        level: usize,
+        obs: &mut O,
+    ) {
+        // Written out rather than mapped: `map` may be left out of line (see `lanes`).
+        let (columns, rows) = (&self.columns, &self.rows);
+        let xs = [
+            columns.texel[0][lane] as usize,
+            columns.texel[1][lane] as usize,
+        ];
+        let ys = [rows.texel[0][lane] as usize, rows.texel[1][lane] as usize];
+        let inside = |r: usize, c: usize| rows.inside[r][lane] & columns.inside[c][lane];
+        let inside = [[inside(0, 0), inside(0, 1)], [inside(1, 0), inside(1, 1)]];
+        obs.touch_block(level, xs, ys, inside);
     }
 }
 

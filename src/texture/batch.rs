@@ -130,7 +130,7 @@ fn byte_bilinear_lanes<'a, S: TexelSource<'a>, O: TexelObserver>(
         for (l, texel) in texels_out.iter_mut().enumerate() {
             obs.begin_lookup();
             *texel = if blocks.served(l) {
-                blocks.each_texel_read(l, |x, y| obs.touch(0, x, y));
+                blocks.touch_texels_read(l, 0, obs);
                 blocks.value(bytes, l)
             } else {
                 bilinear_from(level, texels, 0, s[l], t[l], wrap, obs)
