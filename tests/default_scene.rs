@@ -17,6 +17,7 @@ fn default_scene_renders_into_out_with_all_layers() {
             "54",
             "--stats",
             "stats.json",
+            "--count-texture-tiles",
             "--aov",
             "all",
             "--quiet",
@@ -96,4 +97,57 @@ fn default_scene_renders_into_out_with_all_layers() {
     assert_eq!(counters["camera_rays"].as_u64().unwrap(), 96 * 54);
     assert!(stats["texture_memory_bytes"].as_u64().unwrap() > 0);
     assert!(stats["texture_tiles"]["total"].as_u64().unwrap() > 0);
+}
+
+/// `--stats` measures the render as it runs without it: texture tiles, which need a record
+/// of every texel block a filter reads, are counted only on `--count-texture-tiles`, and
+/// counting them changes no pixel.
+#[test]
+fn stats_count_texture_tiles_only_on_request() {
+    let dir = temp_dir();
+    let render = |name: &str, extra: &[&str]| {
+        let exr = format!("{name}.exr");
+        let json = format!("{name}.json");
+        let mut args = vec![
+            "render", "--width", "64", "--height", "36", "--no-png", "-o", &exr, "--stats", &json,
+        ];
+        args.extend_from_slice(extra);
+        let out = run_in(dir.path(), &args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let stats: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join(&json)).unwrap()).unwrap();
+        let summary = String::from_utf8_lossy(&out.stdout).into_owned();
+        (read_exr(&dir.path().join(&exr)), stats, summary)
+    };
+    let (plain, plain_stats, plain_summary) = render("plain", &[]);
+    let (counted, counted_stats, counted_summary) = render("counted", &["--count-texture-tiles"]);
+
+    assert!(plain_stats["texture_tiles"].is_null(), "{plain_stats}");
+    assert!(!plain_summary.contains("texture tiles"), "{plain_summary}");
+    let tiles = counted_stats["texture_tiles"]["total"]
+        .as_u64()
+        .expect("tiles counted on request");
+    assert!(tiles > 0);
+    assert!(
+        counted_summary.contains(&format!("{tiles} texture tiles")),
+        "{counted_summary}"
+    );
+    assert!(plain_stats["counters"]["texture_lookups"].as_u64().unwrap() > 0);
+    assert_eq!(
+        plain_stats["counters"], counted_stats["counters"],
+        "the same work either way"
+    );
+    for channel in ["R", "G", "B"] {
+        let (a, b) = (plain.channel(channel), counted.channel(channel));
+        assert!(
+            a.iter()
+                .zip(b.iter())
+                .all(|(x, y)| x.to_bits() == y.to_bits()),
+            "{channel} differs when tiles are counted"
+        );
+    }
 }

@@ -373,6 +373,7 @@ fn cache_stats(dir: &Path, extra: &[&str]) -> (serde_json::Value, u64, String) {
         "bilinear",
         "--stats",
         "s.json",
+        "--count-texture-tiles",
     ];
     args.extend_from_slice(extra);
     let out = render_with(dir, "out.exr", &args);

@@ -97,6 +97,13 @@ pub struct RenderArgs {
     /// Write the statistics as JSON to this file.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Also count the 64x64 texture tiles the lookups touch, per texture and level, as a
+    /// demand-loaded cache with a small per-thread ring would read them (`texture_tiles` in
+    /// `--stats`, and the summary line). Off by default: it records every texel block a
+    /// filter reads, which slows anisotropic filtering, so `--stats` alone times the render
+    /// as it runs without it.
+    #[arg(long)]
+    pub count_texture_tiles: bool,
     /// Footprint strategy that drives texture level of detail.
     #[arg(long, default_value = "cone", value_parser = lod_parser())]
     pub lod: LodStrategy,
@@ -466,7 +473,7 @@ pub fn options(args: &RenderArgs, scene: &SceneDescription) -> Result<RenderOpti
             texture_footprint: extra(AovName::Footprint),
             lod: extra(AovName::Lod),
         },
-        count_texture_tiles: args.stats.is_some(),
+        count_texture_tiles: args.count_texture_tiles,
         all_effects: args.all_effects,
         seed: args.seed.unwrap_or(scene.settings.seed),
         sample_clamp,
