@@ -37,6 +37,17 @@ const TILE_MASK: u32 = TEXTURE_TILE_SIZE - 1;
 
 pub(crate) type Lanes<T> = [T; PROBE_LANES];
 
+/// A lane mask: all ones where a condition holds, zero where not. Masks rather than bools:
+/// LLVM kept lanes of bools one lane at a time, packing and unpacking bytes, while a
+/// comparison's mask is what the vector instructions give.
+pub(crate) type Mask = Lanes<u32>;
+
+/// The mask lane of `condition`.
+#[inline(always)]
+fn mask(condition: bool) -> u32 {
+    (condition as u32).wrapping_neg()
+}
+
 /// The lanes `f(0)`, `f(1)`, ... A plain loop rather than `array::from_fn` or `map`,
 /// which the release build left out of line (`core::array::try_from_fn`), so compiled at
 /// the baseline level and called per step.
@@ -69,9 +80,9 @@ pub(crate) struct ProbeStep {
 #[derive(Clone, Copy)]
 struct AxisTexels {
     texel: [Lanes<u32>; 2],
-    inside: [Lanes<bool>; 2],
+    inside: [Mask; 2],
     /// Lanes whose texels these are (the others take the scalar path).
-    served: Lanes<bool>,
+    served: Mask,
 }
 
 /// Where one step's probes read: the index of each of a block's four texels (corner-major:
@@ -85,7 +96,7 @@ pub(crate) struct ProbeBlocks {
     fraction: [Lanes<f32>; 2],
     columns: AxisTexels,
     rows: AxisTexels,
-    served: Lanes<bool>,
+    served: Mask,
     /// A black wrap on either axis, so a texel may be outside (the other modes map every
     /// texel inside, and [`ProbeBlocks::value`] skips the test).
     black: bool,
@@ -95,7 +106,7 @@ impl ProbeBlocks {
     /// Whether probe `first + lane` is served here (else the scalar path computes it).
     #[inline(always)]
     pub(crate) fn served(&self, lane: usize) -> bool {
-        self.served[lane]
+        self.served[lane] != 0
     }
 
     /// The bilinear value of served probe `first + lane`, read from `texels` (the buffer
@@ -112,7 +123,7 @@ impl ProbeBlocks {
     #[inline(always)]
     pub(crate) fn single_tile(&self) -> Lanes<bool> {
         let [a, b, c, d] = &self.tile;
-        lanes(|l| self.served[l] & (a[l] == b[l]) & (a[l] == c[l]) & (a[l] == d[l]))
+        lanes(|l| (self.served[l] != 0) & (a[l] == b[l]) & (a[l] == c[l]) & (a[l] == d[l]))
     }
 
     /// The number of the tile (row of tiles times tiles per row, plus column) holding the
@@ -146,7 +157,7 @@ impl ProbeBlocks {
     fn blend(&self, lane: usize, texel: impl Fn(usize) -> Vec4) -> Vec4 {
         let texel = |corner: usize| {
             let inside = !self.black
-                || self.columns.inside[corner & 1][lane] & self.rows.inside[corner >> 1][lane];
+                || self.columns.inside[corner & 1][lane] & self.rows.inside[corner >> 1][lane] != 0;
             if inside {
                 texel(corner)
             } else {
@@ -177,7 +188,7 @@ impl ProbeBlocks {
             columns.texel[1][lane] as usize,
         ];
         let ys = [rows.texel[0][lane] as usize, rows.texel[1][lane] as usize];
-        let inside = |r: usize, c: usize| rows.inside[r][lane] & columns.inside[c][lane];
+        let inside = |r: usize, c: usize| rows.inside[r][lane] & columns.inside[c][lane] != 0;
         let inside = [[inside(0, 0), inside(0, 1)], [inside(1, 0), inside(1, 1)]];
         obs.touch_block(level, xs, ys, inside);
     }
@@ -228,7 +239,7 @@ pub(crate) fn blocks(
     let (i, j) = (lanes(|l| floor_i32(x[l])), lanes(|l| floor_i32(y[l])));
     let columns = wrap_axis(&i, level.width, wrap.0);
     let rows = wrap_axis(&j, level.height, wrap.1);
-    let mut served = lanes(|l| (l < count) & columns.served[l] & rows.served[l]);
+    let mut served = lanes(|l| mask(l < count) & columns.served[l] & rows.served[l]);
     let addresses = block_addresses(level, &columns, &rows, len, &mut served);
     ProbeBlocks {
         index: addresses.index,
@@ -349,8 +360,11 @@ fn axis_texels(
             lanes(|l| texel(i[l]) as u32),
             lanes(|l| texel(next[l]) as u32),
         ],
-        inside: [lanes(|l| inside(i[l])), lanes(|l| inside(next[l]))],
-        served: lanes(|l| served(i[l])),
+        inside: [
+            lanes(|l| mask(inside(i[l]))),
+            lanes(|l| mask(inside(next[l]))),
+        ],
+        served: lanes(|l| mask(served(i[l]))),
     }
 }
 
@@ -373,7 +387,7 @@ fn block_addresses(
     columns: &AxisTexels,
     rows: &AxisTexels,
     len: usize,
-    served: &mut Lanes<bool>,
+    served: &mut Mask,
 ) -> BlockAddresses {
     let (w, h) = (level.width, level.height);
     let tiles_x = w.div_ceil(TEXTURE_TILE_SIZE);
@@ -429,7 +443,8 @@ fn block_addresses(
     let len = u32::try_from(len).unwrap_or(u32::MAX);
     // `&` rather than `all`, whose early exit kept the test one lane at a time.
     let [a, b, c, d] = &index;
-    *served = lanes(|l| served[l] & (a[l] < len) & (b[l] < len) & (c[l] < len) & (d[l] < len));
+    *served =
+        lanes(|l| served[l] & mask((a[l] < len) & (b[l] < len) & (c[l] < len) & (d[l] < len)));
     BlockAddresses {
         index,
         tile,
@@ -497,16 +512,17 @@ mod tests {
                         let must_serve =
                             !repeats || n.is_power_of_two() || (-side..side).contains(&start);
                         assert!(
-                            !must_serve || axis.served[l],
+                            !must_serve || axis.served[l] != 0,
                             "{mode:?} n {n} start {start}"
                         );
-                        if !axis.served[l] {
+                        if axis.served[l] == 0 {
                             continue;
                         }
                         for k in 0..2 {
                             let scalar =
                                 super::super::wrap::wrap_texel((start + k as i32) as f32, n, mode);
-                            let lane = axis.inside[k][l].then_some(axis.texel[k][l] as usize);
+                            let lane =
+                                (axis.inside[k][l] != 0).then_some(axis.texel[k][l] as usize);
                             assert_eq!(lane, scalar, "{mode:?} n {n} texel {}", start + k as i32);
                         }
                     }
