@@ -394,10 +394,9 @@ fn out_of_range_numbers_name_the_documented_range() {
     assert!(listing(dir.path()).is_empty(), "{:?}", listing(dir.path()));
 }
 
-/// `bench textures` finds its OpenImageIO script wherever it runs (it used to look for
-/// bench/oiio_texture_bench.py under the working directory, and fail after measuring its own
-/// side with a Python traceback flattened onto one line); a script that fails is reported by
-/// the line that says why.
+/// `bench textures` builds its OpenImageIO side wherever it runs (the C++ source is built
+/// into the program), times OpenImageIO on the same queries, and reports a side that fails
+/// to compile or to run by the one line that says why.
 #[test]
 fn bench_textures_runs_outside_the_repository() {
     let dir = temp_dir();
@@ -406,8 +405,6 @@ fn bench_textures_runs_outside_the_repository() {
         "textures",
         "--queries",
         "2000",
-        "--oiio-queries",
-        "200",
         "--seconds",
         "0.01",
         "--filters",
@@ -420,35 +417,49 @@ fn bench_textures_runs_outside_the_repository() {
         .lines()
         .find(|line| line.starts_with("| bilinear | coherent |"))
         .unwrap_or_else(|| panic!("no bilinear row:\n{table}"));
-    // Every column filled: the batched lookups were timed and OIIO's rates came back.
+    // Every column filled: the batched lookups were timed and OIIO's rate came back.
     assert!(!row.contains(" - "), "{row}");
-    assert_eq!(row.matches('|').count(), 16, "fifteen columns: {row}");
+    assert_eq!(row.matches('|').count(), 14, "thirteen columns: {row}");
+    let columns: Vec<&str> = row.split('|').map(str::trim).collect();
+    let oiio_rate: f64 = columns[12].parse().unwrap_or_else(|_| panic!("{row}"));
+    assert!(oiio_rate > 0.0 && oiio_rate.is_finite(), "{row}");
 
     write(
         dir.path(),
-        "broken.py",
-        "def main():\n    raise RuntimeError('the benchmark broke')\n\nmain()\n",
+        "broken.cpp",
+        "int main() { return undeclared_name; }\n",
     );
     let mut args = quick.to_vec();
-    args.extend(["--oiio-script", "broken.py"]);
+    args.extend(["--oiio-source", "broken.cpp"]);
     let out = run_in(dir.path(), &args);
     let message = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{message}");
     assert_eq!(message.lines().count(), 1, "{message}");
     assert!(
-        message.contains("broken.py")
-            && message.contains("RuntimeError: the benchmark broke")
-            && !message.contains("Traceback"),
+        message.contains("broken.cpp: cannot compile") && message.contains("undeclared_name"),
         "{message}"
     );
 
+    write(
+        dir.path(),
+        "failing.cpp",
+        "#include <cstdio>\nint main() { std::fprintf(stderr, \"the benchmark broke\\n\"); return 1; }\n",
+    );
     let mut args = quick.to_vec();
-    args.extend(["--oiio-script", "missing.py"]);
+    args.extend(["--oiio-source", "failing.cpp"]);
+    let out = run_in(dir.path(), &args);
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{message}");
+    assert_eq!(message.lines().count(), 1, "{message}");
+    assert!(message.contains("the benchmark broke"), "{message}");
+
+    let mut args = quick.to_vec();
+    args.extend(["--oiio-source", "missing.cpp"]);
     let out = run_in(dir.path(), &args);
     let message = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{message}");
     assert!(
-        message.contains("missing.py: --oiio-script: no such file"),
+        message.contains("missing.cpp: --oiio-source: no such file"),
         "{message}"
     );
 }

@@ -1,9 +1,10 @@
 //! `conetrace bench textures`: single-thread lookups per second for every filter, printed
 //! as a markdown table, on one tiled, mip-mapped `.tx` (made by `maketx`) read three ways:
 //! decoded whole (resident), tile by tile through the texture cache under a cap (cached),
-//! and by OpenImageIO's TextureSystem with its ImageCache under the same cap (through
-//! /usr/bin/python3 and bench/oiio_texture_bench.py, whose text is built into the program
-//! so that it runs from any directory), all on the same queries.
+//! and by OpenImageIO's TextureSystem with its ImageCache under the same cap, all on the
+//! same queries. OpenImageIO is called from C++: bench/oiio_texture_bench.cpp, whose text is
+//! built into the program (so that it runs from any directory) and compiled against
+//! Debian's libopenimageio-dev when the benchmark starts.
 //!
 //! Query sets decide the cache's hit rate: lookups laid out as a render makes them
 //! (neighbouring lookups read the same tiles, so nearly every tile fetch hits the thread's
@@ -12,12 +13,13 @@
 //! rate and tiles loaded that the cached run measured, so the rate is read beside the hit
 //! rate that produced it.
 //!
-//! OIIO is timed from Python, so the script also times the same loop calling an
-//! empty Python function; the table shows OIIO's rate both raw and with that
-//! per-call overhead subtracted. This is a measurement tool, never a test.
+//! The C++ side calls `TextureSystem::texture()` with a texture handle resolved once and the
+//! thread's `Perthread` info, the fastest calls OpenImageIO offers a renderer, so its rate
+//! is OpenImageIO's own, with no interpreter in between. This is a measurement tool, never
+//! a test.
 //!
 //! Both sides are timed by the CPU time of the measuring thread (Linux
-//! `CLOCK_THREAD_CPUTIME_ID`; Python's `time.thread_time`), not by the wall clock:
+//! `CLOCK_THREAD_CPUTIME_ID`), not by the wall clock:
 //! on a shared machine with more runnable jobs than cores, wall time mostly measures
 //! the other jobs. `--wall-clock` restores wall-clock timing on both sides. Each row times
 //! its resident and cached lookups in alternating slices, so that the other jobs' weight
@@ -53,6 +55,9 @@ pub struct BenchTexturesArgs {
     /// Only these filters (comma-separated); default: all.
     #[arg(long, value_delimiter = ',')]
     pub filters: Vec<FilterMode>,
+    /// Only these query sets (comma-separated: coherent, random, aniso16); default: all.
+    #[arg(long, value_delimiter = ',')]
+    pub query_sets: Vec<QuerySet>,
     /// Cap of the texture cache, ours and OIIO's ImageCache (`max_memory_MB`), e.g. 256M.
     #[arg(long, value_name = "SIZE", default_value = "256M",
           value_parser = crate::render::memory::parse_memory_size)]
@@ -65,16 +70,13 @@ pub struct BenchTexturesArgs {
     /// Skip the OpenImageIO side.
     #[arg(long)]
     pub no_oiio: bool,
-    /// Queries given to OIIO per row (Python is slow).
-    #[arg(long, default_value_t = 20_000)]
-    pub oiio_queries: usize,
-    /// Python interpreter that has the OpenImageIO module.
-    #[arg(long, default_value = "/usr/bin/python3")]
-    pub python: PathBuf,
-    /// The OIIO benchmark script [default: the copy of bench/oiio_texture_bench.py built
-    /// into conetrace].
+    /// C++ compiler that builds the OpenImageIO side against libopenimageio-dev.
+    #[arg(long, default_value = "c++")]
+    pub cxx: PathBuf,
+    /// C++ source of the OpenImageIO side [default: the copy of
+    /// bench/oiio_texture_bench.cpp built into conetrace].
     #[arg(long)]
-    pub oiio_script: Option<PathBuf>,
+    pub oiio_source: Option<PathBuf>,
     /// Time by the wall clock instead of the thread's CPU time (both sides).
     #[arg(long)]
     pub wall_clock: bool,
@@ -162,46 +164,65 @@ fn thread_cpu_time() -> Option<Duration> {
     None
 }
 
-/// Runs the OIIO script with Python's `time.perf_counter` replaced by
-/// `time.thread_time` (CPU time of the calling thread), so it is timed like our side.
-const PYTHON_THREAD_TIME_SHIM: &str = "import runpy, sys, time\n\
-time.perf_counter = time.thread_time\n\
-sys.argv = sys.argv[1:]\n\
-runpy.run_path(sys.argv[0], run_name='__main__')\n";
+/// bench/oiio_texture_bench.cpp, compiled when `--oiio-source` is not given.
+const OIIO_SOURCE: &str = include_str!("../../bench/oiio_texture_bench.cpp");
 
-/// bench/oiio_texture_bench.py, run when `--oiio-script` is not given.
-const OIIO_SCRIPT: &str = include_str!("../../bench/oiio_texture_bench.py");
-
-/// The line of a failed Python run's standard error that says what went wrong: the last
-/// one, which a traceback ends with (`ModuleNotFoundError: ...`) and `sys.exit(message)`
-/// prints alone.
-fn python_failure_line(stderr: &str) -> &str {
-    stderr
+/// The line of a failed command's standard error that says what went wrong: the first
+/// one naming an error (a compiler's first diagnostic), else the last one.
+fn failure_line(stderr: &str) -> &str {
+    let mut lines = stderr
         .lines()
         .map(str::trim)
-        .rfind(|line| !line.is_empty())
+        .filter(|line| !line.is_empty());
+    lines
+        .clone()
+        .find(|line| line.contains("error"))
+        .or_else(|| lines.next_back())
         .unwrap_or("no message")
 }
 
-/// The script to run: `--oiio-script` (which must be a file), else the built-in copy written
-/// into `work`.
-fn oiio_script(args: &BenchTexturesArgs, work: &Path) -> Result<PathBuf, String> {
-    match &args.oiio_script {
-        Some(path) if path.is_file() => Ok(path.clone()),
-        Some(path) => Err(format!("{}: --oiio-script: no such file", path.display())),
+/// The OpenImageIO side's program: `--oiio-source` (which must be a file), else the
+/// built-in copy written into `work`, compiled with `--cxx` into `work`.
+fn oiio_program(args: &BenchTexturesArgs, work: &Path) -> Result<PathBuf, String> {
+    let source = match &args.oiio_source {
+        Some(path) if path.is_file() => path.clone(),
+        Some(path) => return Err(format!("{}: --oiio-source: no such file", path.display())),
         None => {
-            let path = work.join("oiio_texture_bench.py");
-            std::fs::write(&path, OIIO_SCRIPT)
+            let path = work.join("oiio_texture_bench.cpp");
+            std::fs::write(&path, OIIO_SOURCE)
                 .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
-            Ok(path)
+            path
         }
+    };
+    let program = work.join("oiio_texture_bench");
+    let out = Command::new(&args.cxx)
+        .args(["-O2", "-std=c++17"])
+        .arg(&source)
+        .arg("-o")
+        .arg(&program)
+        .args(["-lOpenImageIO", "-lOpenImageIO_Util"])
+        .output()
+        .map_err(|e| {
+            format!(
+                "{}: cannot run ({e}); run `bash scripts/setup.sh`",
+                args.cxx.display()
+            )
+        })?;
+    if !out.status.success() {
+        return Err(format!(
+            "{}: cannot compile with {}: {}",
+            source.display(),
+            args.cxx.display(),
+            failure_line(&String::from_utf8_lossy(&out.stderr))
+        ));
     }
+    Ok(program)
 }
 
 /// Queries of one set: how they are laid out, hence how often a lookup finds its tiles in
 /// the thread's micro-cache.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum QuerySet {
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum QuerySet {
     /// A rendered image's lookups in the order a render makes them: 16x16-pixel work
     /// tiles in raster order, each band of 16 pixel rows one plane with its own
     /// derivatives (random levels, anisotropy 1-4, random angles). Neighbouring lookups
@@ -231,7 +252,8 @@ struct Row {
     set: QuerySet,
     cap: u64,
     cached: CachedRun,
-    oiio_raw_ns: Option<f64>,
+    /// OpenImageIO's ns per lookup on the row's queries.
+    oiio_ns: Option<f64>,
 }
 
 /// The demand-loaded side of a row: its rate, the resident rate timed beside it, and what
@@ -445,13 +467,9 @@ fn write_queries(path: &Path, queries: &[TextureQuery]) -> Result<(), String> {
     std::fs::write(path, text).map_err(|e| format!("{}: cannot write queries: {e}", path.display()))
 }
 
-/// OIIO timings from the Python script, in ns per call.
+/// OIIO timings from the C++ side, in ns per lookup.
 struct OiioTimes {
-    /// An empty Python function with the same arguments.
-    empty: f64,
-    /// texture() on a 1x1 texture (binding overhead plus a trivial lookup).
-    binding: f64,
-    /// The ImageCache's `max_memory_MB` as OIIO reports it after the script set it.
+    /// The ImageCache's `max_memory_MB` as OIIO reports it after the program set it.
     cache_mb: Option<f64>,
     /// Per filter.
     filters: Vec<(String, f64)>,
@@ -459,64 +477,55 @@ struct OiioTimes {
 
 fn run_oiio(
     args: &BenchTexturesArgs,
-    script: &Path,
+    program: &Path,
     tx: &Path,
     queries: &Path,
     filters: &[FilterMode],
     cap: u64,
 ) -> Result<OiioTimes, String> {
     let names: Vec<String> = filters.iter().map(|f| f.to_string()).collect();
-    let mut command = Command::new(&args.python);
-    if !args.wall_clock {
-        command.args(["-c", PYTHON_THREAD_TIME_SHIM]);
-    }
-    let out = command
-        .arg(script)
+    let mut command = Command::new(program);
+    command
         .arg(tx)
         .arg(queries)
-        .args(["--filters", &names.join(",")])
-        .args(["--max-aniso", &args.max_aniso.to_string()])
-        .args(["--cache-mb", &(cap as f64 / MIB).to_string()])
+        .arg(names.join(","))
+        .arg(args.max_aniso.to_string())
+        .arg((cap as f64 / MIB).to_string())
+        .arg(args.seconds.max(0.01).to_string());
+    if args.wall_clock {
+        command.arg("wall");
+    }
+    let out = command
         .output()
-        .map_err(|e| format!("{}: cannot run: {e}", args.python.display()))?;
+        .map_err(|e| format!("{}: cannot run: {e}", program.display()))?;
     if !out.status.success() {
         return Err(format!(
             "{}: failed ({}): {}",
-            script.display(),
+            program.display(),
             out.status,
-            python_failure_line(&String::from_utf8_lossy(&out.stderr))
+            failure_line(&String::from_utf8_lossy(&out.stderr))
         ));
     }
-    parse_oiio_output(&String::from_utf8_lossy(&out.stdout), script)
+    parse_oiio_output(&String::from_utf8_lossy(&out.stdout), program)
 }
 
-/// Lines "empty <ns>", "binding <ns>", "cache_mb <MB>" and "<filter> <ns>".
-fn parse_oiio_output(text: &str, script: &Path) -> Result<OiioTimes, String> {
-    let mut empty = None;
-    let mut binding = None;
+/// Lines "cache_mb <MB>" and "<filter> <ns>".
+fn parse_oiio_output(text: &str, program: &Path) -> Result<OiioTimes, String> {
     let mut cache_mb = None;
-    let mut rates = Vec::new();
+    let mut filters = Vec::new();
     for line in text.lines() {
         let mut parts = line.split_whitespace();
         if let (Some(k), Some(v)) = (parts.next(), parts.next()) {
             let v: f64 = v
                 .parse()
-                .map_err(|_| format!("{}: bad output line '{line}'", script.display()))?;
+                .map_err(|_| format!("{}: bad output line '{line}'", program.display()))?;
             match k {
-                "empty" => empty = Some(v),
-                "binding" => binding = Some(v),
                 "cache_mb" => cache_mb = Some(v),
-                _ => rates.push((k.to_string(), v)),
+                _ => filters.push((k.to_string(), v)),
             }
         }
     }
-    let missing = |what: &str| format!("{}: no {what} timing", script.display());
-    Ok(OiioTimes {
-        empty: empty.ok_or_else(|| missing("empty-call"))?,
-        binding: binding.ok_or_else(|| missing("binding"))?,
-        cache_mb,
-        filters: rates,
-    })
+    Ok(OiioTimes { cache_mb, filters })
 }
 
 const MIB: f64 = 1024.0 * 1024.0;
@@ -565,11 +574,12 @@ fn make_tx(source: &Path, tx: &Path) -> Result<(), String> {
 }
 
 fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
-    // Found before anything is measured: a missing script costs no benchmark time.
-    let script = if args.no_oiio {
+    // Built before anything is measured: a missing compiler or library costs no benchmark
+    // time.
+    let program = if args.no_oiio {
         None
     } else {
-        Some(oiio_script(args, work)?)
+        Some(oiio_program(args, work)?)
     };
     let source = source_texture(args, work)?;
     let tx = work.join("bench.tx");
@@ -588,10 +598,12 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
     ];
     let mut caps = vec![args.cache];
     caps.extend(args.small_cache.filter(|&small| small != args.cache));
-    let mut overhead: Option<(f64, f64)> = None;
     let mut oiio_caps = Vec::new();
     let mut rows = Vec::new();
     for (set, level0, filters) in &sets {
+        if !args.query_sets.is_empty() && !args.query_sets.contains(set) {
+            continue;
+        }
         let filters: Vec<FilterMode> = filters
             .iter()
             .copied()
@@ -603,19 +615,15 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
         let queries = query_set(*set, *level0, args.queries.max(1), size);
         for &cap in &caps {
             let mut oiio = Vec::new();
-            if let Some(script) = &script {
+            if let Some(program) = &program {
                 let qpath = work.join(format!("{}-{level0}.csv", set.name()));
-                write_queries(
-                    &qpath,
-                    &queries[..args.oiio_queries.clamp(1, queries.len())],
-                )?;
+                write_queries(&qpath, &queries)?;
                 let oiio_filters: Vec<FilterMode> = filters
                     .iter()
                     .copied()
                     .filter(|f| *f != FilterMode::Ewa)
                     .collect();
-                let times = run_oiio(args, script, &tx, &qpath, &oiio_filters, cap)?;
-                overhead = Some((times.empty, times.binding));
+                let times = run_oiio(args, program, &tx, &qpath, &oiio_filters, cap)?;
                 oiio_caps.push((cap, times.cache_mb));
                 oiio = times.filters;
             }
@@ -631,7 +639,7 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
                     min_time,
                     args.wall_clock,
                 )?;
-                let oiio_raw_ns = oiio
+                let oiio_ns = oiio
                     .iter()
                     .find(|(name, _)| *name == filter.to_string())
                     .map(|(_, ns)| *ns);
@@ -640,13 +648,13 @@ fn run_in(args: &BenchTexturesArgs, work: &Path) -> Result<(), String> {
                     set: *set,
                     cap,
                     cached,
-                    oiio_raw_ns,
+                    oiio_ns,
                 });
             }
         }
     }
-    print_header(args, &source, &resident, overhead, &oiio_caps);
-    print_table(&rows, overhead);
+    print_header(args, &source, &resident, program.is_some(), &oiio_caps);
+    print_table(&rows);
     Ok(())
 }
 
@@ -663,7 +671,7 @@ fn print_header(
     args: &BenchTexturesArgs,
     source: &Path,
     tex: &Texture,
-    overhead: Option<(f64, f64)>,
+    oiio: bool,
     oiio_caps: &[(u64, Option<f64>)],
 ) {
     let clock = match Clock::start(args.wall_clock) {
@@ -686,7 +694,7 @@ fn print_header(
         args.batch,
         if args.batch == 0 { "; not measured: --batch 0" } else { "" },
     );
-    if let Some((e, b)) = overhead {
+    if oiio {
         let mut seen: Vec<String> = Vec::new();
         for (cap, mb) in oiio_caps {
             let line = match mb {
@@ -704,36 +712,27 @@ fn print_header(
             }
         }
         println!(
-            "OIIO (TextureSystem over the same .tx, ImageCache {}) via Python: an empty Python call with the same \
-             arguments costs {e:.0} ns (subtracted in \"OIIO net\"); texture() on a 1x1 texture (binding overhead \
-             + trivial lookup) costs {b:.0} ns (subtracted in \"OIIO C++ est.\").",
+            "OIIO: TextureSystem::texture() over the same .tx and queries, called from C++ \
+             (bench/oiio_texture_bench.cpp, {} -O2) with a texture handle and the thread's Perthread info, \
+             ImageCache {}, one thread, timed by the same clock; the fastest of three passes.",
+            args.cxx.display(),
             seen.join("; ")
         );
     }
     println!();
 }
 
-fn print_table(rows: &[Row], overhead: Option<(f64, f64)>) {
+fn print_table(rows: &[Row]) {
     println!(
         "| filter | queries | cap | single: resident (M/s) | cached (M/s) | cached / resident \
          | batched: resident (M/s) | cached (M/s) | cached / resident | micro-cache hits | tiles loaded \
-         | OIIO raw (M/s) | OIIO net (M/s) | OIIO C++ est. (M/s) | cached / C++ est. |"
+         | OIIO (M/s) | single cached / OIIO |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in rows {
-        let oiio = match (r.oiio_raw_ns, overhead) {
-            (Some(ns), Some((e, b))) => {
-                let net_ns = (ns - e).max(1e-3);
-                let cpp_ns = (ns - b).max(1e-3);
-                format!(
-                    "{:.3} | {:.3} | {:.3} | {:.1}x",
-                    1e3 / ns,
-                    1e3 / net_ns,
-                    1e3 / cpp_ns,
-                    r.cached.per_sec * cpp_ns * 1e-9
-                )
-            }
-            _ => "- | - | - | -".to_string(),
+        let oiio = match r.oiio_ns {
+            Some(ns) => format!("{:.2} | {:.2}x", 1e3 / ns, r.cached.per_sec * ns * 1e-9),
+            None => "- | -".to_string(),
         };
         let batched = match r.cached.batched {
             Some((resident, cached)) => format!(
@@ -764,17 +763,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_python_failure_is_reported_by_its_last_line() {
-        let traceback = "Traceback (most recent call last):\n  File \"x.py\", line 3, in <module>\n    \
-                         import OpenImageIO\nModuleNotFoundError: No module named 'OpenImageIO'\n\n";
+    fn a_failed_command_is_reported_by_its_first_error_else_its_last_line() {
+        let compiler =
+            "x.cpp: In function 'int main()':\nx.cpp:3:5: error: 'foo' was not declared\n\
+                        x.cpp:4:5: error: 'bar' was not declared\n";
         assert_eq!(
-            python_failure_line(traceback),
-            "ModuleNotFoundError: No module named 'OpenImageIO'"
+            failure_line(compiler),
+            "x.cpp:3:5: error: 'foo' was not declared"
         );
         assert_eq!(
-            python_failure_line("OpenImageIO Python module missing\n"),
-            "OpenImageIO Python module missing"
+            failure_line("warming up\nbench.tx: OpenImageIO cannot open it\n\n"),
+            "bench.tx: OpenImageIO cannot open it"
         );
-        assert_eq!(python_failure_line(""), "no message");
+        assert_eq!(failure_line(""), "no message");
     }
 }

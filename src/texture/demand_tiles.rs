@@ -24,7 +24,7 @@ use glam::Vec4;
 
 use super::aniso_lanes::{Lanes, ProbeBlocks, PROBE_LANES};
 use super::image_load::{sniff_format, ImageFormat};
-use super::micro_cache::{self, ThreadTiles};
+use super::micro_cache::{self, FetchedTile, ThreadTiles};
 use super::mip_pyramid::{MipLevel, MipPyramid};
 use super::texels::{ByteTexels, FloatTexels, HalfTexels, TexelSource, Texels, TileWork};
 use super::tiff_tile_reader::TiffTileReader;
@@ -310,27 +310,21 @@ impl DemandLevel {
     /// A micro-cache miss: the tile from its slot, or else from the file.
     #[cold]
     #[inline(never)]
-    fn fetch(
-        &self,
-        index: usize,
-        tile_x: usize,
-        tile_y: usize,
-    ) -> Option<(Arc<Texels>, Arc<FileTally>)> {
-        let tally = &self.file.tally;
-        tally.micro_misses.fetch_add(1, Ordering::Relaxed);
-        let tile = match self.tiles.resident(index) {
-            Some(tile) => {
-                tally.cache_hits.fetch_add(1, Ordering::Relaxed);
-                tile
-            }
+    fn fetch(&self, index: usize, tile_x: usize, tile_y: usize) -> Option<FetchedTile<'_>> {
+        let (tile, from_cache) = match self.tiles.resident(index) {
+            Some(tile) => (tile, true),
             None => self.read(index, tile_x, tile_y)?,
         };
-        Some((tile, tally.clone()))
+        Some(FetchedTile {
+            tile,
+            tally: &self.file.tally,
+            from_cache,
+        })
     }
 
-    /// Reads a tile that is not resident (unless another thread read it meanwhile) and
-    /// admits it to the cache.
-    fn read(&self, index: usize, tile_x: usize, tile_y: usize) -> Option<Arc<Texels>> {
+    /// Reads a tile that is not resident and admits it to the cache; `true` with it when
+    /// another thread read it meanwhile, so the cache served it after all.
+    fn read(&self, index: usize, tile_x: usize, tile_y: usize) -> Option<(Arc<Texels>, bool)> {
         if self.file.failure.get().is_some() {
             return None;
         }
@@ -340,8 +334,7 @@ impl DemandLevel {
             .lock()
             .unwrap_or_else(PoisonError::into_inner);
         if let Some(tile) = self.tiles.resident(index) {
-            self.file.tally.cache_hits.fetch_add(1, Ordering::Relaxed);
-            return Some(tile);
+            return Some((tile, true));
         }
         let read = reader
             .read_tile(self.level, tile_x, tile_y)
@@ -350,7 +343,7 @@ impl DemandLevel {
             Ok(tile) => {
                 let tile = Arc::new(tile);
                 self.admit(index, tile.clone(), reader.stored_bytes(self.level, index));
-                Some(tile)
+                Some((tile, false))
             }
             Err(error) => {
                 let _ = self.file.failure.set(error.to_string());

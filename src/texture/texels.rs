@@ -104,7 +104,11 @@ pub(crate) use with_texel_source;
 
 /// A level's texels, RGBA, in the source's precision. Decoders produce them row-major with
 /// t = 0 first; a [`super::MipLevel`] holds them in the tile order of its `TileLayout`.
+///
+/// The kind is a byte of its own (`repr(u8)`) rather than hidden in a vector's capacity,
+/// so that the fetches, which branch on it, read it in one load.
 #[derive(Clone, Debug)]
+#[repr(u8)]
 pub enum Texels {
     /// One byte per channel; colour decoded through `colour` (linear or sRGB), alpha is
     /// byte / 255.
