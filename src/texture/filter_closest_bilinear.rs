@@ -23,12 +23,8 @@ fn to_texel(s: f32, n: u32) -> (f32, f32) {
     (i, x - i)
 }
 
-/// Reads texel (i, j) after wrapping, a demand-loaded level's tile through `tiles` (`None`:
-/// through the thread's micro-cache, found here); black outside for [`WrapMode::Black`].
-///
-/// A lookup of a single texel finds the thread's micro-cache here rather than in
-/// `Texture::sample`: the thread-local access, out of line, then holds this fetch alone, and
-/// the texel's load is reached in fewer steps (measured in docs/texture-filtering.md).
+/// Reads texel (i, j) after wrapping (see [`fetch_inside`]); black outside for
+/// [`WrapMode::Black`].
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn fetch<O: TexelObserver>(
@@ -44,26 +40,71 @@ fn fetch<O: TexelObserver>(
         wrap_texel(i, level.width, wrap.0),
         wrap_texel(j, level.height, wrap.1),
     ) {
-        (Some(x), Some(y)) => {
-            obs.touch(level_index, x, y);
-            let layout = level.layout();
-            match tiles {
-                Some(tiles) => {
-                    with_texel_source!(&level.texels, tiles, |texels| texels.texel_at(layout, x, y))
-                }
-                None => with_texel_source!(&level.texels, |texels| texels.texel_at(layout, x, y)),
-            }
-        }
+        (Some(x), Some(y)) => fetch_inside(level, level_index, x, y, tiles, obs),
         _ => Vec4::ZERO,
+    }
+}
+
+/// Reads texel (x, y) of the level (both in range), a demand-loaded level's tile through
+/// `tiles` (`None`: through the thread's micro-cache, found here).
+///
+/// A lookup of a single texel finds the thread's micro-cache here rather than in
+/// `Texture::sample`: the thread-local access, out of line, then holds this fetch alone, and
+/// the texel's load is reached in fewer steps (measured in docs/texture-filtering.md).
+#[inline(always)]
+fn fetch_inside<O: TexelObserver>(
+    level: &MipLevel,
+    level_index: usize,
+    x: usize,
+    y: usize,
+    tiles: Option<ThreadTiles<'_>>,
+    obs: &mut O,
+) -> Vec4 {
+    obs.touch(level_index, x, y);
+    let layout = level.layout();
+    match tiles {
+        Some(tiles) => {
+            with_texel_source!(&level.texels, tiles, |texels| texels.texel_at(layout, x, y))
+        }
+        None => with_texel_source!(&level.texels, |texels| texels.texel_at(layout, x, y)),
     }
 }
 
 /// The texel nearest to (s, t); a fraction of exactly 0.5 picks the lower texel, as in OIIO.
 /// A demand-loaded level reads its tile through `tiles` (`None`: the thread's micro-cache,
 /// found for this one fetch).
+///
+/// The common case, the nearest texel inside the level, is found in integers and read
+/// directly; only a texel outside goes through [`wrap_texel`]. Both give the same texel:
+/// where the integer floor lies in the level it equals the float floor, and a NaN position
+/// fails the first test.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn closest<O: TexelObserver>(
+    level: &MipLevel,
+    level_index: usize,
+    s: f32,
+    t: f32,
+    wrap: (WrapMode, WrapMode),
+    tiles: Option<ThreadTiles<'_>>,
+    obs: &mut O,
+) -> Vec4 {
+    let x = s * level.width as f32 - 0.5;
+    let y = t * level.height as f32 - 0.5;
+    let (i, j) = (floor_i32(x), floor_i32(y));
+    let i = i.saturating_add((x - i as f32 > 0.5) as i32);
+    let j = j.saturating_add((y - j as f32 > 0.5) as i32);
+    // A texel inside has x > -0.5, so the first test only turns NaN away.
+    if x > -1.0 && y > -1.0 && (i as u32) < level.width && (j as u32) < level.height {
+        return fetch_inside(level, level_index, i as usize, j as usize, tiles, obs);
+    }
+    closest_wrapped(level, level_index, s, t, wrap, tiles, obs)
+}
+
+/// [`closest`] of a texel outside the level: wrapped, or black.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn closest_wrapped<O: TexelObserver>(
     level: &MipLevel,
     level_index: usize,
     s: f32,
@@ -89,7 +130,7 @@ pub(crate) fn closest<O: TexelObserver>(
 #[inline(always)]
 fn floor_i32(x: f32) -> i32 {
     let t = x as i32;
-    t - ((t as f32 > x) as i32)
+    t.saturating_sub((t as f32 > x) as i32)
 }
 
 /// Bilinear interpolation of the four texels around (s, t): [`bilinear_from`] with the
@@ -359,6 +400,63 @@ mod tests {
         ] {
             assert_eq!(floor_i32(x) as f32, x.floor(), "{x}");
         }
+        // Saturating beyond 2^31 on both sides (below, the step down from i32::MIN
+        // overflowed), 0 for NaN.
+        assert_eq!(floor_i32(-3e9), i32::MIN);
+        assert_eq!(floor_i32(f32::NEG_INFINITY), i32::MIN);
+        assert_eq!(floor_i32(3e9), i32::MAX);
+        assert_eq!(floor_i32(f32::NAN), 0);
+    }
+
+    #[test]
+    fn closest_inside_the_level_equals_the_wrapped_path() {
+        let (w, h) = (13u32, 7u32);
+        let texels = (0..w * h).map(|k| [k as f32, 0.0, 0.0, 1.0]).collect();
+        let l = MipLevel::new(w, h, texels).unwrap();
+        let modes = [
+            WrapMode::Periodic,
+            WrapMode::Clamp,
+            WrapMode::Black,
+            WrapMode::Mirror,
+        ];
+        // Texel edges and centres (fractions of exactly 0.5 included), just past the
+        // level's sides, far away, huge and not a number.
+        let mut positions: Vec<f32> = (-60..=60).map(|k| k as f32 / (2.0 * w as f32)).collect();
+        positions.extend([
+            -0.0,
+            0.5 / w as f32,
+            1.0 - 0.5 / w as f32,
+            1.0 + 1e-7,
+            -1e-7,
+            3e9,
+            -3e9,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ]);
+        let mut inside = 0;
+        for &s in &positions {
+            for &t in &positions {
+                for wrap in modes.iter().flat_map(|&a| modes.map(|b| (a, b))) {
+                    let fast = closest(&l, 0, s, t, wrap, NO_TILES, &mut NoTextureTiles);
+                    let wrapped = closest_wrapped(&l, 0, s, t, wrap, NO_TILES, &mut NoTextureTiles);
+                    assert_eq!(
+                        fast.to_array().map(f32::to_bits),
+                        wrapped.to_array().map(f32::to_bits),
+                        "s {s} t {t} {wrap:?}"
+                    );
+                }
+                let (x, y) = (s * w as f32 - 0.5, t * h as f32 - 0.5);
+                inside += usize::from(
+                    (-0.5..w as f32 - 0.5).contains(&x) && (-0.5..h as f32 - 0.5).contains(&y),
+                );
+            }
+        }
+        // Both paths were exercised.
+        assert!(
+            inside > 500 && inside < positions.len() * positions.len() / 2,
+            "{inside}"
+        );
     }
 
     #[test]
