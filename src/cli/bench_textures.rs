@@ -231,7 +231,7 @@ pub enum QuerySet {
     /// The same derivatives, but every lookup at its own random place and scale: nearly
     /// every lookup misses the micro-cache, the low hit rate.
     Random,
-    /// [`QuerySet::Coherent`] with anisotropy 20, clamped to the limit 16: 31 probes per
+    /// The coherent layout with anisotropy 20, clamped to the limit 16: 31 probes per
     /// level.
     Aniso16,
 }
