@@ -451,7 +451,11 @@ fn bench_textures_runs_outside_the_repository() {
     let message = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{message}");
     assert_eq!(message.lines().count(), 1, "{message}");
-    assert!(message.contains("the benchmark broke"), "{message}");
+    assert!(
+        message.contains("failing.cpp (compiled): failed")
+            && message.contains("the benchmark broke"),
+        "{message}"
+    );
 
     let mut args = quick.to_vec();
     args.extend(["--oiio-source", "missing.cpp"]);

@@ -181,9 +181,16 @@ fn failure_line(stderr: &str) -> &str {
         .unwrap_or("no message")
 }
 
+/// The OpenImageIO side, compiled: the program and the source it was compiled from (which
+/// its failures name, the program living in a temporary directory).
+struct OiioProgram {
+    program: PathBuf,
+    source: PathBuf,
+}
+
 /// The OpenImageIO side's program: `--oiio-source` (which must be a file), else the
 /// built-in copy written into `work`, compiled with `--cxx` into `work`.
-fn oiio_program(args: &BenchTexturesArgs, work: &Path) -> Result<PathBuf, String> {
+fn oiio_program(args: &BenchTexturesArgs, work: &Path) -> Result<OiioProgram, String> {
     let source = match &args.oiio_source {
         Some(path) if path.is_file() => path.clone(),
         Some(path) => return Err(format!("{}: --oiio-source: no such file", path.display())),
@@ -216,7 +223,7 @@ fn oiio_program(args: &BenchTexturesArgs, work: &Path) -> Result<PathBuf, String
             failure_line(&String::from_utf8_lossy(&out.stderr))
         ));
     }
-    Ok(program)
+    Ok(OiioProgram { program, source })
 }
 
 /// Queries of one set: how they are laid out, hence how often a lookup finds its tiles in
@@ -477,14 +484,14 @@ struct OiioTimes {
 
 fn run_oiio(
     args: &BenchTexturesArgs,
-    program: &Path,
+    oiio: &OiioProgram,
     tx: &Path,
     queries: &Path,
     filters: &[FilterMode],
     cap: u64,
 ) -> Result<OiioTimes, String> {
     let names: Vec<String> = filters.iter().map(|f| f.to_string()).collect();
-    let mut command = Command::new(program);
+    let mut command = Command::new(&oiio.program);
     command
         .arg(tx)
         .arg(queries)
@@ -497,28 +504,28 @@ fn run_oiio(
     }
     let out = command
         .output()
-        .map_err(|e| format!("{}: cannot run: {e}", program.display()))?;
+        .map_err(|e| format!("{} (compiled): cannot run: {e}", oiio.source.display()))?;
     if !out.status.success() {
         return Err(format!(
-            "{}: failed ({}): {}",
-            program.display(),
+            "{} (compiled): failed ({}): {}",
+            oiio.source.display(),
             out.status,
             failure_line(&String::from_utf8_lossy(&out.stderr))
         ));
     }
-    parse_oiio_output(&String::from_utf8_lossy(&out.stdout), program)
+    parse_oiio_output(&String::from_utf8_lossy(&out.stdout), &oiio.source)
 }
 
 /// Lines "cache_mb <MB>" and "<filter> <ns>".
-fn parse_oiio_output(text: &str, program: &Path) -> Result<OiioTimes, String> {
+fn parse_oiio_output(text: &str, source: &Path) -> Result<OiioTimes, String> {
     let mut cache_mb = None;
     let mut filters = Vec::new();
     for line in text.lines() {
         let mut parts = line.split_whitespace();
         if let (Some(k), Some(v)) = (parts.next(), parts.next()) {
-            let v: f64 = v
-                .parse()
-                .map_err(|_| format!("{}: bad output line '{line}'", program.display()))?;
+            let v: f64 = v.parse().map_err(|_| {
+                format!("{} (compiled): bad output line '{line}'", source.display())
+            })?;
             match k {
                 "cache_mb" => cache_mb = Some(v),
                 _ => filters.push((k.to_string(), v)),
