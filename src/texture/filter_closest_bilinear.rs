@@ -23,28 +23,6 @@ fn to_texel(s: f32, n: u32) -> (f32, f32) {
     (i, x - i)
 }
 
-/// Reads texel (i, j) after wrapping (see [`fetch_inside`]); black outside for
-/// [`WrapMode::Black`].
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn fetch<O: TexelObserver>(
-    level: &MipLevel,
-    level_index: usize,
-    i: f32,
-    j: f32,
-    wrap: (WrapMode, WrapMode),
-    tiles: Option<ThreadTiles<'_>>,
-    obs: &mut O,
-) -> Vec4 {
-    match (
-        wrap_texel(i, level.width, wrap.0),
-        wrap_texel(j, level.height, wrap.1),
-    ) {
-        (Some(x), Some(y)) => fetch_inside(level, level_index, x, y, tiles, obs),
-        _ => Vec4::ZERO,
-    }
-}
-
 /// Reads texel (x, y) of the level (both in range), a demand-loaded level's tile through
 /// `tiles` (`None`: through the thread's micro-cache, found here).
 ///
@@ -101,7 +79,7 @@ pub(crate) fn closest<O: TexelObserver>(
     closest_wrapped(level, level_index, s, t, wrap, tiles, obs)
 }
 
-/// [`closest`] of a texel outside the level: wrapped, or black.
+/// [`closest`] of a texel outside the level: wrapped, or black for [`WrapMode::Black`].
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn closest_wrapped<O: TexelObserver>(
@@ -121,7 +99,13 @@ fn closest_wrapped<O: TexelObserver>(
     if ft > 0.5 {
         j += 1.0;
     }
-    fetch(level, level_index, i, j, wrap, tiles, obs)
+    match (
+        wrap_texel(i, level.width, wrap.0),
+        wrap_texel(j, level.height, wrap.1),
+    ) {
+        (Some(x), Some(y)) => fetch_inside(level, level_index, x, y, tiles, obs),
+        _ => Vec4::ZERO,
+    }
 }
 
 /// floor(x) as an integer for |x| < 2^31 (saturating beyond, 0 for NaN): truncate,
